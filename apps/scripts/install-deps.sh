@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages netdem needs (only the missing ones). Needs root or sudo.
+set -euo pipefail
+pkgs=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libsuitesparse-dev libsundials-dev libgtest-dev libfmt-dev
+  libcli11-dev nlohmann-json3-dev libbenchmark-dev
+  libopenblas0-serial                # optimised serial BLAS for CHOLMOD's supernodal factorisation
+  python3 python3-numpy python3-matplotlib
+)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#pkgs[@]} packages present" >&2
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

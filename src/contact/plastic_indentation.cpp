@@ -1,0 +1,25 @@
+#include "netdem/contact/plastic_indentation.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace netdem::contact {
+
+namespace {
+void require(bool ok, const std::string& msg) {
+  if (!ok) throw std::invalid_argument(msg);
+}
+}  // namespace
+
+void PlasticIndentationParams::validate() const {
+  require(std::isfinite(sigma_y) && sigma_y > 0.0,
+          "contact law: yield stress sigma_y must be positive and finite, got " + std::to_string(sigma_y));
+  require(!std::isnan(mu) && mu >= 0.0,
+          "contact law: friction coefficient mu must be >= 0 (or inf for sticking), got " + std::to_string(mu));
+  require(std::isfinite(k_t) && k_t > 0.0,
+          "contact law: tangential stiffness k_t must be positive and finite, got " + std::to_string(k_t));
+  require(std::isfinite(unload_ratio) && unload_ratio >= 1.0,
+          "contact law: unloading stiffness ratio must be >= 1 and finite, got " + std::to_string(unload_ratio));
+}
+
+}  // namespace netdem::contact

@@ -1,0 +1,64 @@
+#pragma once
+// Packing data types for 2D disk (cylinder, unit depth) aggregates and the geometric queries the
+// solvers need: touching pairs, contact statistics, the peripheral layer (Redanz & Fleck, Acta
+// Mater. 49 (2001) 4325, sections 2.2 and 2.4) and a validity check.
+//
+// Gravity points along -y; the container is the axis-aligned box `Packing::box` with a floor at
+// y_min, side walls at x_min / x_max and an open lid at y_max (disks must nevertheless lie inside
+// the box). Lengths are in units of the reference radius R used to build the packing.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace netdem::packing {
+
+struct Box {
+  double x_min = 0, y_min = 0, x_max = 0, y_max = 0;
+  double width() const { return x_max - x_min; }
+  double height() const { return y_max - y_min; }
+  double area() const { return width() * height(); }
+};
+
+/// Structure of arrays, one entry per disk (2D, unit depth).
+struct Packing {
+  std::vector<double> x, y, r;
+  Box box;
+  std::uint64_t seed = 0;              ///< 0 if unknown (hand-made file)
+  std::vector<std::string> comments;  ///< extra '# ...' lines carried through I/O (without the '# ')
+
+  std::size_t size() const { return x.size(); }
+  double solid_area() const;  ///< sum pi r^2
+  double density() const;     ///< solid_area / box.area() (relative density D, section 2.2)
+};
+
+struct ContactStats {
+  std::size_t particles = 0;      ///< N (nodes of the contact network)
+  std::size_t disk_contacts = 0;  ///< disk-disk contacts (elements of the network)
+  std::size_t wall_contacts = 0;  ///< disk-wall contacts: left, right and bottom walls (not the lid)
+  double density = 0;             ///< relative density D = solid_area / box area
+  double coordination = 0;        ///< Z = 2 * disk_contacts / particles (walls excluded)
+};
+
+/// Pairs (i < j, sorted) with |x_i - x_j| <= (r_i + r_j) * (1 + tol). Cell list, not all pairs.
+std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol = 1e-6);
+
+/// Disk contacts as touching_pairs(); wall contacts: a disk within tol * r of the left, right or
+/// bottom wall counts once per wall it touches.
+ContactStats contact_stats(const Packing& p, double tol = 1e-6);
+
+/// Peripheral layer for the die-compaction boundary conditions (section 2.4): flag 1 for disks
+/// within tol * r of the left, right or bottom wall or of y_max, and for the free top surface
+/// ("skyline": a disk is in the top layer if, for some x in its horizontal extent, its upper
+/// surface is the highest disk surface at that x). Exact: the upper envelope of the half-circles is
+/// evaluated on the breakpoints where it may change owner, not sampled.
+std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol = 1e-6);
+
+/// Throws std::invalid_argument with ONE line naming the first problem found: box with NaN/inf or
+/// non-positive size, empty packing, x/y/r size mismatch, NaN/inf coordinate or radius, r <= 0,
+/// disk outside the box (by more than 1e-9 r), duplicate disk (same centre within 1e-12 R).
+/// Overlapping disks are allowed (compacted packings overlap).
+void validate(const Packing& p);
+
+}  // namespace netdem::packing
