@@ -1,0 +1,314 @@
+// Ballistic deposition with steepest descent, Redanz & Fleck (2001) section 2.2. The motion rules,
+// the stop rule and the random-draw order are documented in ballistic.hpp and docs/packing.md.
+#include "netdem/packing/ballistic.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace netdem::packing {
+
+void DepositionOptions::validate() const {
+  auto fail = [](const std::string& msg) { throw std::invalid_argument("deposition options: " + msg); };
+  auto finite = [&](double v, const char* name) {
+    if (!std::isfinite(v)) fail(fmt::format("{} must be finite, got {}", name, v));
+  };
+  finite(width, "width");
+  finite(height, "height");
+  finite(radius, "radius");
+  finite(r_min, "r_min");
+  finite(r_max, "r_max");
+  if (!(radius > 0)) fail(fmt::format("reference radius must be > 0, got {}", radius));
+  if (!(r_min > 0)) fail(fmt::format("r_min must be > 0, got {}", r_min));
+  if (r_min > r_max) fail(fmt::format("r_min = {} exceeds r_max = {}", r_min, r_max));
+  if (width < 2 * r_max) fail(fmt::format("width {} is smaller than the largest diameter 2 r_max = {}", width, 2 * r_max));
+  if (box_height() < 2 * r_max)
+    fail(fmt::format("height {} is smaller than the largest diameter 2 r_max = {}", box_height(), 2 * r_max));
+  if (max_rejections == 0) fail("max_rejections must be >= 1");
+}
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+// Tolerances, all relative to the length they compare with (r + r_k, r, or unit normals).
+constexpr double kContactTol = 1e-10;  // gap / (r + r_k) below which a disk (wall, floor) is touching
+constexpr double kGrazing = 1e-9;      // contact normal n_y below this: beside, does not carry weight
+constexpr double kTop = 1e-10;         // |n_x| below this: exactly on top of a disk (unstable)
+constexpr double kAdmissible = 1e-10;  // motion d admissible for a contact if n . d >= -kAdmissible
+constexpr double kArcEnd = 1e-9;      // angular distance treated as "at the end of a blocked arc"
+constexpr long kMaxSteps = 1'000'000;  // per disk; a guard against a logic error, never reached
+
+constexpr int kLeftWall = -1, kRightWall = -2, kFloor = -3, kEquator = -4;
+
+/// [0,1) from one 64-bit draw: the top 53 bits, exact and platform independent.
+double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+double wrap_2pi(double a) {
+  a = std::fmod(a, 2 * kPi);
+  return a < 0 ? a + 2 * kPi : a;
+}
+
+struct Contact {
+  int id;         // disk id, or kLeftWall / kRightWall / kFloor
+  double nx, ny;  // unit normal from the obstacle towards the moving disk
+};
+
+enum class MoveKind { kRest, kFall, kRoll };
+struct Move {
+  MoveKind kind = MoveKind::kRest;
+  int on = -1;  // disk rolled over
+  int dir = 0;  // +1: towards +x, -1: towards -x
+};
+
+class Depositor {
+ public:
+  Depositor(const DepositionOptions& o, Packing& out)
+      : out_(out),
+        w_(o.width * o.radius),
+        h_(o.box_height() * o.radius),
+        rmax_(o.r_max * o.radius),
+        cell_(2 * rmax_),
+        nx_(std::max(1L, static_cast<long>(std::ceil(w_ / cell_)))),
+        ny_(std::max(1L, static_cast<long>(std::ceil(h_ / cell_)))),
+        cells_(static_cast<std::size_t>(nx_ * ny_)) {}
+
+  /// Settles a disk of radius r dropped at abscissa x0 (section 2.2: path of steepest descent).
+  void settle(double r, double x0, double& px, double& py) {
+    px = x0;
+    py = std::numeric_limits<double>::infinity();
+    contacts_.clear();
+    fall(px, py, r);
+    for (long step = 0; step < kMaxSteps; ++step) {
+      gather(px, py, r);
+      const Move m = decide();
+      switch (m.kind) {
+        case MoveKind::kRest: return;
+        case MoveKind::kFall: fall(px, py, r); break;
+        case MoveKind::kRoll: roll(m.on, m.dir, px, py, r); break;
+      }
+    }
+    throw std::runtime_error(fmt::format("ballistic_deposition: disk {} did not settle in {} steps (x0 = {})",
+                                         out_.size(), kMaxSteps, x0));
+  }
+
+  void insert(double x, double y, double r) {
+    const int id = static_cast<int>(out_.size());
+    out_.x.push_back(x);
+    out_.y.push_back(y);
+    out_.r.push_back(r);
+    cells_[static_cast<std::size_t>(row(y) * nx_ + col(x))].push_back(id);
+    top_row_ = std::max(top_row_, row(y));
+  }
+
+ private:
+  long col(double x) const { return std::clamp(static_cast<long>(std::floor(x / cell_)), 0L, nx_ - 1); }
+  long row(double y) const {
+    if (!(y < static_cast<double>(ny_) * cell_)) return ny_ - 1;  // also +inf
+    return std::max(0L, static_cast<long>(std::floor(y / cell_)));
+  }
+  const std::vector<int>& cell(long c, long r) const { return cells_[static_cast<std::size_t>(r * nx_ + c)]; }
+  bool in_contact(int id) const {
+    return std::any_of(contacts_.begin(), contacts_.end(), [id](const Contact& c) { return c.id == id; });
+  }
+  double xs(int k) const { return out_.x[static_cast<std::size_t>(k)]; }
+  double ys(int k) const { return out_.y[static_cast<std::size_t>(k)]; }
+  double rs(int k) const { return out_.r[static_cast<std::size_t>(k)]; }
+
+  /// Vertical free fall from (px, py) to the first disk (circle-circle tangency) or the floor.
+  /// Disks in the current contact set are ignored (they are beside or above: decide() checked).
+  /// A vertical side wall never stops a fall: sliding down a wall is a free fall along it.
+  void fall(double px, double& py, double r) {
+    const double y_start = py;
+    double best = r;  // the floor
+    const double reach = r + rmax_;
+    const long c0 = col(px - reach), c1 = col(px + reach);
+    for (long rw = std::min(row(y_start), top_row_); rw >= 0; --rw) {
+      // every disk of row rw has y_k < (rw + 1) cell, hence a contact height < that + reach
+      if (best >= static_cast<double>(rw + 1) * cell_ + reach) break;
+      for (long c = c0; c <= c1; ++c)
+        for (int k : cell(c, rw)) {
+          const double m = r + rs(k), dx = std::fabs(xs(k) - px);
+          if (dx >= m) continue;
+          const double rise = std::sqrt((m - dx) * (m + dx));  // exact tangency, section 2.2
+          if (rise <= kGrazing * m || in_contact(k)) continue;  // grazing a side neighbour
+          const double yc = ys(k) + rise;
+          if (yc > y_start + kContactTol * m) continue;  // above the start: rounding only
+          best = std::max(best, yc);
+        }
+    }
+    py = best;
+  }
+
+  /// Contact set at (px, py): disks within kContactTol relative gap, side walls and floor.
+  void gather(double px, double py, double r) {
+    contacts_.clear();
+    const double reach = (r + rmax_) * (1 + kContactTol);
+    const long c0 = col(px - reach), c1 = col(px + reach), r0 = row(py - reach), r1 = row(py + reach);
+    for (long rw = r0; rw <= r1; ++rw)
+      for (long c = c0; c <= c1; ++c)
+        for (int k : cell(c, rw)) {
+          const double dx = px - xs(k), dy = py - ys(k), lim = (r + rs(k)) * (1 + kContactTol);
+          const double d2 = dx * dx + dy * dy;
+          if (d2 > lim * lim) continue;
+          const double d = std::sqrt(d2);
+          contacts_.push_back({k, dx / d, dy / d});
+        }
+    if (px - r <= kContactTol * r) contacts_.push_back({kLeftWall, 1.0, 0.0});
+    if (w_ - r - px <= kContactTol * r) contacts_.push_back({kRightWall, -1.0, 0.0});
+    if (py - r <= kContactTol * r) contacts_.push_back({kFloor, 0.0, 1.0});
+  }
+
+  /// Steepest descent under gravity g = (0,-1): the projection of g onto the cone of admissible
+  /// motions {d : n_c . d >= 0}. In 2D the projection is g itself (free fall), the downhill tangent
+  /// of one supporting disk (rolling), or zero (rest: the supports hold the disk, section 2.2).
+  Move decide() const {
+    bool free = true;
+    for (const Contact& c : contacts_) free = free && c.ny <= kGrazing;
+    if (free) return {MoveKind::kFall};
+    auto admissible = [&](double tx, double ty, std::size_t skip) {
+      for (std::size_t i = 0; i < contacts_.size(); ++i)
+        if (i != skip && contacts_[i].nx * tx + contacts_[i].ny * ty < -kAdmissible) return false;
+      return true;
+    };
+    Move best;
+    double best_descent = -1;
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      const Contact& c = contacts_[i];
+      if (c.id < 0 || c.ny <= kGrazing) continue;  // walls never support; the floor always holds
+      if (std::fabs(c.nx) <= kTop) {
+        // exactly on top of disk c: unstable equilibrium, the disk rolls off to +x if it can,
+        // else to -x (away from a wall or side neighbour on the +x side)
+        for (int s : {1, -1})
+          if (best_descent < 0 && admissible(s, 0, i)) {
+            best = {MoveKind::kRoll, c.id, s};
+            best_descent = 0;
+          }
+        continue;
+      }
+      const int s = c.nx > 0 ? 1 : -1;
+      const double descent = c.nx * c.nx;  // |projection of g onto the tangent|^2
+      if (descent > best_descent && admissible(s * c.ny, -std::fabs(c.nx), i)) {
+        best = {MoveKind::kRoll, c.id, s};
+        best_descent = descent;
+      }
+    }
+    return best;
+  }
+
+  /// Rolls the disk over disk j in direction s, keeping contact, until the first event: contact
+  /// with another disk, a side wall or the floor, or j's equator (then it falls off). Angles psi are
+  /// measured from j's vertical, positive in the direction of motion; the path is psi0 -> pi/2.
+  /// The event is located by angle; the new position is then computed exactly (circle-circle,
+  /// circle-line intersection) so contacts hold to rounding.
+  void roll(int j, int s, double& px, double& py, double r) {
+    const double xj = xs(j), yj = ys(j), l = r + rs(j);
+    const double psi0 = s * std::atan2(px - xj, py - yj);
+    double best = kPi / 2;
+    int event = kEquator;
+    const double reach = l + r + rmax_;
+    const long c0 = col(xj - reach), c1 = col(xj + reach), r0 = row(yj - r - rmax_), r1 = row(yj + reach);
+    for (long rw = r0; rw <= r1; ++rw)
+      for (long c = c0; c <= c1; ++c)
+        for (int k : cell(c, rw)) {
+          if (k == j) continue;
+          const double dx = xs(k) - xj, dy = ys(k) - yj, m = r + rs(k), d2 = dx * dx + dy * dy;
+          if (d2 >= (l + m) * (l + m)) continue;
+          const double d = std::sqrt(d2);
+          const double cb = (l * l + d2 - m * m) / (2 * l * d);
+          if (cb >= 1) continue;  // tangent from outside: grazing, no hit
+          const double beta = std::acos(std::max(cb, -1.0));  // half-angle of the blocked arc
+          const double alpha = s * std::atan2(dx, dy);         // direction of k, in psi
+          const double to_entry = wrap_2pi(alpha - beta - psi0), to_exit = wrap_2pi(alpha + beta - psi0);
+          if (in_contact(k)) {
+            // At an end of k's blocked arc. At its entry end we move tangentially (decide() found
+            // the motion admissible): no event. At its exit end we move away, and re-enter after
+            // 2 pi - 2 beta, which can lie on the path for large radius ratios.
+            if (to_entry < kArcEnd || to_entry > 2 * kPi - kArcEnd) continue;
+          } else if (to_exit < to_entry) {
+            continue;  // inside the blocked arc: only by rounding
+          }
+          if (psi0 + to_entry < best) {
+            best = psi0 + to_entry;
+            event = k;
+          }
+        }
+    const int wall = s > 0 ? kRightWall : kLeftWall;
+    const double xw = s > 0 ? w_ - r : r;
+    if (!in_contact(wall) && s * (xw - xj) < l) {
+      const double psi = std::asin(std::max(-1.0, s * (xw - xj) / l));
+      if (psi > psi0 && psi < best) {
+        best = psi;
+        event = wall;
+      }
+    }
+    if (!in_contact(kFloor) && yj < r) {  // a small disk on the floor under a larger moving one
+      const double psi = std::acos((r - yj) / l);
+      if (psi > psi0 && psi < best) {
+        best = psi;
+        event = kFloor;
+      }
+    }
+    if (event == kEquator) {  // falls off j
+      px = xj + s * l;
+      py = yj;
+    } else if (event == wall) {
+      const double a = std::fabs(xw - xj);
+      px = xw;
+      py = yj + std::sqrt(std::max(0.0, (l - a) * (l + a)));
+    } else if (event == kFloor) {
+      const double a = r - yj;
+      py = r;
+      px = xj + s * std::sqrt(std::max(0.0, (l - a) * (l + a)));
+    } else {  // tangent to j and k: entry point of the arc, alpha - s beta in j's vertical angle
+      const double dx = xs(event) - xj, dy = ys(event) - yj, m = r + rs(event), d = std::hypot(dx, dy);
+      const double ux = dx / d, uy = dy / d;
+      const double a = (l * l - m * m + d * d) / (2 * d), h = std::sqrt(std::max(0.0, (l - a) * (l + a)));
+      px = xj + a * ux - s * h * uy;
+      py = yj + a * uy + s * h * ux;
+    }
+  }
+
+  Packing& out_;
+  double w_, h_, rmax_, cell_;
+  long nx_, ny_;
+  long top_row_ = -1;
+  std::vector<std::vector<int>> cells_;
+  std::vector<Contact> contacts_;  // reused workspace
+};
+
+}  // namespace
+
+Packing ballistic_deposition(const DepositionOptions& o) {
+  o.validate();
+  Packing p;
+  const double w = o.width * o.radius, h = o.box_height() * o.radius;
+  p.box = {0.0, 0.0, w, h};
+  p.seed = o.seed;
+  Depositor dep(o, p);
+  std::mt19937_64 rng(o.seed);
+  std::size_t rejections = 0;
+  for (;;) {
+    // Draw order, per dropped disk: radius (only if r_min < r_max), then the drop abscissa.
+    double r = o.r_min * o.radius;
+    if (o.r_max > o.r_min) r = o.radius * (o.r_min + (o.r_max - o.r_min) * uniform01(rng));
+    const double x0 = r + (w - 2 * r) * uniform01(rng);
+    double x, y;
+    dep.settle(r, x0, x, y);
+    if (y + r > h) {  // stop rule: does not fit below the lid
+      if (++rejections >= o.max_rejections) break;
+      continue;
+    }
+    rejections = 0;
+    dep.insert(x, y, r);
+  }
+  return p;
+}
+
+}  // namespace netdem::packing

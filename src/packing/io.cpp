@@ -1,0 +1,225 @@
+// Packing CSV files: format in io.hpp and docs/packing.md.
+#include "netdem/packing/io.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+namespace netdem::packing {
+
+namespace {
+
+std::string_view trim(std::string_view s) {
+  const auto ws = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; };
+  while (!s.empty() && ws(s.front())) s.remove_prefix(1);
+  while (!s.empty() && ws(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> split(std::string_view s, char sep) {
+  std::vector<std::string_view> out;
+  std::size_t b = 0;
+  for (;;) {
+    const std::size_t e = s.find(sep, b);
+    out.push_back(trim(s.substr(b, e == std::string_view::npos ? std::string_view::npos : e - b)));
+    if (e == std::string_view::npos) return out;
+    b = e + 1;
+  }
+}
+
+std::vector<std::string_view> split_ws(std::string_view s) {
+  std::vector<std::string_view> out;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
+    std::size_t j = i;
+    while (j < s.size() && s[j] != ' ' && s[j] != '\t') ++j;
+    if (j > i) out.push_back(s.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
+bool parse_double(std::string_view s, double& v) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty()) return false;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+template <class Int>
+bool parse_int(std::string_view s, Int& v) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty()) return false;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+/// First word of a comment: the reserved keywords "box" and "seed" are interpreted, not kept.
+std::string_view keyword(std::string_view comment) {
+  const auto w = split_ws(comment);
+  return w.empty() ? std::string_view{} : w.front();
+}
+
+}  // namespace
+
+void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
+  validate(p);
+  for (const std::string& c : p.comments) {
+    if (c.find_first_of("\r\n") != std::string::npos)
+      throw std::invalid_argument("write_packing_csv: a comment contains a line break");
+    const std::string_view k = keyword(c);
+    if (k == "box" || k == "seed")
+      throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", c));
+  }
+  std::string text;
+  text.reserve(64 * p.size() + 256);
+  text += fmt::format("# box {:.17g} {:.17g} {:.17g} {:.17g}\n", p.box.x_min, p.box.y_min, p.box.x_max, p.box.y_max);
+  if (p.seed != 0) text += fmt::format("# seed {}\n", p.seed);
+  for (const std::string& c : p.comments) text += "# " + std::string(trim(c)) + "\n";
+  text += "id,x,y,r\n";
+  for (std::size_t i = 0; i < p.size(); ++i) text += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", i, p.x[i], p.y[i], p.r[i]);
+
+  // Atomic replace: write a sibling temporary file, flush, then rename over the target.
+  const std::filesystem::path tmp =
+      path.parent_path() / fmt::format(".{}.tmp.{}", path.filename().string(), static_cast<long>(::getpid()));
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(fmt::format("write_packing_csv: cannot create '{}'", tmp.string()));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    out.flush();
+    if (!out) {
+      out.close();
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw std::runtime_error(fmt::format("write_packing_csv: write to '{}' failed", tmp.string()));
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignore;
+    std::filesystem::remove(tmp, ignore);
+    throw std::runtime_error(fmt::format("write_packing_csv: cannot rename to '{}': {}", path.string(), ec.message()));
+  }
+}
+
+Packing read_packing_csv(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", file));
+  auto fail = [&](std::size_t line, const std::string& what) {
+    throw std::runtime_error(fmt::format("{}:{}: {}", file, line, what));
+  };
+
+  Packing p;
+  bool have_box = false, have_seed = false, have_header = false;
+  std::size_t box_line = 0;
+  std::vector<long long> ids;
+  std::vector<std::size_t> lines;  // source line of each disk
+  std::string raw;
+  std::size_t ln = 0;
+  while (std::getline(in, raw)) {
+    ++ln;
+    const std::string_view line = trim(raw);
+    if (line.empty()) continue;
+    if (line.front() == '#') {
+      const std::string_view body = trim(line.substr(1));
+      const std::string_view k = keyword(body);
+      if (k == "box") {
+        const auto w = split_ws(body);
+        double v[4];
+        if (w.size() != 5) fail(ln, "box line must be '# box x_min y_min x_max y_max'");
+        for (int i = 0; i < 4; ++i)
+          if (!parse_double(w[static_cast<std::size_t>(i) + 1], v[i]))
+            fail(ln, fmt::format("box line: non-numeric field '{}'", w[static_cast<std::size_t>(i) + 1]));
+        for (int i = 0; i < 4; ++i)
+          if (!std::isfinite(v[i])) fail(ln, "box line: NaN or infinite bound");
+        if (have_box) fail(ln, fmt::format("second box line (first on line {})", box_line));
+        if (!(v[2] > v[0]) || !(v[3] > v[1])) fail(ln, "box line: box has non-positive size");
+        p.box = {v[0], v[1], v[2], v[3]};
+        have_box = true;
+        box_line = ln;
+      } else if (k == "seed") {
+        const auto w = split_ws(body);
+        if (w.size() != 2 || !parse_int(w[1], p.seed)) fail(ln, "seed line must be '# seed <unsigned integer>'");
+        if (have_seed) fail(ln, "second seed line");
+        have_seed = true;
+      } else {
+        p.comments.emplace_back(body);
+      }
+      continue;
+    }
+    const auto f = split(line, ',');
+    if (!have_header) {
+      if (f.size() != 4 || f[0] != "id" || f[1] != "x" || f[2] != "y" || f[3] != "r")
+        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", line));
+      have_header = true;
+      continue;
+    }
+    if (f.size() != 4) fail(ln, fmt::format("expected 4 fields (id,x,y,r), got {}", f.size()));
+    long long id = 0;
+    if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", f[0]));
+    double v[3];
+    static constexpr const char* kName[3] = {"x", "y", "r"};
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], f[i + 1]));
+      if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], f[i + 1], id));
+    }
+    if (!(v[2] > 0)) fail(ln, fmt::format("r <= 0 (r = {}, disk id {})", v[2], id));
+    ids.push_back(id);
+    lines.push_back(ln);
+    p.x.push_back(v[0]);
+    p.y.push_back(v[1]);
+    p.r.push_back(v[2]);
+  }
+  if (in.bad()) throw std::runtime_error(fmt::format("{}: read error", file));
+  if (!have_box) fail(ln, "missing '# box x_min y_min x_max y_max' line");
+  if (!have_header) fail(ln, "missing header 'id,x,y,r'");
+  if (p.size() == 0) fail(ln, "no disks");
+
+  for (std::size_t i = 0; i < p.size(); ++i) {  // same criterion as validate(): centre in the box
+    const double t = 1e-9 * p.r[i];
+    const Box& b = p.box;
+    if (p.x[i] < b.x_min - t || p.x[i] > b.x_max + t || p.y[i] < b.y_min - t || p.y[i] > b.y_max + t)
+      fail(lines[i], fmt::format("disk id {} is outside the box (centre ({}, {}))", ids[i], p.x[i], p.y[i]));
+  }
+  // Sort by id (ids in any order), reject duplicates.
+  std::vector<std::size_t> order(p.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return ids[a] < ids[b]; });
+  for (std::size_t k = 1; k < order.size(); ++k)
+    if (ids[order[k]] == ids[order[k - 1]])
+      fail(lines[order[k]], fmt::format("duplicate id {} (first on line {})", ids[order[k]], lines[order[k - 1]]));
+  Packing q;
+  q.box = p.box;
+  q.seed = p.seed;
+  q.comments = std::move(p.comments);
+  q.x.reserve(p.size());
+  q.y.reserve(p.size());
+  q.r.reserve(p.size());
+  for (std::size_t i : order) {
+    q.x.push_back(p.x[i]);
+    q.y.push_back(p.y[i]);
+    q.r.push_back(p.r[i]);
+  }
+  try {
+    validate(q);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(fmt::format("{}: {}", file, e.what()));
+  }
+  return q;
+}
+
+}  // namespace netdem::packing

@@ -56,9 +56,11 @@ ContactStats contact_stats(const Packing& p, double tol = 1e-6);
 std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol = 1e-6);
 
 /// Throws std::invalid_argument with ONE line naming the first problem found: box with NaN/inf or
-/// non-positive size, empty packing, x/y/r size mismatch, NaN/inf coordinate or radius, r <= 0,
-/// disk outside the box (by more than 1e-9 r), duplicate disk (same centre within 1e-12 R).
-/// Overlapping disks are allowed (compacted packings overlap).
+/// non-positive size, x/y/r size mismatch, empty packing, then per disk in id order NaN/inf
+/// coordinate or radius, r <= 0, disk outside the box (its CENTRE outside the box by more than
+/// 1e-9 r), and finally duplicates (centres closer than 1e-12 (r_i + r_j)). Disks overlapping each
+/// other or poking through a wall by less than their radius are allowed: compacted packings
+/// (section 2.4, affine boundary motion) do both. Deposited packings lie entirely inside the box.
 void validate(const Packing& p);
 
 }  // namespace netdem::packing

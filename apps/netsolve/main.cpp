@@ -1,0 +1,286 @@
+// netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001).
+//
+//   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--out DIR]
+//   netsolve compact  [--affine] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
+//                     [--no-rotation] [--to-density 0.85] [--packing FILE] [--increments N] [--out DIR]
+//
+// Every run writes into its own folder: command.txt, the packing, history.csv, summary.json and
+// VTK PolyData snapshots. Errors are one line on stderr and a non-zero exit.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "netdem/packing/ballistic.hpp"
+#include "netdem/packing/io.hpp"
+#include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/compaction.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+#include "output.hpp"
+
+namespace fs = std::filesystem;
+using netdem::app::Field;
+
+namespace {
+
+std::string g_command;
+
+struct PackArgs {
+  double width = 80.0, r_min = 0.9, r_max = 1.1;
+  bool mono = false;
+  std::uint64_t seed = 1;
+};
+
+struct CompactArgs {
+  bool affine = false, no_rotation = false, quiet = false;
+  std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6;
+  int increments = 200, max_newton = 12;
+};
+
+double parse_friction(const std::string& s) {
+  if (s == "inf" || s == "infinity" || s == "sticking") return std::numeric_limits<double>::infinity();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used != s.size() || std::isnan(v) || v < 0)
+    throw std::invalid_argument(fmt::format("--friction '{}' is not a non-negative number or 'inf'", s));
+  return v;
+}
+
+std::vector<double> parse_list(const std::string& s, const char* what) {
+  std::vector<double> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument(fmt::format("{}: '{}' is not a number", what, item));
+    out.push_back(v);
+  }
+  return out;
+}
+
+netdem::packing::Packing make_packing(const PackArgs& a) {
+  netdem::packing::DepositionOptions o;
+  o.width = a.width;
+  o.r_min = a.mono ? 1.0 : a.r_min;
+  o.r_max = a.mono ? 1.0 : a.r_max;
+  o.seed = a.seed;
+  return netdem::packing::ballistic_deposition(o);
+}
+
+void write_common(const fs::path& out) {
+  netdem::app::make_output_dir(out);
+  netdem::app::write_file_atomic(out / "command.txt", g_command + "\n");
+}
+
+int run_pack(const PackArgs& a, const fs::path& out) {
+  write_common(out);
+  const auto pk = make_packing(a);
+  netdem::packing::write_packing_csv(pk, out / "packing.csv");
+  const auto st = netdem::packing::contact_stats(pk);
+  nlohmann::json j;
+  j["command"] = g_command;
+  j["seed"] = a.seed;
+  j["particles"] = st.particles;
+  j["disk_contacts"] = st.disk_contacts;
+  j["wall_contacts"] = st.wall_contacts;
+  j["density"] = st.density;
+  j["coordination"] = st.coordination;
+  netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  std::printf("seed %llu: %zu particles, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
+              static_cast<unsigned long long>(a.seed), st.particles, st.disk_contacts, st.wall_contacts, st.density,
+              st.coordination, (out / "packing.csv").c_str());
+  return 0;
+}
+
+void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, const std::string& tag) {
+  const auto& x = s.x();
+  const auto& y = s.y();
+  std::vector<double> rad = s.radius(), th = s.theta(), per(s.peripheral().begin(), s.peripheral().end());
+  netdem::app::write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
+                                 netdem::app::vtp_particles(x, y, {{"radius", 1, rad}, {"theta", 1, th}, {"peripheral", 1, per}}));
+  const auto cs = s.contacts();
+  std::vector<int> ci, cj;
+  Field fn{"normal_force", 1, {}}, ft{"tangential_force", 1, {}}, ov{"overlap", 1, {}}, sl{"sliding", 1, {}};
+  for (const auto& c : cs) {
+    ci.push_back(c.i);
+    cj.push_back(c.j);
+    fn.values.push_back(c.f_n);
+    ft.values.push_back(c.f_t);
+    ov.values.push_back(c.overlap);
+    sl.values.push_back(c.sliding ? 1.0 : 0.0);
+  }
+  netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
+}
+
+int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
+  using namespace netdem;
+  qs::SolverOptions so;
+  so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
+  so.rotations = !a.no_rotation;
+  so.law.mu = parse_friction(a.friction);
+  so.law.k_t = a.k_t;
+  so.law.sigma_y = a.sigma_y;
+  so.residual_tol = a.tol;
+  so.max_newton = a.max_newton;
+  so.validate();
+  qs::CompactionOptions co;
+  co.path = qs::StrainPath::parse(a.path);
+  co.target_density = a.to_density;
+  co.increments = a.increments;
+  const auto snaps = parse_list(a.snapshots, "--snapshots");
+
+  packing::Packing pk;
+  std::string source;
+  if (!a.packing_file.empty()) {
+    pk = packing::read_packing_csv(a.packing_file);
+    source = a.packing_file;
+  } else {
+    pk = make_packing(pa);
+    source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", pa.width, pa.mono ? 1.0 : pa.r_min,
+                         pa.mono ? 1.0 : pa.r_max, pa.seed);
+  }
+  co.validate(pk.density());
+  write_common(out);
+  packing::write_packing_csv(pk, out / "packing.csv");
+  if (!a.quiet) std::fprintf(stderr, "netsolve: %zu particles, D0 = %.4f, seed %llu (%s)\n", pk.size(), pk.density(),
+                             static_cast<unsigned long long>(pk.seed), source.c_str());
+
+  const auto t0 = std::chrono::steady_clock::now();
+  qs::NetworkSolver solver(pk, so);
+  write_snapshot(solver, out, "initial");
+  std::string csv =
+      "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
+      "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,newton,"
+      "linear_iterations,converged\n";
+  std::size_t next_snap = 0;
+  int unconverged = 0;
+  double max_residual = 0.0;
+  qs::StateMeasures last;
+  app::Progress progress("compact", co.increments, a.quiet);
+  const double sy = so.law.sigma_y;
+  qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
+    const auto& m = row.state;
+    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{},{},{}\n",
+                       row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
+                       m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
+                       m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
+                       m.dev_tangential_rotations, m.affine_tangential, row.report.residual,
+                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
+    if (row.increment > 0) {
+      unconverged += !row.report.converged;
+      max_residual = std::max(max_residual, row.report.residual);
+    }
+    while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
+      write_snapshot(solver, out, fmt::format("D{:.3f}", snaps[next_snap]));
+      ++next_snap;
+    }
+    if (row.increment % 20 == 0) app::write_file_atomic(out / "history.csv", csv);  // checkpoint
+    progress.update(row.increment);
+    last = m;
+  });
+  progress.finish();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  app::write_file_atomic(out / "history.csv", csv);
+  write_snapshot(solver, out, "final");
+  const auto& tm = solver.timings();
+  nlohmann::json j;
+  j["command"] = g_command;
+  j["packing"] = source;
+  j["seed"] = pk.seed;
+  j["particles"] = pk.size();
+  j["initial_density"] = solver.initial_density();
+  j["sigma_y"] = sy;
+  j["friction"] = a.friction;
+  j["mode"] = a.affine ? "affine" : "die";
+  j["rotations"] = !a.no_rotation;
+  j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
+  j["increments"] = co.increments;
+  j["k_t"] = so.law.k_t;
+  j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
+                {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
+                {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
+                {"E22", last.E22},          {"E12", last.E12}};
+  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
+                 {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
+                 {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
+                 {"solves", tm.solves}};
+  j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
+                   {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
+  app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
+              last.density, last.S11 / sy, last.S22 / sy, last.Z, unconverged, max_residual, wall, out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
+  CLI::App app{"netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001)"};
+  app.require_subcommand(1);
+  PackArgs pa;
+  CompactArgs ca;
+  std::string out;
+  auto add_pack_opts = [&](CLI::App* c) {
+    c->add_option("--width", pa.width, "box width W in units of the mean radius R")->capture_default_str();
+    c->add_option("--r-min", pa.r_min, "smallest radius / R")->capture_default_str();
+    c->add_option("--r-max", pa.r_max, "largest radius / R")->capture_default_str();
+    c->add_flag("--mono", pa.mono, "monosized disks (r = R)");
+    c->add_option("--seed", pa.seed, "random seed of the deposition")->capture_default_str();
+  };
+  auto* pack = app.add_subcommand("pack", "ballistic deposition packing (section 2.2)");
+  add_pack_opts(pack);
+  pack->add_option("--out", out, "output folder")->default_val("results/pack");
+  auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
+  add_pack_opts(comp);
+  comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
+  comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
+  comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
+  comp->add_option("--friction", ca.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");
+  comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();
+  comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
+  comp->add_option("--k-t", ca.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
+  comp->add_option("--sigma-y", ca.sigma_y, "yield stress of the solid")->capture_default_str();
+  comp->add_option("--tol", ca.tol, "Newton tolerance: max residual / mean contact force")->capture_default_str();
+  comp->add_option("--max-newton", ca.max_newton, "Newton iterations per increment")->capture_default_str();
+  comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
+  comp->add_option("--out", out, "output folder")->default_val("results/compact");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "netsolve: error: %s (see --help)\n", e.what());
+    return 2;
+  }
+  try {
+    if (*pack) return run_pack(pa, out);
+    return run_compact(pa, ca, out);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netsolve: error: %s\n", e.what());
+    return 1;
+  }
+}

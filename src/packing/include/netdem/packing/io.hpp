@@ -1,0 +1,32 @@
+#pragma once
+// Packing text files (CSV). Format (see docs/packing.md):
+//
+//   # box <x_min> <y_min> <x_max> <y_max>      required, once
+//   # seed <S>                                   optional (unsigned 64-bit; absent -> seed 0)
+//   # <free comment>                             optional, any number, kept in Packing::comments
+//   id,x,y,r                                     header, exactly these four names
+//   0,<x>,<y>,<r>                                one line per disk
+//
+// '#' lines may appear anywhere; blank lines are ignored; fields may be padded with spaces/tabs;
+// CRLF line ends are accepted. Ids must be distinct non-negative integers in any order; disks are
+// stored sorted by id and renumbered 0..N-1 (the writer writes the index as id). Numbers are
+// written with %.17g, so write -> read reproduces every double exactly.
+#include <filesystem>
+
+#include "netdem/packing/packing.hpp"
+
+namespace netdem::packing {
+
+/// Writes `p` atomically: to a temporary file in the same directory, then renamed over `path`
+/// (no half-written file is ever visible). Throws std::invalid_argument if validate(p) fails or a
+/// comment cannot be stored (contains a line break, or starts with the reserved words "box" or
+/// "seed"); std::runtime_error on an I/O failure.
+void write_packing_csv(const Packing& p, const std::filesystem::path& path);
+
+/// Reads a packing file. Throws std::runtime_error with a one-line message "<file>:<line>: <what>"
+/// for: missing/unreadable file, missing or malformed box line, malformed seed line, bad or
+/// missing header, wrong field count, non-numeric field, NaN/inf value, r <= 0, bad or duplicate
+/// id, disk outside the box; then runs validate() (its message is rethrown prefixed by the file).
+Packing read_packing_csv(const std::filesystem::path& path);
+
+}  // namespace netdem::packing

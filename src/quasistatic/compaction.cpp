@@ -1,0 +1,66 @@
+#include "netdem/quasistatic/compaction.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace netdem::qs {
+
+Eigen::Matrix2d StrainPath::rate() const {
+  Eigen::Matrix2d r;
+  r << E11, E12, E12, E22;
+  return r;
+}
+
+StrainPath StrainPath::hydrostatic() { return {"hydrostatic", -1.0, -1.0, 0.0}; }
+StrainPath StrainPath::closed_die() { return {"closed-die", 0.0, -1.0, 0.0}; }
+
+StrainPath StrainPath::parse(const std::string& text) {
+  if (text == "hydrostatic") return hydrostatic();
+  if (text == "closed-die") return closed_die();
+  std::istringstream in(text);
+  double v[3];
+  char c1 = 0, c2 = 0;
+  if (!(in >> v[0] >> c1 >> v[1] >> c2 >> v[2]) || c1 != ',' || c2 != ',' || !in.eof() ||
+      !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+    throw std::invalid_argument(
+        fmt::format("strain path '{}' is not 'hydrostatic', 'closed-die' or three finite numbers E11,E22,E12", text));
+  if (v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0) throw std::invalid_argument("strain path 0,0,0 has no direction");
+  return {text, v[0], v[1], v[2]};
+}
+
+void CompactionOptions::validate(double initial_density) const {
+  if (!(std::isfinite(target_density) && target_density > 0.0 && target_density < 1.0))
+    throw std::invalid_argument(fmt::format("target density must be in (0, 1), got {}", target_density));
+  if (!(target_density > initial_density))
+    throw std::invalid_argument(fmt::format("impossible target: density {} is not above the current density {:.4f}",
+                                            target_density, initial_density));
+  if (!(path.E11 + path.E22 < 0.0))
+    throw std::invalid_argument(fmt::format(
+        "impossible target: strain path {} (E11+E22 = {}) does not compact, so density {} is never reached", path.name,
+        path.E11 + path.E22, target_density));
+  if (increments < 1 || increments > 10000000)
+    throw std::invalid_argument(fmt::format("number of increments must be in [1, 1e7], got {}", increments));
+}
+
+void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
+                    const std::function<void(const CompactionRow&)>& on_row) {
+  CompactionRow row;
+  row.state = solver.measures();
+  options.validate(row.state.density);
+  on_row(row);
+  // D = D0 exp(-(E11 + E22)): the volumetric strain still needed, split into equal increments
+  const double trE = std::log(row.state.density / options.target_density);
+  const Eigen::Matrix2d rate = options.path.rate();
+  const Eigen::Matrix2d dE = rate * (trE / rate.trace()) / options.increments;
+  for (int k = 1; k <= options.increments; ++k) {
+    row.increment = k;
+    row.report = solver.increment(dE);
+    row.state = solver.measures();
+    on_row(row);
+  }
+}
+
+}  // namespace netdem::qs

@@ -1,0 +1,41 @@
+#pragma once
+// Compaction driver: strain paths and the increment loop to a target density
+// (Redanz & Fleck 2001 section 2.4: hydrostatic E11 = E22, E12 = 0; closed die E22 < 0, E11 = E12 = 0).
+#include <functional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "netdem/quasistatic/network_solver.hpp"
+
+namespace netdem::qs {
+
+/// A proportional strain-rate direction (E11, E22, E12); its magnitude is irrelevant.
+struct StrainPath {
+  std::string name = "hydrostatic";
+  double E11 = -1.0, E22 = -1.0, E12 = 0.0;
+  Eigen::Matrix2d rate() const;
+  static StrainPath hydrostatic();
+  static StrainPath closed_die();
+  /// "hydrostatic", "closed-die" or "E11,E22,E12"; throws std::invalid_argument (one line).
+  static StrainPath parse(const std::string& text);
+};
+
+struct CompactionOptions {
+  StrainPath path;
+  double target_density = 0.85;
+  int increments = 200;  ///< increments from the initial to the target density (equal strain steps)
+  void validate(double initial_density) const;  ///< throws std::invalid_argument (one line)
+};
+
+struct CompactionRow {
+  int increment = 0;
+  StateMeasures state;
+  IncrementReport report;
+};
+
+/// Runs the compaction; calls on_row for the initial state (increment 0) and after each increment.
+void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
+                    const std::function<void(const CompactionRow&)>& on_row);
+
+}  // namespace netdem::qs

@@ -1,0 +1,131 @@
+#pragma once
+// Quasi-static implicit network solver (Redanz & Fleck, Acta Mater. 49 (2001) 4325, sections 2.3-2.4).
+//
+// Each particle is a node with (u1, u2, theta); each contact a plastic-indentation element from
+// src/contact. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
+// coordinates) on the prescribed particles (the peripheral layer in die mode, every centre in
+// affine mode; peripheral rotations are always held), then finds the free DOFs by Newton
+// iterations on the equilibrium equations (Eq 10-12). The trial state is always recomputed from
+// the committed contact history plus the whole increment (return mapping) and committed only when
+// the increment is accepted. If Newton does not reach the tolerance within max_newton iterations
+// the increment is accepted anyway and its residual is carried into the next increment
+// (forward Euler with equilibrium correction); the residual norm is reported per increment.
+//
+// Linear algebra: the global tangent K is assembled into a fixed sparsity pattern built from the
+// neighbour list (pairs with gap < skin, non-touching ones stored as explicit zeros), analysed by
+// CHOLMOD only when that list is rebuilt and refactorised otherwise. Frictionless runs are
+// symmetric (direct solve). With friction the consistent tangent of sliding contacts is
+// non-symmetric (dF_T = mu_eff k_N du_N): it is solved by GMRES preconditioned with the CHOLMOD
+// factor of the symmetric slip-status tangent M (sliding contacts keep only a small fraction of
+// their tangential stiffness in M), see docs/quasistatic.md.
+//
+// Singular modes (rattlers, rotations of particles without tangential stiffness, rolling modes of
+// particles with a single contact) are removed by a tiny diagonal regularisation of the matrix
+// only (it changes the Newton path, never the equilibrium being solved), and Newton steps are
+// limited in size. A genuinely indefinite tangent (localisation) is reported as an error.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "netdem/contact/plastic_indentation.hpp"
+
+namespace netdem::packing {
+struct Packing;
+}
+
+namespace netdem::qs {
+
+enum class BoundaryMode { Die, Affine };
+
+struct SolverOptions {
+  BoundaryMode mode = BoundaryMode::Die;
+  bool rotations = true;  ///< false: forbid every particle rotation
+  contact::PlasticIndentationParams law;
+  double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
+  int max_newton = 12;             ///< Newton iterations per increment
+  double residual_tol = 1e-6;      ///< converged when max|residual| <= tol * mean normal contact force
+  double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
+  double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle
+  double regularisation = 1e-9;    ///< diagonal shift, relative to the mean translational diagonal
+  double slide_stiffness_fraction = 0.05;  ///< tangential stiffness kept by sliding contacts in the iteration matrix
+  bool geometric_stiffness = false;        ///< add the geometric stiffness to the tangent
+  void validate() const;  ///< throws std::invalid_argument (one line)
+};
+
+/// What one increment did.
+struct IncrementReport {
+  int newton_iterations = 0;
+  bool converged = false;
+  double residual = 0.0;        ///< max |free residual| / mean normal contact force, after the increment
+  int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
+  bool reanalysed = false;
+  int new_contacts = 0, lost_contacts = 0, sliding = 0;
+};
+
+/// Macroscopic and microscopic measures of the committed state.
+struct StateMeasures {
+  double E11 = 0, E22 = 0, E12 = 0;  ///< accumulated strain E = integral of Edot
+  double density = 0;                ///< D = solid area / current box area
+  double S11 = 0, S22 = 0, S12 = 0;  ///< symmetric part of Eq 13 (tension positive)
+  double S_asym = 0;                 ///< (S12 - S21)/2
+  double S11_contacts = 0, S22_contacts = 0, S12_contacts = 0;  ///< Love-Weber average over contacts
+  double Z = 0;                      ///< 2 x load-bearing contacts / N
+  int contacts = 0, sliding = 0;
+  double mean_normal_force = 0;
+  // Fig 7 / Fig 8 affine-deviation measures (section 3.3)
+  double dev_normal_mean_ratio = 0;  ///< < |u_N - u_N^A| / u_N^A >
+  double dev_normal_ratio_of_means = 0;  ///< < |u_N - u_N^A| > / < u_N^A >
+  double dev_tangential_centres = 0;     ///< < |u_T - u_T^A| > / < u_N^A >, u_T from the centres only
+  double dev_tangential_rotations = 0;   ///< same with the rotations of Eq 5
+  double affine_tangential = 0;          ///< < |u_T^A| > / < u_N^A >
+};
+
+struct SolverTimings {
+  double assemble = 0, analyse = 0, factorise = 0, solve = 0, neighbours = 0, total = 0;
+  long analyses = 0, factorisations = 0, solves = 0, increments = 0, newton_iterations = 0;
+};
+
+/// Read-only view of one contact of the committed state (for output).
+struct ContactView {
+  int i, j;
+  double f_n, f_t, overlap;
+  bool sliding;
+};
+
+class NetworkSolver {
+ public:
+  /// Throws std::invalid_argument on invalid options or packing.
+  NetworkSolver(const packing::Packing& packing, const SolverOptions& options);
+  ~NetworkSolver();
+  NetworkSolver(const NetworkSolver&) = delete;
+  NetworkSolver& operator=(const NetworkSolver&) = delete;
+
+  /// One load increment with the macroscopic strain increment dE (symmetric 2x2).
+  /// Throws std::runtime_error with a one-line message on a singular/indefinite system or NaN.
+  IncrementReport increment(const Eigen::Matrix2d& dE);
+
+  StateMeasures measures() const;
+  const SolverTimings& timings() const;
+
+  // committed state
+  std::size_t size() const;
+  const std::vector<double>& x() const;
+  const std::vector<double>& y() const;
+  const std::vector<double>& theta() const;
+  const std::vector<double>& radius() const;
+  const std::vector<std::uint8_t>& peripheral() const;
+  std::vector<ContactView> contacts() const;  ///< load-bearing contacts only
+  Eigen::Matrix2d box_deformation() const;     ///< maps the initial box to the current one
+  double solid_area() const;
+  double initial_density() const;
+  int free_dofs() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace netdem::qs

@@ -1,0 +1,638 @@
+#include "netdem/quasistatic/network_solver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/LU>
+#include <fmt/format.h>
+
+#include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/linear_solver.hpp"
+
+namespace netdem::qs {
+
+namespace ct = netdem::contact;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+void require(bool ok, const std::string& msg) {
+  if (!ok) throw std::invalid_argument(msg);
+}
+
+/// exp(A) for a small symmetric 2x2 matrix (series; |A| << 1 per increment).
+Eigen::Matrix2d small_expm(const Eigen::Matrix2d& A) {
+  Eigen::Matrix2d term = Eigen::Matrix2d::Identity(), sum = Eigen::Matrix2d::Identity();
+  for (int k = 1; k <= 8; ++k) {
+    term = term * A / static_cast<double>(k);
+    sum += term;
+  }
+  return sum;
+}
+
+struct PairAux {
+  Eigen::Matrix2d E_form = Eigen::Matrix2d::Zero();  ///< accumulated strain when the contact formed
+  double slip = 0.0;    ///< accumulated slip with rotations (Eq 5)
+  double centre = 0.0;  ///< accumulated tangential displacement of the centres (L dphi)
+};
+
+}  // namespace
+
+void SolverOptions::validate() const {
+  law.validate();
+  require(std::isfinite(skin) && skin > 0.0, fmt::format("solver: skin must be positive, got {}", skin));
+  require(max_newton >= 0 && max_newton <= 1000, fmt::format("solver: max_newton must be in [0, 1000], got {}", max_newton));
+  require(std::isfinite(residual_tol) && residual_tol > 0.0,
+          fmt::format("solver: residual tolerance must be positive, got {}", residual_tol));
+  require(std::isfinite(max_step) && max_step > 0.0, fmt::format("solver: max_step must be positive, got {}", max_step));
+  require(std::isfinite(max_rotation_step) && max_rotation_step > 0.0,
+          fmt::format("solver: max_rotation_step must be positive, got {}", max_rotation_step));
+  require(std::isfinite(regularisation) && regularisation >= 0.0 && regularisation < 1e-2,
+          fmt::format("solver: regularisation must be in [0, 1e-2), got {}", regularisation));
+  require(std::isfinite(slide_stiffness_fraction) && slide_stiffness_fraction >= 0.0 && slide_stiffness_fraction <= 1.0,
+          fmt::format("solver: slide_stiffness_fraction must be in [0, 1], got {}", slide_stiffness_fraction));
+}
+
+struct NetworkSolver::Impl {
+  SolverOptions opt;
+  int n = 0;
+  std::vector<double> x, y, th, r;
+  std::vector<std::uint8_t> periph;
+  double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;
+  Eigen::Matrix2d Fbox = Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d E = Eigen::Matrix2d::Zero();
+
+  // DOF map: dof[3p + c] = free index or -1 (prescribed)
+  std::vector<int> dof;
+  int nfree = 0;
+
+  // pair table = neighbour list (i < j, sorted), with committed history
+  std::vector<int> pi, pj;
+  std::vector<ct::PlasticIndentationHistory> hist;
+  std::vector<PairAux> aux;
+  std::vector<double> xb, yb;  // positions at the last neighbour build
+  Eigen::Matrix2d Fb = Eigen::Matrix2d::Identity();
+
+  // committed forces
+  std::vector<double> fn_c, ft_c;  // per pair
+  std::vector<std::uint8_t> slide_c;
+  std::vector<double> f_c;  // 3n contact forces on particles (committed state)
+
+  // sparse pattern (free DOFs only, full storage)
+  SpMat K, M;
+  std::vector<int> pos;       // 36 per pair: position in valuePtr, -1 if a DOF is prescribed
+  std::vector<int> diag_pos;  // per free DOF
+  bool pattern_changed = true;
+
+  // trial buffers
+  std::vector<double> du, f;
+  std::vector<ct::PairGeometry> g0;
+  std::vector<ct::PlasticIndentationResult> trial;
+  std::vector<double> trial_slip, trial_dphi;
+  std::vector<double> du_prev;
+  Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
+  VecX rhs, sol;
+
+  LinearSolver lin;
+  SolverTimings tim;
+
+  // ---------------------------------------------------------------------------------------------
+  void build_dofs() {
+    dof.assign(3 * n, -1);
+    nfree = 0;
+    const bool rot_free = opt.rotations && opt.law.frictional();
+    for (int p = 0; p < n; ++p) {
+      const bool translations_free = opt.mode == BoundaryMode::Die && !periph[p];
+      if (translations_free) {
+        dof[3 * p] = nfree++;
+        dof[3 * p + 1] = nfree++;
+      }
+      // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes
+      if (rot_free && !periph[p]) dof[3 * p + 2] = nfree++;
+    }
+  }
+
+  // Cell-list neighbour search: all pairs with gap < skin * r_mean. Merges the committed history.
+  void build_neighbours() {
+    const auto t0 = Clock::now();
+    const double skin = opt.skin * r_mean;
+    const double cell = 2.0 * r_max + skin;
+    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0];
+    for (int p = 1; p < n; ++p) {
+      xmin = std::min(xmin, x[p]);
+      xmax = std::max(xmax, x[p]);
+      ymin = std::min(ymin, y[p]);
+      ymax = std::max(ymax, y[p]);
+    }
+    const int nx = std::max(1, static_cast<int>((xmax - xmin) / cell) + 1);
+    const int ny = std::max(1, static_cast<int>((ymax - ymin) / cell) + 1);
+    std::vector<int> head(static_cast<std::size_t>(nx) * ny, -1), next(n, -1);
+    auto cell_of = [&](int p, int& cx, int& cy) {
+      cx = std::min(nx - 1, static_cast<int>((x[p] - xmin) / cell));
+      cy = std::min(ny - 1, static_cast<int>((y[p] - ymin) / cell));
+    };
+    for (int p = n - 1; p >= 0; --p) {
+      int cx, cy;
+      cell_of(p, cx, cy);
+      next[p] = head[cy * nx + cx];
+      head[cy * nx + cx] = p;
+    }
+    std::vector<std::pair<int, int>> pairs;
+    pairs.reserve(pi.size() + n);
+    for (int p = 0; p < n; ++p) {
+      int cx, cy;
+      cell_of(p, cx, cy);
+      for (int oy = -1; oy <= 1; ++oy)
+        for (int ox = -1; ox <= 1; ++ox) {
+          const int qx = cx + ox, qy = cy + oy;
+          if (qx < 0 || qy < 0 || qx >= nx || qy >= ny) continue;
+          for (int q = head[qy * nx + qx]; q >= 0; q = next[q]) {
+            if (q <= p) continue;
+            const double dx = x[q] - x[p], dy = y[q] - y[p];
+            const double gap = std::sqrt(dx * dx + dy * dy) - r[p] - r[q];
+            if (gap < skin) pairs.emplace_back(p, q);
+          }
+        }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    // merge the committed history (both lists sorted); pairs farther apart than the skin lose it
+    std::vector<int> npi(pairs.size()), npj(pairs.size());
+    std::vector<ct::PlasticIndentationHistory> nh(pairs.size());
+    std::vector<PairAux> na(pairs.size());
+    std::vector<double> nfn(pairs.size(), 0.0), nft(pairs.size(), 0.0);
+    std::vector<std::uint8_t> nsl(pairs.size(), 0);
+    std::size_t o = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      npi[k] = pairs[k].first;
+      npj[k] = pairs[k].second;
+      while (o < pi.size() && std::make_pair(pi[o], pj[o]) < pairs[k]) ++o;
+      if (o < pi.size() && pi[o] == pairs[k].first && pj[o] == pairs[k].second) {
+        nh[k] = hist[o];
+        na[k] = aux[o];
+        nfn[k] = fn_c[o];
+        nft[k] = ft_c[o];
+        nsl[k] = slide_c[o];
+      } else {
+        na[k].E_form = E;
+      }
+    }
+    pi.swap(npi);
+    pj.swap(npj);
+    hist.swap(nh);
+    aux.swap(na);
+    fn_c.swap(nfn);
+    ft_c.swap(nft);
+    slide_c.swap(nsl);
+    xb = x;
+    yb = y;
+    Fb = Fbox;
+    build_pattern();
+    tim.neighbours += seconds_since(t0);
+  }
+
+  // Sparsity pattern of the free-DOF matrix: diagonal 3x3 blocks + one block pair per neighbour pair.
+  void build_pattern() {
+    std::vector<Eigen::Triplet<double, int>> trip;
+    trip.reserve(9 * n + 36 * pi.size());
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          const int ra = dof[3 * p + a], cb = dof[3 * p + b];
+          if (ra >= 0 && cb >= 0) trip.emplace_back(ra, cb, 0.0);
+        }
+    for (std::size_t k = 0; k < pi.size(); ++k) {
+      const int nodes[2] = {pi[k], pj[k]};
+      for (int A = 0; A < 2; ++A)
+        for (int B = 0; B < 2; ++B)
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) {
+              const int ra = dof[3 * nodes[A] + a], cb = dof[3 * nodes[B] + b];
+              if (ra >= 0 && cb >= 0) trip.emplace_back(ra, cb, 0.0);
+            }
+    }
+    K.resize(nfree, nfree);
+    K.setFromTriplets(trip.begin(), trip.end());
+    K.makeCompressed();
+    M = K;
+    auto find = [&](int row, int col) -> int {
+      const int* inner = K.innerIndexPtr();
+      const int b = K.outerIndexPtr()[col], e = K.outerIndexPtr()[col + 1];
+      const int* it = std::lower_bound(inner + b, inner + e, row);
+      return static_cast<int>(it - inner);
+    };
+    pos.assign(36 * pi.size(), -1);
+    for (std::size_t k = 0; k < pi.size(); ++k) {
+      const int nodes[2] = {pi[k], pj[k]};
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) {
+          const int ra = dof[3 * nodes[a / 3] + a % 3], cb = dof[3 * nodes[b / 3] + b % 3];
+          if (ra >= 0 && cb >= 0) pos[36 * k + 6 * b + a] = find(ra, cb);
+        }
+    }
+    diag_pos.resize(nfree);
+    for (int d = 0; d < nfree; ++d) diag_pos[d] = find(d, d);
+    pattern_changed = true;
+  }
+
+  bool needs_rebuild() const {
+    // displacement relative to the affine motion since the last build, plus the affine part of
+    // the relative motion of two neighbours
+    const Eigen::Matrix2d A = Fbox * Fb.inverse();
+    double dmax = 0.0;
+    for (int p = 0; p < n; ++p) {
+      const Eigen::Vector2d xa = A * Eigen::Vector2d(xb[p], yb[p]);
+      dmax = std::max(dmax, std::hypot(x[p] - xa.x(), y[p] - xa.y()));
+    }
+    const double affine_rel = (A - Eigen::Matrix2d::Identity()).norm() * (2.0 * r_max + opt.skin * r_mean);
+    return 2.0 * dmax + affine_rel > opt.skin * r_mean;
+  }
+
+  // Trial evaluation of every pair from the committed state and the increment du.
+  // Fills f (3n), trial results, and (if assemble) the values of K and M.
+  void evaluate(bool assemble, bool& any_nonsymmetric) {
+    std::fill(f.begin(), f.end(), 0.0);
+    if (assemble) {
+      std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+      std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
+    }
+    any_nonsymmetric = false;
+    ct::TangentOptions topt;
+    topt.geometric = opt.geometric_stiffness;
+    ct::PairElement e;
+    double* Kv = K.valuePtr();
+    double* Mv = M.valuePtr();
+    const double slide_frac = opt.slide_stiffness_fraction;
+    for (std::size_t k = 0; k < pi.size(); ++k) {
+      const int i = pi[k], j = pj[k];
+      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+      const ct::PairGeometry& g = g0[k];
+      // pairs that are apart and have never touched cost only the geometry
+      if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+        trial[k] = ct::PlasticIndentationResult{};
+        trial_slip[k] = 0.0;
+        trial_dphi[k] = 0.0;
+        continue;
+      }
+      ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
+      trial[k] = e.law;
+      trial_slip[k] = e.dslip;
+      trial_dphi[k] = std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
+      for (int a = 0; a < 3; ++a) {
+        f[3 * i + a] += e.force(a);
+        f[3 * j + a] += e.force(3 + a);
+      }
+      if (!assemble || e.law.branch == ct::NormalBranch::Open) continue;
+      if (e.law.sliding) any_nonsymmetric = true;
+      const ct::PairVec bn = ct::normal_gradient(g1), bt = ct::slip_gradient(g1);
+      // Young contacts: Eq 2 is concave with a singular tangent at first touch, and Newton on the
+      // tangent overshoots into separation. On the plastic branch use the secant over the
+      // increment (from where the force starts) when it is stiffer than the tangent.
+      double kn_extra = 0.0;
+      if (e.law.branch == ct::NormalBranch::Plastic) {
+        const double u_from = std::max(g.overlap, ct::separation_overlap(opt.law, g1.r_eff, hist[k].u_max));
+        if (g1.overlap > u_from) {
+          const double ksec = ct::normal_secant(opt.law, g1.r_eff, hist[k].u_max, u_from, g1.overlap);
+          kn_extra = std::max(0.0, ksec - e.law.k_n);
+        }
+      }
+      if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
+      // sliding contacts keep a fraction of their tangential spring in the iteration matrix: the
+      // consistent tangent has none, which leaves the rotation of a particle whose contacts all
+      // slide without stiffness (the residual, not the matrix, defines the equilibrium)
+      if (e.law.sliding && slide_frac > 0.0)
+        e.stiffness.noalias() += slide_frac * opt.law.k_t * e.law.area * bt * bt.transpose();
+      const double kn_sym = e.law.k_n + kn_extra;
+      // symmetric slip-status tangent for the preconditioner / direct solve
+      const double kt = opt.law.frictional() ? opt.law.k_t * e.law.area * (e.law.sliding ? slide_frac : 1.0) : 0.0;
+      const int* pk = &pos[36 * k];
+      for (int b = 0; b < 6; ++b)
+        for (int a = 0; a < 6; ++a) {
+          const int q = pk[6 * b + a];
+          if (q < 0) continue;
+          Kv[q] += e.stiffness(a, b);
+          Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
+        }
+    }
+    if (opt.law.frictional()) any_nonsymmetric = true;  // stick tangents differ slightly from M too
+  }
+
+  double mean_normal_force() const {
+    double s = 0.0;
+    int c = 0;
+    for (const auto& t : trial)
+      if (t.branch != ct::NormalBranch::Open) {
+        s += t.f_n;
+        ++c;
+      }
+    return c > 0 ? s / c : 0.0;
+  }
+
+  double residual_norm(double fbar) const {
+    double m = 0.0;
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 3; ++a)
+        if (dof[3 * p + a] >= 0) m = std::max(m, std::fabs(f[3 * p + a]) / (a == 2 ? r_mean : 1.0));
+    return m / std::max(fbar, 1e-300);
+  }
+
+  void regularise() {
+    double s = 0.0;
+    int c = 0;
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 2; ++a)
+        if (dof[3 * p + a] >= 0) {
+          s += M.valuePtr()[diag_pos[dof[3 * p + a]]];
+          ++c;
+        }
+    double ref = c > 0 ? s / c : 0.0;
+    if (ref <= 0.0) {  // affine mode: only rotations are free
+      for (int d = 0; d < nfree; ++d) ref = std::max(ref, M.valuePtr()[diag_pos[d]]);
+      if (ref <= 0.0) ref = opt.law.sigma_y;
+    }
+    const double eps = opt.regularisation * ref;
+    for (int d = 0; d < nfree; ++d) {
+      K.valuePtr()[diag_pos[d]] += eps;
+      M.valuePtr()[diag_pos[d]] += eps;
+    }
+  }
+};
+
+NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
+  options.validate();
+  packing::validate(pk);
+  auto& s = *impl_;
+  s.opt = options;
+  s.n = static_cast<int>(pk.size());
+  s.x = pk.x;
+  s.y = pk.y;
+  s.r = pk.r;
+  s.th.assign(s.n, 0.0);
+  s.periph = packing::peripheral_layer(pk);
+  s.solid_area = pk.solid_area();
+  s.box_area0 = pk.box.area();
+  s.D0 = s.solid_area / s.box_area0;
+  s.r_mean = std::accumulate(s.r.begin(), s.r.end(), 0.0) / s.n;
+  s.r_max = *std::max_element(s.r.begin(), s.r.end());
+  s.build_dofs();
+  s.du.assign(3 * s.n, 0.0);
+  s.f.assign(3 * s.n, 0.0);
+  s.f_c.assign(3 * s.n, 0.0);
+  s.build_neighbours();
+}
+
+NetworkSolver::~NetworkSolver() = default;
+
+IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
+  auto& s = *impl_;
+  const auto t_start = Clock::now();
+  if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
+  IncrementReport rep;
+  if (s.needs_rebuild()) {
+    s.build_neighbours();
+    rep.reanalysed = true;
+  }
+  const std::size_t np = s.pi.size();
+  s.g0.resize(np);
+  s.trial.resize(np);
+  s.trial_slip.resize(np);
+  s.trial_dphi.resize(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    const int i = s.pi[k], j = s.pj[k];
+    s.g0[k] = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
+  }
+  // prescribed motion (Eqs 14-15 on current coordinates) and predictor for the free DOFs
+  const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
+  const double dn = dE.norm(), dpn = s.dE_prev.norm();
+  const bool reuse = !s.du_prev.empty() && dpn > 0.0 && dn > 0.0 &&
+                     (dE.array() * s.dE_prev.array()).sum() / (dn * dpn) > 0.999;
+  const double scale = reuse ? dn / dpn : 0.0;
+  for (int p = 0; p < s.n; ++p) {
+    const Eigen::Vector2d u = A * Eigen::Vector2d(s.x[p], s.y[p]);
+    for (int a = 0; a < 2; ++a) {
+      const int d = s.dof[3 * p + a];
+      s.du[3 * p + a] = (d >= 0 && reuse) ? scale * s.du_prev[3 * p + a] : u(a);
+    }
+    const int d = s.dof[3 * p + 2];
+    s.du[3 * p + 2] = (d >= 0 && reuse) ? scale * s.du_prev[3 * p + 2] : 0.0;
+  }
+  s.rhs.resize(s.nfree);
+  s.sol.resize(s.nfree);
+  double fbar = 1.0;
+  for (int it = 0;; ++it) {
+    const bool want_tangent = it < s.opt.max_newton;
+    bool nonsym = false;
+    auto ta = Clock::now();
+    s.evaluate(want_tangent && s.nfree > 0, nonsym);
+    s.tim.assemble += seconds_since(ta);
+    fbar = s.mean_normal_force();
+    if (fbar <= 0.0) fbar = s.opt.law.sigma_y * s.r_mean * 1e-6;
+    rep.residual = s.nfree > 0 ? s.residual_norm(fbar) : 0.0;
+    if (!std::isfinite(rep.residual))
+      throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
+    if (std::getenv("NETDEM_DEBUG"))
+      std::fprintf(stderr, "  it %d residual %.3e fbar %.3e\n", it, rep.residual, fbar);
+    if (rep.residual <= s.opt.residual_tol || s.nfree == 0) {
+      rep.converged = true;
+      break;
+    }
+    if (!want_tangent) break;
+    s.regularise();
+    for (int p = 0; p < s.n; ++p)
+      for (int a = 0; a < 3; ++a)
+        if (const int d = s.dof[3 * p + a]; d >= 0) s.rhs(d) = s.f[3 * p + a];
+    LinearStatus st = s.lin.factorise(s.M, s.pattern_changed);
+    s.pattern_changed = false;
+    if (!st.ok) throw std::runtime_error("increment: " + st.message);
+    st = nonsym ? s.lin.solve(s.K, s.rhs, s.sol) : s.lin.solve(s.rhs, s.sol);
+    if (!st.ok) {
+      // fall back to the symmetric slip-status tangent (a defect-correction step)
+      st = s.lin.solve(s.rhs, s.sol);
+      if (!st.ok) throw std::runtime_error("increment: " + st.message);
+    }
+    rep.linear_iterations += st.iterations;
+    // limit the step size
+    // per-particle step limits: a single soft mode must not freeze the whole network
+    const double lim = 1.0;
+    for (int p = 0; p < s.n; ++p) {
+      const int dx = s.dof[3 * p], dy = s.dof[3 * p + 1], dr = s.dof[3 * p + 2];
+      if (dx >= 0) {
+        const double t = std::hypot(s.sol(dx), s.sol(dy)), tl = s.opt.max_step * s.r_mean;
+        if (t > tl) {
+          s.sol(dx) *= tl / t;
+          s.sol(dy) *= tl / t;
+        }
+      }
+      if (dr >= 0) s.sol(dr) = std::clamp(s.sol(dr), -s.opt.max_rotation_step, s.opt.max_rotation_step);
+    }
+    // backtracking line search on the residual norm
+    const double r_before = rep.residual;
+    double applied = 0.0;
+    for (int ls = 0; ls < 5; ++ls) {
+      const double step = lim * std::ldexp(1.0, -ls) - applied;
+      for (int p = 0; p < s.n; ++p)
+        for (int a = 0; a < 3; ++a)
+          if (const int d = s.dof[3 * p + a]; d >= 0) s.du[3 * p + a] += step * s.sol(d);
+      applied += step;
+      if (ls == 4) break;
+      bool dummy;
+      s.evaluate(false, dummy);
+      const double fb = std::max(s.mean_normal_force(), 1e-300);
+      if (s.residual_norm(fb) < r_before) break;
+    }
+    ++rep.newton_iterations;
+  }
+  // commit
+  const Eigen::Matrix2d E_old = s.E;
+  for (std::size_t k = 0; k < np; ++k) {
+    const auto& t = s.trial[k];
+    const bool was_loaded = s.fn_c[k] > 0.0;
+    const bool loaded = t.branch != ct::NormalBranch::Open;
+    if (loaded && s.hist[k].u_max <= 0.0) {  // first touch: start the affine-deviation bookkeeping
+      s.aux[k] = PairAux{};
+      s.aux[k].E_form = E_old;
+    }
+    if (loaded && !was_loaded) ++rep.new_contacts;
+    if (!loaded && was_loaded) ++rep.lost_contacts;
+    if (loaded || s.hist[k].u_max > 0.0) {
+      s.hist[k] = t.history;
+      s.aux[k].slip += s.trial_slip[k];
+      s.aux[k].centre += s.trial_dphi[k];
+    }
+    s.fn_c[k] = t.f_n;
+    s.ft_c[k] = t.f_t;
+    s.slide_c[k] = t.sliding ? 1 : 0;
+    rep.sliding += t.sliding;
+  }
+  for (int p = 0; p < s.n; ++p) {
+    s.x[p] += s.du[3 * p];
+    s.y[p] += s.du[3 * p + 1];
+    s.th[p] += s.du[3 * p + 2];
+  }
+  s.f_c = s.f;
+  s.E += dE;
+  s.Fbox = small_expm(dE) * s.Fbox;
+  s.du_prev = s.du;
+  s.dE_prev = dE;
+  const auto& ls = s.lin.stats();
+  s.tim.analyses = ls.analyses;
+  s.tim.factorisations = ls.factorisations;
+  s.tim.solves = ls.solves;
+  s.tim.analyse = ls.t_analyse;
+  s.tim.factorise = ls.t_factorise;
+  s.tim.solve = ls.t_solve;
+  s.tim.increments += 1;
+  s.tim.newton_iterations += rep.newton_iterations;
+  s.tim.total += seconds_since(t_start);
+  return rep;
+}
+
+StateMeasures NetworkSolver::measures() const {
+  const auto& s = *impl_;
+  StateMeasures m;
+  m.E11 = s.E(0, 0);
+  m.E22 = s.E(1, 1);
+  m.E12 = s.E(0, 1);
+  const double V = s.box_area0 * s.Fbox.determinant();
+  m.density = s.solid_area / V;
+  // Eq 13: reactions of the prescribed particles (translational DOFs prescribed)
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
+  for (int p = 0; p < s.n; ++p) {
+    if (s.dof[3 * p] >= 0) continue;
+    const Eigen::Vector2d Fapp(-s.f_c[3 * p], -s.f_c[3 * p + 1]);
+    S += Fapp * Eigen::Vector2d(s.x[p], s.y[p]).transpose();
+  }
+  S /= V;
+  m.S11 = S(0, 0);
+  m.S22 = S(1, 1);
+  m.S12 = 0.5 * (S(0, 1) + S(1, 0));
+  m.S_asym = 0.5 * (S(0, 1) - S(1, 0));
+  // Love-Weber average over the contacts and the affine-deviation measures
+  Eigen::Matrix2d SC = Eigen::Matrix2d::Zero();
+  double sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_tc = 0, sum_tr = 0, sum_ta = 0;
+  int n_ratio = 0, loaded = 0;
+  double sum_fn = 0;
+  for (std::size_t k = 0; k < s.pi.size(); ++k) {
+    if (s.fn_c[k] <= 0.0) continue;
+    const int i = s.pi[k], j = s.pj[k];
+    const auto g = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
+    const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
+    SC -= fj * (g.L * g.n).transpose();
+    ++loaded;
+    sum_fn += s.fn_c[k];
+    m.sliding += s.slide_c[k];
+    // Eq 16 with the strain accumulated since the contact formed
+    const Eigen::Matrix2d dEc = s.E - s.aux[k].E_form;
+    const double Rsum = s.r[i] + s.r[j];
+    const double una = -(g.n.dot(dEc * g.n)) * Rsum;
+    const double uta = g.t.dot(dEc * g.n) * Rsum;
+    const double un = g.overlap;
+    sum_absdev += std::fabs(un - una);
+    sum_una += una;
+    if (una > 1e-12 * s.r_mean) {
+      sum_ratio += std::fabs(un - una) / una;
+      ++n_ratio;
+    }
+    sum_tc += std::fabs(s.aux[k].centre - uta);
+    sum_tr += std::fabs(s.aux[k].slip - uta);
+    sum_ta += std::fabs(uta);
+  }
+  SC /= V;
+  m.S11_contacts = SC(0, 0);
+  m.S22_contacts = SC(1, 1);
+  m.S12_contacts = 0.5 * (SC(0, 1) + SC(1, 0));
+  if (loaded == 0) {  // initial state: count geometric contacts
+    for (std::size_t k = 0; k < s.pi.size(); ++k) {
+      const int i = s.pi[k], j = s.pj[k];
+      const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
+      if (L <= (s.r[i] + s.r[j]) * (1.0 + 1e-6)) ++loaded;
+    }
+  }
+  m.contacts = loaded;
+  m.Z = 2.0 * loaded / s.n;
+  m.mean_normal_force = loaded > 0 ? sum_fn / loaded : 0.0;
+  const int nl = std::max(loaded, 1);
+  const double una_mean = sum_una / nl;
+  m.dev_normal_mean_ratio = n_ratio > 0 ? sum_ratio / n_ratio : 0.0;
+  m.dev_normal_ratio_of_means = una_mean > 0 ? (sum_absdev / nl) / una_mean : 0.0;
+  m.dev_tangential_centres = una_mean > 0 ? (sum_tc / nl) / una_mean : 0.0;
+  m.dev_tangential_rotations = una_mean > 0 ? (sum_tr / nl) / una_mean : 0.0;
+  m.affine_tangential = una_mean > 0 ? (sum_ta / nl) / una_mean : 0.0;
+  return m;
+}
+
+const SolverTimings& NetworkSolver::timings() const { return impl_->tim; }
+std::size_t NetworkSolver::size() const { return static_cast<std::size_t>(impl_->n); }
+const std::vector<double>& NetworkSolver::x() const { return impl_->x; }
+const std::vector<double>& NetworkSolver::y() const { return impl_->y; }
+const std::vector<double>& NetworkSolver::theta() const { return impl_->th; }
+const std::vector<double>& NetworkSolver::radius() const { return impl_->r; }
+const std::vector<std::uint8_t>& NetworkSolver::peripheral() const { return impl_->periph; }
+Eigen::Matrix2d NetworkSolver::box_deformation() const { return impl_->Fbox; }
+double NetworkSolver::solid_area() const { return impl_->solid_area; }
+double NetworkSolver::initial_density() const { return impl_->D0; }
+int NetworkSolver::free_dofs() const { return impl_->nfree; }
+
+std::vector<ContactView> NetworkSolver::contacts() const {
+  const auto& s = *impl_;
+  std::vector<ContactView> out;
+  for (std::size_t k = 0; k < s.pi.size(); ++k) {
+    if (s.fn_c[k] <= 0.0) continue;
+    const int i = s.pi[k], j = s.pj[k];
+    const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
+    out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.r[i] + s.r[j] - L, s.slide_c[k] != 0});
+  }
+  return out;
+}
+
+}  // namespace netdem::qs

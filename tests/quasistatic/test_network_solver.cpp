@@ -1,0 +1,195 @@
+// Tests of the quasi-static network solver against closed forms on lattices, equilibrium
+// identities on random packings, and increment convergence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+
+#include "netdem/packing/ballistic.hpp"
+#include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/compaction.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+
+using namespace netdem;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+bool small_scale() {
+  const char* s = std::getenv("NETDEM_TEST_SCALE");
+  return s && std::string(s) == "small";
+}
+
+// Square lattice of nc x nr touching disks of radius R filling the box [0, 2 R nc] x [0, 2 R nr].
+packing::Packing square_lattice(int nc, int nr, double R = 1.0) {
+  packing::Packing p;
+  for (int r = 0; r < nr; ++r)
+    for (int c = 0; c < nc; ++c) {
+      p.x.push_back(R + 2 * R * c);
+      p.y.push_back(R + 2 * R * r);
+      p.r.push_back(R);
+    }
+  p.box = {0.0, 0.0, 2 * R * nc, 2 * R * nr};
+  return p;
+}
+
+// Closed form for the square lattice under proportional affine strain with principal components
+// (E11, E22): every horizontal contact has length 2R exp(E11), every vertical one 2R exp(E22);
+// F_N = 3 sigma_y sqrt(8 u R*) (Eq 2) with R* = R/2; Sigma = -(1/V) sum_c F_N L n n (Eq 13 at equilibrium).
+Eigen::Vector2d lattice_stress(int nc, int nr, double R, double E11, double E22, double sigma_y) {
+  const double V = (2 * R * nc) * (2 * R * nr) * std::exp(E11 + E22);
+  auto contact = [&](double L) {
+    const double u = 2 * R - L;
+    return u > 0 ? 3 * sigma_y * std::sqrt(8 * u * R / 2) * L : 0.0;
+  };
+  const double Lh = 2 * R * std::exp(E11), Lv = 2 * R * std::exp(E22);
+  return {-(nr * (nc - 1)) * contact(Lh) / V, -(nc * (nr - 1)) * contact(Lv) / V};
+}
+
+struct RunResult {
+  qs::StateMeasures m;
+  int unconverged = 0;
+  double max_residual = 0;
+};
+
+RunResult compact(const packing::Packing& pk, const qs::SolverOptions& so, const qs::StrainPath& path, double D,
+                  int increments) {
+  qs::NetworkSolver s(pk, so);
+  qs::CompactionOptions co;
+  co.path = path;
+  co.target_density = D;
+  co.increments = increments;
+  RunResult rr;
+  qs::run_compaction(s, co, [&](const qs::CompactionRow& row) {
+    rr.m = row.state;
+    if (row.increment > 0) {
+      rr.unconverged += !row.report.converged;
+      rr.max_residual = std::max(rr.max_residual, row.report.residual);
+    }
+  });
+  return rr;
+}
+
+}  // namespace
+
+// Square lattice, hydrostatic and closed-die, affine and die boundary conditions, with and
+// without friction: by symmetry the interior follows the affine motion, so every combination
+// must reproduce the closed form.
+TEST(NetworkSolver, SquareLatticeMatchesClosedForm) {
+  const int nc = 8, nr = 6;
+  const auto pk = square_lattice(nc, nr);
+  for (const auto& path : {qs::StrainPath::hydrostatic(), qs::StrainPath::closed_die()}) {
+    for (auto mode : {qs::BoundaryMode::Affine, qs::BoundaryMode::Die}) {
+      for (double mu : {0.0, kInf}) {
+        qs::SolverOptions so;
+        so.mode = mode;
+        so.law.mu = mu;
+        so.law.sigma_y = 2.0;
+        so.residual_tol = 1e-11;
+        const double D_target = pk.density() * 1.04;
+        auto rr = compact(pk, so, path, D_target, 20);
+        const auto expect = lattice_stress(nc, nr, 1.0, rr.m.E11, rr.m.E22, so.law.sigma_y);
+        const std::string tag = path.name + (mode == qs::BoundaryMode::Affine ? " affine" : " die") +
+                                (mu == 0.0 ? " frictionless" : " sticking");
+        EXPECT_NEAR(rr.m.density, D_target, 1e-12) << tag;
+        EXPECT_NEAR(rr.m.S11, expect(0), 1e-7 * std::fabs(expect(1))) << tag;
+        EXPECT_NEAR(rr.m.S22, expect(1), 1e-7 * std::fabs(expect(1))) << tag;
+        EXPECT_NEAR(rr.m.S12, 0.0, 1e-6 * std::fabs(expect(1))) << tag;  // round-off of sum F x
+        EXPECT_EQ(rr.unconverged, 0) << tag;
+        if (path.name == "closed-die") {
+          EXPECT_EQ(expect(0), 0.0);  // horizontal contacts never load
+        }
+      }
+    }
+  }
+}
+
+// On a random packing the stress from the boundary reactions (Eq 13) equals the contact
+// (Love-Weber) average when the free particles are in equilibrium.
+TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {
+  packing::DepositionOptions d;
+  d.width = small_scale() ? 12.0 : 20.0;
+  d.seed = 3;
+  const auto pk = packing::ballistic_deposition(d);
+  for (double mu : {0.1, kInf}) {
+    qs::SolverOptions so;
+    so.law.mu = mu;
+    so.residual_tol = 1e-7;
+    so.max_newton = 200;
+    auto rr = compact(pk, so, qs::StrainPath::hydrostatic(), pk.density() + 0.02, 40);
+    EXPECT_LT(rr.m.S22, 0.0);
+    EXPECT_LT(rr.m.S11, 0.0);
+    const double tol = 1e-5 * std::fabs(rr.m.S22) + 10 * rr.max_residual * rr.m.mean_normal_force;
+    EXPECT_NEAR(rr.m.S11, rr.m.S11_contacts, tol) << "mu=" << mu;
+    EXPECT_NEAR(rr.m.S22, rr.m.S22_contacts, tol) << "mu=" << mu;
+    std::printf("mu=%g: S11=%.5f S22=%.5f (contacts %.5f %.5f), Z=%.3f, unconverged %d, max residual %.2e\n", mu,
+                rr.m.S11, rr.m.S22, rr.m.S11_contacts, rr.m.S22_contacts, rr.m.Z, rr.unconverged, rr.max_residual);
+  }
+}
+
+// Affine mode on a random packing: with no rearrangement the contact overlaps follow Eq 16 and
+// the affine deviation measures vanish; hydrostatic affine motion gives no tangential motion.
+TEST(NetworkSolver, AffineModeHasNoAffineDeviation) {
+  packing::DepositionOptions d;
+  d.width = 16.0;
+  d.seed = 5;
+  const auto pk = packing::ballistic_deposition(d);
+  qs::SolverOptions so;
+  so.mode = qs::BoundaryMode::Affine;
+  so.law.mu = 0.0;
+  auto rr = compact(pk, so, qs::StrainPath::hydrostatic(), pk.density() + 0.02, 10);
+  EXPECT_LT(rr.m.dev_tangential_centres, 1e-6);
+  EXPECT_LT(rr.m.affine_tangential, 1e-9);
+  // Eq 16 is the linearisation of the exact overlap: deviation of the order of the strain
+  EXPECT_LT(rr.m.dev_normal_ratio_of_means, 0.05);
+}
+
+// Equilibrium correction: the final stress converges as the strain increment shrinks.
+TEST(NetworkSolver, IncrementConvergence) {
+  packing::DepositionOptions d;
+  d.width = small_scale() ? 12.0 : 20.0;
+  d.seed = 3;
+  const auto pk = packing::ballistic_deposition(d);
+  qs::SolverOptions so;
+  so.law.mu = kInf;
+  so.residual_tol = 1e-7;
+  so.max_newton = 200;
+  const double D = pk.density() + 0.02;
+  const int ref_n = 160;
+  const auto ref_run = compact(pk, so, qs::StrainPath::hydrostatic(), D, ref_n);
+  ASSERT_EQ(ref_run.unconverged, 0);
+  const double ref = ref_run.m.S22;
+  double prev_err = kInf;
+  for (int n : {10, 20, 40}) {
+    const double err = std::fabs(compact(pk, so, qs::StrainPath::hydrostatic(), D, n).m.S22 - ref) / std::fabs(ref);
+    std::printf("increments %d: relative error in S22 vs %d increments: %.3e\n", n, ref_n, err);
+    EXPECT_LT(err, 0.05);
+    if (err > 1e-6) {
+      EXPECT_LT(err, prev_err * 1.01);
+    }
+    prev_err = err;
+  }
+}
+
+TEST(NetworkSolver, RejectsImpossibleTargetsAndBadOptions) {
+  const auto pk = square_lattice(4, 4);
+  qs::SolverOptions so;
+  qs::NetworkSolver s(pk, so);
+  qs::CompactionOptions co;
+  co.path = qs::StrainPath::parse("1,1,0");
+  EXPECT_THROW(qs::run_compaction(s, co, [](const qs::CompactionRow&) {}), std::invalid_argument);
+  co.path = qs::StrainPath::hydrostatic();
+  co.target_density = 0.5;  // below the current density
+  EXPECT_THROW(qs::run_compaction(s, co, [](const qs::CompactionRow&) {}), std::invalid_argument);
+  EXPECT_THROW(qs::StrainPath::parse("foo"), std::invalid_argument);
+  EXPECT_THROW(qs::StrainPath::parse("1,nan,0"), std::invalid_argument);
+  so.skin = -1;
+  EXPECT_THROW(qs::NetworkSolver(pk, so), std::invalid_argument);
+  so = {};
+  so.law.sigma_y = -1;
+  EXPECT_THROW(qs::NetworkSolver(pk, so), std::invalid_argument);
+}
