@@ -40,9 +40,9 @@ struct PackArgs {
 };
 
 struct CompactArgs {
-  bool affine = false, no_rotation = false, quiet = false;
+  bool affine = false, no_rotation = false, quiet = false, verbose = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6, viscosity = 1e-2, slide_fraction = 0.05;
   int increments = 200, max_newton = 12;
 };
 
@@ -143,6 +143,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.law.sigma_y = a.sigma_y;
   so.residual_tol = a.tol;
   so.max_newton = a.max_newton;
+  so.viscosity = a.viscosity;
+  so.slide_stiffness_fraction = a.slide_fraction;
+  so.verbose = a.verbose;
   so.validate();
   qs::CompactionOptions co;
   co.path = qs::StrainPath::parse(a.path);
@@ -171,7 +174,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   write_snapshot(solver, out, "initial");
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
-      "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,newton,"
+      "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,newton_residual,newton,"
       "linear_iterations,converged\n";
   std::size_t next_snap = 0;
   int unconverged = 0;
@@ -182,11 +185,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{},{},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{},{},{}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
-                       m.dev_tangential_rotations, m.affine_tangential, row.report.residual,
+                       m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.newton_residual,
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
     if (row.increment > 0) {
       unconverged += !row.report.converged;
@@ -267,6 +270,9 @@ int main(int argc, char** argv) {
   comp->add_option("--tol", ca.tol, "Newton tolerance: max residual / mean contact force")->capture_default_str();
   comp->add_option("--max-newton", ca.max_newton, "Newton iterations per increment")->capture_default_str();
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  comp->add_option("--viscosity", ca.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")->capture_default_str();
+  comp->add_option("--slide-fraction", ca.slide_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
+  comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_option("--out", out, "output folder")->default_val("results/compact");
   try {

@@ -11,6 +11,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace netdem::packing {
@@ -39,10 +40,15 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 // Tolerances, all relative to the length they compare with (r + r_k, r, or unit normals).
 constexpr double kContactTol = 1e-10;  // gap / (r + r_k) below which a disk (wall, floor) is touching
-constexpr double kGrazing = 1e-9;      // contact normal n_y below this: beside, does not carry weight
+// Contact normal n_y at or below kGrazing: beside, carries no weight, and a fall passes it. A disk
+// dropped into a gap of exactly its diameter (common in monosized packings: the gap is exact up
+// to rounding) would otherwise "bridge" the gap at a height ~sqrt(rounding) above the equators,
+// an ill-conditioned rest that amplifies rounding to ~1e-8 R and propagates through the lattice.
+// Passing a contact with n_y <= kGrazing costs an overlap <= (r + r_k) kGrazing^2 / 2 = 5e-13.
+constexpr double kGrazing = 1e-6;
 constexpr double kTop = 1e-10;         // |n_x| below this: exactly on top of a disk (unstable)
 constexpr double kAdmissible = 1e-10;  // motion d admissible for a contact if n . d >= -kAdmissible
-constexpr double kArcEnd = 1e-9;      // angular distance treated as "at the end of a blocked arc"
+constexpr double kArcEnd = 1e-9;       // angular distance treated as "at the end of a blocked arc"
 constexpr long kMaxSteps = 1'000'000;  // per disk; a guard against a logic error, never reached
 
 constexpr int kLeftWall = -1, kRightWall = -2, kFloor = -3, kEquator = -4;
@@ -69,11 +75,12 @@ struct Move {
 
 class Depositor {
  public:
-  Depositor(const DepositionOptions& o, Packing& out)
+  /// Box [0, w] x [0, h]; `out` holds the fixed disks (appended by insert()), all of radius <= rmax.
+  Depositor(double w, double h, double rmax, Packing& out)
       : out_(out),
-        w_(o.width * o.radius),
-        h_(o.box_height() * o.radius),
-        rmax_(o.r_max * o.radius),
+        w_(w),
+        h_(h),
+        rmax_(rmax),
         cell_(2 * rmax_),
         nx_(std::max(1L, static_cast<long>(std::ceil(w_ / cell_)))),
         ny_(std::max(1L, static_cast<long>(std::ceil(h_ / cell_)))),
@@ -224,6 +231,7 @@ class Depositor {
           const double cb = (l * l + d2 - m * m) / (2 * l * d);
           if (cb >= 1) continue;  // tangent from outside: grazing, no hit
           const double beta = std::acos(std::max(cb, -1.0));  // half-angle of the blocked arc
+          if (beta <= kGrazing) continue;  // grazing (overlap < 1e-12 (r + r_k)); see kGrazing
           const double alpha = s * std::atan2(dx, dy);         // direction of k, in psi
           const double to_entry = wrap_2pi(alpha - beta - psi0), to_exit = wrap_2pi(alpha + beta - psi0);
           if (in_contact(k)) {
@@ -291,7 +299,7 @@ Packing ballistic_deposition(const DepositionOptions& o) {
   const double w = o.width * o.radius, h = o.box_height() * o.radius;
   p.box = {0.0, 0.0, w, h};
   p.seed = o.seed;
-  Depositor dep(o, p);
+  Depositor dep(w, h, o.r_max * o.radius, p);
   std::mt19937_64 rng(o.seed);
   std::size_t rejections = 0;
   for (;;) {
@@ -309,6 +317,34 @@ Packing ballistic_deposition(const DepositionOptions& o) {
     dep.insert(x, y, r);
   }
   return p;
+}
+
+std::pair<double, double> drop_disk(const Packing& base, double x0, double r) {
+  const Box& b = base.box;
+  if (!std::isfinite(b.x_min) || !std::isfinite(b.y_min) || !std::isfinite(b.x_max) || !std::isfinite(b.y_max) ||
+      !(b.width() > 0) || !(b.height() > 0))
+    throw std::invalid_argument("drop_disk: the base packing's box is not finite with positive size");
+  if (!std::isfinite(r) || !(r > 0)) throw std::invalid_argument(fmt::format("drop_disk: radius must be > 0, got {}", r));
+  if (!(x0 >= b.x_min + r && x0 <= b.x_max - r))
+    throw std::invalid_argument(
+        fmt::format("drop_disk: x0 = {} is not in [x_min + r, x_max - r] = [{}, {}]", x0, b.x_min + r, b.x_max - r));
+  if (base.y.size() != base.size() || base.r.size() != base.size())
+    throw std::invalid_argument("drop_disk: x, y, r of the base packing have different sizes");
+  double rmax = r;
+  for (std::size_t i = 0; i < base.size(); ++i) {
+    if (!std::isfinite(base.x[i]) || !std::isfinite(base.y[i]) || !std::isfinite(base.r[i]) || !(base.r[i] > 0))
+      throw std::invalid_argument(fmt::format("drop_disk: base disk {} is not finite with r > 0", i));
+    rmax = std::max(rmax, base.r[i]);
+  }
+  // Work in box coordinates [0, W] x [0, H] (the lid only sizes the search grid).
+  Packing work;
+  double top = b.height();
+  for (std::size_t i = 0; i < base.size(); ++i) top = std::max(top, base.y[i] - b.y_min + base.r[i]);
+  Depositor dep(b.width(), top, rmax, work);
+  for (std::size_t i = 0; i < base.size(); ++i) dep.insert(base.x[i] - b.x_min, base.y[i] - b.y_min, base.r[i]);
+  double x, y;
+  dep.settle(r, x0 - b.x_min, x, y);
+  return {x + b.x_min, y + b.y_min};
 }
 
 }  // namespace netdem::packing

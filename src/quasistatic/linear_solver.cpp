@@ -287,6 +287,9 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
   const int status = cm.status;  // read immediately: later CHOLMOD calls reset it
   stats.t_factorise += seconds_since(t0);
 
+  if (status < CHOLMOD_OK)
+    return failure(fmt::format("CHOLMOD factorisation of the {}x{} stiffness matrix failed: {}", nn, nn,
+                               cholmod_status_name(status)));
   const auto minor = static_cast<long>(L->minor);
   if (status == CHOLMOD_NOT_POSDEF || minor < nn) {
     LinearStatus st;
@@ -299,9 +302,6 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
         st.column, st.minor, nn);
     return st;
   }
-  if (status < CHOLMOD_OK)
-    return failure(fmt::format("CHOLMOD factorisation of the {}x{} stiffness matrix failed: {}", nn, nn,
-                               cholmod_status_name(status)));
   double ratio = 0;
   if (const int k = small_pivot(ratio); k >= 0) {
     LinearStatus st;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -59,6 +58,8 @@ void SolverOptions::validate() const {
           fmt::format("solver: max_rotation_step must be positive, got {}", max_rotation_step));
   require(std::isfinite(regularisation) && regularisation >= 0.0 && regularisation < 1e-2,
           fmt::format("solver: regularisation must be in [0, 1e-2), got {}", regularisation));
+  require(std::isfinite(viscosity) && viscosity >= 0.0 && viscosity <= 1e3,
+          fmt::format("solver: viscosity must be in [0, 1e3], got {}", viscosity));
   require(std::isfinite(slide_stiffness_fraction) && slide_stiffness_fraction >= 0.0 && slide_stiffness_fraction <= 1.0,
           fmt::format("solver: slide_stiffness_fraction must be in [0, 1], got {}", slide_stiffness_fraction));
 }
@@ -100,6 +101,11 @@ struct NetworkSolver::Impl {
   std::vector<ct::PlasticIndentationResult> trial;
   std::vector<double> trial_slip, trial_dphi;
   std::vector<double> du_prev;
+  std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
+  std::vector<std::uint8_t> last_open, open_flips;
+  std::vector<double> last_kn;
+  std::vector<double> du_aff;  // affine motion of the increment (drag reference)
+  double eta = -1.0;           // viscous drag coefficient of the current increment
   Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
   VecX rhs, sol;
 
@@ -282,6 +288,7 @@ struct NetworkSolver::Impl {
         trial[k] = ct::PlasticIndentationResult{};
         trial_slip[k] = 0.0;
         trial_dphi[k] = 0.0;
+        if (assemble) open_contact_stiffness(k, g1);
         continue;
       }
       ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
@@ -292,29 +299,43 @@ struct NetworkSolver::Impl {
         f[3 * i + a] += e.force(a);
         f[3 * j + a] += e.force(3 + a);
       }
-      if (!assemble || e.law.branch == ct::NormalBranch::Open) continue;
+      if (!assemble) continue;
+      if (e.law.branch == ct::NormalBranch::Open) {
+        open_contact_stiffness(k, g1);
+        continue;
+      }
+      if (last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
+      last_open[k] = 0;
       if (e.law.sliding) any_nonsymmetric = true;
       const ct::PairVec bn = ct::normal_gradient(g1), bt = ct::slip_gradient(g1);
-      // Young contacts: Eq 2 is concave with a singular tangent at first touch, and Newton on the
-      // tangent overshoots into separation. On the plastic branch use the secant over the
-      // increment (from where the force starts) when it is stiffer than the tangent.
+      // Eq 2 is concave with a tangent that is singular at first touch, and Newton on the tangent
+      // overshoots into separation: on the plastic branch the iteration matrix uses the secant of
+      // Eq 2 over the increment (from the start overlap, or from touch) when it is stiffer.
       double kn_extra = 0.0;
+      const double u_sep = ct::separation_overlap(opt.law, g1.r_eff, hist[k].u_max);
       if (e.law.branch == ct::NormalBranch::Plastic) {
-        const double u_from = std::max(g.overlap, ct::separation_overlap(opt.law, g1.r_eff, hist[k].u_max));
+        const double u_from = std::max(g.overlap, u_sep);
         if (g1.overlap > u_from) {
           const double ksec = ct::normal_secant(opt.law, g1.r_eff, hist[k].u_max, u_from, g1.overlap);
           kn_extra = std::max(0.0, ksec - e.law.k_n);
         }
       }
       if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
-      // sliding contacts keep a fraction of their tangential spring in the iteration matrix: the
-      // consistent tangent has none, which leaves the rotation of a particle whose contacts all
-      // slide without stiffness (the residual, not the matrix, defines the equilibrium)
-      if (e.law.sliding && slide_frac > 0.0)
-        e.stiffness.noalias() += slide_frac * opt.law.k_t * e.law.area * bt * bt.transpose();
+      // Iteration matrix (a modified Newton: robust on these non-smooth laws, see
+      // docs/quasistatic.md). Sliding contacts keep a fraction slide_frac of their tangential
+      // spring: the consistent tangent has none, which leaves the rotation of a particle whose
+      // contacts all slide without stiffness. A contact whose stick/slip status flipped twice in
+      // this increment keeps its full spring (elastic predictor; slower, but it cannot cycle).
+      // The residual, not the matrix, defines the equilibrium.
+      if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
+      last_sliding[k] = e.law.sliding ? 1 : 0;
+      const double frac = flips[k] >= 2 ? 1.0 : slide_frac;
+      if (e.law.sliding && frac > 0.0)
+        e.stiffness.noalias() += frac * opt.law.k_t * e.law.area * bt * bt.transpose();
       const double kn_sym = e.law.k_n + kn_extra;
+      last_kn[k] = kn_sym;
       // symmetric slip-status tangent for the preconditioner / direct solve
-      const double kt = opt.law.frictional() ? opt.law.k_t * e.law.area * (e.law.sliding ? slide_frac : 1.0) : 0.0;
+      const double kt = opt.law.frictional() ? opt.law.k_t * e.law.area * (e.law.sliding ? frac : 1.0) : 0.0;
       const int* pk = &pos[36 * k];
       for (int b = 0; b < 6; ++b)
         for (int a = 0; a < 6; ++a) {
@@ -325,6 +346,25 @@ struct NetworkSolver::Impl {
         }
     }
     if (opt.law.frictional()) any_nonsymmetric = true;  // stick tangents differ slightly from M too
+  }
+
+  // Open/closed cycling: a pair that closed and opened again within this increment keeps the
+  // normal stiffness it last had while closed, so that the Newton step lands near touch instead
+  // of jumping across it (iteration matrix only).
+  void open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1) {
+    if (!last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
+    last_open[k] = 1;
+    if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
+    const ct::PairVec bn = ct::normal_gradient(g1);
+    const int* pk = &pos[36 * k];
+    for (int b = 0; b < 6; ++b)
+      for (int a = 0; a < 6; ++a) {
+        const int q = pk[6 * b + a];
+        if (q < 0) continue;
+        const double v = last_kn[k] * bn(a) * bn(b);
+        K.valuePtr()[q] += v;
+        M.valuePtr()[q] += v;
+      }
   }
 
   double mean_normal_force() const {
@@ -338,7 +378,9 @@ struct NetworkSolver::Impl {
     return c > 0 ? s / c : 0.0;
   }
 
-  double residual_norm(double fbar) const {
+  /// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
+  /// out-of-balance contact force, i.e. the viscous drag that holds the increment.
+  double unbalance(double fbar) const {
     double m = 0.0;
     for (int p = 0; p < n; ++p)
       for (int a = 0; a < 3; ++a)
@@ -346,25 +388,53 @@ struct NetworkSolver::Impl {
     return m / std::max(fbar, 1e-300);
   }
 
-  void regularise() {
-    double s = 0.0;
-    int c = 0;
+  /// Newton residual r = f_contact - eta (du - du_affine) on the free DOFs, as max-norm / fbar.
+  /// If fill_rhs, also stores r in rhs for the linear solve.
+  double residual(double fbar, bool fill_rhs) {
+    const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+    double m = 0.0;
     for (int p = 0; p < n; ++p)
-      for (int a = 0; a < 2; ++a)
-        if (dof[3 * p + a] >= 0) {
-          s += M.valuePtr()[diag_pos[dof[3 * p + a]]];
-          ++c;
+      for (int a = 0; a < 3; ++a)
+        if (const int d = dof[3 * p + a]; d >= 0) {
+          const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+          if (fill_rhs) rhs(d) = rv;
+          m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
         }
-    double ref = c > 0 ? s / c : 0.0;
-    if (ref <= 0.0) {  // affine mode: only rotations are free
-      for (int d = 0; d < nfree; ++d) ref = std::max(ref, M.valuePtr()[diag_pos[d]]);
-      if (ref <= 0.0) ref = opt.law.sigma_y;
-    }
+    return m / std::max(fbar, 1e-300);
+  }
+
+  /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).
+  double mean_diagonal() const {
+    double sum = 0.0, rot = 0.0;
+    int c = 0, cr = 0;
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 3; ++a)
+        if (const int d = dof[3 * p + a]; d >= 0) {
+          if (a < 2) {
+            sum += M.valuePtr()[diag_pos[d]];
+            ++c;
+          } else {
+            rot += M.valuePtr()[diag_pos[d]];
+            ++cr;
+          }
+        }
+    if (c > 0 && sum > 0.0) return sum / c;
+    if (cr > 0 && rot > 0.0) return rot / cr / (r_mean * r_mean);
+    return opt.law.sigma_y;
+  }
+
+  /// Adds the viscous drag and the tiny regularisation to the diagonal of K and M.
+  void regularise() {
+    const double ref = mean_diagonal();
     const double eps = opt.regularisation * ref;
-    for (int d = 0; d < nfree; ++d) {
-      K.valuePtr()[diag_pos[d]] += eps;
-      M.valuePtr()[diag_pos[d]] += eps;
-    }
+    const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 3; ++a)
+        if (const int d = dof[3 * p + a]; d >= 0) {
+          const double add = eps * (a == 2 ? r_mean * r_mean : 1.0) + (a == 2 ? eta_r : eta_t);
+          K.valuePtr()[diag_pos[d]] += add;
+          M.valuePtr()[diag_pos[d]] += add;
+        }
   }
 };
 
@@ -426,8 +496,29 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     const int d = s.dof[3 * p + 2];
     s.du[3 * p + 2] = (d >= 0 && reuse) ? scale * s.du_prev[3 * p + 2] : 0.0;
   }
+  s.last_sliding.assign(np, 0);
+  s.flips.assign(np, 0);
+  s.last_open.assign(np, 0);
+  s.open_flips.assign(np, 0);
+  s.last_kn.assign(np, 0.0);
+  for (std::size_t k = 0; k < np; ++k) {
+    s.last_sliding[k] = s.slide_c[k];
+    s.last_open[k] = s.fn_c[k] > 0.0 ? 0 : 1;
+  }
   s.rhs.resize(s.nfree);
   s.sol.resize(s.nfree);
+  // Viscous regularisation (pseudo-time): the free DOFs feel a drag eta (du - du_affine) relative
+  // to the affine motion, so mechanisms and collapsing regions get a finite stiffness eta and
+  // move at a finite rate instead of making the tangent singular. Homogeneous (affine) motion is
+  // not resisted, and the drag vanishes as the increments shrink; its size, max|f_contact| /
+  // mean contact force, is reported as the unbalanced force of the increment.
+  s.du_aff.assign(3 * s.n, 0.0);
+  for (int p = 0; p < s.n; ++p) {
+    const Eigen::Vector2d u = A * Eigen::Vector2d(s.x[p], s.y[p]);
+    s.du_aff[3 * p] = u.x();
+    s.du_aff[3 * p + 1] = u.y();
+  }
+  s.eta = -1.0;
   double fbar = 1.0;
   for (int it = 0;; ++it) {
     const bool want_tangent = it < s.opt.max_newton;
@@ -435,35 +526,31 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     auto ta = Clock::now();
     s.evaluate(want_tangent && s.nfree > 0, nonsym);
     s.tim.assemble += seconds_since(ta);
+    if (s.eta < 0.0 && want_tangent && s.nfree > 0) s.eta = s.opt.viscosity * s.mean_diagonal();
     fbar = s.mean_normal_force();
     if (fbar <= 0.0) fbar = s.opt.law.sigma_y * s.r_mean * 1e-6;
-    rep.residual = s.nfree > 0 ? s.residual_norm(fbar) : 0.0;
-    if (!std::isfinite(rep.residual))
+    const double newton_res = s.nfree > 0 ? s.residual(fbar, true) : 0.0;
+    rep.newton_residual = newton_res;
+    if (!std::isfinite(newton_res))
       throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
-    if (std::getenv("NETDEM_DEBUG"))
-      std::fprintf(stderr, "  it %d residual %.3e fbar %.3e\n", it, rep.residual, fbar);
-    if (rep.residual <= s.opt.residual_tol || s.nfree == 0) {
+    if (s.opt.verbose) std::fprintf(stderr, "  iteration %d: residual %.3e (mean contact force %.3e)\n", it, newton_res, fbar);
+    if (newton_res <= s.opt.residual_tol || s.nfree == 0) {
       rep.converged = true;
       break;
     }
     if (!want_tangent) break;
     s.regularise();
-    for (int p = 0; p < s.n; ++p)
-      for (int a = 0; a < 3; ++a)
-        if (const int d = s.dof[3 * p + a]; d >= 0) s.rhs(d) = s.f[3 * p + a];
     LinearStatus st = s.lin.factorise(s.M, s.pattern_changed);
     s.pattern_changed = false;
     if (!st.ok) throw std::runtime_error("increment: " + st.message);
     st = nonsym ? s.lin.solve(s.K, s.rhs, s.sol) : s.lin.solve(s.rhs, s.sol);
     if (!st.ok) {
-      // fall back to the symmetric slip-status tangent (a defect-correction step)
+      // GMRES hit its cap: fall back to the symmetric slip-status tangent (defect correction)
       st = s.lin.solve(s.rhs, s.sol);
       if (!st.ok) throw std::runtime_error("increment: " + st.message);
     }
     rep.linear_iterations += st.iterations;
-    // limit the step size
     // per-particle step limits: a single soft mode must not freeze the whole network
-    const double lim = 1.0;
     for (int p = 0; p < s.n; ++p) {
       const int dx = s.dof[3 * p], dy = s.dof[3 * p + 1], dr = s.dof[3 * p + 2];
       if (dx >= 0) {
@@ -476,10 +563,9 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
       if (dr >= 0) s.sol(dr) = std::clamp(s.sol(dr), -s.opt.max_rotation_step, s.opt.max_rotation_step);
     }
     // backtracking line search on the residual norm
-    const double r_before = rep.residual;
     double applied = 0.0;
     for (int ls = 0; ls < 5; ++ls) {
-      const double step = lim * std::ldexp(1.0, -ls) - applied;
+      const double step = std::ldexp(1.0, -ls) - applied;
       for (int p = 0; p < s.n; ++p)
         for (int a = 0; a < 3; ++a)
           if (const int d = s.dof[3 * p + a]; d >= 0) s.du[3 * p + a] += step * s.sol(d);
@@ -488,10 +574,11 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
       bool dummy;
       s.evaluate(false, dummy);
       const double fb = std::max(s.mean_normal_force(), 1e-300);
-      if (s.residual_norm(fb) < r_before) break;
+      if (s.residual(fb, false) < newton_res) break;
     }
     ++rep.newton_iterations;
   }
+  rep.residual = s.nfree > 0 ? s.unbalance(fbar) : 0.0;
   // commit
   const Eigen::Matrix2d E_old = s.E;
   for (std::size_t k = 0; k < np; ++k) {

@@ -16,9 +16,11 @@
 //   * rest (the projection is zero): two supports whose normal cone contains -g, i.e. the centre's x
 //     lies between the x of the two support points (disk-disk, or disk and the side wall on the far
 //     side), or a floor contact.
-// A disk exactly on top of a single disk (|n_x| < 1e-10, e.g. a monosized disk sliding down a wall
-// onto a disk that touches the same wall) is an unstable equilibrium: it rolls away from the wall,
-// or to +x if it touches none.
+// A disk exactly on top of a single disk (|n_x| <= 1e-10, e.g. a monosized disk sliding down a
+// wall onto a disk that touches the same wall) is an unstable equilibrium: it rolls off to +x if
+// that is admissible, else to -x (away from the wall). A contact with n_y <= 1e-6 (at the
+// equator) carries no weight and is passed by falls and rolls (overlap <= 5e-13 (r + r_k)): a
+// monosized disk must fall through a gap of exactly one diameter, not bridge it on rounding.
 //
 // Stop rule ("until the box has filled", our choice, see docs/packing.md): a disk whose resting
 // position would put its top above y_max = H is discarded (not added); deposition stops after
@@ -37,6 +39,7 @@
 // x = r + (W - 2r) U.
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 #include "netdem/packing/packing.hpp"
 
@@ -60,5 +63,13 @@ struct DepositionOptions {
 /// Ballistic deposition into [0,W]x[0,H] (section 2.2). Deterministic for a given options set.
 /// The returned packing has box = {0, 0, W, H} and seed = options.seed.
 Packing ballistic_deposition(const DepositionOptions& options);
+
+/// [extension] Resting centre (x, y) of ONE disk of radius r dropped at abscissa x0 onto `base`,
+/// by the same rules as ballistic_deposition(): the base disks are fixed obstacles (they need not
+/// be stable themselves), box.y_min is the floor, box.x_min / x_max are the walls, the lid is
+/// ignored. For analytic checks and for building packings by hand. O(N) set-up per call.
+/// Throws std::invalid_argument if r <= 0, x0 is not in [x_min + r, x_max - r], the box is not
+/// finite with positive size, or a base disk is not finite with r > 0.
+std::pair<double, double> drop_disk(const Packing& base, double x0, double r);
 
 }  // namespace netdem::packing

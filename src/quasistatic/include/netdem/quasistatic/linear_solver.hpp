@@ -60,7 +60,7 @@ struct LinearStatus {
 
 struct LinearSolverStats {
   long analyses = 0;          ///< cholmod_analyze calls (ordering + symbolic factorisation)
-  long factorisations = 0;    ///< numeric factorisations (including failed ones)
+  long factorisations = 0;    ///< numeric factorisations attempted (incl. not positive definite)
   long solves = 0;            ///< calls of either solve() overload
   long gmres_iterations = 0;  ///< total GMRES iterations; each = one factor solve + one mat-vec
   double t_analyse = 0, t_factorise = 0, t_solve = 0;  ///< seconds (steady_clock)

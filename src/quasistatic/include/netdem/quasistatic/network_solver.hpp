@@ -52,6 +52,10 @@ struct SolverOptions {
   double regularisation = 1e-9;    ///< diagonal shift, relative to the mean translational diagonal
   double slide_stiffness_fraction = 0.05;  ///< tangential stiffness kept by sliding contacts in the iteration matrix
   bool geometric_stiffness = false;        ///< add the geometric stiffness to the tangent
+  /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
+  /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
+  double viscosity = 1e-2;
+  bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
 
@@ -59,7 +63,8 @@ struct SolverOptions {
 struct IncrementReport {
   int newton_iterations = 0;
   bool converged = false;
-  double residual = 0.0;        ///< max |free residual| / mean normal contact force, after the increment
+  double residual = 0.0;        ///< out-of-balance contact force on the free DOFs / mean normal contact force
+  double newton_residual = 0.0; ///< Newton residual (contact force - viscous drag) / mean contact force
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
   int new_contacts = 0, lost_contacts = 0, sliding = 0;

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Plots a netsolve compaction run and writes its short report.
+
+usage: plot_run.py RUN_DIR [--readme-images DIR]
+
+Reads RUN_DIR/history.csv, summary.json and packing.csv; writes compaction.png (normalised stresses
+and coordination against density), packing.png (initial packing with its contact network, peripheral
+layer highlighted) and report.md.
+"""
+import csv
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.collections import LineCollection, PatchCollection  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(line for line in f if not line.startswith("#"))]
+    head, data = rows[0], rows[1:]
+    return {h: [float(r[k]) for r in data] for k, h in enumerate(head)}
+
+
+def read_packing(path):
+    box = None
+    xs, ys, rs = [], [], []
+    with open(path) as f:
+        for line in f:
+            if line.startswith("# box"):
+                box = [float(v) for v in line.split()[2:6]]
+            elif line.startswith("#") or line.startswith("id"):
+                continue
+            elif line.strip():
+                _, x, y, r = line.strip().split(",")
+                xs.append(float(x)); ys.append(float(y)); rs.append(float(r))
+    return box, xs, ys, rs
+
+
+def plot_packing(run, png):
+    box, xs, ys, rs = read_packing(os.path.join(run, "packing.csv"))
+    fig, ax = plt.subplots(figsize=(6, 6))
+    circles = [Circle((x, y), r) for x, y, r in zip(xs, ys, rs)]
+    ax.add_collection(PatchCollection(circles, facecolor="#c9d6e8", edgecolor="#50607a", linewidths=0.3))
+    segs = []
+    n = len(xs)
+    cell = 2.3 * max(rs)
+    grid = {}
+    for k in range(n):
+        grid.setdefault((int(xs[k] // cell), int(ys[k] // cell)), []).append(k)
+    for k in range(n):
+        cx, cy = int(xs[k] // cell), int(ys[k] // cell)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for q in grid.get((cx + dx, cy + dy), []):
+                    if q > k and math.hypot(xs[q] - xs[k], ys[q] - ys[k]) <= (rs[q] + rs[k]) * (1 + 1e-6):
+                        segs.append([(xs[k], ys[k]), (xs[q], ys[q])])
+    ax.add_collection(LineCollection(segs, colors="#b03030", linewidths=0.6))
+    ax.set_xlim(box[0], box[2]); ax.set_ylim(box[1], box[3]); ax.set_aspect("equal")
+    ax.set_title(f"ballistic deposition: {n} disks, {len(segs)} contacts")
+    ax.set_xlabel("x / R"); ax.set_ylabel("y / R")
+    fig.tight_layout(); fig.savefig(png, dpi=130); plt.close(fig)
+
+
+def plot_compaction(h, summary, png):
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    a1.plot(h["D"], [-v for v in h["S22"]], label=r"$-\Sigma_{22}/\sigma_y$")
+    a1.plot(h["D"], [-v for v in h["S11"]], "--", label=r"$-\Sigma_{11}/\sigma_y$")
+    a1.set_xlabel("relative density D"); a1.set_ylabel("normalised stress"); a1.legend(); a1.grid(alpha=0.3)
+    a1.set_title(f"{summary['path']['name']}, {summary['mode']}, friction {summary['friction']}")
+    a2.plot(h["D"], h["Z"])
+    a2.set_xlabel("relative density D"); a2.set_ylabel("coordination Z (load-bearing)"); a2.grid(alpha=0.3)
+    fig.tight_layout(); fig.savefig(png, dpi=130); plt.close(fig)
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit("usage: plot_run.py RUN_DIR")
+    run = sys.argv[1]
+    h = read_csv(os.path.join(run, "history.csv"))
+    with open(os.path.join(run, "summary.json")) as f:
+        s = json.load(f)
+    plot_compaction(h, s, os.path.join(run, "compaction.png"))
+    plot_packing(run, os.path.join(run, "packing.png"))
+    fin = s["final"]
+    ratio = fin["S22"] / fin["S11"] if fin["S11"] else float("nan")
+    t = s["timing_s"]
+    lines = [
+        "# netsolve compaction run", "",
+        f"Command: `{s['command']}`", "",
+        f"Packing: {s['packing']} ({s['particles']} particles, D0 = {s['initial_density']:.4f}, seed {s['seed']})", "",
+        "| quantity | value |", "|---|---|",
+        f"| final density D | {fin['D']:.4f} |",
+        f"| Σ11/σy | {fin['S11']:.4f} |",
+        f"| Σ22/σy | {fin['S22']:.4f} |",
+        f"| Σ22/Σ11 | {ratio:.3f} |",
+        f"| asymmetry (Σ12-Σ21)/2σy | {fin['S_asym']:.2e} |",
+        f"| coordination Z | {fin['Z']:.3f} |",
+        f"| sliding contacts | {fin['sliding']} of {fin['contacts']} |",
+        f"| increments (unconverged) | {s['increments']} ({s['solver']['unconverged_increments']}) |",
+        f"| max residual / mean contact force | {s['solver']['max_residual']:.2e} |",
+        f"| wall time | {t['wall']:.2f} s (factorise {t['factorise']:.2f} s, solve {t['solve']:.2f} s, assemble {t['assemble']:.2f} s) |",
+        "", "![compaction curve](compaction.png)", "", "![initial packing](packing.png)", "",
+    ]
+    with open(os.path.join(run, "report.md.tmp"), "w") as f:
+        f.write("\n".join(lines))
+    os.replace(os.path.join(run, "report.md.tmp"), os.path.join(run, "report.md"))
+    print(f"plot_run: wrote {run}/report.md, compaction.png, packing.png")
+
+
+if __name__ == "__main__":
+    main()
