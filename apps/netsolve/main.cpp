@@ -36,6 +36,7 @@ std::string g_command;
 struct PackArgs {
   double width = 80.0, r_min = 0.9, r_max = 1.1;
   bool mono = false;
+  std::string lid = "centre";
   std::uint64_t seed = 1;
 };
 
@@ -85,6 +86,13 @@ netdem::packing::Packing make_packing(const PackArgs& a) {
   o.r_min = a.mono ? 1.0 : a.r_min;
   o.r_max = a.mono ? 1.0 : a.r_max;
   o.seed = a.seed;
+  if (a.lid == "centre") {
+    o.lid = netdem::packing::Lid::Centre;
+  } else if (a.lid == "inside") {
+    o.lid = netdem::packing::Lid::Inside;
+  } else {
+    throw std::invalid_argument(fmt::format("--lid '{}' is not 'centre' or 'inside'", a.lid));
+  }
   return netdem::packing::ballistic_deposition(o);
 }
 
@@ -94,8 +102,8 @@ void write_common(const fs::path& out) {
 }
 
 int run_pack(const PackArgs& a, const fs::path& out) {
-  write_common(out);
   const auto pk = make_packing(a);
+  write_common(out);
   netdem::packing::write_packing_csv(pk, out / "packing.csv");
   const auto st = netdem::packing::contact_stats(pk);
   nlohmann::json j;
@@ -252,6 +260,7 @@ int main(int argc, char** argv) {
     c->add_option("--r-max", pa.r_max, "largest radius / R")->capture_default_str();
     c->add_flag("--mono", pa.mono, "monosized disks (r = R)");
     c->add_option("--seed", pa.seed, "random seed of the deposition")->capture_default_str();
+    c->add_option("--lid", pa.lid, "stop rule: 'centre' keeps disks whose centre is below the lid (D0 near the paper's), 'inside' only whole disks")->capture_default_str();
   };
   auto* pack = app.add_subcommand("pack", "ballistic deposition packing (section 2.2)");
   add_pack_opts(pack);

@@ -309,7 +309,8 @@ Packing ballistic_deposition(const DepositionOptions& o) {
     const double x0 = r + (w - 2 * r) * uniform01(rng);
     double x, y;
     dep.settle(r, x0, x, y);
-    if (y + r > h) {  // stop rule: does not fit below the lid
+    const bool fits = o.lid == Lid::Centre ? y <= h : y + r <= h;
+    if (!fits) {  // stop rule: does not fit below the lid
       if (++rejections >= o.max_rejections) break;
       continue;
     }

@@ -45,6 +45,11 @@
 
 namespace netdem::packing {
 
+/// Which disks count as inside the box (the stop rule's fit test). Inside: the whole disk is
+/// below the lid. Centre: the centre is below the lid, so the top layer may stick out by less
+/// than a radius; its density is then close to the bulk and to the paper's D0 (docs/packing.md).
+enum class Lid { Inside, Centre };
+
 struct DepositionOptions {
   double width = 80.0;   ///< box width W in units of the reference radius R
   double height = -1.0;  ///< box height; < 0 means square (= width)
@@ -53,6 +58,7 @@ struct DepositionOptions {
   std::uint64_t seed = 1;
   /// Stop after this many consecutive disks that do not fit below y_max (>= 1). [extension]
   std::size_t max_rejections = 1000;
+  Lid lid = Lid::Inside;  ///< fit test of the stop rule [extension]
 
   double box_height() const { return height < 0 ? width : height; }
   /// Throws std::invalid_argument with a one-line message: NaN/inf, radius <= 0, r_min <= 0,
