@@ -43,8 +43,8 @@ struct PackArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6, viscosity = 1e-2, slide_fraction = 0.05;
-  int increments = 200, max_newton = 12;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6, viscosity = 0.1, slide_fraction = 0.05;
+  int increments = 200, max_newton = 4;
 };
 
 double parse_friction(const std::string& s) {
@@ -182,7 +182,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   write_snapshot(solver, out, "initial");
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
-      "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,newton_residual,newton,"
+      "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
       "linear_iterations,converged\n";
   std::size_t next_snap = 0;
   int unconverged = 0;
@@ -193,11 +193,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{},{},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
-                       m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.newton_residual,
+                       m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
     if (row.increment > 0) {
       unconverged += !row.report.converged;

@@ -106,6 +106,7 @@ struct NetworkSolver::Impl {
   std::vector<double> last_kn;
   std::vector<double> du_aff;  // affine motion of the increment (drag reference)
   double eta = -1.0;           // viscous drag coefficient of the current increment
+  std::vector<double> du_start;  // du at the start of a line search
   Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
   VecX rhs, sol;
 
@@ -380,11 +381,18 @@ struct NetworkSolver::Impl {
 
   /// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
   /// out-of-balance contact force, i.e. the viscous drag that holds the increment.
-  double unbalance(double fbar) const {
-    double m = 0.0;
+  double unbalance(double fbar, double* rms = nullptr) const {
+    double m = 0.0, s2 = 0.0;
+    int c = 0;
     for (int p = 0; p < n; ++p)
       for (int a = 0; a < 3; ++a)
-        if (dof[3 * p + a] >= 0) m = std::max(m, std::fabs(f[3 * p + a]) / (a == 2 ? r_mean : 1.0));
+        if (dof[3 * p + a] >= 0) {
+          const double v = std::fabs(f[3 * p + a]) / (a == 2 ? r_mean : 1.0);
+          m = std::max(m, v);
+          s2 += v * v;
+          ++c;
+        }
+    if (rms) *rms = c > 0 ? std::sqrt(s2 / c) / std::max(fbar, 1e-300) : 0.0;
     return m / std::max(fbar, 1e-300);
   }
 
@@ -401,6 +409,21 @@ struct NetworkSolver::Impl {
           m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
         }
     return m / std::max(fbar, 1e-300);
+  }
+
+  /// Per-particle step limits: a single soft mode must not freeze the whole network.
+  void clip_step() {
+    for (int p = 0; p < n; ++p) {
+      const int dx = dof[3 * p], dy = dof[3 * p + 1], dr = dof[3 * p + 2];
+      if (dx >= 0) {
+        const double t = std::hypot(sol(dx), sol(dy)), tl = opt.max_step * r_mean;
+        if (t > tl) {
+          sol(dx) *= tl / t;
+          sol(dy) *= tl / t;
+        }
+      }
+      if (dr >= 0) sol(dr) = std::clamp(sol(dr), -opt.max_rotation_step, opt.max_rotation_step);
+    }
   }
 
   /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).
@@ -550,35 +573,25 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
       if (!st.ok) throw std::runtime_error("increment: " + st.message);
     }
     rep.linear_iterations += st.iterations;
-    // per-particle step limits: a single soft mode must not freeze the whole network
-    for (int p = 0; p < s.n; ++p) {
-      const int dx = s.dof[3 * p], dy = s.dof[3 * p + 1], dr = s.dof[3 * p + 2];
-      if (dx >= 0) {
-        const double t = std::hypot(s.sol(dx), s.sol(dy)), tl = s.opt.max_step * s.r_mean;
-        if (t > tl) {
-          s.sol(dx) *= tl / t;
-          s.sol(dy) *= tl / t;
-        }
-      }
-      if (dr >= 0) s.sol(dr) = std::clamp(s.sol(dr), -s.opt.max_rotation_step, s.opt.max_rotation_step);
-    }
-    // backtracking line search on the residual norm
-    double applied = 0.0;
-    for (int ls = 0; ls < 5; ++ls) {
-      const double step = std::ldexp(1.0, -ls) - applied;
+    s.clip_step();
+    // backtracking line search on the residual norm (the smallest step is taken if none lowers it)
+    const double r_before = newton_res;
+    double alpha = 1.0;
+    s.du_start = s.du;
+    for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
       for (int p = 0; p < s.n; ++p)
         for (int a = 0; a < 3; ++a)
-          if (const int d = s.dof[3 * p + a]; d >= 0) s.du[3 * p + a] += step * s.sol(d);
-      applied += step;
+          if (const int d = s.dof[3 * p + a]; d >= 0) s.du[3 * p + a] = s.du_start[3 * p + a] + alpha * s.sol(d);
       if (ls == 4) break;
       bool dummy;
       s.evaluate(false, dummy);
       const double fb = std::max(s.mean_normal_force(), 1e-300);
-      if (s.residual(fb, false) < newton_res) break;
+      if (s.residual(fb, false) < r_before) break;
     }
+    if (s.opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
     ++rep.newton_iterations;
   }
-  rep.residual = s.nfree > 0 ? s.unbalance(fbar) : 0.0;
+  rep.residual = s.nfree > 0 ? s.unbalance(fbar, &rep.residual_rms) : 0.0;
   // commit
   const Eigen::Matrix2d E_old = s.E;
   for (std::size_t k = 0; k < np; ++k) {

@@ -337,3 +337,4 @@ TEST(PlasticIndentation, ValidateRejectsBadParameters) {
   bad([](auto& q) { q.k_t = 0; });
   bad([](auto& q) { q.unload_ratio = 0.5; });
 }
+

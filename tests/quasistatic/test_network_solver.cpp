@@ -172,7 +172,7 @@ TEST(NetworkSolver, IncrementConvergence) {
     const double err = std::fabs(compact(pk, so, qs::StrainPath::hydrostatic(), D, n).m.S22 - ref) / std::fabs(ref);
     std::printf("increments %d: relative error in S22 vs %d increments: %.3e\n", n, ref_n, err);
     EXPECT_LT(err, 0.05);
-    if (err > 1e-6) {
+    if (err > 1e-4) {  // above the noise floor set by the Newton tolerance (1e-5)
       EXPECT_LT(err, prev_err * 1.01);
     }
     prev_err = err;

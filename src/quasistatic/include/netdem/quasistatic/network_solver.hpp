@@ -45,7 +45,7 @@ struct SolverOptions {
   bool rotations = true;  ///< false: forbid every particle rotation
   contact::PlasticIndentationParams law;
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
-  int max_newton = 12;             ///< Newton iterations per increment
+  int max_newton = 4;              ///< Newton iterations per increment (then the residual is carried)
   double residual_tol = 1e-6;      ///< converged when max|residual| <= tol * mean normal contact force
   double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
   double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle
@@ -54,7 +54,7 @@ struct SolverOptions {
   bool geometric_stiffness = false;        ///< add the geometric stiffness to the tangent
   /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
   /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
-  double viscosity = 1e-2;
+  double viscosity = 0.1;
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
@@ -64,6 +64,7 @@ struct IncrementReport {
   int newton_iterations = 0;
   bool converged = false;
   double residual = 0.0;        ///< out-of-balance contact force on the free DOFs / mean normal contact force
+  double residual_rms = 0.0;    ///< root mean square of the same over the free DOFs
   double newton_residual = 0.0; ///< Newton residual (contact force - viscous drag) / mean contact force
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
