@@ -44,7 +44,7 @@ struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
   double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6, viscosity = 0.1, slide_fraction = 0.05;
-  int increments = 200, max_newton = 4;
+  int increments = 100, max_newton = 2;
 };
 
 double parse_friction(const std::string& s) {

@@ -24,7 +24,7 @@ struct StrainPath {
 struct CompactionOptions {
   StrainPath path;
   double target_density = 0.85;
-  int increments = 200;  ///< increments from the initial to the target density (equal strain steps)
+  int increments = 100;  ///< increments from the initial to the target density (equal strain steps)
   void validate(double initial_density) const;  ///< throws std::invalid_argument (one line)
 };
 

@@ -45,7 +45,7 @@ struct SolverOptions {
   bool rotations = true;  ///< false: forbid every particle rotation
   contact::PlasticIndentationParams law;
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
-  int max_newton = 4;              ///< Newton iterations per increment (then the residual is carried)
+  int max_newton = 2;              ///< Newton iterations per increment (then the residual is carried)
   double residual_tol = 1e-6;      ///< converged when max|residual| <= tol * mean normal contact force
   double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
   double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle

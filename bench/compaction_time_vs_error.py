@@ -1,0 +1,181 @@
+#!/usr/bin/python3
+"""Run time against error of the default compaction (issue #2, speed part).
+
+Runs `netsolve compact` on the default scene (W = 80 R, polydisperse, seed 1, sticking friction,
+hydrostatic, D0 -> 0.85, die boundary conditions) for several numbers of increments N and a
+reference run with N_ref increments (default 3200 = 16 x the default N = 200), for one or more
+values of --viscosity. Records the wall time of the solver (summary.json timing_s.wall; packing
+generation and output excluded) and the relative error of S22 at D = 0.85 against the reference
+of the same viscosity, plus the largest relative S22 error at the checkpoints D = 0.82, 0.83,
+0.84, 0.85 (linear interpolation in history.csv).
+
+Writes <out>/time_vs_error.csv and <out>/time_vs_error.png.
+
+    /usr/bin/python3 bench/compaction_time_vs_error.py                      # all defaults
+    /usr/bin/python3 bench/compaction_time_vs_error.py --increments 25,50 --reference 800 --viscosities 0.1
+    /usr/bin/python3 bench/compaction_time_vs_error.py --reuse              # re-plot existing runs
+
+The netsolve binary is copied to a temporary file first, so rebuilding it meanwhile is harmless.
+"""
+import argparse
+import csv
+import json
+import resource
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+CHECKPOINTS = (0.82, 0.83, 0.84, 0.85)
+
+
+def read_history(path):
+    with open(path, newline="") as f:
+        rows = [r for r in csv.DictReader(line for line in f if not line.startswith("#"))]
+    return [(float(r["D"]), float(r["S22"])) for r in rows]
+
+
+def s22_at(hist, d):
+    """Linear interpolation of S22 at density d (history is monotone in D)."""
+    for (d0, s0), (d1, s1) in zip(hist, hist[1:]):
+        if d0 <= d <= d1 + 1e-12:
+            w = 0.0 if d1 == d0 else (d - d0) / (d1 - d0)
+            return s0 + w * (s1 - s0)
+    if abs(hist[-1][0] - d) < 1e-9:
+        return hist[-1][1]
+    raise ValueError(f"density {d} outside the run ({hist[0][0]:.4f} .. {hist[-1][0]:.4f})")
+
+
+def run(netsolve, n, viscosity, workdir, extra, reuse, nice):
+    out = workdir / f"visc{viscosity:g}_N{n}"
+    summ = out / "summary.json"
+    if not (reuse and summ.exists()):
+        cmd = ([] if nice is None else ["nice", "-n", str(nice)]) + [
+            str(netsolve), "compact", "--increments", str(n), "--viscosity", str(viscosity),
+            "--snapshots", "", "--quiet", "--out", str(out)] + extra
+        ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        t_proc = time.perf_counter() - t0
+        ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+        if p.returncode != 0:
+            print(f"  N = {n}: netsolve failed ({p.returncode}): {p.stderr.strip()[-300:]}", file=sys.stderr)
+            return None
+        (out / "process_wall_s.txt").write_text(f"{t_proc:.4f}\n")
+        (out / "process_cpu_s.txt").write_text(f"{cpu:.4f}\n")
+    s = json.loads(summ.read_text())
+    t_proc_file = out / "process_wall_s.txt"
+    return {
+        "N": n,
+        "viscosity": viscosity,
+        "particles": s["particles"],
+        "wall_s": s["timing_s"]["wall"],
+        "process_wall_s": float(t_proc_file.read_text()) if t_proc_file.exists() else float("nan"),
+        "process_cpu_s": float((out / "process_cpu_s.txt").read_text()) if (out / "process_cpu_s.txt").exists()
+        else float("nan"),
+        "S22": s["final"]["S22"],
+        "D": s["final"]["D"],
+        "newton_iterations": s["solver"]["newton_iterations"],
+        "factorisations": s["solver"]["factorisations"],
+        "unconverged_increments": s["solver"]["unconverged_increments"],
+        "max_residual": s["solver"]["max_residual"],
+        "hist": read_history(out / "history.csv"),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--netsolve", default="/work/main/build-bench/apps/netsolve")
+    ap.add_argument("--increments", default="25,50,100,200,400")
+    ap.add_argument("--reference", type=int, default=3200, help="increments of the reference run")
+    ap.add_argument("--viscosities", default="0.1,0.01", help="comma list; the first is netsolve's default")
+    ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--workdir", default="/tmp/netdem-bench/time_vs_error", help="run folders")
+    ap.add_argument("--reuse", action="store_true", help="reuse run folders that already hold summary.json")
+    ap.add_argument("--nice", type=int, default=5, help="nice level of the runs (-1: none)")
+    ap.add_argument("--time", choices=("cpu", "wall"), default="cpu",
+                    help="x axis of the plot: process CPU time (user+sys, robust on a shared machine) or solver wall time")
+    ap.add_argument("--extra", default="", help="extra netsolve compact arguments, space separated")
+    a = ap.parse_args()
+
+    workdir = Path(a.workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix="netsolve-"))
+    netsolve = tmp / "netsolve"
+    shutil.copy2(a.netsolve, netsolve)
+    extra = a.extra.split()
+    nice = None if a.nice < 0 else a.nice
+    ns = [int(x) for x in a.increments.split(",")]
+    viscs = [float(x) for x in a.viscosities.split(",")]
+
+    rows = []
+    for v in viscs:
+        print(f"viscosity {v:g}: reference N = {a.reference}", flush=True)
+        ref = run(netsolve, a.reference, v, workdir, extra, a.reuse, nice)
+        if ref is None:
+            print("  reference failed; skipping this viscosity", file=sys.stderr)
+            continue
+        print(f"  reference: {ref['wall_s']:.1f} s, S22 = {ref['S22']:.6f}", flush=True)
+        ref_cp = {d: s22_at(ref["hist"], d) for d in CHECKPOINTS}
+        for n in ns + [a.reference]:
+            r = ref if n == a.reference else run(netsolve, n, v, workdir, extra, a.reuse, nice)
+            if r is None:
+                continue
+            r["err_S22_final"] = abs(r["S22"] - ref["S22"]) / abs(ref["S22"])
+            r["err_S22_max_checkpoints"] = max(abs(s22_at(r["hist"], d) - ref_cp[d]) / abs(ref_cp[d]) for d in CHECKPOINTS)
+            r["N_ref"] = a.reference
+            rows.append(r)
+            print(f"  N = {n:5d}: wall {r['wall_s']:8.2f} s  cpu {r['process_cpu_s']:8.2f} s  S22 = {r['S22']:.6f}  err {100 * r['err_S22_final']:.3f} %"
+                  f"  (max over D checkpoints {100 * r['err_S22_max_checkpoints']:.3f} %)"
+                  f"  unconverged {r['unconverged_increments']}/{n}", flush=True)
+    shutil.rmtree(tmp, ignore_errors=True)
+
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    cols = ["viscosity", "N", "N_ref", "particles", "wall_s", "process_wall_s", "process_cpu_s", "S22", "err_S22_final",
+            "err_S22_max_checkpoints", "newton_iterations", "factorisations", "unconverged_increments", "max_residual"]
+    with open(out / "time_vs_error.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for r in rows:
+            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
+    print(f"wrote {out / 'time_vs_error.csv'}")
+
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib not available: no plot", file=sys.stderr)
+        return
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    for v in viscs:
+        rr = [r for r in rows if r["viscosity"] == v and r["N"] != r["N_ref"]]
+        if not rr:
+            continue
+        x = [r["process_cpu_s"] if a.time == "cpu" else r["wall_s"] for r in rr]
+        y = [max(100 * r["err_S22_final"], 1e-4) for r in rr]
+        ax.loglog(x, y, "o-", label=f"viscosity {v:g} (ref N = {rr[0]['N_ref']})")
+        for r, xi, yi in zip(rr, x, y):
+            ax.annotate(f"N={r['N']}", (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.axvline(2.0, color="k", ls="--", lw=0.8)
+    ax.axhline(1.0, color="k", ls="--", lw=0.8)
+    ax.text(2.0, ax.get_ylim()[1], " 2 s target", va="top", fontsize=8)
+    ax.set_xlabel("CPU time of the netsolve process (user+sys) [s]" if a.time == "cpu"
+                  else "solver wall time (summary.json timing_s.wall) [s]")
+    ax.set_ylabel("relative error of $\\Sigma_{22}$ at D = 0.85 [%]")
+    ax.set_title("default compaction (W = 80R, sticking, hydrostatic)")
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "time_vs_error.png", dpi=130)
+    print(f"wrote {out / 'time_vs_error.png'}")
+
+
+if __name__ == "__main__":
+    main()

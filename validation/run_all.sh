@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Regenerates every validation case's report (runs only the simulations that are missing or whose
+# command changed). Usage: bash validation/run_all.sh [--quick] [--force] [--netsolve PATH] [--jobs N]
+# Every argument is passed through to each case's run.py. Debian's python3 (numpy, matplotlib) is used.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+py=/usr/bin/python3
+[ -x "$py" ] || py=python3
+status=0
+for case_dir in "$here"/redanz_fleck_compaction; do
+  echo "== $(basename "$case_dir")"
+  "$py" "$case_dir/run.py" "$@" || status=1
+done
+exit $status
