@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Plots a netsolve compaction run and writes its short report.
 
-usage: plot_run.py RUN_DIR [--readme-images DIR]
+usage: plot_run.py RUN_DIR
 
 Reads RUN_DIR/history.csv, summary.json and packing.csv; writes compaction.png (normalised stresses
-and coordination against density), packing.png (initial packing with its contact network, peripheral
-layer highlighted) and report.md.
+and coordination against density), packing.png (initial packing with its contact network)
+and report.md.
 """
 import csv
 import json

@@ -27,11 +27,13 @@ import shlex
 import subprocess
 import sys
 import time
+import warnings
 
 import numpy as np
 import matplotlib
 
 matplotlib.use("Agg")
+warnings.filterwarnings("ignore", message=".*tight_layout.*")
 import matplotlib.pyplot as plt  # noqa: E402
 from mpl_toolkits.axes_grid1.inset_locator import inset_axes  # noqa: E402
 
@@ -373,7 +375,12 @@ class Findings:
     def add(self, fid, finding, paper, band, measured, passed, cases, note=""):
         h = self.health(*cases)
         notes = "; ".join(x for x in (note, h) if x)
-        status = "n/a" if passed is None else ("PASS" if passed else "FAIL")
+        if passed is None:
+            status = "n/a"
+        elif note.startswith("ill-conditioned") or "; ill-conditioned" in note:
+            status = "INVALID"  # the measure itself is meaningless here: neither a pass nor a model failure
+        else:
+            status = "PASS" if passed else "FAIL"
         self.rows.append((fid, finding, paper, band, measured, status, notes))
 
     def missing(self, fid, finding, paper, band, cases):
@@ -633,7 +640,11 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
 
     npass = sum(1 for r in rows if r[5] == "PASS")
     nfail = sum(1 for r in rows if r[5] == "FAIL")
-    L.append(f"## Findings: {npass} pass, {nfail} fail, {len(rows) - npass - nfail} not applicable\n")
+    ninv = sum(1 for r in rows if r[5] == "INVALID")
+    L.append(f"## Findings: {npass} pass, {nfail} fail, {ninv} invalid measure, "
+             f"{len(rows) - npass - nfail - ninv} information only\n")
+    L.append("INVALID: the value is dominated by a singular measure (see the note), so the row is neither a pass "
+             "nor a test of the model; the companion ratio-of-means row is the usable one.\n")
     L.append("| # | finding | paper | band | measured | pass/fail | notes |")
     L.append("|---|---|---|---|---|---|---|")
     for fid, fin, paper, band, meas, status, notes in rows:
@@ -754,7 +765,8 @@ def main():
     write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total)
     npass = sum(1 for r in rows if r[5] == "PASS")
     nfail = sum(1 for r in rows if r[5] == "FAIL")
-    print(f"report: {os.path.join(out, 'report.md')}  ({npass} pass, {nfail} fail)")
+    ninv = sum(1 for r in rows if r[5] == "INVALID")
+    print(f"report: {os.path.join(out, 'report.md')}  ({npass} pass, {nfail} fail, {ninv} invalid)")
 
 
 if __name__ == "__main__":
