@@ -266,18 +266,21 @@ def make_figures(R, out, mode_label):
         finish(ax, "co-ordination number Z (load-bearing contacts)", f"Fig {tag} style: {title} ({mode_label})")
         save(fig, f"fig{tag}_{'hydrostatic' if tag == '6a' else 'closed_die'}_Z.png")
 
-    # Fig 7a/b: normal affine deviation
+    # Fig 7a/b: normal affine deviation. Left: linear, paper-like axes (mean-of-ratios curves may leave
+    # the axes, see the note); right: the same on a log axis, everything visible.
     for tag, names, title in (("7a", hydro[:4], "hydrostatic"), ("7b", die[:4], "closed die")):
-        fig, ax = plt.subplots(figsize=(7.0, 5.0))
+        fig, (ax, axl) = plt.subplots(1, 2, figsize=(11.0, 5.0))
         for name in names:
             r = R.get(name)
             if r and r.ok:
                 s = sty(name)
-                ax.plot(r.h["D"][1:], r.h["dev_un_mean_ratio"][1:], label=f"<|uN-uNA|/uNA>, {r.label}", **s)
-                ax.plot(r.h["D"][1:], r.h["dev_un_ratio_of_means"][1:], lw=0.8, color=s["color"], ls=":",
-                        label=f"<|uN-uNA|>/<uNA>, {r.label}")
-        ax.axhline(2.0, color="k", lw=0.5, ls="--")
-        ax.axhline(0.5, color="k", lw=0.5, ls="--")
+                for a in (ax, axl):
+                    a.plot(r.h["D"][1:], r.h["dev_un_mean_ratio"][1:], label=f"<|uN-uNA|/uNA>, {r.label}", **s)
+                    a.plot(r.h["D"][1:], r.h["dev_un_ratio_of_means"][1:], lw=0.8, color=s["color"], ls=":",
+                           label=f"<|uN-uNA|>/<uNA>, {r.label}")
+        for a in (ax, axl):
+            a.axhline(2.0, color="k", lw=0.5, ls="--")
+            a.axhline(0.5, color="k", lw=0.5, ls="--")
         top = max([2.5] + [1.2 * float(np.max(R[n].h["dev_un_ratio_of_means"][1:])) for n in names
                            if R.get(n) and R[n].ok])
         top = min(top, 20.0)
@@ -285,8 +288,12 @@ def make_figures(R, out, mode_label):
                 if R.get(n) and R[n].ok and float(np.max(R[n].h["dev_un_mean_ratio"][1:])) > top]
         ax.set_ylim(0, top)
         if over:
-            ax.text(0.01, 0.98, "clipped: <|uN-uNA|/uNA> of " + ", ".join(over), transform=ax.transAxes,
+            ax.text(0.01, 0.98, "off scale: <|uN-uNA|/uNA> of\n" + "\n".join(over), transform=ax.transAxes,
                     fontsize=6, va="top")
+        axl.set_yscale("log")
+        axl.set_xlabel("relative density D")
+        axl.set_title("same, log scale", fontsize=10)
+        axl.grid(alpha=0.3)
         finish(ax, "normal affine deviation", f"Fig {tag} style: {title} (dashed lines: 200 %, 50 %) ({mode_label})")
         save(fig, f"fig{tag}_{'hydrostatic' if tag == '7a' else 'closed_die'}_normal_deviation.png")
 
@@ -313,7 +320,8 @@ def make_figures(R, out, mode_label):
         ax.set_xlabel("relative density D")
         ax.set_ylabel("<|uT - uTA|> / <uNA>")
         ax.set_title(f"Fig {tag} style: {title}; inset: frictionless ({mode_label})", fontsize=10)
-        ax.set_ylim(bottom=0)
+        ymax = max([0.1] + [float(np.max(l.get_ydata())) for l in ax.get_lines()])
+        ax.set_ylim(0, 1.75 * ymax)  # room for the inset above the curves
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
         save(fig, f"fig{tag}_{'hydrostatic' if tag == '8a' else 'closed_die'}_tangential_deviation.png")

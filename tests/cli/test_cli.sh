@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Command-line checks of netsolve: bad input gives one clear line on stderr, a non-zero exit and
+# no output folder; a small good run writes every documented file.
+# usage: test_cli.sh PATH/TO/netsolve
+set -u
+ns="$1"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+pass=0
+fail=0
+check_bad() {  # name, expected word in the message, args...
+  local name="$1" word="$2"
+  shift 2
+  local out="$tmp/$name"
+  "$ns" "$@" --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
+  local rc=$?
+  local lines
+  lines=$(grep -c . "$tmp/stderr")
+  if [ "$rc" -ne 0 ] && [ "$lines" -eq 1 ] && grep -qi -- "$word" "$tmp/stderr" && [ ! -e "$out" ]; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1))
+    echo "FAIL $name: rc=$rc lines=$lines out-exists=$([ -e "$out" ] && echo yes || echo no) stderr: $(cat "$tmp/stderr")"
+  fi
+}
+check_bad unknown_option "bogus" compact --bogus
+check_bad negative_friction "friction" compact --friction -1
+check_bad nan_friction "friction" compact --friction nan
+check_bad bad_path "strain path" compact --path 1,foo,0
+check_bad dilatant_path "impossible target" compact --path 1,1,0
+check_bad low_target "impossible target" compact --to-density 0.5
+check_bad missing_packing "cannot open" compact --packing "$tmp/does_not_exist.csv"
+printf '# box 0 0 10 10\nid,x,y,r\n0,5,5,-1\n' >"$tmp/negr.csv"
+check_bad negative_radius "r <= 0" compact --packing "$tmp/negr.csv"
+check_bad bad_lid "lid" pack --lid foo
+check_bad negative_width "width" pack --width -3
+check_bad zero_increments "increments" compact --increments 0
+# a good small run writes every documented file
+good="$tmp/good"
+if "$ns" compact --width 12 --increments 5 --to-density 0.83 --quiet --out "$good" >/dev/null 2>"$tmp/stderr" &&
+   [ -s "$good/history.csv" ] && [ -s "$good/summary.json" ] && [ -s "$good/command.txt" ] && [ -s "$good/packing.csv" ] &&
+   [ -s "$good/particles_final.vtp" ] && [ -s "$good/contacts_final.vtp" ] &&
+   head -1 "$good/history.csv" | grep -q "D,S11,S22,S12" && grep -q '"seed"' "$good/summary.json" &&
+   [ "$(find "$good" -name '.*tmp*' | wc -l)" -eq 0 ]; then
+  pass=$((pass + 1))
+else
+  fail=$((fail + 1))
+  echo "FAIL good_run: $(cat "$tmp/stderr")"
+fi
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
