@@ -222,3 +222,31 @@ TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
   }
   EXPECT_LT(prev, 0.01);
 }
+
+// A rattler (a small disk loose in a hole of the lattice) has no stiffness at all: the solver must
+// neither fail nor produce NaN, and the drag carries it along with the affine motion.
+TEST(NetworkSolver, RattlerIsHarmless) {
+  auto pk = square_lattice(6, 6);
+  const int hole = 2 * 6 + 2;
+  pk.r[hole] = 0.4;  // loose in its cage of four unit disks
+  for (double visc : {0.0, 0.1}) {
+    qs::SolverOptions so;
+    so.law.mu = kInf;
+    so.viscosity = visc;
+    qs::NetworkSolver s(pk, so);
+    qs::CompactionOptions co;
+    co.target_density = pk.density() * 1.03;
+    co.increments = 10;
+    const double x0 = pk.x[hole], y0 = pk.y[hole];
+    qs::run_compaction(s, co, [](const qs::CompactionRow&) {});
+    const auto m = s.measures();
+    EXPECT_TRUE(std::isfinite(m.S11) && std::isfinite(m.S22));
+    EXPECT_LT(m.S22, 0.0);
+    for (const auto& c : s.contacts()) EXPECT_TRUE(c.i != hole && c.j != hole);
+    if (visc > 0.0) {  // with drag its equilibrium is exactly the affine motion
+      const Eigen::Vector2d affine = s.box_deformation() * Eigen::Vector2d(x0, y0);
+      EXPECT_NEAR(s.x()[hole], affine.x(), 1e-9);
+      EXPECT_NEAR(s.y()[hole], affine.y(), 1e-9);
+    }
+  }
+}
