@@ -43,7 +43,7 @@ struct PackArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-6, viscosity = 0.1, slide_fraction = 0.05;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.1, slide_fraction = 0.05;
   int increments = 100, max_newton = 2;
 };
 
@@ -277,7 +277,7 @@ int main(int argc, char** argv) {
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
   comp->add_option("--k-t", ca.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
   comp->add_option("--sigma-y", ca.sigma_y, "yield stress of the solid")->capture_default_str();
-  comp->add_option("--tol", ca.tol, "Newton tolerance: max residual / mean contact force")->capture_default_str();
+  comp->add_option("--tol", ca.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
   comp->add_option("--max-newton", ca.max_newton, "Newton iterations per increment")->capture_default_str();
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
   comp->add_option("--viscosity", ca.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")->capture_default_str();

@@ -51,6 +51,8 @@ void SolverOptions::validate() const {
   law.validate();
   require(std::isfinite(skin) && skin > 0.0, fmt::format("solver: skin must be positive, got {}", skin));
   require(max_newton >= 0 && max_newton <= 1000, fmt::format("solver: max_newton must be in [0, 1000], got {}", max_newton));
+  require(!std::isnan(max_residual_tol) && max_residual_tol > 0.0,
+          fmt::format("solver: max residual tolerance must be positive, got {}", max_residual_tol));
   require(std::isfinite(residual_tol) && residual_tol > 0.0,
           fmt::format("solver: residual tolerance must be positive, got {}", residual_tol));
   require(std::isfinite(max_step) && max_step > 0.0, fmt::format("solver: max_step must be positive, got {}", max_step));
@@ -398,17 +400,21 @@ struct NetworkSolver::Impl {
 
   /// Newton residual r = f_contact - eta (du - du_affine) on the free DOFs, as max-norm / fbar.
   /// If fill_rhs, also stores r in rhs for the linear solve.
-  double residual(double fbar, bool fill_rhs) {
+  double residual(double fbar, bool fill_rhs, double* max_norm = nullptr) {
     const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
-    double m = 0.0;
+    double m = 0.0, s2 = 0.0;
     for (int p = 0; p < n; ++p)
       for (int a = 0; a < 3; ++a)
         if (const int d = dof[3 * p + a]; d >= 0) {
           const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
           if (fill_rhs) rhs(d) = rv;
-          m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
+          const double v = std::fabs(rv) / (a == 2 ? r_mean : 1.0);
+          m = std::max(m, v);
+          s2 += v * v;
         }
-    return m / std::max(fbar, 1e-300);
+    const double scale = 1.0 / std::max(fbar, 1e-300);
+    if (max_norm) *max_norm = m * scale;
+    return std::sqrt(s2 / std::max(nfree, 1)) * scale;
   }
 
   /// Per-particle step limits: a single soft mode must not freeze the whole network.
@@ -552,12 +558,15 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     if (s.eta < 0.0 && want_tangent && s.nfree > 0) s.eta = s.opt.viscosity * s.mean_diagonal();
     fbar = s.mean_normal_force();
     if (fbar <= 0.0) fbar = s.opt.law.sigma_y * s.r_mean * 1e-6;
-    const double newton_res = s.nfree > 0 ? s.residual(fbar, true) : 0.0;
+    double newton_max = 0.0;
+    const double newton_res = s.nfree > 0 ? s.residual(fbar, true, &newton_max) : 0.0;  // RMS
     rep.newton_residual = newton_res;
     if (!std::isfinite(newton_res))
       throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
-    if (s.opt.verbose) std::fprintf(stderr, "  iteration %d: residual %.3e (mean contact force %.3e)\n", it, newton_res, fbar);
-    if (newton_res <= s.opt.residual_tol || s.nfree == 0) {
+    if (s.opt.verbose)
+      std::fprintf(stderr, "  iteration %d: residual rms %.3e max %.3e (mean contact force %.3e)\n", it, newton_res,
+                   newton_max, fbar);
+    if ((newton_res <= s.opt.residual_tol && newton_max <= s.opt.max_residual_tol) || s.nfree == 0) {
       rep.converged = true;
       break;
     }

@@ -90,6 +90,7 @@ TEST(NetworkSolver, SquareLatticeMatchesClosedForm) {
         so.law.mu = mu;
         so.law.sigma_y = 2.0;
         so.residual_tol = 1e-9;
+        so.max_residual_tol = 1e-9;
         so.max_newton = 50;
         const double D_target = pk.density() * 1.04;
         auto rr = compact(pk, so, path, D_target, 20);
@@ -121,6 +122,7 @@ TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {
     so.law.mu = mu;
     so.viscosity = 0.0;  // pure Newton: the drag would be an external force
     so.residual_tol = 1e-5;
+    so.max_residual_tol = 1e-5;
     so.max_newton = 300;
     auto rr = compact(pk, so, qs::StrainPath::hydrostatic(), pk.density() + 0.02, 40);
     EXPECT_LT(rr.m.S22, 0.0);
@@ -161,6 +163,7 @@ TEST(NetworkSolver, IncrementConvergence) {
   so.law.mu = kInf;
   so.viscosity = 0.0;
   so.residual_tol = 1e-5;
+  so.max_residual_tol = 1e-5;
   so.max_newton = 300;
   const double D = pk.density() + 0.02;
   const int ref_n = 160;
@@ -208,6 +211,7 @@ TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
   qs::SolverOptions so;
   so.law.mu = kInf;
   so.residual_tol = 1e-5;
+  so.max_residual_tol = 1e-5;
   so.max_newton = 300;
   const double D = pk.density() + 0.02;
   so.viscosity = 0.0;

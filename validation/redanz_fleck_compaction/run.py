@@ -23,6 +23,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import shlex
 import subprocess
 import sys
@@ -657,7 +658,8 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
     L.append("|---|---|---|---|---|---|---|")
     for fid, fin, paper, band, meas, status, notes in rows:
         st = f"**{status}**" if status == "FAIL" else status
-        L.append(f"| {fid} | {fin} | {paper} | {band} | {meas} | {st} | {notes} |")
+        cells = [c.replace("|", "\\|") for c in (fid, fin, paper, band, meas, st, notes)]
+        L.append("| " + " | ".join(cells) + " |")
     L.append("")
     L.append("Definitions: S22/S11 and stress ratios use the boundary-reaction stress (Eq 13, columns S11, S22). "
              "Up-turn (3b): least-squares slope of |S22| against D on windows of +-0.0025; the final slope is "
@@ -719,8 +721,10 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
     }
     for fn in figs:
         L.append(f"**{captions.get(fn, fn)}**\n\n![{fn}]({fn})\n")
+    # <uNA> etc. would be read as HTML tags by Markdown renderers: use angle brackets
+    text = re.sub(r"(?<=[A-Za-z|\\])>", "\u27e9", re.sub(r"<(?=[|A-Za-z\\])", "\u27e8", "\n".join(L)))
     with open(os.path.join(out, "report.md"), "w") as f:
-        f.write("\n".join(L))
+        f.write(text + "\n")
 
 
 # ---------------------------------------------------------------------------------------- main

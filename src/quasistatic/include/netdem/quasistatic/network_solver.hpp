@@ -24,6 +24,7 @@
 // only (it changes the Newton path, never the equilibrium being solved), and Newton steps are
 // limited in size. A genuinely indefinite tangent (localisation) is reported as an error.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,7 +47,8 @@ struct SolverOptions {
   contact::PlasticIndentationParams law;
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
   int max_newton = 2;              ///< Newton iterations per increment (then the residual is carried)
-  double residual_tol = 1e-6;      ///< converged when max|residual| <= tol * mean normal contact force
+  double residual_tol = 1e-3;      ///< converged when RMS(residual) <= tol * mean normal contact force ...
+  double max_residual_tol = std::numeric_limits<double>::infinity();  ///< ... and max|residual| <= this
   double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
   double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle
   double regularisation = 1e-9;    ///< diagonal shift, relative to the mean translational diagonal
@@ -65,7 +67,7 @@ struct IncrementReport {
   bool converged = false;
   double residual = 0.0;        ///< out-of-balance contact force on the free DOFs / mean normal contact force
   double residual_rms = 0.0;    ///< root mean square of the same over the free DOFs
-  double newton_residual = 0.0; ///< Newton residual (contact force - viscous drag) / mean contact force
+  double newton_residual = 0.0; ///< RMS Newton residual (contact force - viscous drag) / mean contact force
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
   int new_contacts = 0, lost_contacts = 0, sliding = 0;
