@@ -43,8 +43,8 @@ struct PackArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.1, slide_fraction = 0.05;
-  int increments = 100, max_newton = 2;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05;
+  int increments = 100, max_newton = 10;
 };
 
 double parse_friction(const std::string& s) {

@@ -46,7 +46,7 @@ struct SolverOptions {
   bool rotations = true;  ///< false: forbid every particle rotation
   contact::PlasticIndentationParams law;
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
-  int max_newton = 2;              ///< Newton iterations per increment (then the residual is carried)
+  int max_newton = 10;             ///< Newton iterations per increment (then the residual is carried)
   double residual_tol = 1e-3;      ///< converged when RMS(residual) <= tol * mean normal contact force ...
   double max_residual_tol = std::numeric_limits<double>::infinity();  ///< ... and max|residual| <= this
   double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
@@ -56,7 +56,7 @@ struct SolverOptions {
   bool geometric_stiffness = false;        ///< add the geometric stiffness to the tangent
   /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
   /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
-  double viscosity = 0.1;
+  double viscosity = 0.01;
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
