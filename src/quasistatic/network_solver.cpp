@@ -510,21 +510,21 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     const int i = s.pi[k], j = s.pj[k];
     s.g0[k] = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
   }
-  // prescribed motion (Eqs 14-15 on current coordinates) and predictor for the free DOFs
+  // prescribed motion (Eqs 14-15 on current coordinates) = the affine motion of the increment
   const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
+  s.du_aff.assign(3 * s.n, 0.0);
+  for (int p = 0; p < s.n; ++p) {
+    const Eigen::Vector2d u = A * Eigen::Vector2d(s.x[p], s.y[p]);
+    s.du_aff[3 * p] = u.x();
+    s.du_aff[3 * p + 1] = u.y();
+  }
+  // predictor for the free DOFs: the previous increment's displacement (scaled) on an unchanged
+  // strain path, else the affine motion
   const double dn = dE.norm(), dpn = s.dE_prev.norm();
   const bool reuse = !s.du_prev.empty() && dpn > 0.0 && dn > 0.0 &&
                      (dE.array() * s.dE_prev.array()).sum() / (dn * dpn) > 0.999;
   const double scale = reuse ? dn / dpn : 0.0;
-  for (int p = 0; p < s.n; ++p) {
-    const Eigen::Vector2d u = A * Eigen::Vector2d(s.x[p], s.y[p]);
-    for (int a = 0; a < 2; ++a) {
-      const int d = s.dof[3 * p + a];
-      s.du[3 * p + a] = (d >= 0 && reuse) ? scale * s.du_prev[3 * p + a] : u(a);
-    }
-    const int d = s.dof[3 * p + 2];
-    s.du[3 * p + 2] = (d >= 0 && reuse) ? scale * s.du_prev[3 * p + 2] : 0.0;
-  }
+  for (int q = 0; q < 3 * s.n; ++q) s.du[q] = (s.dof[q] >= 0 && reuse) ? scale * s.du_prev[q] : s.du_aff[q];
   s.last_sliding.assign(np, 0);
   s.flips.assign(np, 0);
   s.last_open.assign(np, 0);
@@ -541,12 +541,6 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
   // move at a finite rate instead of making the tangent singular. Homogeneous (affine) motion is
   // not resisted, and the drag vanishes as the increments shrink; its size, max|f_contact| /
   // mean contact force, is reported as the unbalanced force of the increment.
-  s.du_aff.assign(3 * s.n, 0.0);
-  for (int p = 0; p < s.n; ++p) {
-    const Eigen::Vector2d u = A * Eigen::Vector2d(s.x[p], s.y[p]);
-    s.du_aff[3 * p] = u.x();
-    s.du_aff[3 * p + 1] = u.y();
-  }
   s.eta = -1.0;
   double fbar = 1.0;
   for (int it = 0;; ++it) {
