@@ -47,16 +47,21 @@ struct CompactArgs {
   int increments = 100, max_newton = 10;
 };
 
-double parse_friction(const std::string& s) {
-  if (s == "inf" || s == "infinity" || s == "sticking") return std::numeric_limits<double>::infinity();
+/// The whole of `s` as a double, or false.
+bool parse_double(const std::string& s, double& v) {
   std::size_t used = 0;
-  double v = 0;
   try {
     v = std::stod(s, &used);
   } catch (...) {
-    used = 0;
+    return false;
   }
-  if (used != s.size() || std::isnan(v) || v < 0)
+  return used == s.size();
+}
+
+double parse_friction(const std::string& s) {
+  if (s == "inf" || s == "infinity" || s == "sticking") return std::numeric_limits<double>::infinity();
+  double v = 0;
+  if (!parse_double(s, v) || std::isnan(v) || v < 0)
     throw std::invalid_argument(fmt::format("--friction '{}' is not a non-negative number or 'inf'", s));
   return v;
 }
@@ -67,14 +72,9 @@ std::vector<double> parse_list(const std::string& s, const char* what) {
   std::string item;
   while (std::getline(in, item, ',')) {
     if (item.empty()) continue;
-    std::size_t used = 0;
     double v = 0;
-    try {
-      v = std::stod(item, &used);
-    } catch (...) {
-      used = 0;
-    }
-    if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument(fmt::format("{}: '{}' is not a number", what, item));
+    if (!parse_double(item, v) || !std::isfinite(v))
+      throw std::invalid_argument(fmt::format("{}: '{}' is not a number", what, item));
     out.push_back(v);
   }
   return out;

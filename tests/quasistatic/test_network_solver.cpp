@@ -56,6 +56,14 @@ struct RunResult {
   double max_residual = 0;
 };
 
+// The random test packing: r = R[0.9, 1.1], deposited in a box of the given width.
+packing::Packing random_packing(double width, std::uint64_t seed) {
+  packing::DepositionOptions d;
+  d.width = width;
+  d.seed = seed;
+  return packing::ballistic_deposition(d);
+}
+
 RunResult compact(const packing::Packing& pk, const qs::SolverOptions& so, const qs::StrainPath& path, double D,
                   int increments) {
   qs::NetworkSolver s(pk, so);
@@ -113,10 +121,7 @@ TEST(NetworkSolver, SquareLatticeMatchesClosedForm) {
 // On a random packing the stress from the boundary reactions (Eq 13) equals the contact
 // (Love-Weber) average when the free particles are in equilibrium.
 TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {
-  packing::DepositionOptions d;
-  d.width = small_scale() ? 12.0 : 20.0;
-  d.seed = 3;
-  const auto pk = packing::ballistic_deposition(d);
+  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
   for (double mu : {kInf}) {
     qs::SolverOptions so;
     so.law.mu = mu;
@@ -139,10 +144,7 @@ TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {
 // Affine mode on a random packing: with no rearrangement the contact overlaps follow Eq 16 and
 // the affine deviation measures vanish; hydrostatic affine motion gives no tangential motion.
 TEST(NetworkSolver, AffineModeHasNoAffineDeviation) {
-  packing::DepositionOptions d;
-  d.width = 16.0;
-  d.seed = 5;
-  const auto pk = packing::ballistic_deposition(d);
+  const auto pk = random_packing(16.0, 5);
   qs::SolverOptions so;
   so.mode = qs::BoundaryMode::Affine;
   so.law.mu = 0.0;
@@ -155,10 +157,7 @@ TEST(NetworkSolver, AffineModeHasNoAffineDeviation) {
 
 // Equilibrium correction: the final stress converges as the strain increment shrinks.
 TEST(NetworkSolver, IncrementConvergence) {
-  packing::DepositionOptions d;
-  d.width = small_scale() ? 12.0 : 20.0;
-  d.seed = 3;
-  const auto pk = packing::ballistic_deposition(d);
+  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
   qs::SolverOptions so;
   so.law.mu = kInf;
   so.viscosity = 0.0;
@@ -204,10 +203,7 @@ TEST(NetworkSolver, RejectsImpossibleTargetsAndBadOptions) {
 // The viscous regularisation acts on the non-affine motion per increment, so its effect on the
 // stress vanishes as the increments shrink: the regularised runs approach the pure-Newton one.
 TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
-  packing::DepositionOptions d;
-  d.width = small_scale() ? 12.0 : 20.0;
-  d.seed = 3;
-  const auto pk = packing::ballistic_deposition(d);
+  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
   qs::SolverOptions so;
   so.law.mu = kInf;
   so.residual_tol = 1e-5;
