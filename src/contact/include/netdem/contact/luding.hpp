@@ -1,0 +1,363 @@
+#pragma once
+// Sintering contact law of Luding, Manetsberger & Muellers, "A discrete model for long time
+// sintering", J. Mech. Phys. Solids 53 (2005) 455 (cited below as LMM05), sections 2-3.
+//
+// Parameters, history and evaluation are three things: `LudingParams` (per run, Table 1 defaults),
+// `LudingHistory` (per contact, plain data) and the const evaluation `luding_evaluate<F>()`, which
+// returns the forces, the tangent and the history to commit; nothing is stored. The temperature
+// state k1(T, t) is a material (global) state, advanced once per step by `advance_thermal()`.
+//
+// Conventions (as kinematics.hpp): overlap delta > 0 when touching (compression positive);
+// n from i to j; the normal force f_n is the force ON j along n, f_n > 0 repulsive; the slip xi is
+// the tangential displacement of j relative to i along t = perp(n), and f_t is the tangential
+// force ON j along t. Units: SI as Table 1 (N/m for stiffnesses of the 2D cylinders, kg/s for
+// damping, s, m); temperatures in deg C (only differences enter, in K).
+//
+// Compile-time specialisation: `luding_evaluate<kLudingLinear>` is a plain linear spring-dashpot
+// with a Cundall-Strack tangential spring (no hysteresis, no cohesion, no temperature); it equals
+// the full law when k1 = k2, k_c = 0 and the temperature is constant (tested). Use
+// `luding_is_linear()` to choose the instantiation once per run.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+
+namespace netdem::contact {
+
+/// All parameters of LMM05 Table 1, with the paper's values as defaults (SI units).
+struct LudingParams {
+  // ---- contact law (Table 1) ----
+  double k2 = 2.0e5;        ///< particle stiffness k2 [N/m] (un/reloading, Eq 4; cap of Eq 7)
+  double k1_ratio = 0.5;    ///< k1/k2: cold loading stiffness (Eq 4)
+  double kc_ratio = 0.5;    ///< k_c/k2: cohesion stiffness (Eq 4, 13)
+  double alpha = 0.2;       ///< k_t/k2(delta_max): tangential stiffness ratio (Eq 23)
+  double gamma_n = 0.2;     ///< normal damping gamma_0 [kg/s] (Eq 5)
+  double gamma_t = 0.05;    ///< tangential damping gamma_t [kg/s] (Eq 19)
+  double mu = 0.5;          ///< particle-particle friction (Eq 14, 24)
+  double mu_wall = 0.0;     ///< particle-wall friction mu_w (see wall_params())
+  double T_melt = 120.0;    ///< melting temperature [deg C] (Eq 9, 10)
+  double T_var = 10.0;      ///< temperature range of melting [K] (Eq 10)
+  double da_T = 1.0e-4;     ///< relative radius change per K, delta a_T [1/K] (Eq 9)
+  double delta_fluid_rel = 0.2;  ///< delta_fluid / a0 (section 3.1.3; 0.0477 physically)
+  double t0 = 1.0e3;        ///< relaxation time t0 [s] (Eq 11, 12), default
+  double t0_sinter = 0.1;   ///< relaxation time during sintering [s] (section 4.1)
+  // ---- sample / solver (Table 1), not used by the contact law itself except a0 ----
+  double a0 = 1.0e-3;       ///< mean particle radius [m]; scales delta_fluid
+  double w0 = 0.5;          ///< relative width of the radius distribution
+  double h = 6.0e-3;        ///< particle height [m]
+  double rho_p = 2000.0;    ///< particle density [kg/m^3] at the reference temperature
+  double m_wall = 0.01;     ///< wall mass (Eq 1)
+  double gamma_wall = 0.2;  ///< wall damping (Eq 1)
+  /// Temperature [deg C] at which the drawn radii a_i (and rho_p) are given. Default T_melt: the
+  /// drawn radius IS a(T_melt) of Eq 9. The mass is computed once at this temperature and kept.
+  double T_radius_ref = 120.0;
+  // ---- switches (not in the paper) ----
+  bool stiffness_growth = true;  ///< Eq 7 on; off: un/reloading stiffness is the constant k2
+  bool sliding_breaks_cohesion = true;  ///< footnote 5: f_n >= 0 while sliding
+
+  double k1() const { return k1_ratio * k2; }
+  double kc() const { return kc_ratio * k2; }
+  double delta_fluid() const { return delta_fluid_rel * a0; }
+  /// delta_max^fluid = k2 delta_fluid / (k2 - k1) (section 3.1.3); inf when k1 = k2.
+  double delta_max_fluid() const {
+    return k1_ratio < 1.0 ? delta_fluid() / (1.0 - k1_ratio)
+                          : std::numeric_limits<double>::infinity();
+  }
+  /// The parameters for a particle-wall contact (not in the paper; our choice, docs/luding.md):
+  /// the same law with the wall as a flat of infinite radius and mass, mu = mu_w, and no cohesion
+  /// (the tooling does not sinter to the powder).
+  LudingParams wall_params() const {
+    LudingParams w = *this;
+    w.mu = mu_wall;
+    w.kc_ratio = 0.0;
+    return w;
+  }
+  /// Throws std::invalid_argument with a one-line message for an invalid value.
+  void validate() const;
+};
+
+/// Compile-time feature flags of the evaluation.
+struct LudingFeatures {
+  bool hysteresis = true;  ///< Eq 4 with k1 < k2 and Eq 7; off: f = k2 delta
+  bool cohesion = true;    ///< -k_c delta branch, Eq 13-15; off: k_c = 0, f_min = 0
+  bool thermal = true;     ///< k1(T, t), Eq 10-13, 24 and the delta rules of section 3.3
+};
+inline constexpr LudingFeatures kLudingFull{true, true, true};
+inline constexpr LudingFeatures kLudingLinear{false, false, false};
+
+/// True when the full law reduces to a linear spring-dashpot (k1 = k2, k_c = 0, constant T).
+inline bool luding_is_linear(const LudingParams& p, bool constant_temperature) {
+  return p.k1_ratio == 1.0 && p.kc_ratio == 0.0 && constant_temperature;
+}
+
+/// Per-contact history (plain data). Lifecycle: created zero on first touch; reset (returned as a
+/// fresh history) on separation, delta <= 0; for a pair-order flip negate xi.
+struct LudingHistory {
+  double delta_max = 0.0;  ///< delta_max (Fig 2); 0 = fresh contact
+  double delta0 = 0.0;     ///< force-free overlap delta_0 of the un/reloading line
+  double k2_line = 0.0;    ///< slope k2' = k2(delta_max) of the un/reloading line (Eq 7)
+  double k1_seen = 0.0;    ///< k1(T, t) at which (delta_max, delta0) were last made consistent
+  double xi = 0.0;         ///< tangential spring length along t (Eq 16-21)
+  std::uint8_t fluid = 0;  ///< 1 once delta_0 reached delta_fluid (fluid limit, frozen delta_0)
+  std::uint8_t sliding = 0;  ///< 1 if the committed step slid
+};
+
+/// Kinematic input of one step (contact frame).
+struct LudingInput {
+  double delta = 0.0;      ///< overlap at the end of the step [m]
+  double delta_dot = 0.0;  ///< d delta / dt (> 0 approaching) [m/s]
+  double dxi = 0.0;        ///< slip increment over the step [m]
+  double xi_dot = 0.0;     ///< slip rate v_t [m/s]
+  double k1_Tt = 0.0;      ///< k1(T, t) of the material [N/m] (ignored without F.thermal)
+};
+
+enum class LudingBranch : std::uint8_t { Open = 0, Loading = 1, Line = 2, Cohesive = 3, Fluid = 4 };
+
+struct LudingResult {
+  double f_n = 0.0;     ///< normal force on j along n (spring + Eq 5 damping), > 0 repulsive
+  double f_t = 0.0;     ///< tangential force on j along t
+  double m_roll = 0.0;  ///< rolling moment: not in the paper (section 5), always 0 (hook)
+  double f_min = 0.0;   ///< Eq 15 for the committed state (<= 0)
+  double k_c = 0.0;     ///< Eq 13
+  double k_t = 0.0;     ///< Eq 23
+  double mu = 0.0;      ///< Eq 24
+  // tangent (rates held fixed): derivatives with respect to delta and dxi
+  double dfn_ddelta = 0.0;
+  double dfn_dxi = 0.0;
+  double dft_ddelta = 0.0;
+  double dft_dxi = 0.0;
+  LudingBranch branch = LudingBranch::Open;
+  bool sliding = false;
+  LudingHistory history;  ///< the history to commit if the step is accepted
+};
+
+// ---------------------------------------------------------------------------------------------
+// Temperature (sections 3.2-3.4)
+
+/// Eq 10: k1(T) = k1/2 [1 + tanh((T_melt - T)/T_var)].
+inline double luding_k1_of_T(const LudingParams& p, double T) {
+  return 0.5 * p.k1() * (1.0 + std::tanh((p.T_melt - T) / p.T_var));  // LMM05 Eq 10
+}
+
+/// Eq 9 with constant mass: radius at T of a particle drawn with radius a_ref at T_radius_ref.
+inline double luding_radius(const LudingParams& p, double a_ref, double T) {
+  // LMM05 Eq 9: a(T) = a(T_melt) [1 - da_T (T_melt - T)], referred to a_ref = a(T_radius_ref)
+  return a_ref * (1.0 - p.da_T * (p.T_melt - T)) / (1.0 - p.da_T * (p.T_melt - p.T_radius_ref));
+}
+/// Constant particle mass rho_p pi a_ref^2 h (Eq 8: the density follows the radius).
+inline double luding_mass(const LudingParams& p, double a_ref) {
+  return p.rho_p * std::numbers::pi * a_ref * a_ref * p.h;
+}
+
+/// Eq 11 literally (falling k1, k1_T0 > k1_T): k1(T, t) after time t at constant T.
+inline double luding_k1_eq11(double k1_T, double k1_T0, double t, double t0) {
+  return k1_T * (1.0 - 1.0 / (1.0 / (1.0 - k1_T0 / k1_T) - t / t0));  // LMM05 Eq 11
+}
+
+/// Exact solution over dt of Eq 12 with the sign of footnote 3, dk/dt = y|y|/(k1_T t0),
+/// y = k1_T - k, from k_prev = k1(T, t - dt) at constant T: y(dt) = y0 / (1 + |y0| dt/(k1_T t0)).
+/// For falling k1 this is Eq 11; for rising k1 it is Eq 11 with the sign of t/t0 flipped.
+/// Never overshoots k1_T, for any dt.
+inline double luding_relax_k1(double k_prev, double k1_T, double dt, double t0) {
+  const double y0 = k1_T - k_prev;
+  if (k1_T <= 0.0) return k1_T;
+  return k1_T - y0 / (1.0 + std::fabs(y0) * dt / (k1_T * t0));  // LMM05 Eq 11/12, footnote 3
+}
+
+/// Material temperature state: T and k1(T, t).
+struct LudingThermalState {
+  double T = 80.0;     ///< [deg C]
+  double k1_Tt = 0.0;  ///< k1(T, t) [N/m]
+};
+/// Cold start: k1(T, t) = k1(T) (equilibrated at T).
+inline LudingThermalState luding_thermal_start(const LudingParams& p, double T) {
+  return {T, luding_k1_of_T(p, T)};
+}
+/// Advances (T, k1(T, t)) to T_new over dt with relaxation time t0 (p.t0 or p.t0_sinter).
+/// Section 3.4 exception: if the temperature falls and k1(T) > k1(T, t - dt), the contact freezes
+/// at once, k1(T, t) = k1(T). Otherwise the exact step of Eq 12 from k1(T, t - dt) (footnote 3).
+inline LudingThermalState luding_advance_thermal(const LudingParams& p, const LudingThermalState& s,
+                                                 double T_new, double dt, double t0) {
+  const double k1T = luding_k1_of_T(p, T_new);  // LMM05 Eq 10
+  if (T_new < s.T && k1T > s.k1_Tt) return {T_new, k1T};  // LMM05 section 3.4: freezing
+  return {T_new, luding_relax_k1(s.k1_Tt, k1T, dt, t0)};  // LMM05 Eq 12 (footnote 3)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Normal and tangential law
+
+/// Eq 7: k2(delta_max), using the constant cold k1 (section 3.3), capped at k2.
+inline double luding_k2_of(const LudingParams& p, double delta_max) {
+  if (!p.stiffness_growth) return p.k2;
+  const double dmf = p.delta_max_fluid();
+  if (!(delta_max < dmf)) return p.k2;                                   // LMM05 Eq 7, fluid
+  return p.k1() + (p.k2 - p.k1()) * delta_max / dmf;                    // LMM05 Eq 7
+}
+/// dk2(delta_max)/d delta_max of Eq 7.
+inline double luding_dk2_of(const LudingParams& p, double delta_max) {
+  if (!p.stiffness_growth) return 0.0;
+  const double dmf = p.delta_max_fluid();
+  return delta_max < dmf ? (p.k2 - p.k1()) / dmf : 0.0;
+}
+
+/// Section 3.3 delta rules, keyed on k1(T, t) (not on dT/dt): while k1(T, t) falls, delta_max
+/// stays and delta_0 grows (Fig 5 left), frozen at delta_fluid (fluid limit); while it rises,
+/// delta_0 stays and delta_max grows on the same k2' line (Fig 5 right).
+inline LudingHistory luding_thermal_update(const LudingParams& p, const LudingHistory& h,
+                                           double k1_Tt) {
+  LudingHistory r = h;
+  r.k1_seen = k1_Tt;
+  if (h.delta_max <= 0.0 || h.fluid) return r;  // fresh contact, or fluid: delta_0 frozen
+  const double k2l = h.k2_line;
+  if (k1_Tt < h.k1_seen) {
+    r.delta0 = (1.0 - k1_Tt / k2l) * h.delta_max;  // LMM05 section 3.3.1: delta_0^+(T)
+    if (r.delta0 >= p.delta_fluid()) {              // LMM05 section 3.1.3: fluid limit
+      r.delta0 = p.delta_fluid();
+      r.fluid = 1;
+    }
+  } else if (k1_Tt > h.k1_seen && h.delta0 > 0.0 && k1_Tt < k2l) {
+    r.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
+  }
+  return r;
+}
+
+/// One step of the law (see LudingInput). Pure: the new history is returned, not stored.
+template <LudingFeatures F = kLudingFull>
+inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& h0,
+                                    const LudingInput& in) {
+  LudingResult r;
+  const double delta = in.delta;
+  if (!(delta > 0.0)) {  // open: no force; the history is reset (docs/luding.md)
+    r.history = LudingHistory{};
+    return r;
+  }
+  const double k1c = p.k1();
+  const double k1 = F.thermal ? in.k1_Tt : k1c;  // k1(T, t), Eq 11-12
+  LudingHistory h = h0;
+  if constexpr (F.thermal && F.hysteresis) {
+    h = luding_thermal_update(p, h0, k1);
+  } else {
+    h.k1_seen = k1;
+  }
+
+  // ---- normal spring, Eq 4 with Fig 2/3 ----
+  double f = 0.0, kn = 0.0;
+  double ddelta0 = 0.0, dk2l = 0.0;  // d(delta_0)/d delta, d(k2')/d delta (loading only)
+  if constexpr (!F.hysteresis) {
+    f = p.k2 * delta;  // LMM05 Eq 4 with k1 = k2: linear spring
+    kn = p.k2;
+    h.delta_max = std::fmax(h.delta_max, delta);
+    h.k2_line = p.k2;
+    r.branch = LudingBranch::Line;
+  } else {
+    if (h.fluid) {
+      h.delta_max = std::fmax(h.delta_max, delta);
+      f = h.k2_line * (delta - h.delta0);  // LMM05 Fig 3: liquid branch, slope k2, delta_0 fixed
+      kn = h.k2_line;
+      r.branch = LudingBranch::Fluid;
+    } else if (delta >= h.delta_max) {  // loading on k1
+      h.delta_max = delta;
+      h.k2_line = luding_k2_of(p, delta);                 // LMM05 Eq 7
+      dk2l = luding_dk2_of(p, delta);
+      h.delta0 = (1.0 - k1 / h.k2_line) * delta;          // LMM05 Eq 4: delta_0
+      ddelta0 = (1.0 - k1 / h.k2_line) + delta * k1 * dk2l / (h.k2_line * h.k2_line);
+      if (h.delta0 >= p.delta_fluid()) {                  // LMM05 section 3.1.3: fluid limit
+        // The liquid branch (Fig 3) starts through the current loading point, so the force stays
+        // continuous: slope k1 delta/(delta - delta_fluid) <= k2(delta_max) <= k2 (our choice;
+        // = k2 when the limit is met exactly at delta_max^fluid with the cold k1).
+        const double df = p.delta_fluid();
+        h.delta0 = df;
+        h.fluid = 1;
+        h.k2_line = k1 * delta / (delta - df);
+        dk2l = -k1 * df / ((delta - df) * (delta - df));
+        ddelta0 = 0.0;
+        f = k1 * delta;                                   // = k2' (delta - delta_fluid)
+        kn = k1;
+        r.branch = LudingBranch::Fluid;
+      } else {
+        f = k1 * delta;                                   // LMM05 Eq 4: loading
+        kn = k1;
+        r.branch = LudingBranch::Loading;
+      }
+    } else {
+      f = h.k2_line * (delta - h.delta0);                 // LMM05 Eq 4: un/reloading
+      kn = h.k2_line;
+      r.branch = LudingBranch::Line;
+    }
+  }
+
+  // ---- cohesion, Eq 13 and 15 ----
+  double kc = 0.0, fmin = 0.0, dfmin = 0.0;
+  double c = 0.0;
+  if constexpr (F.cohesion) {
+    c = (k1 / k1c) * p.kc() / p.k2;  // k_c = c k2', LMM05 Eq 13
+    kc = c * h.k2_line;
+  }
+  if constexpr (F.hysteresis) {
+    if (f < -kc * delta) {  // LMM05 Eq 4: attractive limit -k_c delta (0 without cohesion)
+      f = -kc * delta;
+      kn = -kc;
+      dk2l = 0.0;
+      r.branch = LudingBranch::Cohesive;
+    }
+  }
+  if constexpr (F.cohesion) {
+    if (kc > 0.0) {
+      // f_min = -k_c delta_min, the line/limit intersection; = Eq 15 when delta_0 = (1-k1/k2')dmax
+      fmin = -kc * h.k2_line * h.delta0 / (h.k2_line + kc);  // LMM05 Eq 15
+      // d f_min / d delta on the loading branch (k2' and delta_0 move with delta_max = delta)
+      if (dk2l != 0.0 || ddelta0 != 0.0) {
+        const double g = h.delta0 / (1.0 + c);  // = delta_min, since k_c = c k2'
+        dfmin = -(c * dk2l * g + kc * ddelta0 / (1.0 + c));
+      }
+    }
+  }
+  r.k_c = kc;
+  r.f_min = fmin;
+
+  // ---- damping, Eq 5 ----
+  double fn = f + p.gamma_n * in.delta_dot;  // LMM05 Eq 5
+  double dfn = kn;
+
+  // ---- tangential, Eq 14, 16-24 (2D: xi is a scalar along t, Eq 16 is implicit) ----
+  const double mu = F.thermal ? (k1 / k1c) * p.mu : p.mu;  // LMM05 Eq 24
+  const double kt = p.alpha * h.k2_line;                   // LMM05 Eq 23
+  const double dkt = p.alpha * dk2l;
+  r.mu = mu;
+  r.k_t = kt;
+  const double fc = mu * (fn - fmin);  // LMM05 Eq 14: f_C = mu (f_n - f_min)
+  if (fc > 0.0) {
+    const double xi_trial = h.xi + in.dxi;                     // LMM05 Eq 20
+    const double ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
+    if (std::fabs(ft0) <= fc) {                                // static friction
+      r.f_t = ft0;
+      h.xi = xi_trial;
+      r.dft_dxi = -kt;
+      r.dft_ddelta = -dkt * xi_trial;
+      r.sliding = false;
+    } else {                                                   // sliding friction
+      const double s = ft0 > 0.0 ? 1.0 : -1.0;
+      r.f_t = s * fc;                                          // LMM05 Eq 22
+      h.xi = -(fc * s + p.gamma_t * in.xi_dot) / kt;           // LMM05 Eq 21
+      r.dft_dxi = 0.0;
+      r.dft_ddelta = s * mu * (dfn - dfmin);
+      r.sliding = true;
+      if (p.sliding_breaks_cohesion && fn < 0.0) {             // LMM05 footnote 5: f_n >= 0
+        fn = 0.0;
+        dfn = 0.0;
+      }
+    }
+  } else {  // f_n <= f_min: no tangential force, the spring is released
+    h.xi = 0.0;
+  }
+  h.sliding = r.sliding ? 1 : 0;
+  r.f_n = fn;
+  r.dfn_ddelta = dfn;
+  r.dfn_dxi = 0.0;
+  // Rolling resistance (not in LMM05): a rolling sub-model would add its moment to r.m_roll here
+  // from a rolling-spring history slot; none is modelled, r.m_roll = 0.
+  r.history = h;
+  return r;
+}
+
+}  // namespace netdem::contact
