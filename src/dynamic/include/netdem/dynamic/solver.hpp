@@ -1,0 +1,167 @@
+#pragma once
+// Explicit (molecular-dynamics) DEM solver for 2D disks with the sintering contact law of
+// Luding, Manetsberger & Muellers, J. Mech. Phys. Solids 53 (2005) 455 (LMM05), sections 2-3:
+// Newton's equations Eq 2 by velocity Verlet (kick-drift-kick), time step of Eq 6, Verlet-table
+// neighbour search, a bi-axial box whose right/top walls are strain- or stress-controlled (Eq 1).
+//
+// Conventions (as netdem/contact/kinematics.hpp): a contact is the ordered pair (i, j), i < j;
+// n from i to j, t = perp(n); overlap delta > 0 when touching; f_n > 0 repulsive is the force ON j.
+// A wall contact is the pair (wall, particle): n points from the wall into the box.
+// Units: SI as LMM05 Table 1; disks of height h = params.h (2D cylinders): mass rho_p pi a^2 h,
+// stiffness N/m, damping kg/s, wall pressure p in N/m (force per wall length), wall mass kg.
+// Stress is reported as force per length (N/m) with compression POSITIVE.
+// See docs/dynamic.md.
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "netdem/contact/luding.hpp"
+
+namespace netdem::dem {
+
+using contact::LudingHistory;
+using contact::LudingParams;
+
+/// Particle state in flat arrays (structure of arrays), index = particle id.
+struct Particles {
+  std::vector<double> x, y, vx, vy, omega, theta;  ///< position [m], velocity [m/s], angle [rad]
+  std::vector<double> radius, mass, inertia;       ///< [m], [kg], [kg m^2]
+  std::vector<double> fx, fy, torque;              ///< accumulators [N], [N m]
+  std::size_t size() const { return x.size(); }
+  /// Adds a disk of radius r: mass rho_p pi r^2 h (contact::luding_mass), I = m r^2 / 2.
+  std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
+                  double pvy = 0.0, double pomega = 0.0);
+};
+
+/// Contact-law instantiation, chosen once per run (no virtual call per contact).
+enum class ContactModel : std::uint8_t {
+  Linear,      ///< luding_evaluate<kLudingLinear>: k2 delta + gamma0 delta', Cundall-Strack spring
+  Hysteretic,  ///< {hysteresis}: Eq 4 and Eq 7 without cohesion or temperature
+  Full         ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
+};
+
+enum class WallMode : std::uint8_t { Fixed, Strain, Stress };
+
+/// The right (moves along x) or top (moves along y) wall.
+struct MovingWall {
+  WallMode mode = WallMode::Fixed;
+  double velocity = 0.0;  ///< Strain: prescribed velocity [m/s] along +x (right) / +y (top)
+  double pressure = 0.0;  ///< Stress: external pressure p [N/m] (Eq 1)
+  double mass = 0.01;     ///< Stress: m_w [kg] (Eq 1; Table 1)
+  double damping = 0.2;   ///< Stress: gamma_w [kg/s] (Eq 1; Table 1)
+};
+
+/// Bi-axial box (LMM05 Fig 1): left (x_min) and bottom (y_min) walls fixed.
+struct Box {
+  bool enabled = true;  ///< false: no walls, unbounded free system
+  double x_min = 0.0, y_min = 0.0, x_max = 1.0, y_max = 1.0;
+  MovingWall right, top;
+};
+
+enum class TimeStepRule : std::uint8_t {
+  MeanPair,     ///< LMM05 Eq 6: t_MD = pi/(steps_per_contact omega), omega for the mean pair
+  LightestPair  ///< stricter: the same with omega of the two lightest particles
+};
+
+struct DynamicOptions {
+  ContactModel model = ContactModel::Full;
+  TimeStepRule rule = TimeStepRule::MeanPair;
+  double steps_per_contact = 50.0;      ///< Eq 6: t_MD = t_c / 50
+  double min_steps_per_contact = 10.0;  ///< refuse dt giving the lightest pair fewer steps
+  double dt = 0.0;                      ///< > 0: this time step (still checked); 0: from the rule
+  double skin = 0.0;                    ///< Verlet skin [m]; 0: 0.3 x mean radius
+  double gravity_x = 0.0, gravity_y = 0.0;  ///< [m/s^2]
+  double temperature = 80.0;  ///< [deg C] initial T of the thermal state (ContactModel::Full)
+  /// Throws std::invalid_argument with one line for an invalid value.
+  void validate() const;
+};
+
+struct TimeStepInfo {
+  double dt = 0.0;                          ///< chosen time step [s]
+  double tc_mean = 0.0;                     ///< Eq 6 contact duration of the mean pair [s]
+  double tc_lightest = 0.0;                 ///< Eq 6 contact duration of the lightest pair [s]
+  double steps_per_contact_lightest = 0.0;  ///< tc_lightest / dt
+};
+/// Eq 6 contact duration pi/omega, omega = sqrt(k2/m12 - eta0^2), eta0 = gamma0/(2 m12);
+/// for an over-damped pair the undamped omega is used (shorter, stricter).
+double contact_duration(double k2, double gamma0, double m12);
+/// The time step of the rule (or options.dt); throws std::invalid_argument if the lightest pair
+/// gets fewer than options.min_steps_per_contact steps per contact.
+TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o);
+
+struct Stress2 {
+  double xx = 0.0, xy = 0.0, yx = 0.0, yy = 0.0;  ///< [N/m], compression positive
+};
+
+struct Energies {
+  double kinetic = 0.0;  ///< sum m v^2 / 2 + I omega^2 / 2 of the particles [J]
+  double elastic = 0.0;  ///< sum k2 delta^2 / 2 over contacts (exact for ContactModel::Linear)
+  double gravity = 0.0;  ///< -sum m g.x
+  double wall_kinetic = 0.0;
+  double total() const { return kinetic + elastic + gravity + wall_kinetic; }
+};
+
+class DynamicSolver {
+ public:
+  /// Validates, chooses the time step, builds the neighbour table, computes the first forces.
+  DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
+                const DynamicOptions& options);
+
+  void step();                    ///< one velocity-Verlet step (Eq 2, Eq 1)
+  void run(std::size_t n_steps);  ///< n_steps steps
+
+  const Particles& particles() const { return P_; }
+  const Box& box() const { return box_; }
+  const TimeStepInfo& time_step() const { return ts_; }
+  double dt() const { return ts_.dt; }
+  double time() const { return time_; }
+  std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
+  std::size_t table_size() const { return pair_key_.size(); }
+  /// Material thermal state (ContactModel::Full); the temperature schedule is the caller's.
+  contact::LudingThermalState& thermal() { return thermal_; }
+
+  /// Pairs (i < j) of the table that currently overlap, sorted.
+  void touching_pairs(std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
+  /// Committed contact history of pair (i < j); nullptr if the pair is not in the table.
+  const LudingHistory* history(std::uint32_t i, std::uint32_t j) const;
+
+  double wall_force_right() const { return wall_force_[1]; }  ///< contacts on right wall, +x [N]
+  double wall_force_top() const { return wall_force_[3]; }    ///< contacts on top wall, +y [N]
+  /// Wall stresses F_right / height and F_top / width [N/m].
+  Stress2 wall_stress() const;
+  /// Contact-network stress Sigma = (1/V) sum_c f_c (x) l_c at the last force evaluation: pairs
+  /// with l = x_j - x_i and f on j, wall contacts with l = particle centre - contact point.
+  Stress2 contact_stress() const;
+  /// Density nu = sum pi a_i^2 / box area.
+  double density() const;
+  Energies energies() const;
+
+ private:
+  template <contact::LudingFeatures F>
+  void compute_forces();
+  void compute_forces_dispatch();
+  void build_table();
+  bool needs_rebuild() const;
+
+  Particles P_;
+  LudingParams params_, wall_params_;
+  Box box_;
+  DynamicOptions opt_;
+  TimeStepInfo ts_;
+  contact::LudingThermalState thermal_;
+  double time_ = 0.0, skin_ = 0.0;
+  std::size_t rebuilds_ = 0;
+  // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
+  std::vector<std::uint64_t> pair_key_, new_key_;
+  std::vector<LudingHistory> pair_hist_, new_hist_;
+  std::vector<double> x_build_, y_build_;
+  std::vector<std::uint32_t> cell_start_, cell_items_, cell_cursor_;
+  // wall histories: 4 per particle (left, right, bottom, top); wall state
+  std::vector<LudingHistory> wall_hist_;
+  double wall_force_[4] = {0, 0, 0, 0};
+  double wall_v_[2] = {0, 0};  ///< right, top velocities
+  double sxx_ = 0, sxy_ = 0, syx_ = 0, syy_ = 0, elastic_ = 0;
+};
+
+}  // namespace netdem::dem
