@@ -10,7 +10,7 @@ generation and output excluded) and the relative error of S22 at D = 0.85 agains
 of the same viscosity, plus the largest relative S22 error at the checkpoints D = 0.82, 0.83,
 0.84, 0.85 (linear interpolation in history.csv).
 
-Writes <out>/time_vs_error.csv and <out>/time_vs_error.png.
+Writes <out>/<name>.csv and <out>/<name>.png (--name, default time_vs_error).
 
     /usr/bin/python3 bench/compaction_time_vs_error.py                      # all defaults
     /usr/bin/python3 bench/compaction_time_vs_error.py --increments 25,50 --reference 400 --viscosities 0.1
@@ -117,6 +117,7 @@ def main():
                     help="increments of the reference run (default 1600 = 16 x netsolve's default 100)")
     ap.add_argument("--viscosities", default="0.1,0.01", help="comma list; the first is netsolve's default")
     ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--name", default="time_vs_error", help="base name of the .csv and .png in --out")
     ap.add_argument("--workdir", default="/tmp/netdem-bench/time_vs_error", help="run folders")
     ap.add_argument("--reuse", action="store_true", help="reuse run folders that already hold summary.json")
     ap.add_argument("--nice", type=int, default=5, help="nice level of the runs (-1: none)")
@@ -170,12 +171,12 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     cols = ["viscosity", "N", "N_ref", "particles", "wall_s", "process_wall_s", "process_cpu_s", "S22", "err_S22_final",
             "err_S22_max_checkpoints", "S22_fit", "err_S22_fit", "newton_iterations", "factorisations", "unconverged_increments", "max_residual"]
-    with open(out / "time_vs_error.csv", "w", newline="") as f:
+    with open(out / f"{a.name}.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(cols)
         for r in rows:
             w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
-    print(f"wrote {out / 'time_vs_error.csv'}")
+    print("wrote", out / f"{a.name}.csv")
 
     try:
         import matplotlib
@@ -206,8 +207,8 @@ def main():
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out / "time_vs_error.png", dpi=130)
-    print(f"wrote {out / 'time_vs_error.png'}")
+    fig.savefig(out / f"{a.name}.png", dpi=130)
+    print("wrote", out / f"{a.name}.png")
 
 
 if __name__ == "__main__":
