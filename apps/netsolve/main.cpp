@@ -43,7 +43,7 @@ struct PackArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-3;
   int increments = 100, max_newton = 10;
 };
 
@@ -154,6 +154,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.viscosity = a.viscosity;
   so.slide_stiffness_fraction = a.slide_fraction;
   so.geometric_stiffness = a.geometric;
+  so.linear_tolerance = a.linear_tol;
   so.verbose = a.verbose;
   so.validate();
   qs::CompactionOptions co;
@@ -282,6 +283,7 @@ int main(int argc, char** argv) {
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
   comp->add_option("--viscosity", ca.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")->capture_default_str();
   comp->add_option("--slide-fraction", ca.slide_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
+  comp->add_option("--linear-tol", ca.linear_tol, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_flag("--geometric-stiffness", ca.geometric, "add the geometric stiffness of the contact forces to the iteration matrix");
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");

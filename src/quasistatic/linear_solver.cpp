@@ -1,5 +1,7 @@
 #include "netdem/quasistatic/linear_solver.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -438,6 +440,11 @@ LinearStatus LinearSolver::Impl::gmres(const SpMat& A, const VecX& b, VecX& x) {
 
 LinearSolver::LinearSolver(LinearSolverOptions options) {
   options.validate();
+  // Debian's CHOLMOD 3 opens OpenMP regions with a hard-coded num_threads(4) in the supernodal
+  // factorisation: on a 2-core machine they spin and cost 3x (docs/performance.md). The solver is
+  // serial by design (one core per job; parallelism is across probes/runs): no nested or active
+  // OpenMP parallelism for this thread.
+  omp_set_max_active_levels(0);
   impl_ = std::make_unique<Impl>(options);
 }
 LinearSolver::~LinearSolver() = default;

@@ -60,6 +60,8 @@ void SolverOptions::validate() const {
           fmt::format("solver: max_rotation_step must be positive, got {}", max_rotation_step));
   require(std::isfinite(regularisation) && regularisation >= 0.0 && regularisation < 1e-2,
           fmt::format("solver: regularisation must be in [0, 1e-2), got {}", regularisation));
+  require(std::isfinite(linear_tolerance) && linear_tolerance > 0.0 && linear_tolerance < 1.0,
+          fmt::format("solver: linear tolerance must be in (0, 1), got {}", linear_tolerance));
   require(std::isfinite(viscosity) && viscosity >= 0.0 && viscosity <= 1e3,
           fmt::format("solver: viscosity must be in [0, 1e3], got {}", viscosity));
   require(std::isfinite(slide_stiffness_fraction) && slide_stiffness_fraction >= 0.0 && slide_stiffness_fraction <= 1.0,
@@ -472,6 +474,9 @@ NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& op
   packing::validate(pk);
   auto& s = *impl_;
   s.opt = options;
+  LinearSolverOptions lo;
+  lo.gmres_tolerance = options.linear_tolerance;
+  s.lin = LinearSolver(lo);
   s.n = static_cast<int>(pk.size());
   s.x = pk.x;
   s.y = pk.y;

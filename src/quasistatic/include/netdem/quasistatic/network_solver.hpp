@@ -57,6 +57,9 @@ struct SolverOptions {
   /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
   /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
   double viscosity = 0.01;
+  /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
+  /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
+  double linear_tolerance = 1e-3;
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
