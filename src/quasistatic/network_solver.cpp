@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -582,19 +583,30 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     }
     rep.linear_iterations += st.iterations;
     s.clip_step();
-    // backtracking line search on the residual norm (the smallest step is taken if none lowers it)
+    // backtracking line search on the RMS residual: the first step that lowers it, else the
+    // best step tried
     const double r_before = newton_res;
-    double alpha = 1.0;
+    double alpha = 1.0, best_alpha = 1.0, best_r = std::numeric_limits<double>::infinity();
     s.du_start = s.du;
-    for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
+    auto apply = [&](double a) {
       for (int p = 0; p < s.n; ++p)
-        for (int a = 0; a < 3; ++a)
-          if (const int d = s.dof[3 * p + a]; d >= 0) s.du[3 * p + a] = s.du_start[3 * p + a] + alpha * s.sol(d);
-      if (ls == 4) break;
+        for (int c = 0; c < 3; ++c)
+          if (const int d = s.dof[3 * p + c]; d >= 0) s.du[3 * p + c] = s.du_start[3 * p + c] + a * s.sol(d);
+    };
+    for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
+      apply(alpha);
       bool dummy;
       s.evaluate(false, dummy);
-      const double fb = std::max(s.mean_normal_force(), 1e-300);
-      if (s.residual(fb, false) < r_before) break;
+      const double r = s.residual(std::max(s.mean_normal_force(), 1e-300), false);
+      if (r < best_r) {
+        best_r = r;
+        best_alpha = alpha;
+      }
+      if (r < r_before) break;
+    }
+    if (best_alpha != alpha || best_r >= r_before) {
+      alpha = best_alpha;
+      apply(alpha);
     }
     if (s.opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
     ++rep.newton_iterations;
