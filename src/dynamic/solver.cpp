@@ -346,16 +346,21 @@ void DynamicSolver::step() {
     const double Fw = which == 0 ? wall_force_[1] : wall_force_[3];
     return (Fw - w.pressure * z - w.damping * wall_v_[which]) / w.mass;  // LMM05 Eq 1
   };
-  for (std::size_t i = 0; i < n; ++i) {  // kick
-    P_.vx[i] += h * P_.fx[i] / P_.mass[i];
-    P_.vy[i] += h * P_.fy[i] / P_.mass[i];
-    P_.omega[i] += h * P_.torque[i] / P_.inertia[i];
-  }
-  if (box_.enabled) {
-    const double a0 = wall_accel(0), a1 = wall_accel(1);
-    wall_v_[0] += h * a0;
-    wall_v_[1] += h * a1;
-  }
+  // half-step kick of particles and moving walls; the damping term of Eq 1 is taken at the
+  // half-step wall velocity (explicit)
+  auto kick = [&] {
+    for (std::size_t i = 0; i < n; ++i) {
+      P_.vx[i] += h * P_.fx[i] / P_.mass[i];
+      P_.vy[i] += h * P_.fy[i] / P_.mass[i];
+      P_.omega[i] += h * P_.torque[i] / P_.inertia[i];
+    }
+    if (box_.enabled) {
+      const double a0 = wall_accel(0), a1 = wall_accel(1);
+      wall_v_[0] += h * a0;
+      wall_v_[1] += h * a1;
+    }
+  };
+  kick();
   for (std::size_t i = 0; i < n; ++i) {  // drift
     P_.x[i] += dt * P_.vx[i];
     P_.y[i] += dt * P_.vy[i];
@@ -368,17 +373,7 @@ void DynamicSolver::step() {
   time_ += dt;
   if (needs_rebuild()) build_table();
   compute_forces_dispatch();  // forces use the half-step velocities for the damping terms
-  for (std::size_t i = 0; i < n; ++i) {  // kick
-    P_.vx[i] += h * P_.fx[i] / P_.mass[i];
-    P_.vy[i] += h * P_.fy[i] / P_.mass[i];
-    P_.omega[i] += h * P_.torque[i] / P_.inertia[i];
-  }
-  if (box_.enabled) {
-    // the damping term of Eq 1 is taken at the half-step velocity (explicit)
-    const double a0 = wall_accel(0), a1 = wall_accel(1);
-    wall_v_[0] += h * a0;
-    wall_v_[1] += h * a1;
-  }
+  kick();
 }
 
 void DynamicSolver::run(std::size_t n_steps) {
