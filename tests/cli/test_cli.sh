@@ -4,25 +4,9 @@
 # usage: test_cli.sh PATH/TO/netsolve
 set -u
 ns="$1"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-pass=0
-fail=0
-check_bad() {  # name, expected word in the message, args...
-  local name="$1" word="$2"
-  shift 2
-  local out="$tmp/$name"
-  "$ns" "$@" --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
-  local rc=$?
-  local lines
-  lines=$(grep -c . "$tmp/stderr")
-  if [ "$rc" -ne 0 ] && [ "$lines" -eq 1 ] && grep -qi -- "$word" "$tmp/stderr" && [ ! -e "$out" ]; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL $name: rc=$rc lines=$lines out-exists=$([ -e "$out" ] && echo yes || echo no) stderr: $(cat "$tmp/stderr")"
-  fi
-}
+tool="$1"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 check_bad unknown_option "bogus" compact --bogus
 check_bad negative_friction "friction" compact --friction -1
 check_bad nan_friction "friction" compact --friction nan
@@ -47,5 +31,4 @@ else
   fail=$((fail + 1))
   echo "FAIL good_run: $(cat "$tmp/stderr")"
 fi
-echo "cli: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish

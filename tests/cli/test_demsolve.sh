@@ -4,25 +4,9 @@
 # usage: test_demsolve.sh PATH/TO/demsolve
 set -u
 ds="$1"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-pass=0
-fail=0
-check_bad() {  # name, expected word in the message, args...
-  local name="$1" word="$2"
-  shift 2
-  local out="$tmp/$name"
-  "$ds" "$@" --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
-  local rc=$?
-  local lines
-  lines=$(grep -c . "$tmp/stderr")
-  if [ "$rc" -ne 0 ] && [ "$lines" -eq 1 ] && grep -qi -- "$word" "$tmp/stderr" && [ ! -e "$out" ]; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL $name: rc=$rc lines=$lines stderr: $(cat "$tmp/stderr")"
-  fi
-}
+tool="$1"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 check_bad unknown_option "bogus" prepare --bogus
 check_bad negative_pressure "pressure" prepare --pressure -1
 check_bad nan_pressure "pressure" prepare --pressure nan
@@ -46,5 +30,4 @@ else
   fail=$((fail + 1))
   echo "FAIL good_run (files, header, seed, determinism): $(cat "$tmp/stderr")"
 fi
-echo "cli: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish
