@@ -20,18 +20,11 @@ The netsolve binary is copied to a temporary file first, so rebuilding it meanwh
 """
 import argparse
 import csv
-import json
-import resource
-import os
 import shutil
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-ENV = dict(os.environ)
+from bench_common import add_common_args, run_compact, setup
 CHECKPOINTS = (0.82, 0.83, 0.84, 0.85)
 
 
@@ -72,32 +65,18 @@ def s22_fit(hist, d_lo=0.84, d_hi=0.85):
 
 def run(netsolve, n, viscosity, workdir, extra, reuse, nice):
     out = workdir / f"visc{viscosity:g}_N{n}"
-    summ = out / "summary.json"
-    if not (reuse and summ.exists()):
-        cmd = ([] if nice is None else ["nice", "-n", str(nice)]) + [
-            str(netsolve), "compact", "--increments", str(n), "--viscosity", str(viscosity),
-            "--snapshots", "", "--quiet", "--out", str(out)] + extra
-        ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        t0 = time.perf_counter()
-        p = subprocess.run(cmd, capture_output=True, text=True, env=ENV)
-        t_proc = time.perf_counter() - t0
-        ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
-        if p.returncode != 0:
-            print(f"  N = {n}: netsolve failed ({p.returncode}): {p.stderr.strip()[-300:]}", file=sys.stderr)
-            return None
-        (out / "process_wall_s.txt").write_text(f"{t_proc:.4f}\n")
-        (out / "process_cpu_s.txt").write_text(f"{cpu:.4f}\n")
-    s = json.loads(summ.read_text())
-    t_proc_file = out / "process_wall_s.txt"
+    res = run_compact(netsolve, out, ["--increments", str(n), "--viscosity", str(viscosity)] + extra, reuse, nice,
+                      f"N = {n}")
+    if res is None:
+        return None
+    s, t_proc, cpu = res
     return {
         "N": n,
         "viscosity": viscosity,
         "particles": s["particles"],
         "wall_s": s["timing_s"]["wall"],
-        "process_wall_s": float(t_proc_file.read_text()) if t_proc_file.exists() else float("nan"),
-        "process_cpu_s": float((out / "process_cpu_s.txt").read_text()) if (out / "process_cpu_s.txt").exists()
-        else float("nan"),
+        "process_wall_s": t_proc,
+        "process_cpu_s": cpu,
         "S22": s["final"]["S22"],
         "D": s["final"]["D"],
         "newton_iterations": s["solver"]["newton_iterations"],
@@ -110,34 +89,17 @@ def run(netsolve, n, viscosity, workdir, extra, reuse, nice):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--netsolve", default="/work/main/build-bench/apps/netsolve")
     ap.add_argument("--increments", default="25,50,100,200,400,800,3200",
                     help="comma list; a value above --reference checks the reference itself")
     ap.add_argument("--reference", type=int, default=1600,
                     help="increments of the reference run (default 1600 = 16 x netsolve's default 100)")
     ap.add_argument("--viscosities", default="0.1,0.01", help="comma list; the first is netsolve's default")
-    ap.add_argument("--out", default=str(HERE / "results"))
-    ap.add_argument("--name", default="time_vs_error", help="base name of the .csv and .png in --out")
-    ap.add_argument("--workdir", default="/tmp/netdem-bench/time_vs_error", help="run folders")
-    ap.add_argument("--reuse", action="store_true", help="reuse run folders that already hold summary.json")
-    ap.add_argument("--nice", type=int, default=5, help="nice level of the runs (-1: none)")
     ap.add_argument("--time", choices=("cpu", "wall"), default="cpu",
                     help="x axis of the plot: process CPU time (user+sys, robust on a shared machine) or solver wall time")
-    ap.add_argument("--omp-thread-limit", type=int, default=0,
-                    help="set OMP_THREAD_LIMIT for netsolve (CHOLMOD 3 runs 4 OpenMP threads in its supernodal "
-                         "factorisation whatever OMP_NUM_THREADS says; 1 = truly serial). 0: inherit the environment")
-    ap.add_argument("--extra", default="", help="extra netsolve compact arguments, space separated")
+    add_common_args(ap, "time_vs_error", "/tmp/netdem-bench/time_vs_error")
     a = ap.parse_args()
-    if a.omp_thread_limit > 0:
-        ENV["OMP_THREAD_LIMIT"] = str(a.omp_thread_limit)
-
-    workdir = Path(a.workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix="netsolve-"))
-    netsolve = tmp / "netsolve"
-    shutil.copy2(a.netsolve, netsolve)
+    workdir, netsolve, nice = setup(a)
     extra = a.extra.split()
-    nice = None if a.nice < 0 else a.nice
     ns = [int(x) for x in a.increments.split(",")]
     viscs = [float(x) for x in a.viscosities.split(",")]
 
@@ -165,7 +127,7 @@ def main():
                   f"  (max over D checkpoints {100 * r['err_S22_max_checkpoints']:.3f} %,"
                   f" fitted S22 {r['S22_fit']:.4f}: {100 * r['err_S22_fit']:.3f} %)"
                   f"  unconverged {r['unconverged_increments']}/{n}", flush=True)
-    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.rmtree(netsolve.parent, ignore_errors=True)
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

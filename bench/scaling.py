@@ -16,54 +16,31 @@ Writes <out>/<name>.csv and <out>/<name>.png (--name, default scaling).
 """
 import argparse
 import csv
-import json
-import os
-import resource
 import math
 import shutil
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-ENV = dict(os.environ)
+from bench_common import add_common_args, run_compact, setup
 PARTS = ("assemble", "analyse", "factorise", "solve", "neighbours")
 
 
 def run(netsolve, width, n, workdir, extra, reuse, nice):
     out = workdir / f"W{width}_N{n}"
-    summ = out / "summary.json"
-    if not (reuse and summ.exists()):
-        cmd = ([] if nice is None else ["nice", "-n", str(nice)]) + [
-            str(netsolve), "compact", "--width", str(width), "--increments", str(n), "--snapshots", "",
-            "--quiet", "--out", str(out)] + extra
-        print("  " + " ".join(cmd), flush=True)
-        ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        t0 = time.perf_counter()
-        p = subprocess.run(cmd, capture_output=True, text=True, env=ENV)
-        t_proc = time.perf_counter() - t0
-        ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
-        if p.returncode != 0:
-            print(f"  W = {width}: netsolve failed ({p.returncode}) after {t_proc:.1f} s: {p.stderr.strip()[-300:]}",
-                  file=sys.stderr)
-            return None
-        (out / "process_wall_s.txt").write_text(f"{t_proc:.4f}\n")
-        (out / "process_cpu_s.txt").write_text(f"{cpu:.4f}\n")
-    s = json.loads(summ.read_text())
+    res = run_compact(netsolve, out, ["--width", str(width), "--increments", str(n)] + extra, reuse, nice,
+                      f"W = {width}")
+    if res is None:
+        return None
+    s, t_proc, cpu = res
     t = s["timing_s"]
-    pw = out / "process_wall_s.txt"
     r = {
         "W": width,
         "particles": s["particles"],
         "free_dofs": s["solver"].get("free_dofs", ""),
         "increments": s["increments"],
         "wall_s": t["wall"],
-        "process_wall_s": float(pw.read_text()) if pw.exists() else float("nan"),
-        "process_cpu_s": float((out / "process_cpu_s.txt").read_text()) if (out / "process_cpu_s.txt").exists()
-        else float("nan"),
+        "process_wall_s": t_proc,
+        "process_cpu_s": cpu,
         "per_increment_s": t["wall"] / s["increments"],
         "analyses": s["solver"]["analyses"],
         "factorisations": s["solver"]["factorisations"],
@@ -82,30 +59,13 @@ def run(netsolve, width, n, workdir, extra, reuse, nice):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--netsolve", default="/work/main/build-bench/apps/netsolve")
     ap.add_argument("--widths", default="80,160,320,640")
     ap.add_argument("--increments", type=int, default=100)
     ap.add_argument("--max-seconds-before-640", type=float, default=600.0,
                     help="run W = 640 only if W = 320 took less than this (process wall time)")
-    ap.add_argument("--out", default=str(HERE / "results"))
-    ap.add_argument("--name", default="scaling", help="base name of the .csv and .png in --out")
-    ap.add_argument("--workdir", default="/tmp/netdem-bench/scaling")
-    ap.add_argument("--reuse", action="store_true", help="reuse run folders that already hold summary.json")
-    ap.add_argument("--nice", type=int, default=5, help="nice level of the runs (-1: none)")
-    ap.add_argument("--omp-thread-limit", type=int, default=0,
-                    help="set OMP_THREAD_LIMIT for netsolve (CHOLMOD 3 runs 4 OpenMP threads in its supernodal "
-                         "factorisation whatever OMP_NUM_THREADS says; 1 = truly serial). 0: inherit the environment")
-    ap.add_argument("--extra", default="", help="extra netsolve compact arguments, space separated")
+    add_common_args(ap, "scaling", "/tmp/netdem-bench/scaling")
     a = ap.parse_args()
-    if a.omp_thread_limit > 0:
-        ENV["OMP_THREAD_LIMIT"] = str(a.omp_thread_limit)
-
-    workdir = Path(a.workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix="netsolve-"))
-    netsolve = tmp / "netsolve"
-    shutil.copy2(a.netsolve, netsolve)
-    nice = None if a.nice < 0 else a.nice
+    workdir, netsolve, nice = setup(a)
     widths = [int(x) for x in a.widths.split(",")]
 
     rows, skipped = [], []
@@ -127,7 +87,7 @@ def main():
               f" assemble {r['assemble_s']:.1f}, analyse {r['analyse_s']:.1f}, factorise {r['factorise_s']:.1f},"
               f" solve {r['solve_s']:.1f}, other {r['other_s']:.1f} s; {r['factorisations']} factorisations,"
               f" {r['factorise_per_call_ms']:.1f} ms each)", flush=True)
-    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.rmtree(netsolve.parent, ignore_errors=True)
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
