@@ -154,7 +154,6 @@ inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
 /// Which parts of the element tangent to assemble.
 struct TangentOptions {
   bool geometric = false;   ///< add the geometric (rotation-of-the-normal) stiffness
-  bool symmetrize = false;  ///< return (K + K^T)/2
 };
 
 /// Contact element: forces on both nodes and the consistent 6x6 tangent K = -d f / d q_end.
@@ -196,7 +195,6 @@ inline void element(const PlasticIndentationParams& p, const PlasticIndentationH
     e.stiffness.noalias() -= (e.law.f_t / g1.L) * bn * btt.transpose();
     e.stiffness.noalias() -= e.law.f_t * c * bn.transpose();
   }
-  if (tangent->symmetrize) e.stiffness = 0.5 * (e.stiffness + e.stiffness.transpose()).eval();
 }
 
 }  // namespace netdem::contact
