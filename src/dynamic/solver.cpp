@@ -13,7 +13,10 @@ namespace {
 using contact::LudingFeatures;
 using contact::LudingInput;
 using contact::LudingResult;
-constexpr LudingFeatures kHysteretic{true, false, false};
+constexpr LudingFeatures kHysteretic{true, false, false, true};
+constexpr LudingFeatures kLinearFrictionless{false, false, false, false};
+constexpr LudingFeatures kHystereticFrictionless{true, false, false, false};
+constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 }  // namespace
@@ -106,23 +109,52 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
   for (const MovingWall* w : {&box_.right, &box_.top})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
-  wall_params_ = params_.wall_params();
   ts_ = choose_time_step(P_, params_, opt_);
   thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
-  double rmean = 0.0;
-  for (double r : P_.radius) rmean += r;
-  rmean /= static_cast<double>(std::max<std::size_t>(n, 1));
-  skin_ = opt_.skin > 0.0 ? opt_.skin : 0.3 * rmean;
+  // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
+  radius_ref_ = P_.radius;
+  if (opt_.model == ContactModel::Full) {
+    radius_scale_ = contact::luding_radius(params_, 1.0, thermal_.T);
+    for (std::size_t i = 0; i < n; ++i) {
+      P_.radius[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = 0.5 * P_.mass[i] * P_.radius[i] * P_.radius[i];
+    }
+  }
   wall_v_[0] = box_.right.mode == WallMode::Strain ? box_.right.velocity : 0.0;
   wall_v_[1] = box_.top.mode == WallMode::Strain ? box_.top.velocity : 0.0;
   wall_hist_.assign(4 * n, LudingHistory{});
+  finish_setup();
   build_table();
   compute_forces_dispatch();
 }
 
+void DynamicSolver::finish_setup() {
+  const std::size_t n = P_.size();
+  wall_params_ = params_.wall_params();
+  choose_friction();
+  double rmean = 0.0;
+  radius_ref_max_ = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    rmean += radius_ref_[i];
+    radius_ref_max_ = std::max(radius_ref_max_, radius_ref_[i]);
+  }
+  rmean /= static_cast<double>(std::max<std::size_t>(n, 1));
+  skin_ = opt_.skin > 0.0 ? opt_.skin : 0.3 * rmean;
+  radius_scale_build_ = radius_scale_;
+}
+
+void DynamicSolver::choose_friction() {
+  friction_ = params_.mu > 0.0 || (box_.enabled && params_.mu_wall > 0.0);
+}
+
 // ---- neighbour search: cell list + Verlet table ------------------------------------------------
 bool DynamicSolver::needs_rebuild() const {
-  const double lim2 = 0.25 * skin_ * skin_;  // half the skin
+  // Two particles each moving d and each growing by g (Eq 9) close a gap by 2 d + 2 g: the table
+  // (range r_i + r_j + skin at the build) stays complete while d < skin / 2 - g.
+  const double grow = radius_ref_max_ * std::max(0.0, radius_scale_ - radius_scale_build_);
+  const double lim = 0.5 * skin_ - grow;
+  if (!(lim > 0.0)) return true;
+  const double lim2 = lim * lim;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double dx = P_.x[i] - x_build_[i], dy = P_.y[i] - y_build_[i];
     if (dx * dx + dy * dy > lim2) return true;
@@ -133,6 +165,7 @@ bool DynamicSolver::needs_rebuild() const {
 void DynamicSolver::build_table() {
   const std::size_t n = P_.size();
   ++rebuilds_;
+  radius_scale_build_ = radius_scale_;
   x_build_ = P_.x;
   y_build_ = P_.y;
   new_key_.clear();
@@ -220,15 +253,25 @@ const LudingHistory* DynamicSolver::history(std::uint32_t i, std::uint32_t j) co
 
 // ---- forces ------------------------------------------------------------------------------------
 void DynamicSolver::compute_forces_dispatch() {
-  switch (opt_.model) {  // once per step: the contact loop below is straight-line code
+  // once per step: the contact loop below is straight-line code for one feature set
+  switch (opt_.model) {
     case ContactModel::Linear:
-      compute_forces<contact::kLudingLinear>();
+      if (friction_)
+        compute_forces<contact::kLudingLinear>();
+      else
+        compute_forces<kLinearFrictionless>();
       break;
     case ContactModel::Hysteretic:
-      compute_forces<kHysteretic>();
+      if (friction_)
+        compute_forces<kHysteretic>();
+      else
+        compute_forces<kHystereticFrictionless>();
       break;
     case ContactModel::Full:
-      compute_forces<contact::kLudingFull>();
+      if (friction_)
+        compute_forces<contact::kLudingFull>();
+      else
+        compute_forces<kFullFrictionless>();
       break;
   }
 }

@@ -81,9 +81,11 @@ struct LudingFeatures {
   bool hysteresis = true;  ///< Eq 4 with k1 < k2 and Eq 7; off: f = k2 delta
   bool cohesion = true;    ///< -k_c delta branch, Eq 13-15; off: k_c = 0, f_min = 0
   bool thermal = true;     ///< k1(T, t), Eq 10-13, 24 and the delta rules of section 3.3
+  bool friction = true;    ///< tangential spring, Eq 14-24; off: f_t = 0, no tangential work
+                           ///< (identical to mu = 0, where the spring is released every step)
 };
-inline constexpr LudingFeatures kLudingFull{true, true, true};
-inline constexpr LudingFeatures kLudingLinear{false, false, false};
+inline constexpr LudingFeatures kLudingFull{true, true, true, true};
+inline constexpr LudingFeatures kLudingLinear{false, false, false, true};
 
 /// True when the full law reduces to a linear spring-dashpot (k1 = k2, k_c = 0, constant T).
 inline bool luding_is_linear(const LudingParams& p, bool constant_temperature) {
@@ -325,8 +327,8 @@ inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& 
   const double dkt = p.alpha * dk2l;
   r.mu = mu;
   r.k_t = kt;
-  const double fc = mu * (fn - fmin);  // LMM05 Eq 14: f_C = mu (f_n - f_min)
-  if (fc > 0.0) {
+  const double fc = F.friction ? mu * (fn - fmin) : 0.0;  // LMM05 Eq 14: f_C = mu (f_n - f_min)
+  if (F.friction && fc > 0.0) {
     const double xi_trial = h.xi + in.dxi;                     // LMM05 Eq 20
     const double ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
     if (std::fabs(ft0) <= fc) {                                // static friction

@@ -102,8 +102,34 @@ struct Energies {
   double total() const { return kinetic + elastic + gravity + wall_kinetic; }
 };
 
+/// Everything a restart needs, as plain data (see state.hpp for the file format). The forces and
+/// the wall forces of the last evaluation are part of it: velocity Verlet's closing half kick used
+/// them, and re-evaluating them would commit the last slip increment twice.
+struct SolverState {
+  Particles particles;              ///< radius = current a_i(T); fx, fy, torque = last forces
+  std::vector<double> radius_ref;   ///< radii at params.T_radius_ref (Eq 9), constant
+  Box box;
+  double wall_velocity[2] = {0, 0};  ///< right, top [m/s]
+  double wall_force[4] = {0, 0, 0, 0};  ///< left, right, bottom, top (last evaluation) [N]
+  double stress_sum[4] = {0, 0, 0, 0};  ///< sum f (x) l: xx, xy, yx, yy (last evaluation) [N m]
+  double elastic = 0.0;
+  double time = 0.0;
+  double dt = 0.0;
+  contact::LudingThermalState thermal;
+  LudingParams params;
+  std::vector<std::uint64_t> pair_key;      ///< (i << 32 | j), i < j, sorted
+  std::vector<LudingHistory> pair_history;  ///< one per pair_key
+  std::vector<LudingHistory> wall_history;  ///< 4 per particle: left, right, bottom, top
+};
+
 class DynamicSolver {
  public:
+  /// Restart: continues exactly (bit for bit) where the solver that produced `state` stopped.
+  /// The state's params and dt are used; options give the model and the checks.
+  DynamicSolver(const SolverState& state, const DynamicOptions& options);
+  /// The complete state at the current time (for state files and restarts).
+  SolverState state() const;
+
   /// Validates, chooses the time step, builds the neighbour table, computes the first forces.
   DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
                 const DynamicOptions& options);
@@ -119,7 +145,26 @@ class DynamicSolver {
   std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
   std::size_t table_size() const { return pair_key_.size(); }
   /// Material thermal state (ContactModel::Full); the temperature schedule is the caller's.
-  contact::LudingThermalState& thermal() { return thermal_; }
+  const contact::LudingThermalState& thermal() const { return thermal_; }
+  /// Moves the material to temperature T_new over the time dt with relaxation time t0
+  /// (k1(T, t) by Eq 11-12 and the freezing rule, luding_advance_thermal) and rescales the radii
+  /// by Eq 9 (constant mass, I = m a^2 / 2). Call it between steps, once per step of a schedule;
+  /// a constant T with a converged k1(T, t) costs nothing.
+  void advance_temperature(double T_new, double dt, double t0);
+  /// Changes the contact parameters between steps (e.g. friction on at t_heat); the time step is
+  /// kept. The feature set of the force loop (friction or not) is chosen again.
+  void set_params(const LudingParams& params);
+  const LudingParams& params() const { return params_; }
+  /// Changes the control of the right and top walls (mode, velocity, pressure) between steps; a
+  /// strain-controlled wall takes its velocity at once, a stress-controlled one keeps its own.
+  void set_walls(const MovingWall& right, const MovingWall& top);
+  /// Velocities of the right and top walls [m/s].
+  double wall_velocity_right() const { return wall_v_[0]; }
+  double wall_velocity_top() const { return wall_v_[1]; }
+  /// Sets the gravity vector [m/s^2] between steps.
+  void set_gravity(double gx, double gy);
+  /// Number of particle-wall contacts (overlap > 0) at the current positions.
+  std::size_t wall_contacts() const;
 
   /// Pairs (i < j) of the table that currently overlap, sorted.
   void touching_pairs(std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
@@ -141,6 +186,8 @@ class DynamicSolver {
   template <contact::LudingFeatures F>
   void compute_forces();
   void compute_forces_dispatch();
+  void choose_friction();
+  void finish_setup();
   void build_table();
   bool needs_rebuild() const;
 
@@ -152,6 +199,9 @@ class DynamicSolver {
   contact::LudingThermalState thermal_;
   double time_ = 0.0, skin_ = 0.0;
   std::size_t rebuilds_ = 0;
+  bool friction_ = true;             ///< any friction (particles or walls): F.friction instantiation
+  std::vector<double> radius_ref_;   ///< radii at T_radius_ref (Eq 9)
+  double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
   std::vector<LudingHistory> pair_hist_, new_hist_;

@@ -1,0 +1,476 @@
+// Solver state between steps: restart, temperature schedule, parameter and wall changes, and the
+// state file (see state.hpp and docs/dynamic.md).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "netdem/dynamic/solver.hpp"
+#include "netdem/dynamic/state.hpp"
+
+namespace netdem::dem {
+
+namespace {
+[[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
+}  // namespace
+
+DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& options)
+    : P_(st.particles), params_(st.params), box_(st.box), opt_(options) {
+  params_.validate();
+  opt_.validate();
+  const std::size_t n = P_.size();
+  auto same = [n](std::size_t m) { return m == n; };
+  if (!(same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
+        same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
+        same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) &&
+        same(P_.torque.size()) && same(st.radius_ref.size()) && same(st.wall_history.size() / 4) &&
+        st.wall_history.size() == 4 * n && st.pair_key.size() == st.pair_history.size()))
+    fail("state: inconsistent array sizes");
+  if (n == 0) fail("state: no particles");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(st.radius_ref[i] > 0.0 && P_.radius[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
+      fail("state: particle " + std::to_string(i) + " has a non-positive radius or mass");
+  if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
+    fail("state: box must have x_max > x_min and y_max > y_min");
+  if (!(st.dt > 0.0) || !std::isfinite(st.dt)) fail("state: time step must be positive");
+  for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
+    const auto i = st.pair_key[k] >> 32, j = st.pair_key[k] & 0xffffffffu;
+    if (!(i < j && j < n) || (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])))
+      fail("state: contact table is not a sorted list of pairs i < j < N");
+  }
+  DynamicOptions o = opt_;
+  o.dt = st.dt;
+  ts_ = choose_time_step(P_, params_, o);  // checks the stored dt against the stability rule
+  thermal_ = st.thermal;
+  time_ = st.time;
+  radius_ref_ = st.radius_ref;
+  radius_scale_ = P_.radius[0] / radius_ref_[0];
+  wall_v_[0] = st.wall_velocity[0];
+  wall_v_[1] = st.wall_velocity[1];
+  std::copy(st.wall_force, st.wall_force + 4, wall_force_);
+  sxx_ = st.stress_sum[0];
+  sxy_ = st.stress_sum[1];
+  syx_ = st.stress_sum[2];
+  syy_ = st.stress_sum[3];
+  elastic_ = st.elastic;
+  wall_hist_ = st.wall_history;
+  finish_setup();
+  // The table is rebuilt from the current positions, carrying the stored histories; forces are
+  // NOT re-evaluated (the stored ones are those of the last step).
+  pair_key_ = st.pair_key;
+  pair_hist_ = st.pair_history;
+  build_table();
+  rebuilds_ = 0;
+}
+
+SolverState DynamicSolver::state() const {
+  SolverState st;
+  st.particles = P_;
+  st.radius_ref = radius_ref_;
+  st.box = box_;
+  st.wall_velocity[0] = wall_v_[0];
+  st.wall_velocity[1] = wall_v_[1];
+  std::copy(wall_force_, wall_force_ + 4, st.wall_force);
+  st.stress_sum[0] = sxx_;
+  st.stress_sum[1] = sxy_;
+  st.stress_sum[2] = syx_;
+  st.stress_sum[3] = syy_;
+  st.elastic = elastic_;
+  st.time = time_;
+  st.dt = ts_.dt;
+  st.thermal = thermal_;
+  st.params = params_;
+  // only the pairs with a live history (touching); the others are rebuilt from positions
+  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+    const LudingHistory& h = pair_hist_[k];
+    if (h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0) {
+      st.pair_key.push_back(pair_key_[k]);
+      st.pair_history.push_back(h);
+    }
+  }
+  st.wall_history = wall_hist_;
+  return st;
+}
+
+void DynamicSolver::advance_temperature(double T_new, double dt, double t0) {
+  if (opt_.model != ContactModel::Full)
+    fail("advance_temperature: a temperature needs ContactModel::Full");
+  if (!std::isfinite(T_new) || !(dt >= 0.0) || !(t0 > 0.0))
+    fail("advance_temperature: T must be finite, dt >= 0 and t0 > 0");
+  const double k1T = contact::luding_k1_of_T(params_, T_new);
+  if (T_new == thermal_.T && thermal_.k1_Tt == k1T) return;  // nothing moves
+  const bool t_changed = T_new != thermal_.T;
+  thermal_ = contact::luding_advance_thermal(params_, thermal_, T_new, dt, t0);
+  if (t_changed) {  // Eq 9 with constant mass
+    radius_scale_ = contact::luding_radius(params_, 1.0, T_new);
+    for (std::size_t i = 0; i < P_.size(); ++i) {
+      P_.radius[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = 0.5 * P_.mass[i] * P_.radius[i] * P_.radius[i];
+    }
+  }
+}
+
+void DynamicSolver::set_params(const LudingParams& params) {
+  params.validate();
+  params_ = params;
+  wall_params_ = params_.wall_params();
+  choose_friction();
+}
+
+void DynamicSolver::set_walls(const MovingWall& right, const MovingWall& top) {
+  for (const MovingWall* w : {&right, &top})
+    if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
+      fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
+  box_.right = right;
+  box_.top = top;
+  if (right.mode == WallMode::Strain) wall_v_[0] = right.velocity;
+  if (right.mode == WallMode::Fixed) wall_v_[0] = 0.0;
+  if (top.mode == WallMode::Strain) wall_v_[1] = top.velocity;
+  if (top.mode == WallMode::Fixed) wall_v_[1] = 0.0;
+}
+
+void DynamicSolver::set_gravity(double gx, double gy) {
+  if (!std::isfinite(gx) || !std::isfinite(gy)) fail("set_gravity: gravity must be finite");
+  opt_.gravity_x = gx;
+  opt_.gravity_y = gy;
+}
+
+std::size_t DynamicSolver::wall_contacts() const {
+  if (!box_.enabled) return 0;
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    const double r = P_.radius[i];
+    c += (P_.x[i] - box_.x_min < r) + (box_.x_max - P_.x[i] < r) + (P_.y[i] - box_.y_min < r) +
+         (box_.y_max - P_.y[i] < r);
+  }
+  return c;
+}
+
+// ---- state file --------------------------------------------------------------------------------
+namespace {
+
+struct ParamField {
+  const char* name;
+  double LudingParams::*d;
+  bool LudingParams::*b;
+};
+// Every LudingParams field, by name (state files; the apps' --param NAME=VALUE).
+const ParamField kFields[] = {
+    {"k2", &LudingParams::k2, nullptr},
+    {"k1_ratio", &LudingParams::k1_ratio, nullptr},
+    {"kc_ratio", &LudingParams::kc_ratio, nullptr},
+    {"alpha", &LudingParams::alpha, nullptr},
+    {"gamma_n", &LudingParams::gamma_n, nullptr},
+    {"gamma_t", &LudingParams::gamma_t, nullptr},
+    {"mu", &LudingParams::mu, nullptr},
+    {"mu_wall", &LudingParams::mu_wall, nullptr},
+    {"T_melt", &LudingParams::T_melt, nullptr},
+    {"T_var", &LudingParams::T_var, nullptr},
+    {"da_T", &LudingParams::da_T, nullptr},
+    {"delta_fluid_rel", &LudingParams::delta_fluid_rel, nullptr},
+    {"t0", &LudingParams::t0, nullptr},
+    {"t0_sinter", &LudingParams::t0_sinter, nullptr},
+    {"a0", &LudingParams::a0, nullptr},
+    {"w0", &LudingParams::w0, nullptr},
+    {"h", &LudingParams::h, nullptr},
+    {"rho_p", &LudingParams::rho_p, nullptr},
+    {"m_wall", &LudingParams::m_wall, nullptr},
+    {"gamma_wall", &LudingParams::gamma_wall, nullptr},
+    {"T_radius_ref", &LudingParams::T_radius_ref, nullptr},
+    {"stiffness_growth", nullptr, &LudingParams::stiffness_growth},
+    {"sliding_breaks_cohesion", nullptr, &LudingParams::sliding_breaks_cohesion},
+};
+
+std::string g17(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+const char* mode_name(WallMode m) {
+  return m == WallMode::Fixed ? "fixed" : m == WallMode::Strain ? "strain" : "stress";
+}
+
+void put_history(std::ostringstream& o, const LudingHistory& h) {
+  o << g17(h.delta_max) << ' ' << g17(h.delta0) << ' ' << g17(h.k2_line) << ' ' << g17(h.k1_seen)
+    << ' ' << g17(h.xi) << ' ' << int(h.fluid) << ' ' << int(h.sliding);
+}
+
+}  // namespace
+
+std::vector<std::string> luding_param_names() {
+  std::vector<std::string> v;
+  for (const auto& f : kFields) v.emplace_back(f.name);
+  return v;
+}
+
+void set_luding_param(LudingParams& p, const std::string& name, double value) {
+  for (const auto& f : kFields)
+    if (name == f.name) {
+      if (!std::isfinite(value)) fail("parameter " + name + " must be a finite number");
+      if (f.d) p.*f.d = value;
+      else p.*f.b = value != 0.0;
+      return;
+    }
+  fail("unknown contact parameter '" + name + "'");
+}
+
+double get_luding_param(const LudingParams& p, const std::string& name) {
+  for (const auto& f : kFields)
+    if (name == f.name) return f.d ? p.*f.d : (p.*f.b ? 1.0 : 0.0);
+  fail("unknown contact parameter '" + name + "'");
+}
+
+std::string format_state(const SolverState& st) {
+  std::ostringstream o;
+  const Particles& P = st.particles;
+  o << "# demsolve state v2 (docs/dynamic.md); lengths m, masses kg, times s, forces N\n";
+  o << "time " << g17(st.time) << "\ndt " << g17(st.dt) << "\n";
+  o << "box " << int(st.box.enabled) << ' ' << g17(st.box.x_min) << ' ' << g17(st.box.y_min) << ' '
+    << g17(st.box.x_max) << ' ' << g17(st.box.y_max) << "\n";
+  const MovingWall* w[2] = {&st.box.right, &st.box.top};
+  const char* wn[2] = {"wall_right", "wall_top"};
+  for (int k = 0; k < 2; ++k)
+    o << wn[k] << ' ' << mode_name(w[k]->mode) << ' ' << g17(w[k]->velocity) << ' '
+      << g17(w[k]->pressure) << ' ' << g17(w[k]->mass) << ' ' << g17(w[k]->damping) << ' '
+      << g17(st.wall_velocity[k]) << "\n";
+  o << "wall_force " << g17(st.wall_force[0]) << ' ' << g17(st.wall_force[1]) << ' '
+    << g17(st.wall_force[2]) << ' ' << g17(st.wall_force[3]) << "\n";
+  o << "stress_sum " << g17(st.stress_sum[0]) << ' ' << g17(st.stress_sum[1]) << ' '
+    << g17(st.stress_sum[2]) << ' ' << g17(st.stress_sum[3]) << ' ' << g17(st.elastic) << "\n";
+  o << "thermal " << g17(st.thermal.T) << ' ' << g17(st.thermal.k1_Tt) << "\n";
+  for (const auto& f : kFields) o << "param " << f.name << ' ' << g17(get_luding_param(st.params, f.name)) << "\n";
+  o << "particles " << P.size() << "\n";
+  o << "id,x,y,vx,vy,omega,theta,radius,radius_ref,mass,inertia,fx,fy,torque\n";
+  for (std::size_t i = 0; i < P.size(); ++i)
+    o << i << ',' << g17(P.x[i]) << ',' << g17(P.y[i]) << ',' << g17(P.vx[i]) << ',' << g17(P.vy[i])
+      << ',' << g17(P.omega[i]) << ',' << g17(P.theta[i]) << ',' << g17(P.radius[i]) << ','
+      << g17(st.radius_ref[i]) << ',' << g17(P.mass[i]) << ',' << g17(P.inertia[i]) << ','
+      << g17(P.fx[i]) << ',' << g17(P.fy[i]) << ',' << g17(P.torque[i]) << "\n";
+  o << "pairs " << st.pair_key.size() << "\n";
+  o << "# i j delta_max delta0 k2_line k1_seen xi fluid sliding\n";
+  for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
+    o << (st.pair_key[k] >> 32) << ' ' << (st.pair_key[k] & 0xffffffffu) << ' ';
+    put_history(o, st.pair_history[k]);
+    o << "\n";
+  }
+  std::size_t nw = 0;
+  for (const auto& h : st.wall_history) nw += (h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0);
+  o << "wall_contacts " << nw << "\n";
+  o << "# particle wall(0 left, 1 right, 2 bottom, 3 top) delta_max delta0 k2_line k1_seen xi fluid sliding\n";
+  for (std::size_t k = 0; k < st.wall_history.size(); ++k) {
+    const auto& h = st.wall_history[k];
+    if (!(h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0)) continue;
+    o << k / 4 << ' ' << k % 4 << ' ';
+    put_history(o, h);
+    o << "\n";
+  }
+  o << "end\n";
+  return o.str();
+}
+
+namespace {
+
+class Reader {
+ public:
+  Reader(std::istream& in, std::string name) : in_(in), name_(std::move(name)) {}
+  /// Next line that is not empty and not a comment.
+  std::string line() {
+    std::string s;
+    while (std::getline(in_, s)) {
+      ++no_;
+      if (!s.empty() && s.back() == '\r') s.pop_back();
+      if (!s.empty() && s[0] != '#') return s;
+    }
+    error("unexpected end of file");
+  }
+  /// A line "key v1 v2 ..." with the given key; returns the rest as a stream.
+  std::istringstream keyed(const std::string& key) {
+    std::istringstream ls(line());
+    std::string k;
+    ls >> k;
+    if (k != key) error("expected '" + key + "', found '" + k + "'");
+    return ls;
+  }
+  template <class T>
+  T num(std::istringstream& ls, const char* what) {
+    T v{};
+    if (!(ls >> v)) error(std::string("cannot read ") + what);
+    return v;
+  }
+  [[noreturn]] void error(const std::string& msg) const {
+    throw std::invalid_argument(name_ + ":" + std::to_string(no_) + ": " + msg);
+  }
+  /// A finite real number (strtod: also reads nan and inf, which are refused by name).
+  double real(std::istringstream& ls, const char* what) {
+    std::string tok;
+    if (!(ls >> tok)) error(std::string("missing ") + what);
+    char* end = nullptr;
+    const double v = std::strtod(tok.c_str(), &end);
+    if (end == tok.c_str() || *end != '\0') error(std::string("cannot read ") + what + " '" + tok + "'");
+    if (!std::isfinite(v)) error(std::string(what) + " is not a finite number ('" + tok + "')");
+    return v;
+  }
+
+ private:
+  std::istream& in_;
+  std::string name_;
+  std::size_t no_ = 0;
+};
+
+WallMode parse_mode(Reader& r, const std::string& s) {
+  if (s == "fixed") return WallMode::Fixed;
+  if (s == "strain") return WallMode::Strain;
+  if (s == "stress") return WallMode::Stress;
+  r.error("unknown wall mode '" + s + "'");
+}
+
+LudingHistory get_history(Reader& r, std::istringstream& ls) {
+  LudingHistory h;
+  h.delta_max = r.real(ls, "delta_max");
+  h.delta0 = r.real(ls, "delta0");
+  h.k2_line = r.real(ls, "k2_line");
+  h.k1_seen = r.real(ls, "k1_seen");
+  h.xi = r.real(ls, "xi");
+  h.fluid = static_cast<std::uint8_t>(r.num<int>(ls, "fluid") != 0);
+  h.sliding = static_cast<std::uint8_t>(r.num<int>(ls, "sliding") != 0);
+  return h;
+}
+
+}  // namespace
+
+SolverState parse_state(std::istream& in, const std::string& name) {
+  Reader r(in, name);
+  SolverState st;
+  {
+    std::string first;
+    if (!std::getline(in, first)) r.error("empty file");
+    if (first.rfind("# demsolve state v2", 0) != 0)
+      r.error("not a demsolve state file v2 (first line '" + first.substr(0, 40) + "')");
+  }
+  auto one = [&](const char* key) {
+    auto ls = r.keyed(key);
+    return r.real(ls, key);
+  };
+  st.time = one("time");
+  st.dt = one("dt");
+  {
+    auto ls = r.keyed("box");
+    st.box.enabled = r.num<int>(ls, "box enabled") != 0;
+    st.box.x_min = r.real(ls, "x_min");
+    st.box.y_min = r.real(ls, "y_min");
+    st.box.x_max = r.real(ls, "x_max");
+    st.box.y_max = r.real(ls, "y_max");
+  }
+  MovingWall* w[2] = {&st.box.right, &st.box.top};
+  const char* wn[2] = {"wall_right", "wall_top"};
+  for (int k = 0; k < 2; ++k) {
+    auto ls = r.keyed(wn[k]);
+    w[k]->mode = parse_mode(r, r.num<std::string>(ls, "wall mode"));
+    w[k]->velocity = r.real(ls, "wall velocity");
+    w[k]->pressure = r.real(ls, "wall pressure");
+    w[k]->mass = r.real(ls, "wall mass");
+    w[k]->damping = r.real(ls, "wall damping");
+    st.wall_velocity[k] = r.real(ls, "wall velocity");
+  }
+  {
+    auto ls = r.keyed("wall_force");
+    for (double& f : st.wall_force) f = r.real(ls, "wall force");
+  }
+  {
+    auto ls = r.keyed("stress_sum");
+    for (double& f : st.stress_sum) f = r.real(ls, "stress");
+    st.elastic = r.real(ls, "elastic energy");
+  }
+  {
+    auto ls = r.keyed("thermal");
+    st.thermal.T = r.real(ls, "T");
+    st.thermal.k1_Tt = r.real(ls, "k1_Tt");
+  }
+  for (std::size_t k = 0; k < std::size(kFields); ++k) {
+    auto ls = r.keyed("param");
+    const auto key = r.num<std::string>(ls, "parameter name");
+    const double v = r.real(ls, "parameter value");
+    try {
+      set_luding_param(st.params, key, v);
+    } catch (const std::invalid_argument& e) {
+      r.error(e.what());
+    }
+  }
+  try {
+    st.params.validate();
+  } catch (const std::invalid_argument& e) {
+    r.error(e.what());
+  }
+  std::size_t n = 0;
+  {
+    auto ls = r.keyed("particles");
+    n = r.num<std::size_t>(ls, "particle count");
+    if (n == 0 || n > (std::size_t{1} << 31)) r.error("bad particle count");
+  }
+  if (r.line().rfind("id,x,y", 0) != 0) r.error("expected the particle header line");
+  Particles& P = st.particles;
+  st.radius_ref.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::string s = r.line();
+    std::replace(s.begin(), s.end(), ',', ' ');
+    std::istringstream ls(s);
+    const auto id = r.num<std::size_t>(ls, "particle id");
+    if (id != i) r.error("particle ids must be 0..N-1 in order");
+    double v[13];
+    for (double& x : v) x = r.real(ls, "particle value");
+    if (!(v[6] > 0.0 && v[7] > 0.0 && v[8] > 0.0 && v[9] > 0.0))
+      r.error("particle " + std::to_string(i) + ": radius, mass and inertia must be positive");
+    P.x.push_back(v[0]);
+    P.y.push_back(v[1]);
+    P.vx.push_back(v[2]);
+    P.vy.push_back(v[3]);
+    P.omega.push_back(v[4]);
+    P.theta.push_back(v[5]);
+    P.radius.push_back(v[6]);
+    st.radius_ref[i] = v[7];
+    P.mass.push_back(v[8]);
+    P.inertia.push_back(v[9]);
+    P.fx.push_back(v[10]);
+    P.fy.push_back(v[11]);
+    P.torque.push_back(v[12]);
+  }
+  std::size_t m = 0;
+  {
+    auto ls = r.keyed("pairs");
+    m = r.num<std::size_t>(ls, "pair count");
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    std::istringstream ls(r.line());
+    const auto i = r.num<std::uint64_t>(ls, "pair i"), j = r.num<std::uint64_t>(ls, "pair j");
+    if (!(i < j && j < n)) r.error("pair indices must satisfy i < j < N");
+    st.pair_key.push_back((i << 32) | j);
+    st.pair_history.push_back(get_history(r, ls));
+    if (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])) r.error("pairs must be sorted by (i, j)");
+  }
+  st.wall_history.assign(4 * n, LudingHistory{});
+  {
+    auto ls = r.keyed("wall_contacts");
+    m = r.num<std::size_t>(ls, "wall contact count");
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    std::istringstream ls(r.line());
+    const auto i = r.num<std::size_t>(ls, "particle"), wall = r.num<std::size_t>(ls, "wall");
+    if (!(i < n && wall < 4)) r.error("wall contact needs particle < N and wall in 0..3");
+    st.wall_history[4 * i + wall] = get_history(r, ls);
+  }
+  if (r.line() != "end") r.error("expected 'end' (truncated file?)");
+  return st;
+}
+
+SolverState read_state_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot open state file '" + path + "'");
+  return parse_state(in, path);
+}
+
+}  // namespace netdem::dem
