@@ -12,6 +12,7 @@
 #include <string>
 
 #include "netdem/dynamic/solver.hpp"
+#include "netdem/dynamic/schedule.hpp"
 #include "netdem/dynamic/state.hpp"
 
 using namespace netdem::dem;
@@ -264,4 +265,52 @@ TEST(DynamicState, BadStateFilesGiveOneLineErrors) {
     set_luding_param(q, name, get_luding_param(p, name) * 1.0);
     EXPECT_EQ(get_luding_param(q, name), get_luding_param(p, name)) << name;
   }
+}
+
+// LMM05 Fig 8 / section 4.1.1: k1(T, t)/k1 at the end of sintering for t_s = 1e-4, 0.01, 0.02,
+// 0.1, 1 is 0.95, 0.17, 0.10, 0.036, 0.0198 (the protocol with Table 1, Eq 10-12). Driven through
+// the solver's temperature path with the paper's mean-pair time step; tolerance: half a unit of
+// the paper's last printed digit.
+TEST(DynamicState, ProtocolK1AtEndOfSinteringFig8) {
+  LudingParams p;
+  Particles P;
+  P.add(0.003, 0.003, 1.0e-3, p);
+  Box box;
+  box.x_max = box.y_max = 0.01;
+  DynamicOptions o;
+  const double ts[5] = {1e-4, 0.01, 0.02, 0.1, 1.0};
+  const double paper[5] = {0.95, 0.17, 0.10, 0.036, 0.0198};
+  const double tol[5] = {0.005, 0.005, 0.005, 0.0005, 0.00005};
+  const double dt = 6.1e-7;  // LMM05 section 3.1.2
+  for (int c = 0; c < 5; ++c) {
+    if (small_scale() && c == 4) continue;
+    SinterProtocol prot;
+    prot.sinter = ts[c];
+    const auto ph = prot.phases();
+    DynamicSolver s(P, p, box, o);
+    const double t_end = phase_end(ph, 2);
+    double t = 0.0;
+    for (std::size_t k = 1; t < t_end - 0.5 * dt; ++k) {
+      t = static_cast<double>(k) * dt;
+      const ScheduleAt at = schedule_at(ph, t);
+      s.advance_temperature(at.T, dt, at.t0);
+    }
+    const double k1 = s.thermal().k1_Tt / p.k1();
+    std::printf("  t_s = %-6g: k1(T,t)/k1 = %.5f at t = %.4f (paper %.4g)\n", ts[c], k1, t,
+                paper[c]);
+    EXPECT_NEAR(k1, paper[c], tol[c]) << "t_s = " << ts[c];
+  }
+  // the schedule itself: T and t0 per phase
+  const auto ph = SinterProtocol{}.phases();
+  EXPECT_DOUBLE_EQ(schedule_at(ph, 0.1).T, 80.0);
+  EXPECT_FALSE(schedule_at(ph, 0.1).friction);
+  EXPECT_DOUBLE_EQ(schedule_at(ph, 0.25).T, 110.0);
+  EXPECT_TRUE(schedule_at(ph, 0.25).friction);
+  EXPECT_DOUBLE_EQ(schedule_at(ph, 0.8).t0, 0.1);
+  EXPECT_DOUBLE_EQ(schedule_at(ph, 1.35).T, 110.0);
+  EXPECT_DOUBLE_EQ(schedule_at(ph, 1.45).T, 80.0);
+  EXPECT_DOUBLE_EQ(phase_end(ph, 4), 1.5);
+  SinterProtocol bad;
+  bad.sinter = -1.0;
+  EXPECT_THROW(bad.phases(), std::invalid_argument);
 }

@@ -122,6 +122,20 @@ struct SolverState {
   std::vector<LudingHistory> wall_history;  ///< 4 per particle: left, right, bottom, top
 };
 
+/// One touching contact at the current state, for output (distributions, snapshots).
+struct ContactInfo {
+  std::uint32_t i = 0, j = 0;  ///< particles i < j; for a wall contact i = particle, j = wall
+  int wall = -1;               ///< -1 particle pair; 0 left, 1 right, 2 bottom, 3 top
+  double overlap = 0.0;        ///< delta [m]
+  double d_i = 0.0, d_j = 0.0;  ///< centre-to-contact distances [m] (d_j = 0 for a wall)
+  double nx = 0.0, ny = 0.0;   ///< unit normal from i to j (from the wall into the box)
+  double f_n = 0.0;            ///< normal force on j [N], > 0 repulsive (spring + damping)
+  double f_t = 0.0;            ///< tangential force on j along t = perp(n) [N]
+  double f_min = 0.0;          ///< Eq 15 [N] (<= 0)
+  double mu = 0.0;             ///< Eq 24
+  bool sliding = false;        ///< the committed step slid
+};
+
 class DynamicSolver {
  public:
   /// Restart: continues exactly (bit for bit) where the solver that produced `state` stopped.
@@ -165,6 +179,10 @@ class DynamicSolver {
   void set_gravity(double gx, double gy);
   /// Number of particle-wall contacts (overlap > 0) at the current positions.
   std::size_t wall_contacts() const;
+  /// All touching contacts (pairs, then walls) with their forces: the law evaluated on the
+  /// committed histories with a zero slip increment (the tangential spring force of the last step)
+  /// and the current normal approach rate.
+  void contacts(std::vector<ContactInfo>& out) const;
 
   /// Pairs (i < j) of the table that currently overlap, sorted.
   void touching_pairs(std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
