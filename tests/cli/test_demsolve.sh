@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Command-line checks of demsolve prepare: bad input gives one clear line on stderr, a non-zero
-# exit and no output folder; a short good run writes every documented file and is deterministic.
+# Command-line checks of demsolve prepare and sinter: bad input gives one clear line on stderr, a
+# non-zero exit and no output folder; short good runs write every documented file, are
+# deterministic, and a sinter run restarted from its own state after preparation ends in the
+# same final state, bit for bit.
 # usage: test_demsolve.sh PATH/TO/demsolve
 set -u
 ds="$1"
@@ -12,22 +14,54 @@ check_bad negative_pressure "pressure" prepare --pressure -1
 check_bad nan_pressure "pressure" prepare --pressure nan
 check_bad zero_n "--n" prepare --n 0
 check_bad zero_time "--time" prepare --time 0
-files_ok() {  # out-dir
-  local f
-  for f in command.txt timeseries.csv summary.json particles_initial.vtp particles_final.vtp state.txt; do
-    [ -s "$1/$f" ] || return 1
+check_bad negative_sinter_time "sintering time" sinter --sinter-time -1
+check_bad missing_state "cannot open state file" sinter --state "$tmp/nonexistent.txt"
+check_bad unknown_param "unknown contact parameter 'bogus'" sinter --param bogus=1
+check_bad bad_param_value "k2" sinter --param k2=-5
+check_bad param_not_number "not a number" sinter --param k2=abc
+check_bad line_needs_three "--n 3" sinter --arrangement line --n 5
+check_bad unstable_dt "steps per contact" sinter --steps-per-contact 2
+printf '# demsolve state v2\ntime 0\n' >"$tmp/truncated.txt"
+check_bad truncated_state "truncated.txt" sinter --state "$tmp/truncated.txt"
+files_ok() {  # out-dir files...
+  local d="$1" f
+  shift
+  for f in "$@"; do
+    [ -s "$d/$f" ] || return 1
   done
+}
+has_columns() {  # csv columns...: the header line holds every named column
+  local csv="$1" c
+  shift
+  for c in "$@"; do
+    head -1 "$csv" | tr ',' '\n' | grep -qx "$c" || return 1
+  done
+}
+result() {  # name ok?
+  if [ "$2" -eq 0 ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $1: $(cat "$tmp/stderr")"; fi
 }
 good() {  # out-dir
   "$ds" prepare --n 30 --time 0.003 --seed 7 --quiet --out "$1" >/dev/null 2>"$tmp/stderr"
 }
-if good "$tmp/a" && good "$tmp/b" &&
-   files_ok "$tmp/a" &&
-   head -1 "$tmp/a/timeseries.csv" | grep -q "^t,nu,C,sxx,szz" && grep -q '"seed": 7' "$tmp/a/summary.json" &&
-   cmp -s "$tmp/a/state.txt" "$tmp/b/state.txt"; then
-  pass=$((pass + 1))
-else
-  fail=$((fail + 1))
-  echo "FAIL good_run (files, header, seed, determinism): $(cat "$tmp/stderr")"
-fi
+good "$tmp/a" && good "$tmp/b" &&
+  files_ok "$tmp/a" command.txt parameters.json timeseries.csv summary.json particles_initial.vtp \
+    particles_final.vtp state.txt state_prepare.txt &&
+  has_columns "$tmp/a/timeseries.csv" t nu C sxx szz Ekin && grep -q '"seed": 7' "$tmp/a/summary.json" &&
+  cmp -s "$tmp/a/state.txt" "$tmp/b/state.txt"
+result good_prepare $?
+
+# a short whole protocol, then the same run restarted from its state after preparation
+times=(--t-heat 0.002 --heat-time 0.001 --sinter-time 0.001 --cool-time 0.001 --relax-time 0.001)
+"$ds" sinter --n 25 --seed 3 "${times[@]}" --quiet --out "$tmp/s" >/dev/null 2>"$tmp/stderr" &&
+  files_ok "$tmp/s" timeseries.csv summary.json state_prepare.txt state_heat.txt state_sinter.txt \
+    state_cool.txt state_relax.txt contacts_sinter.csv contacts_relax.csv particles_sinter.vtp \
+    contacts_sinter.vtp &&
+  has_columns "$tmp/s/timeseries.csv" t T k1 nu C szz_over_p &&
+  has_columns "$tmp/s/contacts_sinter.csv" overlap_rel f_n f_t mu_t &&
+  grep -q '"densification"' "$tmp/s/summary.json"
+result good_sinter $?
+"$ds" sinter --state "$tmp/s/state_prepare.txt" "${times[@]}" --quiet --out "$tmp/r" >/dev/null 2>"$tmp/stderr" &&
+  cmp -s "$tmp/s/state.txt" "$tmp/r/state.txt"
+result restart_from_prepare_is_exact $?
+check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
 finish
