@@ -2,6 +2,8 @@
 //
 //   demsolve prepare [--n 300] [--pressure 100] [--seed 1] [--time 0.2] [--out DIR] [--quiet]
 //   demsolve sinter  [--n 300] [--pressure 100] [--sinter-time 1.0] [--seed 1] [--state FILE] [--out DIR]
+//   demsolve compress --state FILE [--strain-rate 1] [--max-strain 0.1] [--out DIR]
+//   demsolve vibrate  --state FILE [--frequency 100] [--amplitude 2e-4] [--time 0.1] [--out DIR]
 //
 // prepare (section 4.1): disks with radii uniform in a0[1 - w0, 1 + w0] placed at random (no
 // overlap) in a square box at density 0.35 with random velocities, compressed by the
@@ -66,6 +68,27 @@ int main(int argc, char** argv) {
   sint->add_option("--t0", prot.t0, "relaxation time t0 outside sintering [s] (Table 1)")->capture_default_str();
   sint->add_option("--t0-sinter", prot.t0_sinter, "relaxation time t0 during sintering [s]")->capture_default_str();
   sint->add_option("--out", out_sinter, "output folder")->default_val("results/sinter");
+  CompressArgs ca;
+  std::string out_compress;
+  auto* comp = app.add_subcommand("compress", "bi-axial compression test of a sample (section 4.4.1): sigma_xx = p held, top wall at constant strain rate");
+  comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")->required();
+  comp->add_option("--strain-rate", ca.strain_rate, "vertical strain rate [1/s] (eps_zz = 1 - z/z0)")->capture_default_str();
+  comp->add_option("--max-strain", ca.max_strain, "final vertical strain")->capture_default_str();
+  comp->add_option("--pressure", ca.pressure, "sigma_xx held by the right wall [N/m]; 0: the state's");
+  comp->add_option("--param", ca.param_overrides, "contact parameter NAME=VALUE");
+  comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
+  comp->add_option("--out", out_compress, "output folder")->default_val("results/compress");
+  VibrateArgs va;
+  std::string out_vibrate;
+  auto* vib = app.add_subcommand("vibrate", "vibration test (section 4.4): walls removed, vertical vibration on a flat bottom in gravity");
+  vib->add_option("--state", va.state_file, "state file of the sample")->required();
+  vib->add_option("--frequency", va.frequency, "[Hz]")->capture_default_str();
+  vib->add_option("--amplitude", va.amplitude, "[m]")->capture_default_str();
+  vib->add_option("--time", va.time, "vibration time [s]")->capture_default_str();
+  vib->add_option("--gravity", va.gravity, "[m/s^2]")->capture_default_str();
+  vib->add_option("--param", va.param_overrides, "contact parameter NAME=VALUE");
+  vib->add_flag("--quiet", va.quiet, "no progress on stderr");
+  vib->add_option("--out", out_vibrate, "output folder")->default_val("results/vibrate");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -76,6 +99,8 @@ int main(int argc, char** argv) {
   for (auto* o : pressure_opts) run.pressure_given = run.pressure_given || o->count() > 0;
   try {
     if (prep->parsed()) return run_protocol(command, sample, run, prot, true, out_prepare);
+    if (comp->parsed()) return run_compress(command, ca, out_compress);
+    if (vib->parsed()) return run_vibrate(command, va, out_vibrate);
     return run_protocol(command, sample, run, prot, false, out_sinter);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "demsolve: error: %s\n", e.what());

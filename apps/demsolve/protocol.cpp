@@ -50,13 +50,15 @@ void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std
   for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
 }
 
-std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs) {
+std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   std::vector<double> ps, z;
   particle_stress(P, cs, ps, z);
   Field rad{"radius", 1, P.radius}, vel{"velocity", 3, {}}, om{"omega", 1, P.omega};
   Field st{"particle_pressure", 1, ps}, co{"contacts", 1, z};
   for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], 0.0});
-  return vtp_particles(P.x, P.y, {rad, vel, om, st, co});
+  std::vector<Field> f{rad, vel, om, st, co};
+  f.insert(f.end(), extra.begin(), extra.end());
+  return vtp_particles(P.x, P.y, f);
 }
 
 std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs) {
@@ -89,6 +91,19 @@ std::string contacts_csv(const Particles& P, const std::vector<ContactInfo>& cs)
   return s;
 }
 
+}  // namespace
+
+void write_snapshot(const DynamicSolver& s, const fs::path& out, const std::string& label,
+                    std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
+  s.contacts(cs);
+  std::string pv = particles_vtp(s.particles(), cs, extra);
+  write_file_atomic(out / fmt::format("particles_{}.vtp", label), pv);
+  write_file_atomic(out / fmt::format("contacts_{}.vtp", label), contacts_vtp(s.particles(), cs));
+  write_file_atomic(out / fmt::format("contacts_{}.csv", label), contacts_csv(s.particles(), cs));
+}
+
+namespace {
+
 double mean_radius(const Particles& P) {
   double r = 0.0;
   for (double v : P.radius) r += v;
@@ -110,6 +125,12 @@ void apply_overrides(LudingParams& p, const std::vector<std::string>& items) {
     set_luding_param(p, name, v);
   }
   p.validate();
+}
+
+SolverState load_state(const std::string& file, const std::vector<std::string>& overrides) {
+  SolverState st = read_state_file(file);
+  apply_overrides(st.params, overrides);
+  return st;
 }
 
 Particles place_sample(const SampleArgs& a, const LudingParams& lp, Box& box) {
@@ -215,12 +236,7 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
                        cst.xx, cst.yy, s.energies().kinetic, s.box().x_max - s.box().x_min,
                        s.box().y_max - s.box().y_min);
   };
-  auto snapshot = [&](const std::string& label) {
-    s.contacts(cs);
-    write_file_atomic(out / fmt::format("particles_{}.vtp", label), particles_vtp(s.particles(), cs));
-    write_file_atomic(out / fmt::format("contacts_{}.vtp", label), contacts_vtp(s.particles(), cs));
-    write_file_atomic(out / fmt::format("contacts_{}.csv", label), contacts_csv(s.particles(), cs));
-  };
+  auto snapshot = [&](const std::string& label) { write_snapshot(s, out, label, cs); };
   auto phase_json = [&](const std::string& name, double wall_s) {
     const Counts c = count_contacts(s, buf);
     const auto ws = s.wall_stress();
@@ -313,8 +329,7 @@ int run_protocol(const std::string& command, const SampleArgs& sample, const Run
   std::unique_ptr<DynamicSolver> s;
   nlohmann::json summary;
   if (!args.state_file.empty()) {
-    SolverState st = read_state_file(args.state_file);
-    apply_overrides(st.params, args.param_overrides);
+    SolverState st = load_state(args.state_file, args.param_overrides);
     if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;
     s = std::make_unique<DynamicSolver>(st, opt);
     summary["state_file"] = args.state_file;

@@ -64,4 +64,21 @@ result good_sinter $?
   cmp -s "$tmp/s/state.txt" "$tmp/r/state.txt"
 result restart_from_prepare_is_exact $?
 check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
+
+# material tests on the sintered sample
+check_bad compress_needs_state "state" compress
+check_bad compress_bad_rate "strain-rate" compress --state "$tmp/s/state.txt" --strain-rate 0
+check_bad compress_bad_strain "max-strain" compress --state "$tmp/s/state.txt" --max-strain 2
+check_bad vibrate_bad_frequency "frequency" vibrate --state "$tmp/s/state.txt" --frequency -100
+check_bad vibrate_missing_state "cannot open state file" vibrate --state "$tmp/none.txt"
+"$ds" compress --state "$tmp/s/state.txt" --max-strain 0.002 --quiet --out "$tmp/c" >/dev/null 2>"$tmp/stderr" &&
+  files_ok "$tmp/c" compress.csv summary.json state.txt particles_final.vtp &&
+  has_columns "$tmp/c/compress.csv" t eps_zz szz szz_over_p nu C &&
+  grep -q '"peak_szz"' "$tmp/c/summary.json" && grep -q '"stiffness"' "$tmp/c/summary.json"
+result good_compress $?
+"$ds" vibrate --state "$tmp/s/state.txt" --time 0.002 --quiet --out "$tmp/v" >/dev/null 2>"$tmp/stderr" &&
+  files_ok "$tmp/v" clusters.csv summary.json timeseries.csv particles_final.vtp &&
+  grep -q '"largest_cluster_fraction"' "$tmp/v/summary.json" &&
+  [ "$(tail -n +2 "$tmp/v/clusters.csv" | awk -F, '{s += $2} END {print s}')" = 25 ]
+result good_vibrate $?
 finish
