@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -237,7 +238,10 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
                        s.box().y_max - s.box().y_min);
   };
   auto snapshot = [&](const std::string& label) { write_snapshot(s, out, label, cs); };
-  auto phase_json = [&](const std::string& name, double wall_s) {
+  auto cpu_now = [] { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; };
+  double cpu_phase = cpu_now();
+  const double cpu_start = cpu_phase;
+  auto phase_json = [&](const std::string& name, double wall_s, double cpu_s) {
     const Counts c = count_contacts(s, buf);
     const auto ws = s.wall_stress();
     const double nn = static_cast<double>(n);
@@ -251,7 +255,8 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
                            {"sxx_over_p", ws.xx / pressure},
                            {"szz_over_p", ws.yy / pressure},
                            {"Ekin_J", s.energies().kinetic},
-                           {"wall_time_s", wall_s}};
+                           {"wall_time_s", wall_s},
+                           {"cpu_time_s", cpu_s}};
   };
 
   snapshot("initial");
@@ -287,8 +292,10 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
       const std::string& name = phases[p].name;
       write_file_atomic(out / fmt::format("state_{}.txt", name), format_state(s.state()));
       snapshot(name);
-      phase_list.push_back(phase_json(name, std::chrono::duration<double>(now - t_phase).count()));
+      const double cpu = cpu_now();
+      phase_list.push_back(phase_json(name, std::chrono::duration<double>(now - t_phase).count(), cpu - cpu_phase));
       t_phase = now;
+      cpu_phase = cpu;
     }
   }
   progress.finish();
@@ -298,7 +305,10 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
   write_file_atomic(out / "state.txt", format_state(s.state()));
   snapshot("final");
   summary["phases"] = phase_list;
-  summary["final"] = phase_json("final", wall);
+  const double cpu = cpu_now() - cpu_start;
+  summary["final"] = phase_json("final", wall, cpu);
+  summary["cpu_time_s"] = cpu;
+  summary["particle_steps_per_cpu_s"] = static_cast<double>(steps_done) * static_cast<double>(n) / std::max(cpu, 1e-9);
   summary["steps"] = steps_done;
   summary["dt_s"] = dt;
   summary["wall_time_s"] = wall;
