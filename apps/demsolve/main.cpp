@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")->required();
   comp->add_option("--strain-rate", ca.strain_rate, "vertical strain rate [1/s] (eps_zz = 1 - z/z0)")->capture_default_str();
   comp->add_option("--max-strain", ca.max_strain, "final vertical strain")->capture_default_str();
+  comp->add_option("--ramp-time", ca.ramp_time, "the top wall's speed rises smoothly over this time [s]")->capture_default_str();
   comp->add_option("--pressure", ca.pressure, "sigma_xx held by the right wall [N/m]; 0: the state's");
   comp->add_option("--param", ca.param_overrides, "contact parameter NAME=VALUE");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");

@@ -44,6 +44,8 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
     throw std::invalid_argument(fmt::format("--strain-rate must be a positive number of 1/s, got {}", a.strain_rate));
   if (!(std::isfinite(a.max_strain) && a.max_strain > 0.0 && a.max_strain < 0.9))
     throw std::invalid_argument(fmt::format("--max-strain must be in (0, 0.9), got {}", a.max_strain));
+  if (!(std::isfinite(a.ramp_time) && a.ramp_time >= 0.0))
+    throw std::invalid_argument(fmt::format("--ramp-time must be a number of seconds >= 0, got {}", a.ramp_time));
   if (!(std::isfinite(a.pressure) && a.pressure >= 0.0))
     throw std::invalid_argument(fmt::format("--pressure must be a positive number of N/m, got {}", a.pressure));
   SolverState st = load_state(a.state_file, a.param_overrides);
@@ -57,13 +59,14 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   right.mode = WallMode::Stress;  // sigma_xx = p held by the right wall
   right.pressure = p;
   top.mode = WallMode::Strain;  // eps_zz = 1 - z/z0 = rate (t - t_start)
-  top.velocity = -a.strain_rate * z0;
+  top.velocity = a.ramp_time > 0.0 ? 0.0 : -a.strain_rate * z0;
   s.set_walls(right, top);
   write_common(command, st, out,
                {{"test", "compress"}, {"state_file", a.state_file}, {"strain_rate_per_s", a.strain_rate},
-                {"max_strain", a.max_strain}, {"pressure_N_per_m", p}, {"top_wall_velocity_m_per_s", top.velocity}});
+                {"max_strain", a.max_strain}, {"ramp_time_s", a.ramp_time}, {"pressure_N_per_m", p}, {"top_wall_velocity_m_per_s", -a.strain_rate * z0}});
   const double T = st.thermal.T, nu0 = s.density();
-  const auto steps = static_cast<std::int64_t>(std::ceil(a.max_strain / a.strain_rate / s.dt()));
+  // eps(t) = rate (t - t_ramp / 2) after the ramp
+  const auto steps = static_cast<std::int64_t>(std::ceil((a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt()));
   const std::int64_t every = std::max<std::int64_t>(1, steps / 2000);
   std::string csv = "t,eps_zz,szz,szz_over_p,sxx_over_p,szz_contacts,nu,C\n";
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
@@ -88,6 +91,14 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   const auto t0 = std::chrono::steady_clock::now();
   std::size_t next_snap = 0;
   for (std::int64_t k = 1; k <= steps; ++k) {
+    const double tt = static_cast<double>(k - 1) * s.dt();
+    if (tt < a.ramp_time) {  // smooth start, v = v_f (1 - cos(pi t / t_ramp)) / 2
+      top.velocity = -a.strain_rate * z0 * 0.5 * (1.0 - std::cos(std::numbers::pi * tt / a.ramp_time));
+      s.set_walls(right, top);
+    } else if (top.velocity != -a.strain_rate * z0) {
+      top.velocity = -a.strain_rate * z0;
+      s.set_walls(right, top);
+    }
     hold_temperature(s, T, s.params());
     s.step();
     if (k % every == 0 || k == steps) {
@@ -120,6 +131,7 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
                    {"state_file", a.state_file},
                    {"pressure_N_per_m", p},
                    {"strain_rate_per_s", a.strain_rate},
+                   {"ramp_time_s", a.ramp_time},
                    {"peak_szz", szz_v[ipk]},
                    {"peak_szz_over_p", szz_v[ipk] / p},
                    {"peak_strain", eps_v[ipk]},

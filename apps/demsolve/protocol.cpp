@@ -267,8 +267,11 @@ int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const R
   auto t_phase = t_start;
   nlohmann::json phase_list = nlohmann::json::array();
   std::int64_t steps_done = 0;
+  const double t_final = phase_end(phases, phases.size() - 1);
   for (std::int64_t k = k0 + 1; k <= K; ++k) {
-    const double t = static_cast<double>(k) * dt;
+    // the last step may end a fraction of dt past the protocol: it still belongs to the last
+    // phase of non-zero length (zero-length trailing phases must not change T)
+    const double t = std::min(static_cast<double>(k) * dt, t_final);
     const ScheduleAt at = schedule_at(phases, t);
     cur_phase = at.phase;
     if (!friction_known || at.friction != friction) {  // LMM05 4.1: mu on and mu_w off at t_heat

@@ -62,6 +62,7 @@ struct CompressArgs {
   std::string state_file;
   double strain_rate = 1.0;  ///< d eps_zz / dt [1/s], top wall velocity -rate z0
   double max_strain = 0.1;
+  double ramp_time = 0.005;  ///< the top wall's speed rises smoothly, (1 - cos)/2, over this time [s]
   double pressure = 0.0;     ///< sigma_xx held by the right wall; 0: the state's
   bool quiet = false;
   std::vector<std::string> param_overrides;

@@ -63,6 +63,11 @@ result good_sinter $?
 "$ds" sinter --state "$tmp/s/state_prepare.txt" "${times[@]}" --quiet --out "$tmp/r" >/dev/null 2>"$tmp/stderr" &&
   cmp -s "$tmp/s/state.txt" "$tmp/r/state.txt"
 result restart_from_prepare_is_exact $?
+# zero-length trailing phases: the run ends hot (the last step must not fall into 'relax' at T_cold)
+"$ds" sinter --n 25 --seed 3 --t-heat 0.002 --heat-time 0.001 --sinter-time 0 --cool-time 0 --relax-time 0 \
+  --quiet --out "$tmp/z" >/dev/null 2>"$tmp/stderr" &&
+  /usr/bin/env python3 -c "import json,sys; f=json.load(open('$tmp/z/summary.json'))['final']; sys.exit(0 if f['T'] == 140.0 else 1)"
+result zero_length_phases_end_hot $?
 check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
 
 # material tests on the sintered sample
