@@ -1006,12 +1006,14 @@ reference for the current runs.
   count as broken-off single grains and lower the largest-cluster fraction of sintered samples.
   A cluster definition by cohesive (attractive or sintered) bonds, or by distance with a small
   gap tolerance, would match the paper's visual judgement better.
-* **Zero-length phases (demsolve).** `demsolve sinter --sinter-time 0 --cool-time 0 --relax-time 0`
-  does not give the heated state: the last time step (t = K dt slightly past 0.3) falls past the
-  zero-length sinter and cool phases into `relax` (schedule_at), whose temperature is T_cold, so the
-  temperature jumps from 140 to 80 deg C in one step and the radii shrink by 0.6 % (C drops from 3.4
-  to 0.34 and sigma_zz/p to 0 for N = 100, p = 100). The study therefore branches from
-  `state_heat.txt` of the t_s = 1e-4 run, whose first 0.3 s are identical.
+* **Zero-length phases (demsolve), fixed after this grid ran.** With the binary of this grid,
+  `demsolve sinter --sinter-time 0 --cool-time 0 --relax-time 0` did not give the heated state: the
+  last time step (t = K dt slightly past 0.3) fell past the zero-length sinter and cool phases into
+  `relax` at T_cold (C 3.4 -> 0.34, sigma_zz/p -> 0 for N = 100, p = 100). Fixed in commit "demsolve:
+  the last step of a protocol with zero-length trailing phases..." (the schedule time is clamped to
+  the protocol's end; CLI test `zero_length_phases_end_hot`). No run of this grid used zero-length
+  phases: the study branches from `state_heat.txt` of the t_s = 1e-4 run, whose first 0.3 s are
+  identical.
 * The three-particle, da_T = 0 and mu_w investigation runs are made from scratch (no branching).
 """
 
