@@ -19,6 +19,77 @@ constexpr LudingFeatures kHystereticFrictionless{true, false, false, false};
 constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
+
+// Field-by-field copy of a history (GCC expanded the struct assignment of the law's result into
+// overlapping 16-byte moves through the stack, which stall on store forwarding).
+inline void store_history(LudingHistory& dst, const LudingHistory& src) {
+  dst.delta_max = src.delta_max;
+  dst.delta0 = src.delta0;
+  dst.k2_line = src.k2_line;
+  dst.k1_seen = src.k1_seen;
+  dst.xi = src.xi;
+  dst.fluid = src.fluid;
+  dst.sliding = src.sliding;
+}
+
+inline bool is_fresh(const LudingHistory& h) {
+  return h.delta_max == 0.0 && h.delta0 == 0.0 && h.k2_line == 0.0 && h.k1_seen == 0.0 &&
+         h.xi == 0.0 && h.fluid == 0 && h.sliding == 0;
+}
+
+// One contact: normal and tangential force on j and the committed history, in place.
+// For the linear feature sets (no hysteresis, cohesion or temperature) this is
+// contact::luding_evaluate<F> written out for the linear spring-dashpot with the Cundall-Strack
+// spring, operation for operation (same results to the last bit, same history), without the
+// tangent and the result struct the solver does not use. Otherwise it calls the law.
+template <LudingFeatures F>
+inline void contact_forces(const LudingParams& p, LudingHistory& h, const LudingInput& in,
+                           double& f_n, double& f_t) {
+  if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
+    const double delta = in.delta;
+    if (!(delta > 0.0)) {  // open (rounding at L = a_i + a_j): no force, history reset
+      h = LudingHistory{};
+      f_n = f_t = 0.0;
+      return;
+    }
+    h.k1_seen = p.k1();
+    h.delta_max = h.delta_max < delta ? delta : h.delta_max;  // fmax (both finite, >= 0)
+    h.k2_line = p.k2;
+    double fn = p.k2 * delta + p.gamma_n * in.delta_dot;  // LMM05 Eq 4 (k1 = k2) and Eq 5
+    double ft = 0.0;
+    std::uint8_t sliding = 0;
+    if constexpr (F.friction) {
+      const double fc = p.mu * (fn - 0.0);  // LMM05 Eq 14 with f_min = 0
+      if (fc > 0.0) {
+        const double kt = p.alpha * p.k2;  // LMM05 Eq 23
+        const double xi_trial = h.xi + in.dxi;                      // LMM05 Eq 20
+        const double ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
+        if (std::fabs(ft0) <= fc) {
+          ft = ft0;
+          h.xi = xi_trial;
+        } else {
+          const double sg = ft0 > 0.0 ? 1.0 : -1.0;
+          ft = sg * fc;                                    // LMM05 Eq 22
+          h.xi = -(fc * sg + p.gamma_t * in.xi_dot) / kt;  // LMM05 Eq 21
+          sliding = 1;
+          if (p.sliding_breaks_cohesion && fn < 0.0) fn = 0.0;
+        }
+      } else {
+        h.xi = 0.0;
+      }
+    } else {
+      h.xi = 0.0;
+    }
+    h.sliding = sliding;
+    f_n = fn;
+    f_t = ft;
+  } else {
+    const LudingResult r = contact::luding_evaluate<F>(p, h, in);
+    store_history(h, r.history);
+    f_n = r.f_n;
+    f_t = r.f_t;
+  }
+}
 }  // namespace
 
 std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx,
@@ -148,12 +219,20 @@ void DynamicSolver::choose_friction() {
 }
 
 // ---- neighbour search: cell list + Verlet table ------------------------------------------------
+namespace {
+// Two particles each moving d and each growing by g (Eq 9) close a gap by 2 d + 2 g: the table
+// (range r_i + r_j + skin at the build) stays complete while d < skin / 2 - g. Returns that limit
+// on d (<= 0: rebuild now).
+double displacement_limit(double skin, double radius_ref_max, double scale, double scale_build) {
+  const double grow = radius_ref_max * std::max(0.0, scale - scale_build);
+  return 0.5 * skin - grow;
+}
+}  // namespace
+
 bool DynamicSolver::needs_rebuild() const {
-  // Two particles each moving d and each growing by g (Eq 9) close a gap by 2 d + 2 g: the table
-  // (range r_i + r_j + skin at the build) stays complete while d < skin / 2 - g.
-  const double grow = radius_ref_max_ * std::max(0.0, radius_scale_ - radius_scale_build_);
-  const double lim = 0.5 * skin_ - grow;
-  if (!(lim > 0.0)) return true;
+  const double lim =
+      displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  if (!(lim > 0.0) || walls_moved()) return true;
   const double lim2 = lim * lim;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double dx = P_.x[i] - x_build_[i], dy = P_.y[i] - y_build_[i];
@@ -162,12 +241,48 @@ bool DynamicSolver::needs_rebuild() const {
   return false;
 }
 
+// Wall candidates: particles within a_i + skin of a wall. Any other particle's wall histories
+// are cleared here (it does not touch a wall, so the next evaluation would clear them anyway).
+void DynamicSolver::build_wall_list() {
+  const std::size_t n = P_.size();
+  wall_list_.clear();
+  wall_list_valid_ = box_.enabled;
+  if (!box_.enabled) return;
+  box_build_[0] = box_.x_min;
+  box_build_[1] = box_.x_max;
+  box_build_[2] = box_.y_min;
+  box_build_[3] = box_.y_max;
+  if (wall_touch_.size() != n) wall_touch_.assign(n, 0xF);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double xi = P_.x[i], yi = P_.y[i], reach = P_.radius[i] + skin_;
+    const bool near = xi - box_.x_min < reach || box_.x_max - xi < reach ||
+                      yi - box_.y_min < reach || box_.y_max - yi < reach;
+    if (near) {
+      wall_list_.push_back(static_cast<std::uint32_t>(i));
+      wall_touch_[i] = 0xF;  // the next evaluation visits its four wall histories
+    } else if (wall_touch_[i] != 0) {
+      for (std::size_t w = 0; w < 4; ++w) wall_hist_[4 * i + w] = LudingHistory{};
+      wall_touch_[i] = 0;
+    }
+  }
+}
+
+bool DynamicSolver::walls_moved() const {
+  if (!box_.enabled) return false;
+  const double lim = 0.5 * skin_;
+  return !(std::fabs(box_.x_min - box_build_[0]) < lim &&
+           std::fabs(box_.x_max - box_build_[1]) < lim &&
+           std::fabs(box_.y_min - box_build_[2]) < lim &&
+           std::fabs(box_.y_max - box_build_[3]) < lim);
+}
+
 void DynamicSolver::build_table() {
   const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
   x_build_ = P_.x;
   y_build_ = P_.y;
+  build_wall_list();
   new_key_.clear();
   if (n >= 2) {
     double xlo = P_.x[0], xhi = xlo, ylo = P_.y[0], yhi = ylo, rmax = 0.0;
@@ -223,10 +338,14 @@ void DynamicSolver::build_table() {
   }
   // carry the committed histories of the pairs that stay in the table (both lists sorted)
   new_hist_.assign(new_key_.size(), LudingHistory{});
+  pair_live_.assign(new_key_.size(), 0);
   std::size_t a = 0;
   for (std::size_t b = 0; b < new_key_.size(); ++b) {
     while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
-    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) new_hist_[b] = pair_hist_[a];
+    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
+      new_hist_[b] = pair_hist_[a];
+      pair_live_[b] = is_fresh(new_hist_[b]) ? 0 : 1;
+    }
   }
   pair_key_.swap(new_key_);
   pair_hist_.swap(new_hist_);
@@ -282,25 +401,34 @@ void DynamicSolver::compute_forces() {
   const double dt = ts_.dt;
   const double k1Tt = thermal_.k1_Tt;
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    P_.fx[i] = P_.mass[i] * opt_.gravity_x;
-    P_.fy[i] = P_.mass[i] * opt_.gravity_y;
-    P_.torque[i] = 0.0;
+  if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
+    for (std::size_t i = 0; i < n; ++i) {
+      P_.fx[i] = P_.mass[i] * opt_.gravity_x;
+      P_.fy[i] = P_.mass[i] * opt_.gravity_y;
+      P_.torque[i] = 0.0;
+    }
   }
+  forces_initialised_ = false;
   // particle-particle contacts from the Verlet table
-  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+  const std::size_t n_pairs = pair_key_.size();
+  if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
+  for (std::size_t k = 0; k < n_pairs; ++k) {
     const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
     const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
     const double ri = P_.radius[i], rj = P_.radius[j];
     const double L2 = dx * dx + dy * dy, s = ri + rj;
     if (!(L2 < s * s)) {  // separated: the law clears the history (docs/luding.md)
-      pair_hist_[k] = LudingHistory{};
+      if (pair_live_[k]) {
+        pair_hist_[k] = LudingHistory{};
+        pair_live_[k] = 0;
+      }
       continue;
     }
-    const double L = std::sqrt(L2);
-    const double nx = dx / L, ny = dy / L, tx = -ny, ty = nx;  // n from i to j, t = perp(n)
-    const double q = (ri * ri - rj * rj) / (2.0 * L);
+    pair_live_[k] = 1;
+    const double L = std::sqrt(L2), iL = 1.0 / L;
+    const double nx = dx * iL, ny = dy * iL, tx = -ny, ty = nx;  // n from i to j, t = perp(n)
+    const double q = (ri * ri - rj * rj) * (0.5 * iL);
     const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
     // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
     const double rvx = P_.vx[j] - P_.vx[i], rvy = P_.vy[j] - P_.vy[i];
@@ -312,15 +440,15 @@ void DynamicSolver::compute_forces() {
     in.xi_dot = vt;
     in.dxi = vt * dt;
     in.k1_Tt = k1Tt;
-    const LudingResult r = contact::luding_evaluate<F>(params_, pair_hist_[k], in);
-    pair_hist_[k] = r.history;
-    const double fx = r.f_n * nx + r.f_t * tx, fy = r.f_n * ny + r.f_t * ty;  // force on j
+    double f_n, f_t;
+    contact_forces<F>(params_, pair_hist_[k], in, f_n, f_t);
+    const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
     P_.fx[j] += fx;
     P_.fy[j] += fy;
     P_.fx[i] -= fx;
     P_.fy[i] -= fy;
-    P_.torque[i] -= di * r.f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-    P_.torque[j] -= dj * r.f_t;
+    P_.torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
+    P_.torque[j] -= dj * f_t;
     sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
     sxy += fx * dy;
     syx += fy * dx;
@@ -330,15 +458,28 @@ void DynamicSolver::compute_forces() {
   // walls: the pair (wall, particle), n from the wall into the box
   double wf[4] = {0, 0, 0, 0};
   if (box_.enabled) {
-    const double wall_pos[4] = {box_.x_min, box_.x_max, box_.y_min, box_.y_max};
     const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
     const double wvx[4] = {0, wall_v_[0], 0, 0}, wvy[4] = {0, 0, 0, wall_v_[1]};
-    for (std::size_t i = 0; i < n; ++i) {
+    if (wall_touch_.size() != n) wall_touch_.assign(n, 0xF);
+    // the candidates of the last build suffice unless a wall moved by skin/2 since (then all)
+    const bool use_list = wall_list_valid_ && !walls_moved();
+    const std::size_t n_visit = use_list ? wall_list_.size() : n;
+    for (std::size_t c = 0; c < n_visit; ++c) {
+      const std::size_t i = use_list ? wall_list_[c] : c;
+      // distances to the four walls (= wn . (x - wall), exactly); skip the particle when it
+      // overlaps no wall and touched none at the last evaluation (histories already fresh)
+      const double xi = P_.x[i], yi = P_.y[i], ai = P_.radius[i];
+      const double d4[4] = {xi - box_.x_min, box_.x_max - xi, yi - box_.y_min, box_.y_max - yi};
+      const unsigned touch = (ai - d4[0] > 0.0 ? 1u : 0u) | (ai - d4[1] > 0.0 ? 2u : 0u) |
+                             (ai - d4[2] > 0.0 ? 4u : 0u) | (ai - d4[3] > 0.0 ? 8u : 0u);
+      const unsigned todo = touch | wall_touch_[i];
+      wall_touch_[i] = static_cast<std::uint8_t>(touch);
+      if (todo == 0) continue;
       for (int w = 0; w < 4; ++w) {
+        if (!((todo >> w) & 1u)) continue;
         LudingHistory& h = wall_hist_[4 * i + static_cast<std::size_t>(w)];
-        const double dist =
-            w < 2 ? wnx[w] * (P_.x[i] - wall_pos[w]) : wny[w] * (P_.y[i] - wall_pos[w]);
-        const double delta = P_.radius[i] - dist;
+        const double dist = d4[w];
+        const double delta = ai - dist;
         if (!(delta > 0.0)) {
           h = LudingHistory{};
           continue;
@@ -353,12 +494,12 @@ void DynamicSolver::compute_forces() {
         in.xi_dot = vt;
         in.dxi = vt * dt;
         in.k1_Tt = k1Tt;
-        const LudingResult r = contact::luding_evaluate<F>(wall_params_, h, in);
-        h = r.history;
-        const double fx = r.f_n * nx + r.f_t * tx, fy = r.f_n * ny + r.f_t * ty;  // on particle
+        double f_n, f_t;
+        contact_forces<F>(wall_params_, h, in, f_n, f_t);
+        const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // on particle
         P_.fx[i] += fx;
         P_.fy[i] += fy;
-        P_.torque[i] -= dist * r.f_t;
+        P_.torque[i] -= dist * f_t;
         wf[w] -= w < 2 ? fx : fy;  // force of the contacts on the wall along x (y)
         const double lx = dist * nx, ly = dist * ny;  // contact point -> particle centre
         sxx += fx * lx;
@@ -378,6 +519,57 @@ void DynamicSolver::compute_forces() {
 }
 
 // ---- integration: velocity Verlet, LMM05 Eq 2 and Eq 1 ------------------------------------------
+namespace {
+// Half kick v += h f / m, omega += h tau / I (with the inverses), on distinct arrays (restrict:
+// the loops vectorise without alias checks).
+void kick_pass(std::size_t n, double h, double* __restrict vx, double* __restrict vy,
+               double* __restrict om, const double* __restrict fx, const double* __restrict fy,
+               const double* __restrict tq, const double* __restrict im,
+               const double* __restrict iI) {
+  for (std::size_t i = 0; i < n; ++i) {
+    vx[i] += h * fx[i] * im[i];
+    vy[i] += h * fy[i] * im[i];
+    om[i] += h * tq[i] * iI[i];
+  }
+}
+// First half kick and drift in one pass; also the table check (displacement since the build
+// beyond sqrt(lim2): returns 1) and the reset of the force accumulators to m g for the coming
+// force evaluation.
+template <bool Gravity>
+int kick_drift_pass_impl(std::size_t n, double h, double dt, double lim2, double* __restrict vx,
+                         double* __restrict vy, double* __restrict om, double* __restrict x,
+                         double* __restrict y, double* __restrict th, double* __restrict fx,
+                         double* __restrict fy, double* __restrict tq,
+                         const double* __restrict im, const double* __restrict iI,
+                         const double* __restrict xb, const double* __restrict yb,
+                         const double* __restrict m, double gx, double gy) {
+  int moved = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    vx[i] += h * fx[i] * im[i];
+    vy[i] += h * fy[i] * im[i];
+    om[i] += h * tq[i] * iI[i];
+    x[i] += dt * vx[i];  // drift
+    y[i] += dt * vy[i];
+    th[i] += dt * om[i];
+    const double ddx = x[i] - xb[i], ddy = y[i] - yb[i];
+    moved |= ddx * ddx + ddy * ddy > lim2 ? 1 : 0;
+    fx[i] = Gravity ? m[i] * gx : 0.0;
+    fy[i] = Gravity ? m[i] * gy : 0.0;
+    tq[i] = 0.0;
+  }
+  return moved;
+}
+template <bool Gravity>
+int kick_drift_pass(std::size_t n, double h, double dt, double lim2, Particles& P,
+                    const double* im, const double* iI, const double* xb, const double* yb,
+                    double gx, double gy) {
+  return kick_drift_pass_impl<Gravity>(n, h, dt, lim2, P.vx.data(), P.vy.data(), P.omega.data(),
+                                       P.x.data(), P.y.data(), P.theta.data(), P.fx.data(),
+                                       P.fy.data(), P.torque.data(), im, iI, xb, yb,
+                                       P.mass.data(), gx, gy);
+}
+}  // namespace
+
 void DynamicSolver::step() {
   const std::size_t n = P_.size();
   const double dt = ts_.dt, h = 0.5 * dt;
@@ -389,13 +581,37 @@ void DynamicSolver::step() {
     const double Fw = which == 0 ? wall_force_[1] : wall_force_[3];
     return (Fw - w.pressure * z - w.damping * wall_v_[which]) / w.mass;  // LMM05 Eq 1
   };
+  if (inv_mass_.size() != n || inv_scale_ != radius_scale_) {  // no division in the kicks
+    inv_mass_.resize(n);
+    inv_inertia_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      inv_mass_[i] = 1.0 / P_.mass[i];
+      inv_inertia_[i] = 1.0 / P_.inertia[i];
+    }
+    inv_scale_ = radius_scale_;
+  }
   // half-step kick of particles and moving walls; the damping term of Eq 1 is taken at the
   // half-step wall velocity (explicit)
-  auto kick = [&] {
-    for (std::size_t i = 0; i < n; ++i) {
-      P_.vx[i] += h * P_.fx[i] / P_.mass[i];
-      P_.vy[i] += h * P_.fy[i] / P_.mass[i];
-      P_.omega[i] += h * P_.torque[i] / P_.inertia[i];
+  // (the first kick, the drift, the table check and the reset of the force accumulators to m g
+  // share one pass over the particles)
+  const double lim = displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  const double lim2 = lim * lim;
+  bool far = !(lim > 0.0);
+  auto kick = [&](bool drift) {
+    if (drift) {
+      const bool gravity = opt_.gravity_x != 0.0 || opt_.gravity_y != 0.0;
+      const int moved =
+          gravity ? kick_drift_pass<true>(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(),
+                                          x_build_.data(), y_build_.data(), opt_.gravity_x,
+                                          opt_.gravity_y)
+                  : kick_drift_pass<false>(n, h, dt, lim2, P_, inv_mass_.data(),
+                                           inv_inertia_.data(), x_build_.data(), y_build_.data(),
+                                           0.0, 0.0);
+      far = far || moved != 0;
+      forces_initialised_ = true;
+    } else {
+      kick_pass(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(), P_.fy.data(),
+                P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
     }
     if (box_.enabled) {
       const double a0 = wall_accel(0), a1 = wall_accel(1);
@@ -403,20 +619,15 @@ void DynamicSolver::step() {
       wall_v_[1] += h * a1;
     }
   };
-  kick();
-  for (std::size_t i = 0; i < n; ++i) {  // drift
-    P_.x[i] += dt * P_.vx[i];
-    P_.y[i] += dt * P_.vy[i];
-    P_.theta[i] += dt * P_.omega[i];
-  }
+  kick(true);
   if (box_.enabled) {
     box_.x_max += dt * wall_v_[0];
     box_.y_max += dt * wall_v_[1];
   }
   time_ += dt;
-  if (needs_rebuild()) build_table();
+  if (far || walls_moved()) build_table();
   compute_forces_dispatch();  // forces use the half-step velocities for the damping terms
-  kick();
+  kick(false);
 }
 
 void DynamicSolver::run(std::size_t n_steps) {

@@ -207,6 +207,8 @@ class DynamicSolver {
   void choose_friction();
   void finish_setup();
   void build_table();
+  void build_wall_list();
+  bool walls_moved() const;
   bool needs_rebuild() const;
 
   Particles P_;
@@ -223,10 +225,29 @@ class DynamicSolver {
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
   std::vector<LudingHistory> pair_hist_, new_hist_;
+  /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
+  /// (set at a table build; refilled with 1 if its size differs from the table's).
+  std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_;
   std::vector<std::uint32_t> cell_start_, cell_items_, cell_cursor_;
   // wall histories: 4 per particle (left, right, bottom, top); wall state
   std::vector<LudingHistory> wall_hist_;
+  /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force
+  /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
+  /// histories of the other particles. Particles with no bit and no overlap are skipped by the
+  /// wall loop (their histories are already fresh).
+  std::vector<std::uint8_t> wall_touch_;
+  /// Particles within a_i + skin of a wall at the last table build (ascending); with the walls
+  /// within skin/2 of box_build_ (else a rebuild) no other particle can touch a wall.
+  std::vector<std::uint32_t> wall_list_;
+  double box_build_[4] = {0, 0, 0, 0};  ///< x_min, x_max, y_min, y_max at the build
+  bool wall_list_valid_ = false;
+  /// 1/m and 1/I for the kicks, refilled by step() when the particle count or radius_scale_ (the
+  /// only thing that changes the inertia, Eq 9) differs from the values they were computed for.
+  std::vector<double> inv_mass_, inv_inertia_;
+  double inv_scale_ = -1.0;
+  /// step() set the force accumulators to m g in its first pass (compute_forces skips its own)
+  bool forces_initialised_ = false;
   double wall_force_[4] = {0, 0, 0, 0};
   double wall_v_[2] = {0, 0};  ///< right, top velocities
   double sxx_ = 0, sxy_ = 0, syx_ = 0, syy_ = 0, elastic_ = 0;

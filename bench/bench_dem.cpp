@@ -1,0 +1,479 @@
+// bench_dem: particle-steps per CPU-second of netdem::dem::DynamicSolver on a dense, jammed,
+// polydisperse, frictional 2D disk packing (issue #4), for the linear spring-dashpot
+// specialisation (ContactModel::Linear: Luding law with k1 = k2, k_c = 0, constant T) and the
+// full Luding law (ContactModel::Full, Table 1, constant 80 deg C). Plain executable with its own
+// timing loop (CPU time of this thread), CSV on stdout. See bench/README.md, docs/performance.md.
+//
+//   bench_dem [--n 300,3000,30000] [--models linear,full] [--psteps 3e7] [--min-steps 200]
+//             [--warmup 1000] [--cache DIR] [--lammps-data DIR] [--seed 1] [--reps 1]
+//
+// Scene (the same as ../shared/bench/lammps/params.in as far as the solver allows):
+//  * radii uniform in a0 [1 - w0, 1 + w0] = [0.5, 1.5] mm, disks of height h = 6 mm, rho = 2000
+//    (LMM05 Table 1); k2 = 2e5 N/m, k_t = 0.2 k2, gamma_0 = 0.2 kg/s, gamma_t = 0.05 kg/s,
+//    mu = 0.5; walls frictionless (mu_w = 0, Table 1); dt = t_c/50 for a pair of two a0 disks
+//    (as params.in: 6.108e-7 s); Verlet skin 0.2 mm (as params.in), rebuilt when a disk moved
+//    more than skin/2.
+//  * square box with four walls (LMM05 Fig 1; the LAMMPS scene of the shared report is periodic,
+//    the solver has no periodic boundaries).
+//  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.txt): all radii drawn first
+//    (std::mt19937_64(seed), the platform-independent uniform of demsolve), then random sequential
+//    placement without overlap, largest disks first, at solid fraction 0.45, particles renumbered
+//    in Morton order of a grid of cell a_max (spatial locality, as LAMMPS's atom sorting); all
+//    with the linear law and friction mu = 0.5, walls frictionless:
+//    (a) affine compression of the gas (positions and box scaled by 0.998, then 200 steps with
+//        fixed walls, velocities zeroed) up to solid fraction 0.70;
+//    (b) stress-controlled right and top walls (LMM05 Eq 1, p = 100 N/m, m_w = 0.01 kg,
+//        gamma_w = p L / (0.5 m/s), so the walls never move faster than 0.5 m/s at any N), one
+//        solver, until after a 2000-step chunk both wall stresses are within 1 % of p, the density
+//        changed by less than 2e-5 and the kinetic energy per disk is below 1e-9 J (about 1 % of
+//        the elastic energy of a contact at p; at most 100 chunks); the walls are then fixed
+//        where they are.
+//  * timing: a fresh solver on the cached packing with fixed walls (full law:
+//    T_radius_ref = 80 deg C so that Eq 9 keeps the packing's radii at the constant 80 deg C),
+//    `warmup` untimed steps (the tangential springs build up), then max(min_steps, psteps/N)
+//    timed steps; CPU time of this thread (CLOCK_THREAD_CPUTIME_ID) and wall time.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "netdem/dynamic/solver.hpp"
+
+namespace fs = std::filesystem;
+using namespace netdem::dem;
+
+namespace {
+
+constexpr double kPressure = 100.0;    // N/m (LMM05 section 4.1, params.in Pt)
+constexpr double kSkin = 0.2e-3;       // m (params.in)
+constexpr double kPlaceDensity = 0.45;  // solid fraction of the random placement
+
+double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+double cpu_now() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+double wall_now() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// The linear spring-dashpot parameters (k1 = k2, k_c = 0) of the scene.
+LudingParams linear_params() {
+  LudingParams p;
+  p.k1_ratio = 1.0;
+  p.kc_ratio = 0.0;
+  return p;  // k2, alpha, gamma_n, gamma_t, mu = 0.5, mu_wall = 0: Table 1
+}
+
+/// dt of params.in: t_c/50 of a pair of two a0 disks (LMM05 Eq 6).
+double scene_dt(const LudingParams& p) {
+  const double m0 = netdem::contact::luding_mass(p, p.a0);
+  return contact_duration(p.k2, p.gamma_n, 0.5 * m0) / 50.0;
+}
+
+struct Packing {
+  std::vector<double> x, y, r;
+  double x_min = 0, y_min = 0, x_max = 0, y_max = 0;
+};
+
+std::uint64_t morton(std::uint32_t a, std::uint32_t b) {
+  std::uint64_t m = 0;
+  for (int k = 0; k < 32; ++k)
+    m |= (static_cast<std::uint64_t>((a >> k) & 1u) << (2 * k)) |
+         (static_cast<std::uint64_t>((b >> k) & 1u) << (2 * k + 1));
+  return m;
+}
+
+/// Random sequential placement without overlap (grid of side 2 a_max for the overlap test).
+Packing place(int n, std::uint64_t seed, const LudingParams& lp) {
+  std::mt19937_64 rng(seed);
+  Packing pk;
+  pk.r.resize(static_cast<std::size_t>(n));
+  double area = 0.0, rmax = 0.0;
+  for (auto& r : pk.r) {
+    r = lp.a0 * (1.0 - lp.w0 + 2.0 * lp.w0 * uniform01(rng));
+    area += std::numbers::pi * r * r;
+    rmax = std::max(rmax, r);
+  }
+  const double L = std::sqrt(area / kPlaceDensity);
+  pk.x_max = pk.y_max = L;
+  const double c = 2.0 * rmax;
+  const std::size_t g = static_cast<std::size_t>(L / c) + 1;
+  std::vector<std::vector<std::uint32_t>> cells(g * g);
+  auto cell = [&](double v) { return std::min(g - 1, static_cast<std::size_t>(v / c)); };
+  std::sort(pk.r.begin(), pk.r.end(), std::greater<>());  // largest first: denser placement
+  for (std::size_t i = 0; i < pk.r.size(); ++i) {
+    const double ri = pk.r[i];
+    bool placed = false;
+    for (long attempt = 0; attempt < 10000000 && !placed; ++attempt) {
+      const double x = ri + (L - 2 * ri) * uniform01(rng), y = ri + (L - 2 * ri) * uniform01(rng);
+      const std::size_t cx = cell(x), cy = cell(y);
+      placed = true;
+      for (std::size_t gy = cy > 0 ? cy - 1 : 0; gy <= std::min(g - 1, cy + 1) && placed; ++gy)
+        for (std::size_t gx = cx > 0 ? cx - 1 : 0; gx <= std::min(g - 1, cx + 1) && placed; ++gx)
+          for (std::uint32_t k : cells[gy * g + gx]) {
+            const double dx = x - pk.x[k], dy = y - pk.y[k], s = ri + pk.r[k];
+            if (dx * dx + dy * dy < s * s) {
+              placed = false;
+              break;
+            }
+          }
+      if (placed) {
+        pk.x.push_back(x);
+        pk.y.push_back(y);
+        cells[cy * g + cx].push_back(static_cast<std::uint32_t>(i));
+      }
+    }
+    if (!placed) throw std::runtime_error("could not place disk " + std::to_string(i));
+  }
+  // renumber in Morton order of a grid of side a_max (locality of the particle arrays)
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(pk.r.size());
+  for (std::size_t i = 0; i < key.size(); ++i)
+    key[i] = {morton(static_cast<std::uint32_t>(pk.x[i] / rmax),
+                     static_cast<std::uint32_t>(pk.y[i] / rmax)),
+              static_cast<std::uint32_t>(i)};
+  std::sort(key.begin(), key.end());
+  Packing s = pk;
+  for (std::size_t k = 0; k < key.size(); ++k) {
+    s.x[k] = pk.x[key[k].second];
+    s.y[k] = pk.y[key[k].second];
+    s.r[k] = pk.r[key[k].second];
+  }
+  return s;
+}
+
+Particles to_particles(const Packing& pk, const LudingParams& lp) {
+  Particles P;
+  for (std::size_t i = 0; i < pk.r.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], lp);
+  return P;
+}
+
+Box fixed_box(const Packing& pk) {
+  Box b;
+  b.x_min = pk.x_min;
+  b.y_min = pk.y_min;
+  b.x_max = pk.x_max;
+  b.y_max = pk.y_max;
+  return b;
+}
+
+struct Stage {
+  double nu = 0, sxx = 0, syy = 0, ekin = 0;
+};
+/// Runs `steps` steps of a solver built on (pk, velocities v) and returns its state in pk, v.
+/// Walls: fixed at pk's box, or stress-controlled right/top walls (p, m_w = 0.01 kg, gamma_w).
+Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
+                const LudingParams& lp, std::size_t steps, double gamma_w) {
+  Box box = fixed_box(pk);
+  if (gamma_w > 0.0)
+    for (MovingWall* w : {&box.right, &box.top}) {
+      w->mode = WallMode::Stress;
+      w->pressure = kPressure;
+      w->mass = 0.01;
+      w->damping = gamma_w;
+    }
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  o.dt = scene_dt(lp);
+  o.skin = kSkin;
+  Particles P;
+  for (std::size_t i = 0; i < pk.r.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], lp, vx[i], vy[i]);
+  DynamicSolver s(std::move(P), lp, box, o);
+  s.run(steps);
+  const Particles& q = s.particles();
+  pk.x = q.x;
+  pk.y = q.y;
+  vx = q.vx;
+  vy = q.vy;
+  pk.x_max = s.box().x_max;
+  pk.y_max = s.box().y_max;
+  const Stress2 ws = s.wall_stress(), cs = s.contact_stress();
+  Stage st;
+  st.nu = s.density();
+  st.sxx = gamma_w > 0.0 ? ws.xx : cs.xx;
+  st.syy = gamma_w > 0.0 ? ws.yy : cs.yy;
+  st.ekin = s.energies().kinetic / static_cast<double>(pk.r.size());
+  return st;
+}
+
+/// The preparation of the file comment. Prints progress on stderr.
+Packing compress(const Packing& start, const LudingParams& lp) {
+  Packing pk = start;
+  const std::size_t n = pk.r.size();
+  std::vector<double> vx(n, 0.0), vy(n, 0.0);
+  const double t0 = wall_now();
+  double area = 0.0;
+  for (double r : pk.r) area += std::numbers::pi * r * r;
+  // (a) affine compression of the gas: strain 0.2 % per 200-step chunk, velocities zeroed after
+  //     each chunk, up to solid fraction 0.70
+  std::size_t steps = 0;
+  while (area / (pk.x_max * pk.y_max) < 0.70) {
+    const double f = 0.998;
+    for (std::size_t i = 0; i < n; ++i) {
+      pk.x[i] *= f;
+      pk.y[i] *= f;
+    }
+    pk.x_max *= f;
+    pk.y_max *= f;
+    std::fill(vx.begin(), vx.end(), 0.0);
+    std::fill(vy.begin(), vy.end(), 0.0);
+    run_stage(pk, vx, vy, lp, 200, 0.0);
+    steps += 200;
+  }
+  std::fprintf(stderr, "  prepare N=%zu: affine compression to nu = %.4f in %zu steps (%.0f s)\n",
+               n, area / (pk.x_max * pk.y_max), steps, wall_now() - t0);
+  // (b) stress-controlled right/top walls; gamma_w = p L / (0.5 m/s) keeps the wall speed below
+  //     0.5 m/s at every N; one solver, checked every 2000 steps
+  Box box = fixed_box(pk);
+  for (MovingWall* w : {&box.right, &box.top}) {
+    w->mode = WallMode::Stress;
+    w->pressure = kPressure;
+    w->mass = 0.01;
+    w->damping = kPressure * pk.x_max / 0.5;
+  }
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  o.dt = scene_dt(lp);
+  o.skin = kSkin;
+  DynamicSolver s(to_particles(pk, lp), lp, box, o);
+  double nu_prev = s.density();
+  for (int chunk = 0; chunk < 100; ++chunk) {
+    s.run(2000);
+    steps += 2000;
+    const Stress2 ws = s.wall_stress();
+    const double nu = s.density(), ek = s.energies().kinetic / static_cast<double>(n);
+    std::fprintf(stderr,
+                 "  prepare N=%zu: %zu steps, nu = %.5f, sxx/p = %.4f, syy/p = %.4f, "
+                 "Ekin/N = %.2e J (%.0f s)\n",
+                 n, steps, nu, ws.xx / kPressure, ws.yy / kPressure, ek, wall_now() - t0);
+    const bool done = std::fabs(ws.xx / kPressure - 1.0) < 0.01 &&
+                      std::fabs(ws.yy / kPressure - 1.0) < 0.01 &&
+                      std::fabs(nu - nu_prev) < 2e-5 && ek < 1e-9;
+    nu_prev = nu;
+    if (done) break;
+  }
+  const Particles& q = s.particles();
+  pk.x = q.x;
+  pk.y = q.y;
+  pk.x_max = s.box().x_max;
+  pk.y_max = s.box().y_max;
+  return pk;
+}
+
+void write_packing(const fs::path& f, const Packing& pk, int n, std::uint64_t seed) {
+  const fs::path tmp = f.string() + ".tmp";
+  {
+    std::ofstream o(tmp);
+    o << "# bench_dem packing v1 N " << n << " seed " << seed << "\n";
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "# box %.17g %.17g %.17g %.17g\n", pk.x_min, pk.y_min, pk.x_max,
+                  pk.y_max);
+    o << buf;
+    for (std::size_t i = 0; i < pk.r.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", pk.x[i], pk.y[i], pk.r[i]);
+      o << buf;
+    }
+    if (!o) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, f);
+}
+
+bool read_packing(const fs::path& f, Packing& pk) {
+  std::ifstream in(f);
+  if (!in) return false;
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);
+  std::istringstream b(line.substr(6));
+  b >> pk.x_min >> pk.y_min >> pk.x_max >> pk.y_max;
+  double x, y, r;
+  while (in >> x >> y >> r) {
+    pk.x.push_back(x);
+    pk.y.push_back(y);
+    pk.r.push_back(r);
+  }
+  return !pk.r.empty();
+}
+
+/// LAMMPS data file (atom_style sphere: id type diameter density x y z). The density column is
+/// a placeholder: the LAMMPS input sets mass = rho pi r^2 h per atom as params.in/prep.in do.
+void write_lammps_data(const fs::path& f, const Packing& pk) {
+  std::ofstream o(f);
+  char buf[256];
+  o << "LAMMPS data file written by netdem bench_dem (walls at the box faces)\n\n";
+  o << pk.r.size() << " atoms\n1 atom types\n\n";
+  std::snprintf(buf, sizeof buf,
+                "%.17g %.17g xlo xhi\n%.17g %.17g ylo yhi\n-0.001 0.001 zlo zhi\n\n"
+                "Atoms # sphere\n\n",
+                pk.x_min, pk.x_max, pk.y_min, pk.y_max);
+  o << buf;
+  for (std::size_t i = 0; i < pk.r.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%zu 1 %.17g 1.0 %.17g %.17g 0.0\n", i + 1, 2.0 * pk.r[i],
+                  pk.x[i], pk.y[i]);
+    o << buf;
+  }
+}
+
+Packing get_packing(int n, std::uint64_t seed, const fs::path& cache) {
+  const fs::path f = cache / ("pack_N" + std::to_string(n) + "_s" + std::to_string(seed) + ".txt");
+  Packing pk;
+  if (read_packing(f, pk)) return pk;
+  const LudingParams lp = linear_params();
+  const double t0 = cpu_now();
+  pk = compress(place(n, seed, lp), lp);
+  std::fprintf(stderr, "  prepared N=%d in %.1f s CPU -> %s\n", n, cpu_now() - t0, f.c_str());
+  fs::create_directories(cache);
+  write_packing(f, pk, n, seed);
+  return pk;
+}
+
+struct Row {
+  int n = 0;
+  std::string model;
+  std::size_t steps = 0, rebuilds = 0, table = 0, contacts = 0;
+  double cpu = 0, wall = 0, nu = 0, sxx = 0, syy = 0;
+};
+
+Row time_model(const Packing& pk, const std::string& model, std::size_t warm, std::size_t steps) {
+  LudingParams lp;  // Table 1 (full law)
+  DynamicOptions o;
+  if (model == "linear") {
+    lp = linear_params();
+    o.model = ContactModel::Linear;
+  } else if (model == "full") {
+    o.model = ContactModel::Full;  // Table 1: k1 = k2/2, k_c = k2/2, 80 deg C constant
+    lp.T_radius_ref = 80.0;        // the packing's radii are a(80 deg C) (Eq 9): no shrinkage
+  } else if (model == "full_linparams") {
+    lp = linear_params();
+    lp.T_radius_ref = 80.0;
+    o.model = ContactModel::Full;  // the general code on the linear parameters (no specialisation)
+  } else {
+    throw std::invalid_argument("unknown model " + model);
+  }
+  o.dt = scene_dt(linear_params());
+  o.skin = kSkin;
+  o.temperature = 80.0;
+  DynamicSolver s(to_particles(pk, lp), lp, fixed_box(pk), o);
+  s.run(warm);
+  const std::size_t b0 = s.rebuilds();
+  const double c0 = cpu_now(), w0 = wall_now();
+  s.run(steps);
+  Row r;
+  r.cpu = cpu_now() - c0;
+  r.wall = wall_now() - w0;
+  r.n = static_cast<int>(pk.r.size());
+  r.model = model;
+  r.steps = steps;
+  r.rebuilds = s.rebuilds() - b0;
+  r.table = s.table_size();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  s.touching_pairs(pairs);
+  r.contacts = pairs.size();
+  r.nu = s.density();
+  const Stress2 cs = s.contact_stress();
+  r.sxx = cs.xx;
+  r.syy = cs.yy;
+  return r;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> v;
+  std::stringstream ss(s);
+  std::string t;
+  while (std::getline(ss, t, ','))
+    if (!t.empty()) v.push_back(t);
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<int> ns = {300, 3000, 30000};
+  std::vector<std::string> models = {"linear", "full"};
+  double psteps = 3e7;
+  std::size_t min_steps = 200, warm = 1000;
+  int reps = 1;
+  std::uint64_t seed = 1;
+  fs::path cache = "dem_packings", lammps_dir;
+  try {
+    for (int k = 1; k < argc; ++k) {
+      const std::string a = argv[k];
+      auto val = [&]() -> std::string {
+        if (k + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+        return argv[++k];
+      };
+      if (a == "--n") {
+        ns.clear();
+        for (const auto& t : split(val())) ns.push_back(std::stoi(t));
+      } else if (a == "--models") {
+        models = split(val());
+      } else if (a == "--psteps") {
+        psteps = std::stod(val());
+      } else if (a == "--min-steps") {
+        min_steps = std::stoul(val());
+      } else if (a == "--warmup") {
+        warm = std::stoul(val());
+      } else if (a == "--reps") {
+        reps = std::stoi(val());
+      } else if (a == "--seed") {
+        seed = std::stoull(val());
+      } else if (a == "--cache") {
+        cache = val();
+      } else if (a == "--lammps-data") {
+        lammps_dir = val();
+      } else if (a == "--help" || a == "-h") {
+        std::printf(
+            "bench_dem [--n 300,3000,30000] [--models linear,full[,full_linparams]]\n"
+            "          [--psteps 3e7] [--min-steps 200] [--warmup 1000] [--reps 1] [--seed 1]\n"
+            "          [--cache DIR] [--lammps-data DIR]\n"
+            "(see the comment at the top of bench/bench_dem.cpp)\n");
+        return 0;
+      } else {
+        throw std::invalid_argument("unknown option " + a);
+      }
+    }
+    std::printf(
+        "N,model,rep,steps,cpu_s,wall_s,psteps_per_cpu_s,psteps_per_wall_s,rebuilds,"
+        "table_per_particle,contacts_per_particle,nu,sxx_N_per_m,syy_N_per_m\n");
+    std::fflush(stdout);
+    for (int n : ns) {
+      const Packing pk = get_packing(n, seed, cache);
+      if (!lammps_dir.empty()) {
+        fs::create_directories(lammps_dir);
+        write_lammps_data(lammps_dir / ("pack_N" + std::to_string(n) + ".data"), pk);
+      }
+      const std::size_t steps =
+          std::max(min_steps, static_cast<std::size_t>(psteps / static_cast<double>(n)));
+      for (int rep = 1; rep <= reps; ++rep)
+        for (const auto& m : models) {
+          if (m == "none") continue;
+          const Row r = time_model(pk, m, warm, steps);
+          const double ps = static_cast<double>(r.n) * static_cast<double>(r.steps);
+          std::printf("%d,%s,%d,%zu,%.4f,%.4f,%.6g,%.6g,%zu,%.4f,%.4f,%.5f,%.4f,%.4f\n", r.n,
+                      r.model.c_str(), rep, r.steps, r.cpu, r.wall, ps / r.cpu, ps / r.wall,
+                      r.rebuilds, static_cast<double>(r.table) / r.n,
+                      2.0 * static_cast<double>(r.contacts) / r.n, r.nu, r.sxx, r.syy);
+          std::fflush(stdout);
+        }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_dem: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,244 @@
+#!/usr/bin/python3
+"""demsolve (netdem::dem::DynamicSolver) against LAMMPS gran/hooke/history on the same packing.
+
+Issue #4: particle-steps per CPU-second on a dense, jammed, polydisperse, frictional 2D packing of
+N = 300, 3000, 30000 disks, one core, side by side with Debian's LAMMPS (`lmp`, pair style
+gran/hooke/history) on the same packing and the same physics (linear spring-dashpot with
+tangential history: Luding's law with k1 = k2, k_c = 0, constant T).
+
+    /usr/bin/python3 bench/dem_vs_lammps.py [--bench build-bench/bench/bench_dem] [--n 300,3000,30000]
+        [--psteps 3e7] [--reps 3] [--warmup 1000] [--workdir /tmp/dem-vs-lammps] [--out bench/results]
+
+1. `bench_dem` (a private copy) prepares the packings (cached next to the binary in
+   `dem_packings/`, see bench/bench_dem.cpp) and writes them as LAMMPS data files.
+2. For each repetition and N (interleaved, so slow phases of a shared machine spread over all
+   cases): LAMMPS on the data file, then bench_dem with the Linear and Full models.
+   LAMMPS: the parameters are ../shared/bench/lammps/params.in (copied to the work folder, not
+   modified); the input (written here) reads the data file, sets m = rho pi r^2 h, uses
+   `pair_style gran/hooke/history kn kt gamn gamt mu 1` as the shared bench.in and four frictionless
+   walls `fix wall/gran hooke/history` at the box faces (boundary f f p: the demsolve walls), then
+   runs `--warmup` untimed and max(200, psteps/N) timed steps. Its CPU time = "Loop time" x
+   "% CPU use" (the shared REPORT.md found this within 1 % of /proc utime+stime).
+   bench_dem: CPU time of its thread around the timed steps (same warm-up and step counts).
+   --baseline BINARY: a second bench_dem (e.g. compiled against an older solver.cpp) timed right
+   after the first, reported as "baseline" columns (docs/performance.md shows how it was built).
+3. Prints the table (medians over the repetitions) and writes OUT/NAME.csv (every run) and
+   OUT/NAME.md (the table, machine, load averages).
+"""
+import argparse
+import csv
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+SHARED = REPO.parent / "shared" / "bench" / "lammps"
+
+LAMMPS_IN = r"""# bench_lammps.in -- written by netdem bench/dem_vs_lammps.py: the demsolve scene in LAMMPS
+# usage: lmp -in bench_lammps.in -var data pack_N3000.data -var nsteps 10000 -var nwarm 1000
+include         params.in
+variable        nsteps index 20000
+variable        nwarm  index 1000
+units           si
+dimension       2
+boundary        f f p
+atom_style      sphere
+atom_modify     map array
+comm_modify     vel yes
+read_data       ${data}
+# mass = rho pi r^2 h as prep.in: a disc density per area of rho h
+set             group all density/disc $(v_rho*v_h)
+pair_style      gran/hooke/history ${kn} ${kt} ${gamn} ${gamt} ${mu} 1
+pair_coeff      * *
+# the four demsolve walls at the box faces, frictionless (mu_w = 0, Table 1)
+fix             wx all wall/gran hooke/history ${kn} ${kt} ${gamn} ${gamt} 0.0 1 xplane $(xlo) $(xhi)
+fix             wy all wall/gran hooke/history ${kn} ${kt} ${gamn} ${gamt} 0.0 1 yplane $(ylo) $(yhi)
+neighbor        ${skin} bin
+neigh_modify    delay 0 every 1 check yes
+timestep        ${dt}
+fix             nve all nve/sphere disc
+fix             e2d all enforce2d
+compute         pv all pressure NULL virial
+compute         zc all contact/atom
+compute         Z all reduce ave c_zc
+thermo_style    custom step atoms c_pv c_Z ke cpu
+thermo_modify   norm no
+thermo          ${nwarm}
+run             ${nwarm}
+thermo          ${nsteps}
+run             ${nsteps}
+print           "BENCH N=$(atoms) steps=${nsteps} P=$(c_pv) Z=$(c_Z) KE=$(ke)"
+"""
+
+LOOP = re.compile(r"^Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms")
+CPU = re.compile(r"^([\d.]+)% CPU use")
+BENCH = re.compile(r"^BENCH N=(\d+) steps=(\d+) P=(\S+) Z=(\S+) KE=(\S+)")
+SECT = re.compile(r"^(Pair|Neigh|Comm|Modify|Other)\s*\|")
+
+
+def loadavg():
+    return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+
+
+def parse_lammps(log):
+    lines = Path(log).read_text(errors="replace").splitlines()
+    idx = max(i for i, l in enumerate(lines) if LOOP.match(l))
+    m = LOOP.match(lines[idx])
+    r = dict(wall=float(m.group(1)), steps=int(m.group(3)), N=int(m.group(4)), cpu_pct=100.0)
+    for l in lines[idx + 1:]:
+        if (c := CPU.match(l)):
+            r["cpu_pct"] = float(c.group(1))
+        if (s := SECT.match(l)):
+            parts = [p.strip() for p in l.split("|")]
+            r["sec_" + parts[0]] = float(parts[2]) if parts[2] else 0.0
+        if (b := BENCH.match(l)):
+            r.update(P=float(b.group(3)), Z=float(b.group(4)), KE=float(b.group(5)))
+    r["cpu"] = r["wall"] * r["cpu_pct"] / 100.0
+    return r
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bench", default=str(REPO / "build-bench" / "bench" / "bench_dem"))
+    ap.add_argument("--cache", default="", help="packing cache (default: dem_packings/ next to --bench)")
+    ap.add_argument("--lammps", default="lmp")
+    ap.add_argument("--params", default=str(SHARED / "params.in"), help="the shared LAMMPS parameters")
+    ap.add_argument("--n", default="300,3000,30000")
+    ap.add_argument("--psteps", type=float, default=3e7, help="particle-steps per timed run")
+    ap.add_argument("--warmup", type=int, default=1000)
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--models", default="linear,full", help="bench_dem models (linear,full,full_linparams)")
+    ap.add_argument("--baseline", default="", help="another bench_dem binary (e.g. built from an older solver) timed "
+                    "the same way, reported as 'baseline' columns")
+    ap.add_argument("--workdir", default=os.path.join(tempfile.gettempdir(), "dem-vs-lammps"))
+    ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--name", default="dem_vs_lammps")
+    a = ap.parse_args()
+
+    ns = [int(x) for x in a.n.split(",")]
+    models = a.models.split(",")
+    work = Path(a.workdir)
+    work.mkdir(parents=True, exist_ok=True)
+    bench = work / "bench_dem"
+    shutil.copy2(a.bench, bench)  # rebuilding meanwhile is harmless
+    benches = [("demsolve_", bench)]
+    if a.baseline:
+        shutil.copy2(a.baseline, work / "bench_dem_baseline")
+        benches.append(("baseline_", work / "bench_dem_baseline"))
+    cache = a.cache or str(Path(a.bench).resolve().parent / "dem_packings")
+    shutil.copy2(a.params, work / "params.in")
+    (work / "bench_lammps.in").write_text(LAMMPS_IN)
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+
+    # 1) packings (untimed; cached) and the LAMMPS data files
+    t0 = time.time()
+    subprocess.run([str(bench), "--n", a.n, "--models", "none", "--cache", cache, "--lammps-data", str(work)],
+                   check=True, stdout=subprocess.DEVNULL, env=env)
+    print(f"packings ready ({time.time() - t0:.0f} s)", file=sys.stderr)
+
+    rows = []
+    for rep in range(1, a.reps + 1):
+        for n in ns:
+            steps = max(200, int(a.psteps / n))
+            # LAMMPS
+            log = work / f"lammps_N{n}_r{rep}.log"
+            la0 = loadavg()
+            subprocess.run([a.lammps, "-in", "bench_lammps.in", "-var", "data", f"pack_N{n}.data", "-var", "nsteps",
+                            str(steps), "-var", "nwarm", str(a.warmup), "-log", str(log), "-screen", "none"],
+                           cwd=work, check=True, env=env)
+            r = parse_lammps(log)
+            rows.append(dict(code="lammps_hooke_history", N=n, rep=rep, steps=r["steps"], cpu_s=r["cpu"],
+                             wall_s=r["wall"], psteps_per_cpu_s=n * r["steps"] / r["cpu"],
+                             psteps_per_wall_s=n * r["steps"] / r["wall"], contacts_per_particle=r.get("Z", ""),
+                             pressure=r.get("P", ""), load_before=la0, load_after=loadavg(),
+                             note=f"pair {r.get('sec_Pair', 0):.3g} s, modify {r.get('sec_Modify', 0):.3g} s, "
+                                  f"neigh {r.get('sec_Neigh', 0):.3g} s, {r['cpu_pct']:.1f}% CPU"))
+            print(f"rep {rep} N={n} lammps: {rows[-1]['psteps_per_cpu_s']:.4g} p-steps/CPU-s", file=sys.stderr)
+            for prefix, binary in benches:  # demsolve (and the baseline binary)
+                la0 = loadavg()
+                p = subprocess.run([str(binary), "--n", str(n), "--models", ",".join(models), "--psteps",
+                                    str(a.psteps), "--warmup", str(a.warmup), "--cache", cache], check=True,
+                                   capture_output=True, text=True, env=env)
+                la1 = loadavg()
+                for d in csv.DictReader(p.stdout.splitlines()):
+                    rows.append(dict(code=prefix + d["model"], N=n, rep=rep, steps=int(d["steps"]),
+                                     cpu_s=float(d["cpu_s"]), wall_s=float(d["wall_s"]),
+                                     psteps_per_cpu_s=float(d["psteps_per_cpu_s"]),
+                                     psteps_per_wall_s=float(d["psteps_per_wall_s"]),
+                                     contacts_per_particle=float(d["contacts_per_particle"]),
+                                     pressure=0.5 * (float(d["sxx_N_per_m"]) + float(d["syy_N_per_m"])),
+                                     load_before=la0, load_after=la1,
+                                     note=f"rebuilds {d['rebuilds']}, table/particle {d['table_per_particle']}, "
+                                          f"nu {d['nu']}"))
+                    print(f"rep {rep} N={n} {prefix}{d['model']}: {float(d['psteps_per_cpu_s']):.4g} "
+                          "p-steps/CPU-s", file=sys.stderr)
+
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / f"{a.name}.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+
+    def med(code, n):
+        v = [r["psteps_per_cpu_s"] for r in rows if r["code"] == code and r["N"] == n]
+        return statistics.median(v) if v else float("nan")
+
+    def rng(code, n):
+        v = [r["psteps_per_cpu_s"] for r in rows if r["code"] == code and r["N"] == n]
+        return f"{min(v) / 1e6:.2f}-{max(v) / 1e6:.2f}" if v else ""
+
+    has_full = "full" in models
+    has_base = bool(a.baseline)
+    head = ("| N | LAMMPS gran/hooke/history (Mp-steps/CPU-s) | demsolve Linear | ratio Linear/LAMMPS |"
+            + (" demsolve Full (Table 1, 80 °C) |" if has_full else "")
+            + (" baseline Linear | baseline Full |" if has_base else ""))
+    sep = "|---|---|---|---|" + ("---|" if has_full else "") + ("---|---|" if has_base else "")
+    lines = [head, sep]
+    for n in ns:
+        lm, li = med("lammps_hooke_history", n), med("demsolve_linear", n)
+        line = (f"| {n} | {lm / 1e6:.2f} ({rng('lammps_hooke_history', n)}) | {li / 1e6:.2f} "
+                f"({rng('demsolve_linear', n)}) | **{li / lm:.2f}** |")
+        if has_full:
+            line += f" {med('demsolve_full', n) / 1e6:.2f} ({rng('demsolve_full', n)}) |"
+        if has_base:
+            line += (f" {med('baseline_linear', n) / 1e6:.2f} ({rng('baseline_linear', n)}) |"
+                     f" {med('baseline_full', n) / 1e6:.2f} ({rng('baseline_full', n)}) |")
+        lines.append(line)
+    table = "\n".join(lines)
+
+    def first(code, n, key):
+        v = [r[key] for r in rows if r["code"] == code and r["N"] == n and r[key] != ""]
+        return statistics.median(v) if v else float("nan")
+
+    check = ["| N | contacts/particle LAMMPS (walls excluded) | demsolve Linear (walls excluded) | LAMMPS virial "
+             "pressure (walls excluded, N/m) | demsolve Linear contact stress (walls included, N/m) |",
+             "|---|---|---|---|---|"]
+    for n in ns:
+        check.append(f"| {n} | {first('lammps_hooke_history', n, 'contacts_per_particle'):.3f} | "
+                     f"{first('demsolve_linear', n, 'contacts_per_particle'):.3f} | "
+                     f"{first('lammps_hooke_history', n, 'pressure'):.1f} | "
+                     f"{first('demsolve_linear', n, 'pressure'):.1f} |")
+    table += "\n\nScene check (end of the timed runs, medians):\n\n" + "\n".join(check)
+    cpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
+    model = next((l.split(":", 1)[1].strip() for l in cpu.splitlines() if l.startswith("Model name")), "?")
+    loads = sorted({r["load_before"] for r in rows} | {r["load_after"] for r in rows})
+    md = [f"# demsolve vs LAMMPS ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())})", "",
+          f"Machine: {os.cpu_count()} cores, {model}; load averages seen (1/5/15 min): "
+          f"{loads[0]} ... {loads[-1]}", "",
+          f"Command: `/usr/bin/python3 bench/dem_vs_lammps.py {' '.join(sys.argv[1:])}`", "",
+          f"Median over {a.reps} repetitions (min-max in brackets), millions of particle-steps per CPU-second; "
+          f"timed runs of max(200, {a.psteps:.3g}/N) steps after {a.warmup} warm-up steps.", "", table, ""]
+    (out / f"{a.name}.md").write_text("\n".join(md))
+    print("\n".join(md))
+
+
+if __name__ == "__main__":
+    main()
