@@ -45,6 +45,8 @@ struct CompactArgs {
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
   double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-3;
   int increments = 100, max_newton = 10;
+  std::string line_search = "residual";
+  netdem::qs::SolverOptions solver;  // defaults of the newer Newton knobs (step limits, sub-stepping, continuation)
 };
 
 /// The whole of `s` as a double, or false.
@@ -156,6 +158,24 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.geometric_stiffness = a.geometric;
   so.linear_tolerance = a.linear_tol;
   so.verbose = a.verbose;
+  so.max_step = a.solver.max_step;
+  so.max_rotation_step = a.solver.max_rotation_step;
+  so.max_cuts = a.solver.max_cuts;
+  so.local_sweeps = a.solver.local_sweeps;
+  so.kink_freeze_after = a.solver.kink_freeze_after;
+  so.local_iterations = a.solver.local_iterations;
+  so.local_threshold = a.solver.local_threshold;
+  so.local_pairs = a.solver.local_pairs;
+  so.freeze_after = a.solver.freeze_after;
+  so.viscosity_start = a.solver.viscosity_start;
+  so.viscosity_decay = a.solver.viscosity_decay;
+  if (a.line_search == "energy") {
+    so.line_search = qs::LineSearch::Energy;
+  } else if (a.line_search == "residual") {
+    so.line_search = qs::LineSearch::Residual;
+  } else {
+    throw std::invalid_argument(fmt::format("--line-search '{}' is not 'energy' or 'residual'", a.line_search));
+  }
   so.validate();
   qs::CompactionOptions co;
   co.path = qs::StrainPath::parse(a.path);
@@ -185,9 +205,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
       "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
-      "linear_iterations,converged\n";
+      "linear_iterations,converged,cuts\n";
   std::size_t next_snap = 0;
-  int unconverged = 0;
+  int unconverged = 0, cuts = 0;
   double max_residual = 0.0;
   qs::StateMeasures last;
   app::Progress progress("compact", co.increments, a.quiet);
@@ -195,14 +215,15 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
-                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
+                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0, row.report.cuts);
     if (row.increment > 0) {
       unconverged += !row.report.converged;
+      cuts += row.report.cuts;
       max_residual = std::max(max_residual, row.report.residual);
     }
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
@@ -235,7 +256,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
                 {"E22", last.E22},          {"E12", last.E12}};
-  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
+  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual}, {"cuts", cuts},
                  {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
                  {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
                  {"solves", tm.solves}};
@@ -285,6 +306,18 @@ int main(int argc, char** argv) {
   comp->add_option("--slide-fraction", ca.slide_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
   comp->add_option("--linear-tol", ca.linear_tol, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_flag("--geometric-stiffness", ca.geometric, "add the geometric stiffness of the contact forces to the iteration matrix");
+  comp->add_option("--max-step", ca.solver.max_step, "cap on a Newton step's translation of one particle [R]")->capture_default_str();
+  comp->add_option("--max-rotation-step", ca.solver.max_rotation_step, "cap on a Newton step's rotation of one particle [rad]")->capture_default_str();
+  comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
+  comp->add_option("--kink-freeze-after", ca.solver.kink_freeze_after, "plastic contacts that switched loading/unloading this often in an increment get the unloading stiffness in the iteration matrix (0: off)")->capture_default_str();
+  comp->add_option("--local-sweeps", ca.solver.local_sweeps, "nonlinear Gauss-Seidel sweeps over the worst particles after each Newton step (0: off)")->capture_default_str();
+  comp->add_option("--local-iterations", ca.solver.local_iterations, "damped Newton iterations per particle in a local sweep")->capture_default_str();
+  comp->add_option("--local-threshold", ca.solver.local_threshold, "local sweeps treat particles whose residual exceeds this multiple of the RMS residual")->capture_default_str();
+  comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
+  comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
+  comp->add_option("--viscosity-start", ca.solver.viscosity_start, "viscosity continuation: drag of the first Newton iteration of an increment, reduced to --viscosity (0: off)")->capture_default_str();
+  comp->add_option("--viscosity-decay", ca.solver.viscosity_decay, "viscosity continuation: factor per Newton iteration")->capture_default_str();
+  comp->add_option("--line-search", ca.line_search, "Newton globalisation: 'energy' (slope of the incremental potential) or 'residual' (backtracking on the RMS residual)")->capture_default_str();
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_option("--out", out, "output folder")->default_val("results/compact");

@@ -65,6 +65,23 @@ void SolverOptions::validate() const {
           fmt::format("solver: linear tolerance must be in (0, 1), got {}", linear_tolerance));
   require(std::isfinite(viscosity) && viscosity >= 0.0 && viscosity <= 1e3,
           fmt::format("solver: viscosity must be in [0, 1e3], got {}", viscosity));
+  require(freeze_after >= 1 && freeze_after <= 100, fmt::format("solver: freeze_after must be in [1, 100], got {}", freeze_after));
+  require(local_sweeps >= 0 && local_sweeps <= 100, fmt::format("solver: local_sweeps must be in [0, 100], got {}", local_sweeps));
+  require(local_iterations >= 1 && local_iterations <= 100,
+          fmt::format("solver: local_iterations must be in [1, 100], got {}", local_iterations));
+  require(std::isfinite(local_threshold) && local_threshold >= 0.0,
+          fmt::format("solver: local_threshold must be non-negative, got {}", local_threshold));
+  require(kink_freeze_after >= 0 && kink_freeze_after <= 100,
+          fmt::format("solver: kink_freeze_after must be in [0, 100], got {}", kink_freeze_after));
+  require(max_cuts >= 0 && max_cuts <= 20, fmt::format("solver: max_cuts must be in [0, 20], got {}", max_cuts));
+  require(std::isfinite(viscosity_start) && viscosity_start >= 0.0 && viscosity_start <= 1e3,
+          fmt::format("solver: viscosity_start must be in [0, 1e3], got {}", viscosity_start));
+  require(std::isfinite(viscosity_decay) && viscosity_decay > 0.0 && viscosity_decay < 1.0,
+          fmt::format("solver: viscosity_decay must be in (0, 1), got {}", viscosity_decay));
+  require(line_search_max >= 1 && line_search_max <= 100,
+          fmt::format("solver: line_search_max must be in [1, 100], got {}", line_search_max));
+  require(std::isfinite(line_search_tol) && line_search_tol > 0.0 && line_search_tol < 1.0,
+          fmt::format("solver: line_search_tol must be in (0, 1), got {}", line_search_tol));
   require(std::isfinite(slide_stiffness_fraction) && slide_stiffness_fraction >= 0.0 && slide_stiffness_fraction <= 1.0,
           fmt::format("solver: slide_stiffness_fraction must be in [0, 1], got {}", slide_stiffness_fraction));
 }
@@ -108,9 +125,13 @@ struct NetworkSolver::Impl {
   std::vector<double> du_prev;
   std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
   std::vector<std::uint8_t> last_open, open_flips;
+  std::vector<std::uint8_t> last_plastic, pe_flips;  // loading/unloading branch flips (2: not seen yet)
   std::vector<double> last_kn;
+  std::vector<int> adj_start, adj_pair;  // pairs of each particle (CSR)
+  std::vector<std::uint8_t> diag_branch;  // verbose diagnostics: branch + 4*sliding at the last iteration
   std::vector<double> du_aff;  // affine motion of the increment (drag reference)
   double eta = -1.0;           // viscous drag coefficient of the current increment
+  double kl_ref = 1.0;         // mean translational diagonal (local regularisation)
   std::vector<double> du_start;  // du at the start of a line search
   Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
   VecX rhs, sol;
@@ -209,6 +230,18 @@ struct NetworkSolver::Impl {
     yb = y;
     Fb = Fbox;
     build_pattern();
+    adj_start.assign(n + 1, 0);
+    for (std::size_t k = 0; k < pi.size(); ++k) {
+      ++adj_start[pi[k] + 1];
+      ++adj_start[pj[k] + 1];
+    }
+    for (int p = 0; p < n; ++p) adj_start[p + 1] += adj_start[p];
+    adj_pair.assign(2 * pi.size(), 0);
+    std::vector<int> fill(adj_start.begin(), adj_start.end() - 1);
+    for (std::size_t k = 0; k < pi.size(); ++k) {
+      adj_pair[fill[pi[k]]++] = static_cast<int>(k);
+      adj_pair[fill[pj[k]]++] = static_cast<int>(k);
+    }
     tim.neighbours += seconds_since(t0);
   }
 
@@ -326,6 +359,17 @@ struct NetworkSolver::Impl {
           kn_extra = std::max(0.0, ksec - e.law.k_n);
         }
       }
+      // loading/unloading kink (the unloading branch is unload_ratio times stiffer): a contact that
+      // keeps switching between the branches is held with the unloading stiffness, so that the
+      // Newton step keeps it near u_max instead of jumping across the kink
+      const std::uint8_t plastic = e.law.branch == ct::NormalBranch::Plastic ? 1 : 0;
+      if (last_plastic[k] != 2 && last_plastic[k] != plastic)
+        pe_flips[k] = static_cast<std::uint8_t>(std::min(pe_flips[k] + 1, 100));
+      last_plastic[k] = plastic;
+      if (opt.kink_freeze_after > 0 && plastic && pe_flips[k] >= opt.kink_freeze_after) {
+        const double ku = opt.law.unload_ratio * ct::plastic_tangent(opt.law, g1.r_eff, g1.overlap);
+        kn_extra = std::max(kn_extra, ku - e.law.k_n);
+      }
       if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
       // Iteration matrix (a modified Newton: robust on these non-smooth laws, see
       // docs/quasistatic.md). Sliding contacts keep a fraction slide_frac of their tangential
@@ -335,7 +379,7 @@ struct NetworkSolver::Impl {
       // The residual, not the matrix, defines the equilibrium.
       if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
       last_sliding[k] = e.law.sliding ? 1 : 0;
-      const double frac = flips[k] >= 2 ? 1.0 : slide_frac;
+      const double frac = flips[k] >= opt.freeze_after ? 1.0 : slide_frac;
       if (e.law.sliding && frac > 0.0)
         e.stiffness.noalias() += frac * opt.law.k_t * e.law.area * bt * bt.transpose();
       const double kn_sym = e.law.k_n + kn_extra;
@@ -351,7 +395,8 @@ struct NetworkSolver::Impl {
           Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
         }
     }
-    if (opt.law.frictional()) any_nonsymmetric = true;  // stick tangents differ slightly from M too
+    // stick tangents differ slightly from M too; the geometric stiffness is not in M at all
+    if (opt.law.frictional() || opt.geometric_stiffness) any_nonsymmetric = true;
   }
 
   // Open/closed cycling: a pair that closed and opened again within this increment keeps the
@@ -361,13 +406,14 @@ struct NetworkSolver::Impl {
     if (!last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
     last_open[k] = 1;
     if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
+    const double kn = last_kn[k];
     const ct::PairVec bn = ct::normal_gradient(g1);
     const int* pk = &pos[36 * k];
     for (int b = 0; b < 6; ++b)
       for (int a = 0; a < 6; ++a) {
         const int q = pk[6 * b + a];
         if (q < 0) continue;
-        const double v = last_kn[k] * bn(a) * bn(b);
+        const double v = kn * bn(a) * bn(b);
         K.valuePtr()[q] += v;
         M.valuePtr()[q] += v;
       }
@@ -418,6 +464,195 @@ struct NetworkSolver::Impl {
     const double scale = 1.0 / std::max(fbar, 1e-300);
     if (max_norm) *max_norm = m * scale;
     return std::sqrt(s2 / std::max(nfree, 1)) * scale;
+  }
+
+  /// Diagnostics (verbose): the particles with the largest Newton residual.
+  void print_worst(double fbar) const {
+    const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+    std::vector<std::pair<double, int>> worst;
+    for (int p = 0; p < n; ++p) {
+      double m = 0.0;
+      for (int a = 0; a < 3; ++a)
+        if (dof[3 * p + a] >= 0) {
+          const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+          m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
+        }
+      worst.emplace_back(m / std::max(fbar, 1e-300), p);
+    }
+    const std::size_t nw = std::min<std::size_t>(6, worst.size());
+    std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(nw), worst.end(), std::greater<>());
+    std::vector<int> closed(n, 0), slid(n, 0);
+    for (std::size_t k = 0; k < pi.size(); ++k)
+      if (trial[k].branch != ct::NormalBranch::Open) {
+        ++closed[pi[k]];
+        ++closed[pj[k]];
+        if (trial[k].sliding) {
+          ++slid[pi[k]];
+          ++slid[pj[k]];
+        }
+      }
+    for (std::size_t w = 0; w < nw; ++w) {
+      const int p = worst[w].second;
+      std::fprintf(stderr, "    worst p=%d |r|/fbar=%.3e contacts=%d sliding=%d non-affine motion %.3e R\n", p,
+                   worst[w].first, closed[p], slid[p],
+                   std::hypot(du[3 * p] - du_aff[3 * p], du[3 * p + 1] - du_aff[3 * p + 1]) / r_mean);
+      if (w >= 2) continue;
+      for (std::size_t k = 0; k < pi.size(); ++k)
+        if ((pi[k] == p || pj[k] == p) && trial[k].branch != ct::NormalBranch::Open)
+          std::fprintf(stderr, "      pair %d-%d f_n %.4e k_n %.4e (iteration matrix %.4e) branch %d u_max %.3e\n", pi[k],
+                       pj[k], trial[k].f_n, trial[k].k_n, last_kn[k], static_cast<int>(trial[k].branch), hist[k].u_max);
+    }
+  }
+
+  /// Residual (contact force - drag) and tangent of a set of m particles (1 or 2) alone, with all
+  /// other particles held at their current trial positions: 3 entries per particle.
+  void local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
+    res.setZero(3 * m);
+    Kl.setZero(3 * m, 3 * m);
+    ct::TangentOptions topt;
+    topt.geometric = opt.geometric_stiffness;
+    ct::PairElement e;
+    auto slot = [&](int p) {
+      for (int t = 0; t < m; ++t)
+        if (ps[t] == p) return t;
+      return -1;
+    };
+    for (int sp = 0; sp < m; ++sp)
+      for (int q = adj_start[ps[sp]]; q < adj_start[ps[sp] + 1]; ++q) {
+        const int k = adj_pair[q], i = pi[k], j = pj[k];
+        const int si = slot(i), sj = slot(j);
+        if ((si >= 0 && si < sp) || (sj >= 0 && sj < sp)) continue;  // pair inside the set: once
+        const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                      ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+        if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) continue;
+        ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+        const int sl[2] = {si, sj};
+        for (int A = 0; A < 2; ++A)
+          if (sl[A] >= 0) res.segment<3>(3 * sl[A]) += e.force.segment<3>(3 * A);
+        if (e.law.branch == ct::NormalBranch::Open) continue;
+        if (e.law.sliding && opt.slide_stiffness_fraction > 0.0) {
+          const ct::PairVec bt = ct::slip_gradient(g1);
+          e.stiffness.noalias() += opt.slide_stiffness_fraction * opt.law.k_t * e.law.area * bt * bt.transpose();
+        }
+        for (int A = 0; A < 2; ++A)
+          for (int B = 0; B < 2; ++B)
+            if (sl[A] >= 0 && sl[B] >= 0) Kl.block<3, 3>(3 * sl[A], 3 * sl[B]) += e.stiffness.block<3, 3>(3 * A, 3 * B);
+      }
+    const double eta_t = std::max(eta, 0.0);
+    for (int t = 0; t < m; ++t)
+      for (int a = 0; a < 3; ++a) {
+        const int p = ps[t];
+        const double ea = a == 2 ? eta_t * r_mean * r_mean : eta_t;
+        res(3 * t + a) -= ea * (du[3 * p + a] - du_aff[3 * p + a]);
+        Kl(3 * t + a, 3 * t + a) += ea + 1e-9 * kl_ref * (a == 2 ? r_mean * r_mean : 1.0);
+      }
+  }
+
+  /// Nonlinear Gauss-Seidel on a set of 1 or 2 particles: damped Newton on their own free DOFs.
+  void relax_set(const int* ps, int m, double fbar) {
+    int idx[6], nf = 0;  // local index 3 t + a of the free DOFs
+    for (int t = 0; t < m; ++t)
+      for (int a = 0; a < 3; ++a)
+        if (dof[3 * ps[t] + a] >= 0) idx[nf++] = 3 * t + a;
+    if (nf == 0) return;
+    auto norm = [&](const Eigen::VectorXd& v) {
+      double s2 = 0.0;
+      for (int c = 0; c < nf; ++c) s2 += std::pow(v(idx[c]) / (idx[c] % 3 == 2 ? r_mean : 1.0), 2);
+      return std::sqrt(s2);
+    };
+    auto at = [&](int c) -> double& { return du[3 * ps[idx[c] / 3] + idx[c] % 3]; };
+    Eigen::VectorXd res, res2;
+    Eigen::MatrixXd Kl, Kl2;
+    local_eval(ps, m, res, Kl);
+    double rn = norm(res);
+    for (int it = 0; it < opt.local_iterations && rn > 0.1 * opt.residual_tol * fbar; ++it) {
+      Eigen::MatrixXd A(nf, nf);
+      Eigen::VectorXd b(nf);
+      for (int c = 0; c < nf; ++c) {
+        b(c) = res(idx[c]);
+        for (int d = 0; d < nf; ++d) A(c, d) = Kl(idx[c], idx[d]);
+      }
+      Eigen::VectorXd step = A.partialPivLu().solve(b);
+      if (!step.allFinite()) return;
+      // same per-particle limits as the global step
+      double scale = 1.0;
+      for (int c = 0; c < nf; ++c) {
+        const double lim = idx[c] % 3 == 2 ? opt.max_rotation_step : opt.max_step * r_mean;
+        if (std::fabs(step(c)) > lim) scale = std::min(scale, lim / std::fabs(step(c)));
+      }
+      step *= scale;
+      double old[6];
+      for (int c = 0; c < nf; ++c) old[c] = at(c);
+      bool accepted = false;
+      for (double alpha = 1.0; alpha > 0.01; alpha *= 0.5) {
+        for (int c = 0; c < nf; ++c) at(c) = old[c] + alpha * step(c);
+        local_eval(ps, m, res2, Kl2);
+        const double rn2 = norm(res2);
+        if (rn2 < rn) {
+          rn = rn2;
+          res = res2;
+          Kl = Kl2;
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        for (int c = 0; c < nf; ++c) at(c) = old[c];
+        return;
+      }
+    }
+  }
+
+  /// One Gauss-Seidel sweep over the particles whose residual exceeds local_threshold x the RMS
+  /// residual (and the tolerance), largest first. With local_pairs, a particle whose most loaded
+  /// contact partner is above the threshold too is relaxed together with it (the residual often
+  /// sits on a pair with one contact cycling open/closed). Needs f from the current trial state.
+  int relax_worst(double fbar, double rms) {
+    const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+    const double thr = std::max(opt.local_threshold * rms, opt.residual_tol) * fbar;
+    std::vector<std::pair<double, int>> bad;
+    std::vector<double> rp(n, 0.0);
+    for (int p = 0; p < n; ++p) {
+      double s2 = 0.0;
+      for (int a = 0; a < 3; ++a)
+        if (dof[3 * p + a] >= 0) {
+          const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+          s2 += std::pow(rv / (a == 2 ? r_mean : 1.0), 2);
+        }
+      rp[p] = std::sqrt(s2);
+      if (rp[p] > thr) bad.emplace_back(rp[p], p);
+    }
+    std::sort(bad.begin(), bad.end(), std::greater<>());
+    std::vector<std::uint8_t> done(n, 0);
+    for (const auto& b : bad) {
+      int ps[2] = {b.second, -1}, m = 1;
+      if (done[ps[0]]) continue;
+      if (opt.local_pairs) {
+        double best = thr;
+        for (int q = adj_start[ps[0]]; q < adj_start[ps[0] + 1]; ++q) {
+          const int k = adj_pair[q], o = pi[k] == ps[0] ? pj[k] : pi[k];
+          if (!done[o] && rp[o] > best && trial[k].branch != ct::NormalBranch::Open) {
+            best = rp[o];
+            ps[1] = o;
+          }
+        }
+        if (ps[1] >= 0) m = 2;
+      }
+      relax_set(ps, m, fbar);
+      for (int t = 0; t < m; ++t) done[ps[t]] = 1;
+    }
+    return static_cast<int>(bad.size());
+  }
+
+  /// Line-search slope: sol . r at the current trial state (r = f_contact - drag on the free DOFs).
+  double slope() const {
+    const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+    double sum = 0.0;
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < 3; ++a)
+        if (const int d = dof[3 * p + a]; d >= 0)
+          sum += sol(d) * (f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]));
+    return sum;
   }
 
   /// Per-particle step limits: a single soft mode must not freeze the whole network.
@@ -499,9 +734,37 @@ NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& op
 NetworkSolver::~NetworkSolver() = default;
 
 IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
+  if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
+  return substep(dE, 0);
+}
+
+// Adaptive sub-stepping: an increment that does not converge is restarted from the committed
+// state as two halves (recursively, up to max_cuts levels); the deepest level is accepted as it
+// is (its residual is carried, as without sub-stepping). The next call starts at full size again.
+IncrementReport NetworkSolver::substep(const Eigen::Matrix2d& dE, int depth) {
+  const bool last_level = depth >= impl_->opt.max_cuts;
+  IncrementReport rep = attempt(dE, last_level);
+  if (rep.converged || last_level) return rep;
+  IncrementReport a = substep(0.5 * dE, depth + 1);
+  IncrementReport b = substep(0.5 * dE, depth + 1);
+  IncrementReport out = b;
+  out.newton_iterations = rep.newton_iterations + a.newton_iterations + b.newton_iterations;
+  out.linear_iterations = rep.linear_iterations + a.linear_iterations + b.linear_iterations;
+  out.converged = a.converged && b.converged;
+  out.residual = std::max(a.residual, b.residual);
+  out.residual_rms = std::max(a.residual_rms, b.residual_rms);
+  out.newton_residual = std::max(a.newton_residual, b.newton_residual);
+  out.reanalysed = rep.reanalysed || a.reanalysed || b.reanalysed;
+  out.new_contacts = a.new_contacts + b.new_contacts;
+  out.lost_contacts = a.lost_contacts + b.lost_contacts;
+  out.cuts = 1 + a.cuts + b.cuts;
+  out.substeps = a.substeps + b.substeps;
+  return out;
+}
+
+IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_unconverged) {
   auto& s = *impl_;
   const auto t_start = Clock::now();
-  if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
   IncrementReport rep;
   if (s.needs_rebuild()) {
     s.build_neighbours();
@@ -536,6 +799,8 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
   s.last_open.assign(np, 0);
   s.open_flips.assign(np, 0);
   s.last_kn.assign(np, 0.0);
+  s.last_plastic.assign(np, 2);
+  s.pe_flips.assign(np, 0);
   for (std::size_t k = 0; k < np; ++k) {
     s.last_sliding[k] = s.slide_c[k];
     s.last_open[k] = s.fn_c[k] > 0.0 ? 0 : 1;
@@ -548,6 +813,7 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
   // not resisted, and the drag vanishes as the increments shrink; its size, max|f_contact| /
   // mean contact force, is reported as the unbalanced force of the increment.
   s.eta = -1.0;
+  double eta_target = 0.0, eta_floor = 0.0;
   double fbar = 1.0;
   for (int it = 0;; ++it) {
     const bool want_tangent = it < s.opt.max_newton;
@@ -555,7 +821,15 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     auto ta = Clock::now();
     s.evaluate(want_tangent && s.nfree > 0, nonsym);
     s.tim.assemble += seconds_since(ta);
-    if (s.eta < 0.0 && want_tangent && s.nfree > 0) s.eta = s.opt.viscosity * s.mean_diagonal();
+    if (s.eta < 0.0 && want_tangent && s.nfree > 0) {
+      // viscosity continuation: start at viscosity_start, reduce by viscosity_decay per Newton
+      // iteration down to the target viscosity; only the target counts as converged
+      const double md = s.mean_diagonal();
+      s.kl_ref = md;
+      eta_target = s.opt.viscosity * md;
+      eta_floor = 1e-6 * md;
+      s.eta = std::max(eta_target, s.opt.viscosity_start * md);
+    }
     fbar = s.mean_normal_force();
     if (fbar <= 0.0) fbar = s.opt.law.sigma_y * s.r_mean * 1e-6;
     double newton_max = 0.0;
@@ -563,10 +837,25 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     rep.newton_residual = newton_res;
     if (!std::isfinite(newton_res))
       throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
-    if (s.opt.verbose)
-      std::fprintf(stderr, "  iteration %d: residual rms %.3e max %.3e (mean contact force %.3e)\n", it, newton_res,
-                   newton_max, fbar);
-    if ((newton_res <= s.opt.residual_tol && newton_max <= s.opt.max_residual_tol) || s.nfree == 0) {
+    if (s.opt.verbose) {
+      int tr[3][3] = {}, ss = 0;
+      if (it == 0) s.diag_branch.assign(np, 0);
+      for (std::size_t k = 0; k < np; ++k) {
+        const int b = static_cast<int>(s.trial[k].branch), sl = s.trial[k].sliding ? 1 : 0;
+        const int ob = s.diag_branch[k] & 3, osl = s.diag_branch[k] >> 2;
+        if (it > 0) {
+          if (ob != b) ++tr[ob][b];
+          if (b != 0 && ob != 0 && sl != osl) ++ss;
+        }
+        s.diag_branch[k] = static_cast<std::uint8_t>(b + 4 * sl);
+      }
+      std::fprintf(stderr,
+                   "  iteration %d: residual rms %.3e max %.3e (mean contact force %.3e) O>P %d O>E %d P>O %d P>E %d "
+                   "E>O %d E>P %d stick/slip %d\n",
+                   it, newton_res, newton_max, fbar, tr[0][1], tr[0][2], tr[1][0], tr[1][2], tr[2][0], tr[2][1], ss);
+    }
+    const bool at_target = s.eta <= eta_target * (1.0 + 1e-12);
+    if ((at_target && newton_res <= s.opt.residual_tol && newton_max <= s.opt.max_residual_tol) || s.nfree == 0) {
       rep.converged = true;
       break;
     }
@@ -583,35 +872,84 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
     }
     rep.linear_iterations += st.iterations;
     s.clip_step();
-    // backtracking line search on the RMS residual: the first step that lowers it, else the
-    // best step tried
-    const double r_before = newton_res;
-    double alpha = 1.0, best_alpha = 1.0, best_r = std::numeric_limits<double>::infinity();
+    double alpha = 1.0;
     s.du_start = s.du;
     auto apply = [&](double a) {
       for (int p = 0; p < s.n; ++p)
         for (int c = 0; c < 3; ++c)
           if (const int d = s.dof[3 * p + c]; d >= 0) s.du[3 * p + c] = s.du_start[3 * p + c] + a * s.sol(d);
     };
-    for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
-      apply(alpha);
-      bool dummy;
-      s.evaluate(false, dummy);
-      const double r = s.residual(std::max(s.mean_normal_force(), 1e-300), false);
-      if (r < best_r) {
-        best_r = r;
-        best_alpha = alpha;
+    // slope s(a) = step . r(du + a step) = -dE/da, where E is the incremental potential
+    // (frictionless: the contact potentials plus the drag; with friction a work-like merit)
+    const double s0 = s.slope();
+    if (s.opt.line_search == LineSearch::Energy && s0 > 0.0) {
+      // Crisfield's line search: a zero of s(a) on [0, 1] by safeguarded regula falsi; accept the
+      // full step while the merit still decreases there. Unlike the residual norm, the merit is
+      // smooth across contact opening/closing, and a symmetric positive iteration matrix always
+      // gives a descent direction.
+      double a_lo = 0.0, s_lo = s0, a_hi = -1.0, s_hi = 0.0;
+      for (int ls = 0; ls < s.opt.line_search_max; ++ls) {
+        apply(alpha);
+        bool dummy;
+        s.evaluate(false, dummy);
+        const double sa = s.slope();
+        if (std::fabs(sa) <= s.opt.line_search_tol * s0 || (sa > 0.0 && a_hi < 0.0)) break;
+        if (sa > 0.0) {
+          a_lo = alpha;
+          s_lo = sa;
+        } else {
+          a_hi = alpha;
+          s_hi = sa;
+        }
+        const double w = a_hi - a_lo;
+        alpha = std::clamp(a_lo + w * s_lo / (s_lo - s_hi), a_lo + 0.05 * w, a_hi - 0.05 * w);
       }
-      if (r < r_before) break;
-    }
-    if (best_alpha != alpha || best_r >= r_before) {
-      alpha = best_alpha;
-      apply(alpha);
+    } else {
+      // backtracking line search on the RMS residual: the first step that lowers it, else the
+      // best step tried
+      const double r_before = newton_res;
+      double best_alpha = 1.0, best_r = std::numeric_limits<double>::infinity();
+      for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
+        apply(alpha);
+        bool dummy;
+        s.evaluate(false, dummy);
+        const double r = s.residual(std::max(s.mean_normal_force(), 1e-300), false);
+        if (r < best_r) {
+          best_r = r;
+          best_alpha = alpha;
+        }
+        if (r < r_before) break;
+      }
+      if (best_alpha != alpha || best_r >= r_before) {
+        alpha = best_alpha;
+        apply(alpha);
+      }
     }
     if (s.opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
+    for (int sweep = 0; sweep < s.opt.local_sweeps; ++sweep) {
+      // nonlinear Gauss-Seidel on the worst particles (the global step has just been taken)
+      bool dummy;
+      s.evaluate(false, dummy);
+      const double fb = std::max(s.mean_normal_force(), 1e-300);
+      const double rms = s.residual(fb, false);
+      const int relaxed = s.relax_worst(fb, rms);
+      if (s.opt.verbose) std::fprintf(stderr, "    local relaxation: %d particles\n", relaxed);
+      if (relaxed == 0) break;
+    }
     ++rep.newton_iterations;
+    if (s.eta > eta_target) {
+      s.eta *= s.opt.viscosity_decay;
+      if (s.eta <= eta_target * 1.0001 || s.eta < eta_floor) s.eta = eta_target;
+    }
   }
   rep.residual = s.nfree > 0 ? s.unbalance(fbar, &rep.residual_rms) : 0.0;
+  if (s.opt.verbose && s.nfree > 0) s.print_worst(fbar);
+  if (!rep.converged && !accept_unconverged) {  // the caller cuts the increment: nothing is committed
+    s.tim.newton_iterations += rep.newton_iterations;
+    s.tim.total += seconds_since(t_start);
+    if (s.opt.verbose) std::fprintf(stderr, "  increment not converged: cut\n");
+    return rep;
+  }
   // commit
   const Eigen::Matrix2d E_old = s.E;
   for (std::size_t k = 0; k < np; ++k) {

@@ -41,6 +41,12 @@ namespace netdem::qs {
 
 enum class BoundaryMode { Die, Affine };
 
+/// Globalisation of the Newton step.
+enum class LineSearch {
+  Residual,  ///< backtracking (halving) on the RMS residual (the original scheme)
+  Energy     ///< Crisfield: zero of the slope step . r(u + a step), i.e. the minimum of the incremental potential
+};
+
 struct SolverOptions {
   BoundaryMode mode = BoundaryMode::Die;
   bool rotations = true;  ///< false: forbid every particle rotation
@@ -60,6 +66,32 @@ struct SolverOptions {
   /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
   /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
   double linear_tolerance = 1e-3;
+  /// A contact whose stick/slip status flipped this many times within an increment keeps its
+  /// elastic-predictor (stick) tangential stiffness in the iteration matrix (open/closed flips:
+  /// always after two, with the last closed normal stiffness).
+  int freeze_after = 2;
+  /// A plastic contact that switched between loading and elastic unloading this many times within
+  /// an increment gets the unloading stiffness in the iteration matrix (0: off).
+  int kink_freeze_after = 0;
+  /// Nonlinear Gauss-Seidel smoothing after each Newton step: local_sweeps sweeps over the
+  /// particles whose residual exceeds local_threshold x the RMS residual, each a damped Newton
+  /// iteration (local_iterations at most) on the particle's own DOFs with its neighbours held
+  /// (0: off).
+  int local_sweeps = 1;
+  int local_iterations = 10;
+  double local_threshold = 3.0;
+  bool local_pairs = false;  ///< relax a particle together with its worst loaded contact partner
+  /// Viscosity continuation: the first Newton iteration of an increment uses
+  /// max(viscosity, viscosity_start), each further one viscosity_decay times the previous value
+  /// down to `viscosity`; only the target viscosity counts as converged (0: off).
+  double viscosity_start = 0.0;
+  double viscosity_decay = 0.5;
+  /// Adaptive sub-stepping: an increment that does not converge is redone from the committed
+  /// state as two halves, recursively up to max_cuts levels (0: off).
+  int max_cuts = 0;
+  LineSearch line_search = LineSearch::Residual;
+  int line_search_max = 6;         ///< residual evaluations per line search
+  double line_search_tol = 0.5;    ///< energy line search: accept |slope| <= tol * initial slope
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
@@ -74,6 +106,8 @@ struct IncrementReport {
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
   int new_contacts = 0, lost_contacts = 0, sliding = 0;
+  int cuts = 0;      ///< failed attempts that were split in two (adaptive sub-stepping)
+  int substeps = 1;  ///< committed sub-increments
 };
 
 /// Macroscopic and microscopic measures of the committed state.
@@ -135,6 +169,8 @@ class NetworkSolver {
   int free_dofs() const;
 
  private:
+  IncrementReport substep(const Eigen::Matrix2d& dE, int depth);
+  IncrementReport attempt(const Eigen::Matrix2d& dE, bool accept_unconverged);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
