@@ -732,6 +732,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="W = 40R, 100 increments (development)")
+    ap.add_argument("--demsolve", default=None, help="ignored (accepted for validation/run_all.sh)")
     ap.add_argument("--netsolve", default=os.environ.get("NETSOLVE", os.path.join(REPO, "build", "apps", "netsolve")),
                     help="netsolve binary (default: $NETSOLVE or build/apps/netsolve)")
     ap.add_argument("--jobs", type=int, default=2, help="simulations run in parallel (default 2)")

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Command-line checks of `netsolve yield` and `netsolve yield-merge` (docs/yield.md): bad input gives
+# one clear line on stderr, a non-zero exit and no output folder; a tiny good run writes
+# yield_points.csv with the documented columns, one curve per probe, summary.json and the plot;
+# two job-array slices merged give the same points as the whole run.
+# usage: test_yield.sh PATH/TO/netsolve
+set -u
+ns="$1"
+tool="$1"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+check_bad yield_precompact "precompact" yield --precompact sideways
+check_bad yield_directions0 "directions" yield --directions 0
+check_bad yield_probe_slice "probe" yield --directions 4 --probe 5/3
+check_bad yield_probe_list "probes" yield --directions 4 --probes 1,7
+check_bad yield_bad_bc "probe-bc" yield --probe-bc sideways
+check_bad yield_mixed_friction "friction 0" yield --compact-bc die --probe-bc affine --friction inf
+check_bad yield_low_density "impossible target" yield --to-density 0.5
+check_bad yield_unknown "bogus" yield --bogus
+check_bad yield_merge_missing "probes/" yield-merge "$tmp/does_not_exist"
+
+ok() { pass=$((pass + 1)); }
+ko() { fail=$((fail + 1)); echo "FAIL $1: $(cat "$tmp/stderr" 2>/dev/null)"; }
+has_columns() {  # FILE COLUMN...: the CSV header names every COLUMN
+  local f="$1" c
+  shift
+  for c in "$@"; do head -1 "$f" | tr ',' '\n' | grep -qx "$c" || return 1; done
+}
+args=(yield --width 12 --directions 4 --increments 10 --to-density 0.83 --quiet)
+good="$tmp/ygood"
+if "$ns" "${args[@]}" --out "$good" >/dev/null 2>"$tmp/stderr" &&
+   head -1 "$good/yield_points.csv" | grep -q "theta" &&
+   has_columns "$good/yield_points.csv" theta S11 S22 S11_offset S22_offset S11_analytic S22_analytic status &&
+   [ "$(tail -n +2 "$good/yield_points.csv" | wc -l)" -eq 4 ] &&
+   [ "$(ls "$good"/probes/probe_*.csv | wc -l)" -eq 4 ] &&
+   [ -s "$good/summary.json" ] && grep -q '"unloading"' "$good/summary.json" && grep -q '"share"' "$good/summary.json" &&
+   [ -s "$good/surface.svg" ] && [ -s "$good/unload.csv" ] &&
+   [ "$(find "$good" -name '.*tmp*' | wc -l)" -eq 0 ]; then
+  ok
+else
+  ko yield_good_run
+fi
+# job-array slices + merge reproduce the whole run (same packing, same unloaded state)
+if "$ns" "${args[@]}" --probe 0/2 --out "$tmp/ys0" >/dev/null 2>"$tmp/stderr" &&
+   "$ns" "${args[@]}" --probes 1,3 --out "$tmp/ys1" >/dev/null 2>"$tmp/stderr" &&
+   [ "$(tail -n +2 "$tmp/ys0/yield_points.csv" | wc -l)" -eq 2 ] &&
+   "$ns" yield-merge "$tmp/ys0" "$tmp/ys1" --out "$tmp/ymerged" >/dev/null 2>"$tmp/stderr" &&
+   cmp -s <(cut -d, -f1-8 "$good/yield_points.csv") <(cut -d, -f1-8 "$tmp/ymerged/yield_points.csv"); then
+  ok
+else
+  ko yield_slices_merge
+fi
+# the probes are independent processes: one at a time gives the same points as several
+if "$ns" "${args[@]}" --jobs 1 --out "$tmp/yj1" >/dev/null 2>"$tmp/stderr" &&
+   cmp -s <(cut -d, -f1-8 "$good/yield_points.csv") <(cut -d, -f1-8 "$tmp/yj1/yield_points.csv"); then
+  ok
+else
+  ko yield_jobs1_equals_parallel
+fi
+# merging runs of different setups is refused
+if "$ns" "${args[@]}" --friction 0 --probes 0 --out "$tmp/ysf" >/dev/null 2>"$tmp/stderr"; then
+  check_bad yield_merge_mismatch "different setup" yield-merge "$tmp/ys0" "$tmp/ysf"
+else
+  ko yield_friction_run
+fi
+finish

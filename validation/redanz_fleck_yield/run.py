@@ -1,0 +1,361 @@
+#!/usr/bin/env python3
+"""Validation of `netsolve yield` against Redanz & Fleck, Acta Mater. 49 (2001) 4325, section 3.4, Figs 9-10.
+
+usage: /usr/bin/python3 validation/redanz_fleck_yield/run.py
+           [--quick] [--netsolve PATH] [--jobs 2] [--out DIR] [--runs DIR] [--force]
+
+Runs the yield-surface cases with `netsolve yield` (polydisperse ballistic packing r = R[0.9, 1.1],
+W = 80R, seed 1, precompaction to D = 0.85 in 100 increments, 24 probe directions; --quick: W = 40R,
+50 increments, 12 directions), one folder per case, then writes figures in the style of Figs 9(a),
+9(b) and 10 and report.md (the findings of the issue beside the measured values, each with its band).
+
+A case is skipped when its folder already holds summary.json and a command.txt with the same
+arguments (the binary path is not compared); --force reruns every case. Cases run one after the
+other under `nice -n 10`, each with --jobs probe processes.
+
+Needs numpy and matplotlib (Debian: /usr/bin/python3 with python3-numpy, python3-matplotlib).
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import shlex
+import subprocess
+import sys
+import time
+
+import numpy as np
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
+
+FULL = {"width": 80, "increments": 100, "directions": 24}
+QUICK = {"width": 40, "increments": 50, "directions": 12}
+
+# name -> (label, precompact, compact-bc, probe-bc, friction)
+CASES = {
+    "hydro_AA_mu0": ("affine-affine, mu = 0", "hydrostatic", "affine", "affine", "0"),
+    "hydro_LL_mu0": ("l.r.-l.r., mu = 0", "hydrostatic", "die", "die", "0"),
+    "hydro_LL_inf": ("l.r.-l.r., sticking", "hydrostatic", "die", "die", "inf"),
+    "hydro_LA_mu0": ("l.r.-affine, mu = 0", "hydrostatic", "die", "affine", "0"),
+    "hydro_AL_mu0": ("affine-l.r., mu = 0", "hydrostatic", "affine", "die", "0"),
+    "die_AA_mu0": ("affine-affine, mu = 0", "closed-die", "affine", "affine", "0"),
+    "die_LL_mu0": ("l.r.-l.r., mu = 0", "closed-die", "die", "die", "0"),
+    "die_LL_inf": ("l.r.-l.r., sticking", "closed-die", "die", "die", "inf"),
+}
+STYLE = {
+    "AA_mu0": dict(color="black", marker="o"),
+    "LL_mu0": dict(color="tab:blue", marker="s"),
+    "LL_inf": dict(color="tab:green", marker="^"),
+    "LA_mu0": dict(color="tab:orange", marker="D"),
+    "AL_mu0": dict(color="tab:purple", marker="v"),
+}
+
+
+def case_args(name, scale, jobs):
+    _, pre, cbc, pbc, mu = CASES[name]
+    return ["yield", "--width", str(scale["width"]), "--increments", str(scale["increments"]),
+            "--directions", str(scale["directions"]), "--precompact", pre, "--compact-bc", cbc,
+            "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--jobs", str(jobs), "--quiet"]
+
+
+def run_case(binary, name, scale, runs, jobs, force):
+    out = os.path.join(runs, name)
+    args = case_args(name, scale, jobs)
+    cmd_file = os.path.join(out, "command.txt")
+    if not force and os.path.exists(os.path.join(out, "summary.json")) and os.path.exists(cmd_file):
+        old = open(cmd_file).read().split()[1:]
+        if old[:-2] == args:  # the output folder may have moved
+            print(f"  {name}: up to date")
+            return
+    t0 = time.time()
+    cmd = ["nice", "-n", "10", binary] + args + ["--out", out]
+    print("  " + " ".join(shlex.quote(c) for c in cmd), flush=True)
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"{name} failed: {r.stderr.strip()}")
+    print(f"    {r.stdout.strip()} ({time.time() - t0:.0f} s)", flush=True)
+
+
+def load(runs, name):
+    d = os.path.join(runs, name)
+    rows = list(csv.DictReader(open(os.path.join(d, "yield_points.csv"))))
+    f = lambda r, k: float(r[k]) if r[k] not in ("", "nan") else math.nan  # noqa: E731
+    pts = {}
+    for r in rows:
+        pts[int(r["probe"])] = {k: f(r, k) for k in ("theta", "S11", "S22", "S11_offset", "S22_offset",
+                                                       "S11_analytic", "S22_analytic")} | {"status": r["status"]}
+    summ = json.load(open(os.path.join(d, "summary.json")))
+    return {"points": pts, "summary": summ, "dir": d}
+
+
+def radius(p, kind):
+    a, b = (p["S11"], p["S22"]) if kind == "curv" else (p["S11_offset"], p["S22_offset"])
+    return math.hypot(a, b)
+
+
+def analytic_curve(summ, n=721):
+    """The affine analytic surface of the run (numpy port of docs/yield_analytic.md, elementary forms)."""
+    sys.path.insert(0, HERE)
+    from analytic_surface import closed_form  # noqa: E402
+    a = summ["setup"]["analytic"]
+    d0, d, z0 = a["D0"], a["D"], a["Z0"]
+    tr = math.log(d / d0)  # -(E11 + E22)
+    E11, E22 = (-tr / 2, -tr / 2) if a["dir11"] == a["dir22"] else (0.0, -tr)
+    th = np.linspace(0, 2 * math.pi, n)
+    return np.array([closed_form(t, E11, E22, d, z0) for t in th])
+
+
+def size_ratio(A, B, kind, min_frac=0.1):
+    """Median over common probes (both found, analytic |S| >= min_frac x vertex) of |S_A| / |S_B|."""
+    vert = max(math.hypot(p["S11_analytic"], p["S22_analytic"]) for p in B["points"].values())
+    rs = []
+    for k, pa in A["points"].items():
+        pb = B["points"].get(k)
+        if pb is None or math.hypot(pa["S11_analytic"], pa["S22_analytic"]) < min_frac * vert:
+            continue
+        ra, rb = radius(pa, kind), radius(pb, kind)
+        if math.isfinite(ra) and math.isfinite(rb) and rb > 0:
+            rs.append(ra / rb)
+    return (float(np.median(rs)), len(rs)) if rs else (math.nan, 0)
+
+
+def analytic_ratios(A, kind, min_frac=0.1):
+    vert = max(math.hypot(p["S11_analytic"], p["S22_analytic"]) for p in A["points"].values())
+    out = []
+    for k, p in sorted(A["points"].items()):
+        ra = math.hypot(p["S11_analytic"], p["S22_analytic"])
+        if ra < min_frac * vert:
+            continue
+        out.append((k, p["theta"], radius(p, kind) / ra))
+    return out
+
+
+def vertex_count(A, kind, tol=0.02):
+    L = A["summary"]["precompaction"]
+    l11, l22 = L["S11"], L["S22"]
+    n = 0
+    for p in A["points"].values():
+        a, b = (p["S11"], p["S22"]) if kind == "curv" else (p["S11_offset"], p["S22_offset"])
+        if math.isfinite(a) and math.hypot(a - l11, b - l22) <= tol * math.hypot(l11, l22):
+            n += 1
+    return n
+
+
+def plot_surface(ax, C, label, style, kind="curv", offset_too=True):
+    pts = [C["points"][k] for k in sorted(C["points"])]
+    s = [(p["S11"], p["S22"]) for p in pts if math.isfinite(p["S11"])]
+    if s:
+        xy = np.array(s)  # not closed: the paper hand-sketches the part near Σ = 0
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=style["color"], marker=style["marker"], ms=4, lw=1.2, label=label)
+    if offset_too:
+        o = [(p["S11_offset"], p["S22_offset"]) for p in pts if math.isfinite(p["S11_offset"])]
+        if o:
+            xy = np.array(o)
+            ax.plot(xy[:, 0], xy[:, 1], ":", color=style["color"], marker=style["marker"], mfc="none", ms=4, lw=0.8,
+                    label=label + " (0.1% offset)")
+    L = C["summary"]["precompaction"]
+    ax.plot([L["S11"]], [L["S22"]], "*", color=style["color"], ms=10)
+    # strain-rate directions at the found points (short arrows, as the paper's)
+    for p in pts:
+        if math.isfinite(p["S11"]):
+            t = math.radians(p["theta"])
+            ax.annotate("", xy=(p["S11"] + 0.06 * math.cos(t), p["S22"] + 0.06 * math.sin(t)), xytext=(p["S11"], p["S22"]),
+                        arrowprops=dict(arrowstyle="->", color=style["color"], lw=0.6))
+
+
+def fig(runs, names, title, path, outdir):
+    fig_, ax = plt.subplots(figsize=(6.2, 6.2))
+    first = load(runs, names[0])
+    ana = analytic_curve(first["summary"])
+    ax.plot(ana[:, 0], ana[:, 1], "--", color="gray", lw=1.2, label="analytic affine (App. A)")
+    for n in names:
+        C = load(runs, n)
+        key = n.split("_", 1)[1]
+        plot_surface(ax, C, CASES[n][0], STYLE[key])
+    ax.axhline(0, color="k", lw=0.5)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$\Sigma_{11}/\sigma_y$")
+    ax.set_ylabel(r"$\Sigma_{22}/\sigma_y$")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7, loc="upper left")
+    fig_.tight_layout()
+    fig_.savefig(os.path.join(outdir, path), dpi=130)
+    plt.close(fig_)
+
+
+def fig_curves(runs, outdir):
+    """Reloading curves of a few probes (the knees behind the points)."""
+    fig_, axs = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, n in zip(axs, ["hydro_AA_mu0", "hydro_LL_mu0"]):
+        C = load(runs, n)
+        nd = C["summary"]["setup"]["directions"]
+        for k in sorted(C["points"]):
+            th = C["points"][k]["theta"]
+            if th < 120 or th > 300 or (k % max(1, nd // 8)):
+                continue
+            rows = list(csv.DictReader(open(os.path.join(C["dir"], "probes", f"probe_{k:03d}.csv"))))
+            x = [float(r["strain"]) for r in rows]
+            y = [float(r["stress"]) for r in rows]
+            line, = ax.plot(np.array(x) * 1e3, y, "-", lw=1, label=f"θ = {th:.0f}°")
+            p = C["points"][k]
+            t = math.radians(th)
+            for kind, mk in (("", "o"), ("_offset", "s")):
+                a, b = p["S11" + kind], p["S22" + kind]
+                if math.isfinite(a):
+                    j = json.load(open(os.path.join(C["dir"], "probes", f"probe_{k:03d}.json")))
+                    xs = j["strain" if kind == "" else "strain_offset"]
+                    ax.plot([xs * 1e3], [a * math.cos(t) + b * math.sin(t)], mk, color=line.get_color(), mfc="none")
+        ax.set_xlabel(r"probe strain $|\Delta E|$ (x 1e-3)")
+        ax.set_ylabel(r"$\Sigma:\hat{E}/\sigma_y$")
+        ax.set_title(CASES[n][0] + ", hydrostatic (o curvature, □ offset)", fontsize=9)
+        ax.legend(fontsize=7)
+    fig_.tight_layout()
+    fig_.savefig(os.path.join(outdir, "reloading_curves.png"), dpi=120)
+    plt.close(fig_)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--demsolve", default=None, help="ignored (accepted for validation/run_all.sh)")
+    ap.add_argument("--netsolve", default=os.path.join(REPO, "build", "apps", "netsolve"))
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default=None, help="figures and report (default: this folder, or quick/ with --quick)")
+    ap.add_argument("--runs", default=None,
+                    help="simulation folders (default: results/validation/redanz_fleck_yield[_quick], git-ignored)")
+    ap.add_argument("--force", action="store_true")
+    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated subset")
+    a = ap.parse_args()
+    scale = QUICK if a.quick else FULL
+    outdir = a.out or (os.path.join(HERE, "quick") if a.quick else HERE)
+    runs = a.runs or os.path.join(REPO, "results", "validation", "redanz_fleck_yield" + ("_quick" if a.quick else ""))
+    os.makedirs(runs, exist_ok=True)
+    names = [n for n in a.cases.split(",") if n]
+    t0 = time.time()
+    for n in names:
+        run_case(os.path.abspath(a.netsolve), n, scale, runs, a.jobs, a.force)
+    have = {n for n in CASES if os.path.exists(os.path.join(runs, n, "yield_points.csv"))}
+
+    if {"hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"} <= have:
+        fig(runs, ["hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"], "Fig 9(a): hydrostatic precompaction to D = 0.85",
+            "fig9a_hydrostatic.png", outdir)
+    if {"die_AA_mu0", "die_LL_mu0", "die_LL_inf"} <= have:
+        fig(runs, ["die_AA_mu0", "die_LL_mu0", "die_LL_inf"], "Fig 9(b): closed-die precompaction to D = 0.85",
+            "fig9b_closed_die.png", outdir)
+    if {"hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"} <= have:
+        fig(runs, ["hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"],
+            "Fig 10: hydrostatic, mu = 0, compaction-probing boundary conditions", "fig10_bc_combinations.png", outdir)
+    if {"hydro_AA_mu0", "hydro_LL_mu0"} <= have:
+        fig_curves(runs, outdir)
+
+    # ---- findings
+    rows = []
+
+    def add(finding, measured, band, ok, note=""):
+        rows.append((finding, measured, band, "n/a" if ok is None else ("PASS" if ok else "FAIL"), note))
+
+    def load_norm(c):
+        p = c["summary"]["precompaction"]
+        return math.hypot(p["S11"], p["S22"])
+
+    C = {n: load(runs, n) for n in have}
+    for pre in ("hydro", "die"):
+        pname = "hydrostatic" if pre == "hydro" else "closed die"
+        aa = C.get(f"{pre}_AA_mu0")
+        if aa:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r = analytic_ratios(aa, kind)
+                vals = [x for _, _, x in r if math.isfinite(x)]
+                worst = max((abs(x - 1) for x in vals), default=math.nan)
+                inside = sum(abs(x - 1) <= 0.10 for x in vals)
+                add(f"{pname}: affine-affine μ=0 yield points ({kl}) within 10% of the analytic surface radially "
+                    f"(probes with analytic |Σ| ≥ 0.1 vertex)",
+                    f"{inside}/{len(r)} within; ratios {min(vals, default=math.nan):.2f}-{max(vals, default=math.nan):.2f}",
+                    "every |ratio − 1| ≤ 0.10", len(vals) == len(r) and len(r) > 0 and worst <= 0.10)
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                n = vertex_count(aa, kind)
+                add(f"{pname}: vertex at the loading point, affine-affine ({kl})",
+                    f"{n} directions within 2% of the loading point", "≥ 2", n >= 2)
+        ll = C.get(f"{pre}_LL_mu0")
+        if aa and ll:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r, n = size_ratio(ll, aa, kind)
+                add(f"{pname}: l.r.-l.r. μ=0 surface / affine-affine size ({kl})", f"{r:.2f} (median of {n} directions)",
+                    "0.4-0.6", 0.4 <= r <= 0.6)
+        li = C.get(f"{pre}_LL_inf")
+        if ll and li:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r, n = size_ratio(li, ll, kind)
+                add(f"{pname}: sticking / frictionless size, l.r.-l.r. ({kl})", f"{r:.2f} (median of {n})", "1.6-2.4",
+                    1.6 <= r <= 2.4)
+        if li and aa:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r, n = size_ratio(li, aa, kind)
+                add(f"{pname}: sticking l.r.-l.r. / affine-affine size ({kl})", f"{r:.2f} (median of {n})", "0.8-1.2",
+                    0.8 <= r <= 1.2, "band chosen here: the issue says 'close to affine size'")
+        # information: the surfaces inherit the precompaction stress (validation/redanz_fleck_compaction)
+        if aa and ll and li:
+            add(f"{pname}: loading-point |Σ| ratios l.r. μ=0 / affine, sticking / μ=0 (information)",
+                f"{load_norm(ll) / load_norm(aa):.2f}, {load_norm(li) / load_norm(ll):.2f}", "-", None,
+                "the yield-surface ratios above follow these precompaction ratios")
+    aa = C.get("hydro_AA_mu0")
+    for n, lab in (("hydro_LA_mu0", "l.r.-affine"), ("hydro_AL_mu0", "affine-l.r.")):
+        if aa and n in C:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r, m = size_ratio(C[n], aa, kind)
+                add(f"Fig 10: {lab} / affine-affine size, hydrostatic μ=0 ({kl})", f"{r:.2f} (median of {m})", "0.4-0.6",
+                    0.4 <= r <= 0.6)
+
+    # ---- report
+    lines = ["# netsolve yield vs Redanz & Fleck (2001) section 3.4, Figs 9-10", "",
+             f"Generated {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by "
+             f"`validation/redanz_fleck_yield/run.py{' --quick' if a.quick else ''}`: "
+             f"W = {scale['width']}R, seed 1, r = R[0.9, 1.1], D = 0.85 in {scale['increments']} increments, "
+             f"{scale['directions']} probe directions. Algorithm and definitions: docs/yield.md.", "",
+             "Size ratios are medians over the probe directions found in both runs whose analytic affine stress is at "
+             "least 0.1 of the vertex value; 'max curvature' is the paper's definition, '0.1% offset' the second one.",
+             "", "| finding | measured | band | result | note |", "|---|---|---|---|---|"]
+    for r in rows:
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in r) + " |")
+    lines += ["", "## Runs", "", "| case | D | Z | loading point S11, S22 | unloading | probes ok | time total (compaction / unloading / probes) s |",
+              "|---|---|---|---|---|---|---|"]
+    for n in CASES:
+        if n not in C:
+            continue
+        s = C[n]["summary"]
+        p = s["precompaction"]
+        u = s["unloading"]
+        t = s["timing_s"]
+        lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | {p['D']:.4f} | {p['Z']:.3f} | {p['S11']:.3f}, {p['S22']:.3f} | "
+                     f"\\|Σ\\| = {u['stress_norm']:.1e} in {u['increments']} | {s['probes']['ok']}/{s['probes']['run']} | "
+                     f"{t['total']:.1f} ({t['compaction']:.1f} / {t['unloading']:.1f} / {t['probes']:.1f}) |")
+    lines += ["", "Times are wall seconds on a shared 2-core machine (other people's builds and runs at the same time), "
+              "`--jobs 2`; they vary by 2-3x between repetitions.", "", "## Per-direction ratios to the analytic affine surface (affine-affine, μ = 0)", ""]
+    for pre in ("hydro", "die"):
+        aa = C.get(f"{pre}_AA_mu0")
+        if not aa:
+            continue
+        lines += [f"{pre}: θ (deg): |Σ| curvature / analytic, offset / analytic", ""]
+        rc = analytic_ratios(aa, "curv")
+        ro = {k: x for k, _, x in analytic_ratios(aa, "off")}
+        lines.append(", ".join(f"{th:.0f}: {x:.2f} / {ro[k]:.2f}" for k, th, x in rc))
+        lines.append("")
+    for f_ in ("fig9a_hydrostatic.png", "fig9b_closed_die.png", "fig10_bc_combinations.png", "reloading_curves.png"):
+        if os.path.exists(os.path.join(outdir, f_)):
+            lines.append(f"![{f_}]({f_})")
+    lines.append("")
+    lines.append(f"Total time of this script: {time.time() - t0:.0f} s.")
+    open(os.path.join(outdir, "report.md"), "w").write("\n".join(lines) + "\n")
+    print("\n".join(lines[:len(rows) + 10]))
+
+
+if __name__ == "__main__":
+    main()
