@@ -25,12 +25,17 @@
 #include "netdem/quasistatic/compaction.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "output.hpp"
+#include "parse.hpp"
 
 namespace fs = std::filesystem;
 using netdem::app::Field;
 int run_yield_command(int argc, char** argv);  // apps/netsolve/yield.cpp: netsolve yield | yield-merge
 
 namespace {
+
+using netdem::app::netsolve::parse_double;
+using netdem::app::netsolve::parse_friction;
+using netdem::app::netsolve::parse_int;
 
 std::string g_command;
 
@@ -50,24 +55,6 @@ struct CompactArgs {
   netdem::qs::SolverOptions solver;  // defaults of the newer Newton knobs (step limits, sub-stepping, continuation)
 };
 
-/// The whole of `s` as a double, or false.
-bool parse_double(const std::string& s, double& v) {
-  std::size_t used = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (...) {
-    return false;
-  }
-  return used == s.size();
-}
-
-double parse_friction(const std::string& s) {
-  if (s == "inf" || s == "infinity" || s == "sticking") return std::numeric_limits<double>::infinity();
-  double v = 0;
-  if (!parse_double(s, v) || std::isnan(v) || v < 0)
-    throw std::invalid_argument(fmt::format("--friction '{}' is not a non-negative number or 'inf'", s));
-  return v;
-}
 
 std::vector<double> parse_list(const std::string& s, const char* what) {
   std::vector<double> out;

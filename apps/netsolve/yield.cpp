@@ -47,6 +47,7 @@
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/quasistatic/yield_probe.hpp"
 #include "output.hpp"
+#include "parse.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -55,6 +56,10 @@ namespace qs = netdem::qs;
 int run_yield_command(int argc, char** argv);
 
 namespace {
+
+using netdem::app::netsolve::parse_double;
+using netdem::app::netsolve::parse_friction;
+using netdem::app::netsolve::parse_int;
 
 using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -85,33 +90,6 @@ struct YieldArgs {
   std::string out = "results/yield";
 };
 
-bool parse_double(const std::string& s, double& v) {
-  std::size_t used = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (...) {
-    return false;
-  }
-  return used == s.size();
-}
-
-bool parse_int(const std::string& s, long& v) {
-  std::size_t used = 0;
-  try {
-    v = std::stol(s, &used);
-  } catch (...) {
-    return false;
-  }
-  return used == s.size();
-}
-
-double parse_friction(const std::string& s) {
-  if (s == "inf" || s == "infinity" || s == "sticking") return std::numeric_limits<double>::infinity();
-  double v = 0;
-  if (!parse_double(s, v) || std::isnan(v) || v < 0)
-    throw std::invalid_argument(fmt::format("--friction '{}' is not a non-negative number or 'inf'", s));
-  return v;
-}
 
 qs::BoundaryMode parse_bc(const std::string& s, const char* opt) {
   if (s == "affine") return qs::BoundaryMode::Affine;
