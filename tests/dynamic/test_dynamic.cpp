@@ -1,6 +1,8 @@
 // Tests of the explicit DEM solver (src/dynamic): LMM05 Eq 1, 2, 5, 6 (see docs/dynamic.md).
 #include <gtest/gtest.h>
 
+#include "test_scale.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,10 +22,7 @@ using netdem::contact::LudingParams;
 
 namespace {
 
-bool small_scale() {
-  const char* s = std::getenv("NETDEM_TEST_SCALE");
-  return s != nullptr && std::strcmp(s, "small") == 0;
-}
+using netdem::test::small_scale;
 
 LudingParams elastic_params() {  // k1 = k2, k_c = 0, no damping, frictionless
   LudingParams p;

@@ -2,6 +2,8 @@
 // file, the temperature schedule (LMM05 Eq 9, 11-12), parameter switches and bad state files.
 #include <gtest/gtest.h>
 
+#include "test_scale.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,10 +22,7 @@ using netdem::contact::LudingParams;
 
 namespace {
 
-bool small_scale() {
-  const char* s = std::getenv("NETDEM_TEST_SCALE");
-  return s != nullptr && std::strcmp(s, "small") == 0;
-}
+using netdem::test::small_scale;
 
 // side x side disks on a jittered lattice of pitch 2.05 a0, radii a0 (1 +- 0.3), random velocities.
 Particles dense(const LudingParams& p, int side, unsigned seed) {

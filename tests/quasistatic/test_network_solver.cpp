@@ -2,6 +2,8 @@
 // identities on random packings, and increment convergence.
 #include <gtest/gtest.h>
 
+#include "test_scale.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,12 +19,9 @@ using namespace netdem;
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using netdem::test::small_scale;
 
-bool small_scale() {
-  const char* s = std::getenv("NETDEM_TEST_SCALE");
-  return s && std::string(s) == "small";
-}
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Square lattice of nc x nr touching disks of radius R filling the box [0, 2 R nc] x [0, 2 R nr].
 packing::Packing square_lattice(int nc, int nr, double R = 1.0) {
