@@ -1,5 +1,6 @@
 #include "netdem/quasistatic/linear_solver.hpp"
 
+#include <dlfcn.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -7,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <cholmod.h>
 #include <fmt/format.h>
@@ -44,6 +47,8 @@ LinearStatus failure(std::string message) {
 
 /// Index (row, col) of the first non-finite stored value of a compressed matrix, or (-1, -1).
 std::pair<int, int> first_non_finite(const SpMat& A) {
+  // vectorised test first (called on every factorisation and solve); the search only on failure
+  if (Eigen::Map<const VecX>(A.valuePtr(), A.nonZeros()).allFinite()) return {-1, -1};
   for (int j = 0; j < A.outerSize(); ++j)
     for (SpMat::InnerIterator it(A, j); it; ++it)
       if (!std::isfinite(it.value())) return {static_cast<int>(it.row()), j};
@@ -70,7 +75,57 @@ int first_non_finite_row(const VecX& v) {
   return -1;
 }
 
+/// Set while this thread is inside a CHOLMOD call made by a LinearSolver (see GOMP_parallel below).
+thread_local int serial_cholmod_depth = 0;
+
+struct SerialCholmod {  // RAII: CHOLMOD's OpenMP regions run inline while alive
+  SerialCholmod() { ++serial_cholmod_depth; }
+  ~SerialCholmod() { --serial_cholmod_depth; }
+  SerialCholmod(const SerialCholmod&) = delete;
+  SerialCholmod& operator=(const SerialCholmod&) = delete;
+};
+
 }  // namespace
+}  // namespace netdem::qs
+
+#if NETDEM_CHOLMOD_INLINE_OMP
+// Debian's CHOLMOD 3 opens an OpenMP region (num_threads(4), usually with a false if-clause) for
+// several loops of every supernode: ~4000 regions per numeric factorisation of the default scene.
+// Even serial (omp_set_max_active_levels(0), see the constructor) each inactive region costs a
+// team allocation and a futex syscall in libgomp (3.4 M syscalls, 1.5 s of a 6.5 s default
+// compaction; docs/performance.md, 2026-11-26). The solver is serial by design, so while a
+// LinearSolver is inside CHOLMOD the outlined region body is called directly on this thread:
+// outside a team omp_get_num_threads() = 1 and omp_get_thread_num() = 0, which is what the
+// static-schedule loops of CHOLMOD (its only OpenMP use: GOMP_parallel, omp_get_num_threads,
+// omp_get_thread_num) need. Results are bit-identical. Every other caller (and every call when
+// this definition does not take precedence, e.g. in a shared-library build) goes to libgomp.
+extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
+  if (netdem::qs::serial_cholmod_depth > 0) {
+    fn(data);
+    return;
+  }
+  using Real = void (*)(void (*)(void*), void*, unsigned, unsigned);
+  static const Real real = reinterpret_cast<Real>(dlsym(RTLD_NEXT, "GOMP_parallel"));
+  if (real == nullptr) {  // no libgomp behind us: run the region on this thread
+    fn(data);
+    return;
+  }
+  real(fn, data, num_threads, flags);
+}
+
+// The supernodal factorisation also reads the clock (SuiteSparse_time, clock_gettime) around every
+// BLAS call of every supernode, only for CHOLMOD's internal statistics (Common->CHOLMOD_CPU_*_TIME),
+// which nothing here reads: 4 % of the default compaction. Inside a LinearSolver call it returns 0.
+extern "C" double SuiteSparse_time(void) {
+  if (netdem::qs::serial_cholmod_depth > 0) return 0.0;
+  using Real = double (*)();
+  static const Real real = reinterpret_cast<Real>(dlsym(RTLD_NEXT, "SuiteSparse_time"));
+  if (real == nullptr) return 0.0;
+  return real();
+}
+#endif  // NETDEM_CHOLMOD_INLINE_OMP (CMake option, default ON)
+
+namespace netdem::qs {
 
 void LinearSolverOptions::validate() const {
   auto require = [](bool ok, const std::string& msg) {
@@ -107,6 +162,10 @@ struct LinearSolver::Impl {
   bool analysed = false;      // L holds a symbolic analysis of M's pattern
   bool factor_valid = false;  // L holds a valid numeric factor of M
   Eigen::MatrixXd V;          // GMRES Krylov basis (kept between solves to avoid reallocation)
+  // tril(P M P') in CSC form with sorted rows (the matrix cholmod_factorize builds from M on every
+  // call with two transposes); built once per analysis, refilled by a gather through smap
+  std::vector<int> Sp, Si, smap;
+  std::vector<double> Sx;
 
   explicit Impl(const LinearSolverOptions& o) : opt(o) {
     cholmod_start(&cm);
@@ -168,6 +227,7 @@ struct LinearSolver::Impl {
     B.z = nullptr;
     B.xtype = CHOLMOD_REAL;
     B.dtype = CHOLMOD_DOUBLE;
+    const SerialCholmod serial;
     if (!cholmod_solve2(CHOLMOD_A, L, &B, nullptr, &X, nullptr, &Y, &E, &cm)) return false;
     const auto* xs = static_cast<const double*>(X->x);
     std::copy(xs, xs + n(), out);
@@ -175,6 +235,7 @@ struct LinearSolver::Impl {
   }
 
   LinearStatus factorise(const SpMat& Min, bool pattern_changed);
+  void build_permuted();
   LinearStatus direct_solve(const VecX& b, VecX& x);
   LinearStatus gmres(const SpMat& A, const VecX& b, VecX& x);
   /// nnz(L) from the symbolic factor: supernodal -> lower trapezoid of each supernode.
@@ -232,6 +293,37 @@ int LinearSolver::Impl::small_pivot(double& ratio) const {
   return -1;
 }
 
+void LinearSolver::Impl::build_permuted() {
+  Sp.clear();
+  Si.clear();
+  Sx.clear();
+  smap.clear();
+  if (L == nullptr || !L->is_super || n() == 0) return;
+  const int nn = n();
+  const auto* perm = static_cast<const int*>(L->Perm);
+  std::vector<int> inv(nn);
+  for (int k = 0; k < nn; ++k) inv[perm[k]] = k;
+  // entry (i, j), i >= j, of the stored lower triangle goes to permuted (max, min) of (inv i, inv j)
+  std::vector<std::vector<std::pair<int, int>>> cols(nn);
+  for (int j = 0; j < nn; ++j)
+    for (int q = M.outerIndexPtr()[j]; q < M.outerIndexPtr()[j + 1]; ++q) {
+      const int i = M.innerIndexPtr()[q];
+      if (i < j) continue;
+      const int a = inv[i], b = inv[j];
+      cols[std::min(a, b)].emplace_back(std::max(a, b), q);
+    }
+  Sp.assign(nn + 1, 0);
+  for (int c = 0; c < nn; ++c) {
+    std::sort(cols[c].begin(), cols[c].end());
+    Sp[c + 1] = Sp[c] + static_cast<int>(cols[c].size());
+    for (const auto& [row, q] : cols[c]) {
+      Si.push_back(row);
+      smap.push_back(q);
+    }
+  }
+  Sx.assign(smap.size(), 0.0);
+}
+
 LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_changed) {
   if (Min.rows() != Min.cols())
     throw std::invalid_argument(
@@ -259,6 +351,7 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
       const auto t0 = Clock::now();
       set_ordering();
       cholmod_sparse A = view();
+      const SerialCholmod serial;
       L = cholmod_analyze(&A, &cm);
       stats.t_analyse += seconds_since(t0);
       ++stats.analyses;
@@ -266,6 +359,7 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
         return failure(fmt::format("CHOLMOD analysis of the {}x{} stiffness matrix failed: {}", nn, nn,
                                    cholmod_status_name(cm.status)));
       stats.factor_nnz = factor_nnz();
+      build_permuted();
     } else {
       ++stats.analyses;  // trivial 0x0 system: nothing to analyse
       stats.factor_nnz = 0;
@@ -283,9 +377,33 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
     return {};
   }
   const auto t0 = Clock::now();
-  cholmod_sparse A = view();
   cm.status = CHOLMOD_OK;
-  cholmod_factorize(&A, L, &cm);
+  {
+    const SerialCholmod serial;
+    if (L->is_super && !Sp.empty()) {
+      // what cholmod_factorize does for a supernodal factor and stype < 0 (final_asis: no
+      // conversion), without its two transposes (allocation + 2 passes over M per call):
+      // the permuted lower triangle S is gathered from M through smap, bit for bit the same
+      for (std::size_t t = 0; t < smap.size(); ++t) Sx[t] = M.valuePtr()[smap[t]];
+      cholmod_sparse S{};
+      S.nrow = S.ncol = static_cast<size_t>(nn);
+      S.nzmax = Sx.size();
+      S.p = Sp.data();
+      S.i = Si.data();
+      S.x = Sx.data();
+      S.stype = -1;
+      S.itype = CHOLMOD_INT;
+      S.xtype = CHOLMOD_REAL;
+      S.dtype = CHOLMOD_DOUBLE;
+      S.sorted = 1;
+      S.packed = 1;
+      double beta[2] = {0.0, 0.0};
+      cholmod_super_numeric(&S, nullptr, beta, L, &cm);
+    } else {
+      cholmod_sparse A = view();
+      cholmod_factorize(&A, L, &cm);
+    }
+  }
   const int status = cm.status;  // read immediately: later CHOLMOD calls reset it
   stats.t_factorise += seconds_since(t0);
 

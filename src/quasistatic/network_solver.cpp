@@ -121,7 +121,7 @@ struct NetworkSolver::Impl {
   std::vector<double> du, f;
   std::vector<ct::PairGeometry> g0;
   std::vector<ct::PlasticIndentationResult> trial;
-  std::vector<double> trial_slip, trial_dphi;
+  std::vector<double> trial_slip;
   std::vector<double> du_prev;
   std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
   std::vector<std::uint8_t> last_open, open_flips;
@@ -326,14 +326,12 @@ struct NetworkSolver::Impl {
       if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
         trial[k] = ct::PlasticIndentationResult{};
         trial_slip[k] = 0.0;
-        trial_dphi[k] = 0.0;
         if (assemble) open_contact_stiffness(k, g1);
         continue;
       }
       ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
       trial[k] = e.law;
       trial_slip[k] = e.dslip;
-      trial_dphi[k] = std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
       for (int a = 0; a < 3; ++a) {
         f[3 * i + a] += e.force(a);
         f[3 * j + a] += e.force(3 + a);
@@ -774,7 +772,6 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
   s.g0.resize(np);
   s.trial.resize(np);
   s.trial_slip.resize(np);
-  s.trial_dphi.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = s.pi[k], j = s.pj[k];
     s.g0[k] = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
@@ -873,6 +870,9 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
     rep.linear_iterations += st.iterations;
     s.clip_step();
     double alpha = 1.0;
+    // f and trial are those of the current du after the line search unless it went back to an
+    // earlier step (then the local sweep re-evaluates)
+    bool f_current = true;
     s.du_start = s.du;
     auto apply = [&](double a) {
       for (int p = 0; p < s.n; ++p)
@@ -923,13 +923,16 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
       if (best_alpha != alpha || best_r >= r_before) {
         alpha = best_alpha;
         apply(alpha);
+        f_current = false;  // f and trial belong to the last step tried, not to best_alpha
       }
     }
     if (s.opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
     for (int sweep = 0; sweep < s.opt.local_sweeps; ++sweep) {
       // nonlinear Gauss-Seidel on the worst particles (the global step has just been taken)
-      bool dummy;
-      s.evaluate(false, dummy);
+      if (sweep > 0 || !f_current) {
+        bool dummy;
+        s.evaluate(false, dummy);
+      }
       const double fb = std::max(s.mean_normal_force(), 1e-300);
       const double rms = s.residual(fb, false);
       const int relaxed = s.relax_worst(fb, rms);
@@ -965,7 +968,13 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
     if (loaded || s.hist[k].u_max > 0.0) {
       s.hist[k] = t.history;
       s.aux[k].slip += s.trial_slip[k];
-      s.aux[k].centre += s.trial_dphi[k];
+      // tangential displacement of the centres, L dphi (only needed here: not in evaluate())
+      const int i = s.pi[k], j = s.pj[k];
+      const ct::PairGeometry& g = s.g0[k];
+      const ct::PairGeometry g1 =
+          ct::pair_geometry(ct::Vec(s.x[i] + s.du[3 * i], s.y[i] + s.du[3 * i + 1]),
+                            ct::Vec(s.x[j] + s.du[3 * j], s.y[j] + s.du[3 * j + 1]), s.r[i], s.r[j]);
+      s.aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
     }
     s.fn_c[k] = t.f_n;
     s.ft_c[k] = t.f_t;
