@@ -26,6 +26,7 @@
 #include "netdem/quasistatic/network_solver.hpp"
 #include "output.hpp"
 #include "parse.hpp"
+#include "setup.hpp"
 
 namespace fs = std::filesystem;
 using netdem::app::Field;
@@ -36,15 +37,9 @@ namespace {
 using netdem::app::netsolve::parse_double;
 using netdem::app::netsolve::parse_friction;
 using netdem::app::netsolve::parse_int;
+using netdem::app::netsolve::PackArgs;
 
 std::string g_command;
-
-struct PackArgs {
-  double width = 80.0, r_min = 0.9, r_max = 1.1;
-  bool mono = false;
-  std::string lid = "centre";
-  std::uint64_t seed = 1;
-};
 
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
@@ -70,29 +65,13 @@ std::vector<double> parse_list(const std::string& s, const char* what) {
   return out;
 }
 
-netdem::packing::Packing make_packing(const PackArgs& a) {
-  netdem::packing::DepositionOptions o;
-  o.width = a.width;
-  o.r_min = a.mono ? 1.0 : a.r_min;
-  o.r_max = a.mono ? 1.0 : a.r_max;
-  o.seed = a.seed;
-  if (a.lid == "centre") {
-    o.lid = netdem::packing::Lid::Centre;
-  } else if (a.lid == "inside") {
-    o.lid = netdem::packing::Lid::Inside;
-  } else {
-    throw std::invalid_argument(fmt::format("--lid '{}' is not 'centre' or 'inside'", a.lid));
-  }
-  return netdem::packing::ballistic_deposition(o);
-}
-
 void write_common(const fs::path& out) {
   netdem::app::make_output_dir(out);
   netdem::app::write_file_atomic(out / "command.txt", g_command + "\n");
 }
 
 int run_pack(const PackArgs& a, const fs::path& out) {
-  const auto pk = make_packing(a);
+  const auto pk = netdem::app::netsolve::make_packing(a);
   write_common(out);
   netdem::packing::write_packing_csv(pk, out / "packing.csv");
   const auto st = netdem::packing::contact_stats(pk);
@@ -133,7 +112,7 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
 
 int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   using namespace netdem;
-  qs::SolverOptions so;
+  qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
   so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
   so.rotations = !a.no_rotation;
   so.law.mu = parse_friction(a.friction);
@@ -146,17 +125,6 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.geometric_stiffness = a.geometric;
   so.linear_tolerance = a.linear_tol;
   so.verbose = a.verbose;
-  so.max_step = a.solver.max_step;
-  so.max_rotation_step = a.solver.max_rotation_step;
-  so.max_cuts = a.solver.max_cuts;
-  so.local_sweeps = a.solver.local_sweeps;
-  so.kink_freeze_after = a.solver.kink_freeze_after;
-  so.local_iterations = a.solver.local_iterations;
-  so.local_threshold = a.solver.local_threshold;
-  so.local_pairs = a.solver.local_pairs;
-  so.freeze_after = a.solver.freeze_after;
-  so.viscosity_start = a.solver.viscosity_start;
-  so.viscosity_decay = a.solver.viscosity_decay;
   if (a.line_search == "energy") {
     so.line_search = qs::LineSearch::Energy;
   } else if (a.line_search == "residual") {
@@ -171,16 +139,8 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   co.increments = a.increments;
   const auto snaps = parse_list(a.snapshots, "--snapshots");
 
-  packing::Packing pk;
   std::string source;
-  if (!a.packing_file.empty()) {
-    pk = packing::read_packing_csv(a.packing_file);
-    source = a.packing_file;
-  } else {
-    pk = make_packing(pa);
-    source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", pa.width, pa.mono ? 1.0 : pa.r_min,
-                         pa.mono ? 1.0 : pa.r_max, pa.seed);
-  }
+  const packing::Packing pk = app::netsolve::input_packing(a.packing_file, pa, source);
   co.validate(pk.density());
   write_common(out);
   packing::write_packing_csv(pk, out / "packing.csv");

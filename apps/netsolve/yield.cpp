@@ -48,6 +48,7 @@
 #include "netdem/quasistatic/yield_probe.hpp"
 #include "output.hpp"
 #include "parse.hpp"
+#include "setup.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -69,9 +70,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 struct YieldArgs {
   // packing
-  double width = 80.0, r_min = 0.9, r_max = 1.1;
-  bool mono = false;
-  std::uint64_t seed = 1;
+  netdem::app::netsolve::PackArgs pack;  // a new deposition (lid: centre)
   std::string packing_file;
   // precompaction
   std::string precompact = "hydrostatic", friction = "inf", compact_bc = "die", probe_bc;
@@ -419,21 +418,8 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   const int jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
 
-  packing::Packing pk;
   std::string source;
-  if (!a.packing_file.empty()) {
-    pk = packing::read_packing_csv(a.packing_file);
-    source = a.packing_file;
-  } else {
-    packing::DepositionOptions d;
-    d.width = a.width;
-    d.r_min = a.mono ? 1.0 : a.r_min;
-    d.r_max = a.mono ? 1.0 : a.r_max;
-    d.seed = a.seed;
-    d.lid = packing::Lid::Centre;
-    pk = packing::ballistic_deposition(d);
-    source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", a.width, d.r_min, d.r_max, a.seed);
-  }
+  const packing::Packing pk = app::netsolve::input_packing(a.packing_file, a.pack, source);
   co.validate(pk.density());
 
   const fs::path out = a.out;
@@ -731,11 +717,11 @@ int run_yield_command(int argc, char** argv) {
     app.description(
         "netsolve yield: precompact, unload elastically, reload along N strain-rate directions in the (E11, E22) plane "
         "and locate the yield points (Redanz & Fleck 2001 section 3.4; docs/yield.md)");
-    app.add_option("--width", a.width, "box width W of a new deposition in units of R")->capture_default_str();
-    app.add_option("--r-min", a.r_min, "smallest radius / R")->capture_default_str();
-    app.add_option("--r-max", a.r_max, "largest radius / R")->capture_default_str();
-    app.add_flag("--mono", a.mono, "monosized disks");
-    app.add_option("--seed", a.seed, "random seed of the deposition")->capture_default_str();
+    app.add_option("--width", a.pack.width, "box width W of a new deposition in units of R")->capture_default_str();
+    app.add_option("--r-min", a.pack.r_min, "smallest radius / R")->capture_default_str();
+    app.add_option("--r-max", a.pack.r_max, "largest radius / R")->capture_default_str();
+    app.add_flag("--mono", a.pack.mono, "monosized disks");
+    app.add_option("--seed", a.pack.seed, "random seed of the deposition")->capture_default_str();
     app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition");
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
