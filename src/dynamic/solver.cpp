@@ -32,11 +32,6 @@ inline void store_history(LudingHistory& dst, const LudingHistory& src) {
   dst.sliding = src.sliding;
 }
 
-inline bool is_fresh(const LudingHistory& h) {
-  return h.delta_max == 0.0 && h.delta0 == 0.0 && h.k2_line == 0.0 && h.k1_seen == 0.0 &&
-         h.xi == 0.0 && h.fluid == 0 && h.sliding == 0;
-}
-
 // One contact: normal and tangential force on j and the committed history, in place.
 // For the linear feature sets (no hysteresis, cohesion or temperature) this is
 // contact::luding_evaluate<F> written out for the linear spring-dashpot with the Cundall-Strack
@@ -344,7 +339,7 @@ void DynamicSolver::build_table() {
     while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
     if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
       new_hist_[b] = pair_hist_[a];
-      pair_live_[b] = is_fresh(new_hist_[b]) ? 0 : 1;
+      pair_live_[b] = new_hist_[b].fresh() ? 0 : 1;
     }
   }
   pair_key_.swap(new_key_);

@@ -87,7 +87,7 @@ SolverState DynamicSolver::state() const {
   // only the pairs with a live history (touching); the others are rebuilt from positions
   for (std::size_t k = 0; k < pair_key_.size(); ++k) {
     const LudingHistory& h = pair_hist_[k];
-    if (h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0) {
+    if (!h.fresh()) {
       st.pair_key.push_back(pair_key_[k]);
       st.pair_history.push_back(h);
     }
@@ -259,12 +259,12 @@ std::string format_state(const SolverState& st) {
     o << "\n";
   }
   std::size_t nw = 0;
-  for (const auto& h : st.wall_history) nw += (h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0);
+  for (const auto& h : st.wall_history) nw += !h.fresh();
   o << "wall_contacts " << nw << "\n";
   o << "# particle wall(0 left, 1 right, 2 bottom, 3 top) delta_max delta0 k2_line k1_seen xi fluid sliding\n";
   for (std::size_t k = 0; k < st.wall_history.size(); ++k) {
     const auto& h = st.wall_history[k];
-    if (!(h.delta_max > 0.0 || h.xi != 0.0 || h.k2_line != 0.0)) continue;
+    if (h.fresh()) continue;
     o << k / 4 << ' ' << k % 4 << ' ';
     put_history(o, h);
     o << "\n";

@@ -102,6 +102,11 @@ struct LudingHistory {
   double xi = 0.0;         ///< tangential spring length along t (Eq 16-21)
   std::uint8_t fluid = 0;  ///< 1 once delta_0 reached delta_fluid (fluid limit, frozen delta_0)
   std::uint8_t sliding = 0;  ///< 1 if the committed step slid
+  /// True for the zero history of a pair that has not touched (or was reset on separation).
+  bool fresh() const {
+    return delta_max == 0.0 && delta0 == 0.0 && k2_line == 0.0 && k1_seen == 0.0 && xi == 0.0 &&
+           fluid == 0 && sliding == 0;
+  }
 };
 
 /// Kinematic input of one step (contact frame).
