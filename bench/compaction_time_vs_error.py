@@ -15,6 +15,10 @@ Writes <out>/<name>.csv and <out>/<name>.png (--name, default time_vs_error).
     /usr/bin/python3 bench/compaction_time_vs_error.py                      # all defaults
     /usr/bin/python3 bench/compaction_time_vs_error.py --increments 25,50 --reference 400 --viscosities 0.1
     /usr/bin/python3 bench/compaction_time_vs_error.py --reuse              # re-plot existing runs
+    /usr/bin/python3 bench/compaction_time_vs_error.py --viscosities 0.01 --max-newtons 3,5,10 --seeds 1,2,3 \
+        --increments 25,50,100,200 --name time_vs_error_newton      # Newton cap x seeds (2026-11-26)
+
+--max-newtons and --seeds add two more loops (each seed and cap gets its own reference run).
 
 The netsolve binary is copied to a temporary file first, so rebuilding it meanwhile is harmless.
 """
@@ -63,16 +67,18 @@ def s22_fit(hist, d_lo=0.84, d_hi=0.85):
     return ms + slope * (d_hi - md)
 
 
-def run(netsolve, n, viscosity, workdir, extra, reuse, nice):
-    out = workdir / f"visc{viscosity:g}_N{n}"
-    res = run_compact(netsolve, out, ["--increments", str(n), "--viscosity", str(viscosity)] + extra, reuse, nice,
-                      f"N = {n}")
+def run(netsolve, n, viscosity, max_newton, seed, workdir, extra, reuse, nice):
+    out = workdir / f"visc{viscosity:g}_newton{max_newton}_seed{seed}_N{n}"
+    args = ["--increments", str(n), "--viscosity", str(viscosity), "--max-newton", str(max_newton), "--seed", str(seed)]
+    res = run_compact(netsolve, out, args + extra, reuse, nice, f"N = {n}")
     if res is None:
         return None
     s, t_proc, cpu = res
     return {
         "N": n,
         "viscosity": viscosity,
+        "max_newton": max_newton,
+        "seed": seed,
         "particles": s["particles"],
         "wall_s": s["timing_s"]["wall"],
         "process_wall_s": t_proc,
@@ -94,6 +100,8 @@ def main():
     ap.add_argument("--reference", type=int, default=1600,
                     help="increments of the reference run (default 1600 = 16 x netsolve's default 100)")
     ap.add_argument("--viscosities", default="0.1,0.01", help="comma list; the first is netsolve's default")
+    ap.add_argument("--max-newtons", default="10", help="comma list of --max-newton values (Newton iterations per increment)")
+    ap.add_argument("--seeds", default="1", help="comma list of deposition seeds (each with its own reference run)")
     ap.add_argument("--time", choices=("cpu", "wall"), default="cpu",
                     help="x axis of the plot: process CPU time (user+sys, robust on a shared machine) or solver wall time")
     add_common_args(ap, "time_vs_error", "/tmp/netdem-bench/time_vs_error")
@@ -103,35 +111,41 @@ def main():
     ns = [int(x) for x in a.increments.split(",")]
     viscs = [float(x) for x in a.viscosities.split(",")]
 
+    mns = [int(x) for x in a.max_newtons.split(",")]
+    seeds = [int(x) for x in a.seeds.split(",")]
     rows = []
     for v in viscs:
-        print(f"viscosity {v:g}: reference N = {a.reference}", flush=True)
-        ref = run(netsolve, a.reference, v, workdir, extra, a.reuse, nice)
-        if ref is None:
-            print("  reference failed; skipping this viscosity", file=sys.stderr)
-            continue
-        print(f"  reference: {ref['wall_s']:.1f} s, S22 = {ref['S22']:.6f}", flush=True)
-        ref_cp = {d: s22_at(ref["hist"], d) for d in CHECKPOINTS}
-        ref_fit = s22_fit(ref["hist"])
-        for n in ns + [a.reference]:
-            r = ref if n == a.reference else run(netsolve, n, v, workdir, extra, a.reuse, nice)
-            if r is None:
+      for mn in mns:
+        for seed in seeds:
+            print(f"viscosity {v:g}, max-newton {mn}, seed {seed}: reference N = {a.reference}", flush=True)
+            ref = run(netsolve, a.reference, v, mn, seed, workdir, extra, a.reuse, nice)
+            if ref is None:
+                print("  reference failed; skipping", file=sys.stderr)
                 continue
-            r["err_S22_final"] = abs(r["S22"] - ref["S22"]) / abs(ref["S22"])
-            r["err_S22_max_checkpoints"] = max(abs(s22_at(r["hist"], d) - ref_cp[d]) / abs(ref_cp[d]) for d in CHECKPOINTS)
-            r["S22_fit"] = s22_fit(r["hist"])
-            r["err_S22_fit"] = abs(r["S22_fit"] - ref_fit) / abs(ref_fit)
-            r["N_ref"] = a.reference
-            rows.append(r)
-            print(f"  N = {n:5d}: wall {r['wall_s']:8.2f} s  cpu {r['process_cpu_s']:8.2f} s  S22 = {r['S22']:.6f}  err {100 * r['err_S22_final']:.3f} %"
-                  f"  (max over D checkpoints {100 * r['err_S22_max_checkpoints']:.3f} %,"
-                  f" fitted S22 {r['S22_fit']:.4f}: {100 * r['err_S22_fit']:.3f} %)"
-                  f"  unconverged {r['unconverged_increments']}/{n}", flush=True)
+            print(f"  reference: {ref['wall_s']:.1f} s, S22 = {ref['S22']:.6f}", flush=True)
+            ref_cp = {d: s22_at(ref["hist"], d) for d in CHECKPOINTS}
+            ref_fit = s22_fit(ref["hist"])
+            for n in ns + [a.reference]:
+                r = ref if n == a.reference else run(netsolve, n, v, mn, seed, workdir, extra, a.reuse, nice)
+                if r is None:
+                    continue
+                r["err_S22_final"] = abs(r["S22"] - ref["S22"]) / abs(ref["S22"])
+                r["err_S22_max_checkpoints"] = max(abs(s22_at(r["hist"], d) - ref_cp[d]) / abs(ref_cp[d])
+                                                   for d in CHECKPOINTS)
+                r["S22_fit"] = s22_fit(r["hist"])
+                r["err_S22_fit"] = abs(r["S22_fit"] - ref_fit) / abs(ref_fit)
+                r["N_ref"] = a.reference
+                rows.append(r)
+                print(f"  N = {n:5d}: wall {r['wall_s']:8.2f} s  cpu {r['process_cpu_s']:8.2f} s  S22 = {r['S22']:.6f}"
+                      f"  err {100 * r['err_S22_final']:.3f} %"
+                      f"  (max over D checkpoints {100 * r['err_S22_max_checkpoints']:.3f} %,"
+                      f" fitted S22 {r['S22_fit']:.4f}: {100 * r['err_S22_fit']:.3f} %)"
+                      f"  unconverged {r['unconverged_increments']}/{n}", flush=True)
     shutil.rmtree(netsolve.parent, ignore_errors=True)
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    cols = ["viscosity", "N", "N_ref", "particles", "wall_s", "process_wall_s", "process_cpu_s", "S22", "err_S22_final",
+    cols = ["viscosity", "max_newton", "seed", "N", "N_ref", "particles", "wall_s", "process_wall_s", "process_cpu_s", "S22", "err_S22_final",
             "err_S22_max_checkpoints", "S22_fit", "err_S22_fit", "newton_iterations", "factorisations", "unconverged_increments", "max_residual"]
     with open(out / f"{a.name}.csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -149,16 +163,23 @@ def main():
         return
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for v in viscs:
-        rr = [r for r in rows if r["viscosity"] == v and r["N"] != r["N_ref"]]
-        if not rr:
-            continue
-        x = [r["process_cpu_s"] if a.time == "cpu" else r["wall_s"] for r in rr]
-        y = [max(100 * r["err_S22_final"], 1e-4) for r in rr]
-        line, = ax.loglog(x, y, "o-", label=f"viscosity {v:g}: S22 at D = 0.85 (ref N = {rr[0]['N_ref']})")
-        ax.loglog(x, [max(100 * r["err_S22_fit"], 1e-4) for r in rr], "s:", color=line.get_color(), alpha=0.7,
-                  label=f"viscosity {v:g}: S22 of a line fit on D in [0.84, 0.85]")
-        for r, xi, yi in zip(rr, x, y):
-            ax.annotate(f"N={r['N']}", (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        for mn in mns:
+            color = None
+            for seed in seeds:
+                rr = [r for r in rows if r["viscosity"] == v and r["max_newton"] == mn and r["seed"] == seed
+                      and r["N"] != r["N_ref"]]
+                if not rr:
+                    continue
+                x = [r["process_cpu_s"] if a.time == "cpu" else r["wall_s"] for r in rr]
+                y = [max(100 * r["err_S22_final"], 1e-4) for r in rr]
+                lab = f"viscosity {v:g}, ≤ {mn} Newton it." + (
+                    f" (solid: seed {seeds[0]}, dotted: seeds {','.join(map(str, seeds[1:]))})" if len(seeds) > 1 else "")
+                line, = ax.loglog(x, y, "o-" if seed == seeds[0] else "o:", color=color, alpha=1.0 if seed == seeds[0] else 0.5,
+                                  label=lab if seed == seeds[0] else None)
+                color = line.get_color()
+                if seed == seeds[0]:
+                    for r, xi, yi in zip(rr, x, y):
+                        ax.annotate(f"N={r['N']}", (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=7)
     ax.axvline(2.0, color="k", ls="--", lw=0.8)
     ax.axhline(1.0, color="k", ls="--", lw=0.8)
     ax.text(2.0, ax.get_ylim()[1], " 2 s target", va="top", fontsize=8)

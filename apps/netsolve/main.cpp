@@ -266,6 +266,7 @@ int main(int argc, char** argv) {
   comp->add_option("--local-threshold", ca.solver.local_threshold, "local sweeps treat particles whose residual exceeds this multiple of the RMS residual")->capture_default_str();
   comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
   comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
+  comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "strain-rate viscosity: the drag of an increment dE is --viscosity x this / |dE| (0: per increment)")->capture_default_str();
   comp->add_option("--viscosity-start", ca.solver.viscosity_start, "viscosity continuation: drag of the first Newton iteration of an increment, reduced to --viscosity (0: off)")->capture_default_str();
   comp->add_option("--viscosity-decay", ca.solver.viscosity_decay, "viscosity continuation: factor per Newton iteration")->capture_default_str();
   comp->add_option("--line-search", ca.line_search, "Newton globalisation: 'energy' (slope of the incremental potential) or 'residual' (backtracking on the RMS residual)")->capture_default_str();

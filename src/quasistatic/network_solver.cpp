@@ -74,6 +74,8 @@ void SolverOptions::validate() const {
   require(kink_freeze_after >= 0 && kink_freeze_after <= 100,
           fmt::format("solver: kink_freeze_after must be in [0, 100], got {}", kink_freeze_after));
   require(max_cuts >= 0 && max_cuts <= 20, fmt::format("solver: max_cuts must be in [0, 20], got {}", max_cuts));
+  require(std::isfinite(viscosity_strain) && viscosity_strain >= 0.0 && viscosity_strain <= 1.0,
+          fmt::format("solver: viscosity_strain must be in [0, 1], got {}", viscosity_strain));
   require(std::isfinite(viscosity_start) && viscosity_start >= 0.0 && viscosity_start <= 1e3,
           fmt::format("solver: viscosity_start must be in [0, 1e3], got {}", viscosity_start));
   require(std::isfinite(viscosity_decay) && viscosity_decay > 0.0 && viscosity_decay < 1.0,
@@ -824,6 +826,7 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
       const double md = s.mean_diagonal();
       s.kl_ref = md;
       eta_target = s.opt.viscosity * md;
+      if (s.opt.viscosity_strain > 0.0 && dE.norm() > 0.0) eta_target *= s.opt.viscosity_strain / dE.norm();
       eta_floor = 1e-6 * md;
       s.eta = std::max(eta_target, s.opt.viscosity_start * md);
     }

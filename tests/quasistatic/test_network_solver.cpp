@@ -222,6 +222,33 @@ TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
   EXPECT_LT(prev, 0.01);
 }
 
+// With a strain-rate viscosity (viscosity_strain > 0) the drag coefficient grows as 1/|dE|, so the
+// drag per unit strain rate is fixed: refining the increments converges to one regularised
+// problem, which stays away from the pure-Newton (rate-independent) solution.
+TEST(NetworkSolver, StrainRateViscosityConvergesToRegularisedProblem) {
+  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
+  qs::SolverOptions so;
+  so.law.mu = kInf;
+  so.residual_tol = 1e-5;
+  so.max_residual_tol = 1e-5;
+  so.max_newton = 300;
+  const double D = pk.density() + 0.02;
+  so.viscosity = 0.0;
+  const double ref = compact(pk, so, qs::StrainPath::hydrostatic(), D, 40).m.S22;
+  so.viscosity = 0.1;
+  so.viscosity_strain = std::sqrt(2.0) * 0.5 * std::log(D / pk.density()) / 10.0;  // |dE| of 10 increments
+  double s[3];
+  const int ns[3] = {10, 40, 160};
+  for (int k = 0; k < 3; ++k) {
+    s[k] = compact(pk, so, qs::StrainPath::hydrostatic(), D, ns[k]).m.S22;
+    std::printf("strain-rate viscosity, %d increments: S22 = %.6f (pure Newton %.6f)\n", ns[k], s[k], ref);
+  }
+  EXPECT_LT(std::fabs(s[2] - s[1]), std::fabs(s[1] - s[0]));  // the increments converge ...
+  EXPECT_GT(std::fabs(s[2] - ref), 2.0 * std::fabs(s[2] - s[1]));  // ... to a problem that keeps its drag
+  so.viscosity_strain = -1.0;
+  EXPECT_THROW(so.validate(), std::invalid_argument);
+}
+
 // A rattler (a small disk loose in a hole of the lattice) has no stiffness at all: the solver must
 // neither fail nor produce NaN, and the drag carries it along with the affine motion.
 TEST(NetworkSolver, RattlerIsHarmless) {

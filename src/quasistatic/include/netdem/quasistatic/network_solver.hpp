@@ -63,6 +63,11 @@ struct SolverOptions {
   /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
   /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
   double viscosity = 0.01;
+  /// 0: the drag coefficient is viscosity x mean stiffness in every increment (so the drag per
+  /// unit strain grows as the increments shrink). > 0: a strain-rate viscosity, the drag
+  /// coefficient of an increment dE is viscosity x mean stiffness x viscosity_strain / |dE|
+  /// (Frobenius norm), so that refining the increments converges to one regularised problem.
+  double viscosity_strain = 0.0;
   /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
   /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
   double linear_tolerance = 1e-3;
