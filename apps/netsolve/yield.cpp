@@ -178,14 +178,24 @@ qs::YieldPoint analytic_point(const Analytic& an, double theta) {
 // ---------------------------------------------------------------------------------------------
 // yield_points.csv and the surface plot from probe records (the .json of each probe).
 const char* kYieldHeader =
-    "probe,theta,S11,S22,S11_offset,S22_offset,S11_analytic,S22_analytic,strain,strain_offset,stress,stress_offset,"
-    "elastic_slope,curvature,increments,unconverged,status,end\n";
+    "probe,theta,S11,S22,S11_offset,S22_offset,S11_analytic,S22_analytic,S11_fabric,S22_fabric,strain,strain_offset,"
+    "stress,stress_offset,elastic_slope,curvature,increments,unconverged,status,end\n";
+
+/// The fabric-resolved affine bound of a probe (stored in the run's setup, one per direction).
+double fabric_value(const json& r, const char* key) {
+  const auto set = r.find("setup");
+  if (set == r.end() || !set->contains("fabric")) return kNaN;
+  const auto& v = (*set)["fabric"][key];
+  const int k = r.at("probe").get<int>();
+  return v.is_array() && k >= 0 && k < static_cast<int>(v.size()) ? from_json(v[static_cast<std::size_t>(k)]) : kNaN;
+}
 
 std::string yield_row(const json& r) {
-  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.at("probe").get<int>(),
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.at("probe").get<int>(),
                      num(from_json(r["theta"])), num(from_json(r["S11"])), num(from_json(r["S22"])),
                      num(from_json(r["S11_offset"])), num(from_json(r["S22_offset"])), num(from_json(r["S11_analytic"])),
-                     num(from_json(r["S22_analytic"])), num(from_json(r["strain"])), num(from_json(r["strain_offset"])),
+                     num(from_json(r["S22_analytic"])), num(fabric_value(r, "S11")), num(fabric_value(r, "S22")),
+                     num(from_json(r["strain"])), num(from_json(r["strain_offset"])),
                      num(from_json(r["stress"])), num(from_json(r["stress_offset"])), num(from_json(r["elastic_slope"])),
                      num(from_json(r["curvature"])), r.value("increments", 0), r.value("unconverged", 0),
                      csv_text(r.value("status", "")), csv_text(r.value("end", "")));
@@ -475,6 +485,15 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   setup["analytic"] = {{"D0", D0},       {"D", loaded.density},      {"Z0", loaded.Z},
                        {"sigma_y", sy},  {"dir11", co.path.E11},     {"dir22", co.path.E22}};
   setup["loading"] = {{"S11", loaded.S11 / sy}, {"S22", loaded.S22 / sy}, {"S12", loaded.S12 / sy}};
+  {  // fabric-resolved affine bound at the loading point, one point per probe direction
+    json f11 = json::array(), f22 = json::array();
+    for (int k = 0; k < a.directions; ++k) {
+      const auto p = qs::fabric_affine_point(*solver, 2 * kPi * k / a.directions, sy);
+      f11.push_back(jnum(p.S11));
+      f22.push_back(jnum(p.S22));
+    }
+    setup["fabric"] = {{"S11", f11}, {"S22", f22}};
+  }
   const Analytic an = make_analytic(setup["analytic"]);
 
   // ---- switch of boundary mode: rebuild the solver from the compacted state (frictionless only)

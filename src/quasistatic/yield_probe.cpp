@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include <Eigen/LU>
 #include <fmt/format.h>
 
 namespace netdem::qs {
@@ -368,6 +369,26 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
     }
   }
   return c;
+}
+
+YieldPoint fabric_affine_point(const NetworkSolver& solver, double theta, double sigma_y) {
+  if (!(std::isfinite(theta) && std::isfinite(sigma_y) && sigma_y > 0.0))
+    throw std::invalid_argument(fmt::format("fabric_affine_point: need a finite theta and sigma_y > 0, got {} and {}", theta, sigma_y));
+  const double e11 = std::cos(theta), e22 = std::sin(theta);
+  const auto& x = solver.x();
+  const auto& y = solver.y();
+  const double area = solver.box_deformation().determinant() * solver.solid_area() / solver.initial_density();
+  double s11 = 0.0, s22 = 0.0;
+  for (const auto& c : solver.contacts()) {
+    const double dx = x[c.j] - x[c.i], dy = y[c.j] - y[c.i];
+    const double L = std::hypot(dx, dy);
+    if (!(L > 0.0)) continue;
+    const double nx = dx / L, ny = dy / L;
+    if (e11 * nx * nx + e22 * ny * ny >= 0.0) continue;  // not compressed by this strain rate
+    s11 -= c.f_n * L * nx * nx;
+    s22 -= c.f_n * L * ny * ny;
+  }
+  return {s11 / (area * sigma_y), s22 / (area * sigma_y)};
 }
 
 }  // namespace netdem::qs

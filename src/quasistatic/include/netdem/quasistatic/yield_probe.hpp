@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "netdem/quasistatic/analytic_yield.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 
 namespace netdem::qs {
@@ -124,6 +125,19 @@ struct YieldEstimate {
 YieldEstimate yield_by_curvature(const std::vector<double>& x, const std::vector<double>& y, const YieldOptions& options = {});
 /// First crossing of the curve with the elastic line shifted by the offset strain.
 YieldEstimate yield_by_offset(const std::vector<double>& x, const std::vector<double>& y, const YieldOptions& options = {});
+
+// ------------------------------------------------------------------------------------------------
+// Fabric-resolved affine bound (our addition; docs/yield.md "Fabric-resolved affine bound")
+
+/// The stress (/ sigma_y, tension positive) of the solver's current state if every load-bearing
+/// contact that the strain rate (cos theta, sin theta) in (E11dot, E22dot) compresses
+/// (n . Edot . n < 0) keeps its normal force and every other contact carries none:
+/// Sigma = -(1/A) sum f_N L n n over those contacts (A = current box area, L = centre distance).
+/// This is Appendix A's rigid-plastic affine surface evaluated on the packing's own contacts,
+/// branch vectors and forces instead of an isotropic distribution of equal disks with a common
+/// force; called at the loading point it gives the affine-affine surface that the probes should
+/// reach. Tangential forces are left out (frictionless surface).
+YieldPoint fabric_affine_point(const NetworkSolver& solver, double theta, double sigma_y);
 
 /// Linear interpolation of v at a fractional index.
 double interpolate_at(const std::vector<double>& v, double position);
