@@ -70,7 +70,18 @@ CASES = {
                      {"path": "hydrostatic", "friction": "inf", "inc_factor": 2}),
     "hydro_mu0_2x": ("hydrostatic, mu = 0, 2x increments",
                      {"path": "hydrostatic", "friction": "0", "inc_factor": 2}),
+    # regularisation study (information, not findings): the frictionless case at weaker viscous drag;
+    # below 0.01 the default Newton settings lose the network, so these use the settings that keep it
+    "hydro_mu0_visc0.003": ("hydrostatic, mu = 0, viscosity 0.003",
+                            {"path": "hydrostatic", "friction": "0",
+                             "extra": ["--viscosity", "0.003", "--max-newton", "20", "--line-search", "energy"]}),
+    "hydro_mu0_visc0.001": ("hydrostatic, mu = 0, viscosity 0.001",
+                            {"path": "hydrostatic", "friction": "0",
+                             "extra": ["--viscosity", "0.001", "--max-newton", "20", "--line-search", "energy"]}),
 }
+VISCOSITY_STUDY = (("hydro_mu0", "0.01 (default)", "≤ 10, residual"),
+                   ("hydro_mu0_visc0.003", "0.003", "≤ 20, energy"),
+                   ("hydro_mu0_visc0.001", "0.001", "≤ 20, energy"))
 
 STYLE = {  # Fig 5-8 line styles: friction level by colour, affine black (solid in the paper)
     "mu0": dict(color="tab:blue", ls="-"),
@@ -95,6 +106,7 @@ def case_args(name, mode):
         a.append("--no-rotation")
     if opts.get("mono"):
         a.append("--mono")
+    a += opts.get("extra", [])
     a.append("--quiet")
     return a
 
@@ -614,6 +626,31 @@ def increment_check(R):
     return lines
 
 
+def viscosity_study(R, out, figs):
+    """Frictionless hydrostatic S22 against the viscous regularisation (information only)."""
+    aff = R.get("hydro_affine")
+    runs = [(R.get(n), v, nw) for n, v, nw in VISCOSITY_STUDY]
+    if not (aff and aff.ok) or not all(r and r.ok for r, _, _ in runs):
+        return []
+    L = ["| viscosity | Newton | S22/S22(affine) at D = " + " / ".join(f"{d:g}" for d in EVAL_D)
+         + " | S22/sy at 0.815 | Z at 0.815 | up-turn D | max ⟨\\|uN-uNA\\|⟩/⟨uNA⟩ | unconverged |",
+         "|---|---|---|---|---|---|---|---|"]
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ax.plot(aff.h["D"], aff.mag("S22"), color="black", label="affine")
+    for (r, v, nw), col in zip(runs, ("tab:blue", "tab:orange", "tab:red")):
+        ratio = " / ".join(fmt(r.at("S22", d) / aff.at("S22", d)) for d in EVAL_D)
+        du, _, _ = upturn_density(r)
+        dev = float(np.nanmax(r.h["dev_un_ratio_of_means"][1:]))
+        L.append(f"| {v} | {nw} | {ratio} | {fmt(r.at('S22', 0.815))} | {fmt(r.at('Z', 0.815), 2)} | {fmt(du, 4)} | "
+                 f"{fmt(dev, 2)} | {r.n_unconverged} / {r.n_increments} |")
+        ax.plot(r.h["D"], r.mag("S22"), color=col, label=f"mu = 0, viscosity {v}")
+    finish(ax, "-S22 / sigma_y", "frictionless hydrostatic compaction against the viscous regularisation", ncol=2)
+    fig.savefig(os.path.join(out, "fig_viscosity_frictionless.png"), dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    figs.append("fig_viscosity_frictionless.png")
+    return L
+
+
 def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_wall):
     rel = os.path.relpath
     L = []
@@ -702,6 +739,19 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
     else:
         L.append("Increment-check runs missing.\n")
 
+    vs = viscosity_study(R, out, figs)
+    if vs:
+        L.append("## Regularisation study (frictionless, hydrostatic)\n")
+        L.append("The frictionless findings (3a, 3b, 7a, 8d) are where the network must rearrange, and there the "
+                 "viscous drag that keeps the Newton iteration stable (docs/quasistatic.md) holds the network "
+                 "closer to the affine motion. Same case at weaker drag (below 0.01 the default Newton settings "
+                 "lose the network, so these runs use up to 20 iterations and the energy line search; they are "
+                 "information, not findings):\n")
+        L += vs
+        L.append("\nThe stress falls and the deviation from the affine motion grows as the drag weakens, without "
+                 "converging yet (each step of 3x less drag lowers S22 by 6-11 %): the frictionless/affine ratio "
+                 "crosses the paper's 0.6, but the paper's near-zero stress before a sharp up-turn does not "
+                 "appear at any drag the solver can hold. The findings table keeps the default solver.\n")
     L.append("## Figures\n")
     captions = {
         "fig4_hydrostatic_mono_poly.png": "Fig 4 style: -S11/sy (dashed) and -S22/sy (solid), hydrostatic, "
@@ -718,6 +768,8 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
         "fig8b_closed_die_tangential_deviation.png": "Fig 8b style: tangential deviation, closed die, and "
                                                      "<|uTA|>/<uNA> of the affine runs.",
         "fig_solver_residual.png": "Solver health: residual at commit per increment, every case.",
+        "fig_viscosity_frictionless.png": "Regularisation study: -S22/sy of the frictionless hydrostatic case at "
+                                          "three viscosities, and the affine run.",
     }
     for fn in figs:
         L.append(f"**{captions.get(fn, fn)}**\n\n![{fn}]({fn})\n")
