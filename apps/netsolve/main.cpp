@@ -47,6 +47,7 @@ struct CompactArgs {
   double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-3;
   int increments = 100, max_newton = 10;
   std::string line_search = "residual";
+  std::string normal_unloading = "reversible";
   netdem::qs::SolverOptions solver;  // defaults of the newer Newton knobs (step limits, sub-stepping, continuation)
 };
 
@@ -118,6 +119,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.law.mu = parse_friction(a.friction);
   so.law.k_t = a.k_t;
   so.law.sigma_y = a.sigma_y;
+  so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
   so.max_newton = a.max_newton;
   so.viscosity = a.viscosity;
@@ -200,6 +202,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
   j["increments"] = co.increments;
   j["k_t"] = so.law.k_t;
+  j["normal_unloading"] = a.normal_unloading;
   j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
@@ -267,6 +270,11 @@ int main(int argc, char** argv) {
   comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
   comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
   comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "strain-rate viscosity: the drag of an increment dE is --viscosity x this / |dE| (0: per increment)")->capture_default_str();
+  comp->add_option("--normal-unloading", ca.normal_unloading,
+                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
+                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4")
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
   comp->add_option("--viscosity-start", ca.solver.viscosity_start, "viscosity continuation: drag of the first Newton iteration of an increment, reduced to --viscosity (0: off)")->capture_default_str();
   comp->add_option("--viscosity-decay", ca.solver.viscosity_decay, "viscosity continuation: factor per Newton iteration")->capture_default_str();
   comp->add_option("--line-search", ca.line_search, "Newton globalisation: 'energy' (slope of the incremental potential) or 'residual' (backtracking on the RMS residual)")->capture_default_str();

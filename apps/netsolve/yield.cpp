@@ -74,6 +74,7 @@ struct YieldArgs {
   std::string packing_file;
   // precompaction
   std::string precompact = "hydrostatic", friction = "inf", compact_bc = "die", probe_bc;
+  std::string normal_unloading = "reversible";  // normal law during the precompaction
   double to_density = 0.85;
   int increments = 100;
   // solver
@@ -406,6 +407,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   so.law.mu = parse_friction(a.friction);
   so.law.k_t = a.k_t;
   so.law.sigma_y = a.sigma_y;
+  so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
   so.max_newton = a.max_newton;
   so.viscosity = a.viscosity;
@@ -474,6 +476,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   setup["precompact"] = a.precompact;
   setup["to_density"] = a.to_density;
   setup["friction"] = a.friction;
+  setup["normal_unloading"] = a.normal_unloading;
   setup["compact_bc"] = bc_name(compact_mode);
   setup["probe_bc"] = bc_name(probe_mode);
   setup["directions"] = a.directions;
@@ -516,6 +519,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
     }
     auto so2 = so;
     so2.mode = probe_mode;
+    so2.law.reversible = false;  // unloading and probing on the section 3.4 branch
     solver = std::make_unique<qs::NetworkSolver>(hp, so2);
     // A new solver has no committed contact forces yet: zero-strain increments evaluate them (and,
     // affine -> die, let the interior relax once the affine constraint is released).
@@ -534,7 +538,9 @@ int run_yield(const YieldArgs& a, const std::string& command) {
     packing::write_packing_csv(hp, out / "packing_compacted.csv");
   }
 
-  // ---- unloading
+  // ---- unloading: from here on the section 3.4 elastic un/reloading branch, every contact
+  // starting at its current overlap
+  solver->set_reversible_normal(false);
   t0 = Clock::now();
   qs::UnloadOptions uo;
   uo.tol = a.unload_tol;
@@ -762,6 +768,11 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--k-t", a.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
     app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
     app.add_option("--max-newton", a.max_newton, "Newton iterations per increment")->capture_default_str();
+    app.add_option("--normal-unloading", a.normal_unloading,
+                   "normal law during the precompaction: 'reversible' (Eq 2 both ways, the paper's compaction) or "
+                   "'elastic' (section 3.4 branch throughout); unloading and probes always use the elastic branch")
+        ->check(CLI::IsMember({"reversible", "elastic"}))
+        ->capture_default_str();
     app.add_option("--viscosity", a.viscosity, "drag on non-affine motion / mean contact stiffness")->capture_default_str();
     app.add_flag("--quiet", a.quiet, "no progress on stderr");
     app.add_option("--out", a.out, "output folder")->capture_default_str();

@@ -1007,6 +1007,23 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
   return rep;
 }
 
+void NetworkSolver::set_reversible_normal(bool reversible) {
+  auto& s = *impl_;
+  if (!reversible && s.opt.law.reversible) {
+    for (std::size_t k = 0; k < s.pi.size(); ++k) {
+      const int i = s.pi[k], j = s.pj[k];
+      const double u =
+          ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]).overlap;
+      s.hist[k].u_max = std::max(u, 0.0);
+      if (u <= 0.0) {
+        s.hist[k].f_t = 0.0;
+        s.hist[k].sliding = 0;
+      }
+    }
+  }
+  s.opt.law.reversible = reversible;
+}
+
 StateMeasures NetworkSolver::measures() const {
   const auto& s = *impl_;
   StateMeasures m;

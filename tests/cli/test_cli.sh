@@ -19,6 +19,7 @@ check_bad negative_radius "r <= 0" compact --packing "$tmp/negr.csv"
 check_bad bad_lid "lid" pack --lid foo
 check_bad negative_width "width" pack --width -3
 check_bad zero_increments "increments" compact --increments 0
+check_bad bad_unloading "normal-unloading" compact --normal-unloading plastic
 # a good small run writes every documented file
 good="$tmp/good"
 if "$ns" compact --width 12 --increments 5 --to-density 0.83 --quiet --out "$good" >/dev/null 2>"$tmp/stderr" &&

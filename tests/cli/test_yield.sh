@@ -12,6 +12,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 check_bad yield_precompact "precompact" yield --precompact sideways
 check_bad yield_directions0 "directions" yield --directions 0
 check_bad yield_probe_slice "probe" yield --directions 4 --probe 5/3
+check_bad yield_unloading "normal-unloading" yield --normal-unloading plastic
 check_bad yield_probe_list "probes" yield --directions 4 --probes 1,7
 check_bad yield_bad_bc "probe-bc" yield --probe-bc sideways
 check_bad yield_mixed_friction "friction 0" yield --compact-bc die --probe-bc affine --friction inf

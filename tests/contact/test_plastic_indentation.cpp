@@ -123,6 +123,49 @@ TEST(PlasticIndentation, UnloadReloadBranch) {
   EXPECT_EQ(r1.history.u_max, umax);
 }
 
+// The reversible normal law (no section 3.4 unloading branch): unloading retraces Eq 2, the
+// contact separates at zero overlap, and the element tangent still matches finite differences.
+TEST(PlasticIndentation, ReversibleNormalLawRetracesEq2) {
+  PlasticIndentationParams p;
+  p.reversible = true;
+  const double reff = 0.5, umax = 0.02;
+  double f, k;
+  NormalBranch b;
+  for (double u : {0.02, 0.015, 0.001}) {
+    normal_force(p, reff, umax, u, f, k, b);
+    EXPECT_EQ(b, NormalBranch::Plastic) << u;
+    EXPECT_DOUBLE_EQ(f, f_plastic(reff, u));
+    EXPECT_DOUBLE_EQ(k, plastic_tangent(p, reff, u));
+  }
+  normal_force(p, reff, umax, -1e-9, f, k, b);
+  EXPECT_EQ(b, NormalBranch::Open);
+  EXPECT_EQ(f, 0.0);
+  EXPECT_EQ(separation_overlap(p, reff, umax), 0.0);
+  // a load-unload-reload cycle through evaluate() keeps the largest overlap as history only
+  PlasticIndentationHistory h{};
+  const auto r1 = evaluate(p, h, reff, umax, 0.0);
+  const auto r2 = evaluate(p, r1.history, reff, 0.5 * umax, 0.0);
+  EXPECT_DOUBLE_EQ(r2.f_n, f_plastic(reff, 0.5 * umax));
+  EXPECT_EQ(r2.history.u_max, umax);
+  // unloading with sticking friction: tangent against central finite differences
+  const double ri = 1.0, rj = 0.9;
+  const Pair start = make_pair(ri, rj, 0.02, 0.7);
+  const PairGeometry g0 = start.geom();
+  PairVec q1 = start.q;
+  q1.segment<2>(3) += 2e-4 * g0.n + 1e-8 * g0.t;
+  Pair end = start;
+  end.q = q1;
+  const PlasticIndentationHistory hs{0.02, 0.05, 0};
+  PairElement e;
+  TangentOptions opt;
+  opt.geometric = true;
+  element(p, hs, g0, end.geom(), 0.0, 0.0, e, &opt);
+  EXPECT_EQ(e.law.branch, NormalBranch::Plastic);
+  EXPECT_LT(e.law.f_n, f_plastic(ri * rj / (ri + rj), 0.02));
+  const PairMat K_fd = fd_tangent(p, hs, start, q1, 1e-9);
+  EXPECT_LT((e.stiffness - K_fd).cwiseAbs().maxCoeff(), 2e-5 * K_fd.cwiseAbs().maxCoeff());
+}
+
 // The tangent of the element matches central finite differences of the force in every regime:
 // first touch, loading, unloading, reloading, stick, slip on both sides of mu_eff = 1/(3 sqrt 3).
 TEST(PlasticIndentation, TangentMatchesFiniteDifferencesInEveryRegime) {

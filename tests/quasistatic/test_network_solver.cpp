@@ -117,6 +117,54 @@ TEST(NetworkSolver, SquareLatticeMatchesClosedForm) {
   }
 }
 
+// Reversible normal law and the switch to the section 3.4 unloading branch, on the square
+// lattice (die boundary conditions, sticking): a reversible load-unload path follows Eq 2 back;
+// after set_reversible_normal(false) the same small unloading follows the elastic line
+// F = F(u1) - unload_ratio k(u1) (u1 - u2) from the switch point, with no force jump at the switch.
+TEST(NetworkSolver, ReversibleLawAndSwitchToElasticUnloading) {
+  const int nc = 6, nr = 5;
+  const auto pk = square_lattice(nc, nr);
+  qs::SolverOptions so;
+  so.law.mu = kInf;
+  so.law.reversible = true;
+  so.residual_tol = 1e-10;
+  so.max_residual_tol = 1e-10;
+  so.max_newton = 50;
+  const double e_load = -0.01, e_back = 1e-5;
+  auto hydro = [](double e) { return Eigen::Matrix2d(Eigen::Vector2d(e, e).asDiagonal()); };
+  auto run = [&](bool switch_branch) {
+    qs::NetworkSolver s(pk, so);
+    for (int k = 0; k < 10; ++k) EXPECT_TRUE(s.increment(hydro(e_load / 10)).converged);
+    const auto loaded = s.measures();
+    if (switch_branch) {
+      s.set_reversible_normal(false);
+      EXPECT_TRUE(s.increment(hydro(0.0)).converged);
+      const auto same = s.measures();
+      EXPECT_NEAR(same.S22, loaded.S22, 1e-9 * std::fabs(loaded.S22));  // no jump at the switch
+    }
+    EXPECT_TRUE(s.increment(hydro(e_back)).converged);
+    return s.measures();
+  };
+  const double E2 = e_load + e_back;
+  // reversible: Eq 2 at the end strain
+  const auto rev = run(false);
+  const auto expect_rev = lattice_stress(nc, nr, 1.0, E2, E2, so.law.sigma_y);
+  EXPECT_NEAR(rev.S22, expect_rev(1), 1e-7 * std::fabs(expect_rev(1)));
+  EXPECT_NEAR(rev.S11, expect_rev(0), 1e-7 * std::fabs(expect_rev(1)));
+  // elastic unloading branch after the switch
+  const auto el = run(true);
+  const double R = 1.0, reff = 0.5;
+  const double u1 = 2 * R * (1 - std::exp(e_load)), u2 = 2 * R * (1 - std::exp(E2));
+  const double f1 = 3 * so.law.sigma_y * std::sqrt(8 * u1 * reff), k1 = 3 * so.law.sigma_y * std::sqrt(2 * reff / u1);
+  const double f2 = f1 - so.law.unload_ratio * k1 * (u1 - u2);
+  ASSERT_GT(f2, 0.0);
+  ASSERT_LT(f2, 0.9 * f1);  // a real drop: the test sees the 10^3 stiffer branch
+  const double L = 2 * R * std::exp(E2);
+  const double V = (2 * R * nc) * (2 * R * nr) * std::exp(2 * E2);
+  EXPECT_NEAR(el.S22, -(nc * (nr - 1)) * f2 * L / V, 1e-6 * std::fabs(expect_rev(1)));
+  EXPECT_NEAR(el.S11, -(nr * (nc - 1)) * f2 * L / V, 1e-6 * std::fabs(expect_rev(1)));
+}
+
 // On a random packing the stress from the boundary reactions (Eq 13) equals the contact
 // (Love-Weber) average when the free particles are in equilibrium.
 TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {

@@ -34,6 +34,9 @@ struct PlasticIndentationParams {
   double mu = std::numeric_limits<double>::infinity();  ///< Coulomb coefficient; inf = sticking
   double k_t = 1.0e3;         ///< tau = k_t u_T: shear stress per unit slip [sigma_y / R]
   double unload_ratio = 1.0e3;  ///< elastic un/reloading stiffness / loading tangent at u_max
+  /// true: no elastic unloading branch, unloading follows Eq 2 back (nonlinear elastic normal law,
+  /// the incremental Eq 3 read literally); false: the section 3.4 unloading branch
+  bool reversible = false;
 
   /// min(mu, 1/(3 sqrt 3)): the Coulomb limit and the shear cap tau_y = sigma_y/sqrt(3) combined.
   double mu_eff() const { return std::fmin(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
@@ -74,6 +77,7 @@ inline double plastic_tangent(const PlasticIndentationParams& p, double r_eff, d
 /// Normal force on the branch selected by the committed u_max (no history change).
 inline void normal_force(const PlasticIndentationParams& p, double r_eff, double u_max, double u,
                          double& f, double& k, NormalBranch& branch) {
+  if (p.reversible) u_max = 0.0;
   if (u >= u_max && u > 0.0) {  // loading: Eq 2
     f = plastic_force(p, r_eff, u);
     k = plastic_tangent(p, r_eff, u);
@@ -97,7 +101,7 @@ inline void normal_force(const PlasticIndentationParams& p, double r_eff, double
 
 /// Overlap at which a contact with history u_max carries no force (u_max for a fresh contact).
 inline double separation_overlap(const PlasticIndentationParams& p, double r_eff, double u_max) {
-  if (u_max <= 0.0) return 0.0;
+  if (u_max <= 0.0 || p.reversible) return 0.0;
   return u_max - plastic_force(p, r_eff, u_max) / (p.unload_ratio * plastic_tangent(p, r_eff, u_max));
 }
 

@@ -157,6 +157,12 @@ class NetworkSolver {
   /// Throws std::runtime_error with a one-line message on a singular/indefinite system or NaN.
   IncrementReport increment(const Eigen::Matrix2d& dE);
 
+  /// Switches the normal law between reversible Eq 2 (compaction as in sections 2-3.3 of the
+  /// paper) and the section 3.4 elastic unloading branch (yield-surface probing). Switching the
+  /// branch on starts every touching contact at its current overlap (u_max := overlap), so no force
+  /// jumps; pairs apart start fresh. Takes effect from the next increment.
+  void set_reversible_normal(bool reversible);
+
   StateMeasures measures() const;
   const SolverTimings& timings() const;
 
