@@ -15,6 +15,11 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& tex
 /// Creates the output folder (and parents). Throws std::runtime_error (one line) on failure.
 void make_output_dir(const std::filesystem::path& dir);
 
+/// make_output_dir, then removes the summary.json of an earlier run in that folder: summary.json is
+/// written last and marks a finished run, so a run that fails must not leave the old one behind
+/// next to its own first files.
+void start_run_dir(const std::filesystem::path& dir);
+
 /// A named point-data field for VTK output.
 struct Field {
   std::string name;

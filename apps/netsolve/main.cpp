@@ -67,7 +67,7 @@ std::vector<double> parse_list(const std::string& s, const char* what) {
 }
 
 void write_common(const fs::path& out) {
-  netdem::app::make_output_dir(out);
+  netdem::app::start_run_dir(out);
   netdem::app::write_file_atomic(out / "command.txt", g_command + "\n");
 }
 

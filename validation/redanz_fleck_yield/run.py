@@ -62,7 +62,8 @@ def case_args(name, scale, jobs):
     _, pre, cbc, pbc, mu = CASES[name]
     return ["yield", "--width", str(scale["width"]), "--increments", str(scale["increments"]),
             "--directions", str(scale["directions"]), "--precompact", pre, "--compact-bc", cbc,
-            "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--jobs", str(jobs), "--quiet"]
+            "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--normal-unloading", "reversible",
+            "--jobs", str(jobs), "--quiet"]
 
 
 def run_case(binary, name, scale, runs, jobs, force):
