@@ -249,17 +249,31 @@ TEST(NetworkSolver, RejectsImpossibleTargetsAndBadOptions) {
 
 // The viscous regularisation acts on the non-affine motion per increment, so its effect on the
 // stress vanishes as the increments shrink: the regularised runs approach the pure-Newton one.
-TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
+namespace {
+// Sticking friction on a small random packing with a tight Newton tolerance, compacted by 0.02 in
+// density; ref = S22 of pure Newton (no drag) in 40 increments; so comes back with viscosity 0.1.
+struct DragCase {
+  packing::Packing pk;
   qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.residual_tol = 1e-5;
-  so.max_residual_tol = 1e-5;
-  so.max_newton = 300;
-  const double D = pk.density() + 0.02;
-  so.viscosity = 0.0;
-  const double ref = compact(pk, so, qs::StrainPath::hydrostatic(), D, 40).m.S22;
-  so.viscosity = 0.1;
+  double D = 0, ref = 0;
+};
+DragCase drag_case() {
+  DragCase c;
+  c.pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
+  c.so.law.mu = kInf;
+  c.so.residual_tol = 1e-5;
+  c.so.max_residual_tol = 1e-5;
+  c.so.max_newton = 300;
+  c.D = c.pk.density() + 0.02;
+  c.so.viscosity = 0.0;
+  c.ref = compact(c.pk, c.so, qs::StrainPath::hydrostatic(), c.D, 40).m.S22;
+  c.so.viscosity = 0.1;
+  return c;
+}
+}  // namespace
+
+TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
+  auto [pk, so, D, ref] = drag_case();
   double prev = kInf;
   for (int n : {10, 40, 160}) {
     const double err = std::fabs(compact(pk, so, qs::StrainPath::hydrostatic(), D, n).m.S22 - ref) / std::fabs(ref);
@@ -274,16 +288,7 @@ TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
 // drag per unit strain rate is fixed: refining the increments converges to one regularised
 // problem, which stays away from the pure-Newton (rate-independent) solution.
 TEST(NetworkSolver, StrainRateViscosityConvergesToRegularisedProblem) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.residual_tol = 1e-5;
-  so.max_residual_tol = 1e-5;
-  so.max_newton = 300;
-  const double D = pk.density() + 0.02;
-  so.viscosity = 0.0;
-  const double ref = compact(pk, so, qs::StrainPath::hydrostatic(), D, 40).m.S22;
-  so.viscosity = 0.1;
+  auto [pk, so, D, ref] = drag_case();
   so.viscosity_strain = std::sqrt(2.0) * 0.5 * std::log(D / pk.density()) / 10.0;  // |dE| of 10 increments
   double s[3];
   const int ns[3] = {10, 40, 160};

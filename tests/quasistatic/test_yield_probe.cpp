@@ -29,6 +29,25 @@ std::vector<double> probe_strains(double h, double x_max) {
   return x;
 }
 
+// W = 20R packing (seed 3), affine frictionless hydrostatic compaction to D = 0.85 in 20 increments.
+struct AffineCase {
+  packing::Packing pk;
+  qs::SolverOptions so;
+  qs::CompactionOptions co;
+};
+AffineCase affine_case() {
+  AffineCase c;
+  packing::DepositionOptions d;
+  d.width = 20;
+  d.seed = 3;
+  c.pk = packing::ballistic_deposition(d);
+  c.so.mode = qs::BoundaryMode::Affine;
+  c.so.law.mu = 0.0;
+  c.co.target_density = 0.85;
+  c.co.increments = 20;
+  return c;
+}
+
 // Bilinear elastic-plastic curve: slope k up to the kink (xk, k xk), then slope hp.
 double bilinear(double x, double k, double xk, double hp) { return x <= xk ? k * x : k * xk + hp * (x - xk); }
 
@@ -176,16 +195,7 @@ TEST(YieldProbe, NoYieldPointWithoutKnee) {
 // (frictionless), unloaded to |Sigma| < 1e-3 sigma_y, then reloaded along the loading direction
 // (theta = 225 deg) and along a tensile direction (45 deg).
 TEST(YieldProbe, AffineProbeAlongLoadingDirectionYieldsAtLoadingPoint) {
-  packing::DepositionOptions d;
-  d.width = 20;
-  d.seed = 3;
-  const auto pk = packing::ballistic_deposition(d);
-  qs::SolverOptions so;
-  so.mode = qs::BoundaryMode::Affine;
-  so.law.mu = 0.0;
-  qs::CompactionOptions co;
-  co.target_density = 0.85;
-  co.increments = 20;
+  const auto [pk, so, co] = affine_case();
   qs::StateMeasures loaded;
   // compact, remember the loaded state, unload (each probe needs its own copy: netsolve forks)
   auto prepare = [&](qs::NetworkSolver& s) {
@@ -286,16 +296,7 @@ TEST(YieldProbe, DieProbesEndWithReasonNotException) {
 // maximises the dissipation Sigma : Edot over the points of all other directions (normality); and
 // an affine-affine frictionless probe reaches it at the offset point.
 TEST(YieldProbe, FabricAffineBound) {
-  packing::DepositionOptions d;
-  d.width = 20;
-  d.seed = 3;
-  const auto pk = packing::ballistic_deposition(d);
-  qs::SolverOptions so;
-  so.mode = qs::BoundaryMode::Affine;
-  so.law.mu = 0.0;
-  qs::CompactionOptions co;
-  co.target_density = 0.85;
-  co.increments = 20;
+  const auto [pk, so, co] = affine_case();
   qs::NetworkSolver s(pk, so);
   qs::run_compaction(s, co, [](const qs::CompactionRow&) {});
   const auto loaded = s.measures();
