@@ -48,6 +48,21 @@ AffineCase affine_case() {
   return c;
 }
 
+// The columns of a reloading curve: strain, stress, S11, S22.
+struct Columns {
+  std::vector<double> x, y, s11, s22;
+};
+Columns columns(const qs::ProbeCurve& c) {
+  Columns r;
+  for (const auto& p : c.samples) {
+    r.x.push_back(p.strain);
+    r.y.push_back(p.stress);
+    r.s11.push_back(p.S11);
+    r.s22.push_back(p.S22);
+  }
+  return r;
+}
+
 // Bilinear elastic-plastic curve: slope k up to the kink (xk, k xk), then slope hp.
 double bilinear(double x, double k, double xk, double hp) { return x <= xk ? k * x : k * xk + hp * (x - xk); }
 
@@ -217,13 +232,7 @@ TEST(YieldProbe, AffineProbeAlongLoadingDirectionYieldsAtLoadingPoint) {
   const auto c = qs::probe(s, 1.25 * std::numbers::pi, 1.0, po);
   ASSERT_GT(c.samples.size(), 25u) << c.end;
   EXPECT_EQ(c.end, "past offset");
-  std::vector<double> x, y, s11, s22;
-  for (const auto& p : c.samples) {
-    x.push_back(p.strain);
-    y.push_back(p.stress);
-    s11.push_back(p.S11);
-    s22.push_back(p.S22);
-  }
+  const auto [x, y, s11, s22] = columns(c);
   qs::YieldOptions yo;
   yo.min_rise = 0.02 * un.loading_norm;
   const auto yc = qs::yield_by_curvature(x, y, yo);
@@ -329,13 +338,7 @@ TEST(YieldProbe, FabricAffineBound) {
   const auto at_load = pts[30];                                // 150 degrees at the loading point
   EXPECT_NE(bound.S11, at_load.S11);
   const auto c = qs::probe(s, theta, 1.0, po);
-  std::vector<double> x, y, s11, s22;
-  for (const auto& p : c.samples) {
-    x.push_back(p.strain);
-    y.push_back(p.stress);
-    s11.push_back(p.S11);
-    s22.push_back(p.S22);
-  }
+  const auto [x, y, s11, s22] = columns(c);
   qs::YieldOptions yo;
   yo.min_rise = 0.02 * un.loading_norm;
   const auto yf = qs::yield_by_offset(x, y, yo);
