@@ -48,9 +48,11 @@ CASES = {
     "die_AA_mu0": ("affine-affine, mu = 0", "closed-die", "affine", "affine", "0"),
     "die_LL_mu0": ("l.r.-l.r., mu = 0", "closed-die", "die", "die", "0"),
     "die_LL_inf": ("l.r.-l.r., sticking", "closed-die", "die", "die", "inf"),
+    "hydro_AA_inf": ("affine-affine, sticking", "hydrostatic", "affine", "affine", "inf"),
 }
 STYLE = {
     "AA_mu0": dict(color="black", marker="o"),
+    "AA_inf": dict(color="dimgray", marker="x"),
     "LL_mu0": dict(color="tab:blue", marker="s"),
     "LL_inf": dict(color="tab:green", marker="^"),
     "LA_mu0": dict(color="tab:orange", marker="D"),
@@ -102,12 +104,14 @@ def radius(p, kind):
     return math.hypot(a, b)
 
 
-def analytic_curve(summ, n=721):
-    """The affine analytic surface of the run (numpy port of docs/yield_analytic.md, elementary forms)."""
+def analytic_curve(summ, n=721, z0=None):
+    """The affine analytic surface of the run (numpy port of docs/yield_analytic.md, elementary forms),
+    with the run's measured Z0 or the given one."""
     sys.path.insert(0, HERE)
     from analytic_surface import closed_form  # noqa: E402
     a = summ["setup"]["analytic"]
-    d0, d, z0 = a["D0"], a["D"], a["Z0"]
+    d0, d = a["D0"], a["D"]
+    z0 = a["Z0"] if z0 is None else z0
     tr = math.log(d / d0)  # -(E11 + E22)
     E11, E22 = (-tr / 2, -tr / 2) if a["dir11"] == a["dir22"] else (0.0, -tr)
     th = np.linspace(0, 2 * math.pi, n)
@@ -140,6 +144,26 @@ def analytic_ratios(A, kind, min_frac=0.1, ref="analytic"):
             continue
         out.append((k, p["theta"], radius(p, kind) / ra))
     return out
+
+
+def kink_angle(A, kind):
+    """Angle (deg) between the secants from the yield point of the probe along the loading direction
+    to its nearest found neighbours on either side (0 = smooth, large = vertex); nan if missing."""
+    pts = A["summary"]["setup"]["analytic"]
+    th_load = math.degrees(math.atan2(pts["dir22"], pts["dir11"])) % 360
+    P = A["points"]
+    key = ("S11", "S22") if kind == "curv" else ("S11_offset", "S22_offset")
+    found = sorted(k for k, p in P.items() if math.isfinite(p[key[0]]))
+    at = [k for k in found if abs((P[k]["theta"] - th_load + 180) % 360 - 180) < 1e-6]
+    if not at:
+        return math.nan
+    i = found.index(at[0])
+    if i == 0 or i == len(found) - 1:
+        return math.nan
+    xy = [np.array([P[k][key[0]], P[k][key[1]]]) for k in (found[i - 1], found[i], found[i + 1])]
+    a, b = xy[1] - xy[0], xy[2] - xy[1]
+    c = float(np.dot(a, b) / (np.linalg.norm(a) * np.linalg.norm(b)))
+    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
 
 
 def vertex_count(A, kind, tol=0.02):
@@ -179,7 +203,10 @@ def fig(runs, names, title, path, outdir):
     fig_, ax = plt.subplots(figsize=(6.2, 6.2))
     first = load(runs, names[0])
     ana = analytic_curve(first["summary"])
-    ax.plot(ana[:, 0], ana[:, 1], "--", color="gray", lw=1.2, label="analytic affine (App. A)")
+    ax.plot(ana[:, 0], ana[:, 1], "--", color="gray", lw=1.2,
+            label=f"analytic affine (App. A), measured Z0 = {first['summary']['setup']['analytic']['Z0']:.2f}")
+    ana4 = analytic_curve(first["summary"], z0=4.0)
+    ax.plot(ana4[:, 0], ana4[:, 1], ":", color="gray", lw=1.0, label="analytic affine (App. A), Z0 = 4.0")
     aa = next((n for n in names if "_AA_" in n), None)
     if aa:
         fp = [load(runs, aa)["points"][k] for k in sorted(load(runs, aa)["points"])]
@@ -307,9 +334,21 @@ def main():
         ll = C.get(f"{pre}_LL_mu0")
         if aa and ll:
             for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                add(f"{pname}: kink angle at the loading point between the secants to the neighbouring yield "
+                    f"points, affine-affine vs l.r.-l.r. μ=0 ({kl})",
+                    f"{kink_angle(aa, kind):.0f}° vs {kink_angle(ll, kind):.0f}°", "-", None,
+                    "the paper: a vertex for affine-affine, rounded for l.r.-l.r. (smaller angle = smoother)")
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
                 r, n = size_ratio(ll, aa, kind)
                 add(f"{pname}: l.r.-l.r. μ=0 surface / affine-affine size ({kl})", f"{r:.2f} (median of {n} directions)",
                     "0.4-0.6", 0.4 <= r <= 0.6)
+        ai = C.get(f"{pre}_AA_inf")
+        if aa and ai:
+            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                r, n = size_ratio(ai, aa, kind)
+                add(f"{pname}: affine-affine sticking / frictionless size ({kl})", f"{r:.2f} (median of {n})",
+                    "0.9-1.1 (ours)", 0.9 <= r <= 1.1,
+                    "section 3.4 citing [2, 7]: friction has only a minor effect when affine deformation is imposed")
         li = C.get(f"{pre}_LL_inf")
         if ll and li:
             for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
