@@ -21,7 +21,7 @@ namespace netdem::app::dem {
 namespace {
 
 void write_common(const std::string& command, const SolverState& st, const fs::path& out, nlohmann::json extra) {
-  make_output_dir(out);
+  start_run_dir(out);
   write_file_atomic(out / "command.txt", command + "\n");
   nlohmann::json params;
   for (const auto& name : luding_param_names()) params[name] = get_luding_param(st.params, name);

@@ -365,7 +365,7 @@ int run_protocol(const std::string& command, const SampleArgs& sample, const Run
     summary["seed"] = sample.seed;
     summary["arrangement"] = sample.arrangement;
   }
-  make_output_dir(out);
+  start_run_dir(out);
   write_file_atomic(out / "command.txt", command + "\n");
   nlohmann::json params;
   for (const auto& name : luding_param_names()) params[name] = get_luding_param(s->params(), name);
