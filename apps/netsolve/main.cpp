@@ -44,7 +44,7 @@ std::string g_command;
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
   std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-3;
+  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-2;
   int increments = 100, max_newton = 10;
   std::string line_search = "residual";
   std::string normal_unloading = "reversible";

@@ -70,7 +70,7 @@ struct SolverOptions {
   double viscosity_strain = 0.0;
   /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
   /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
-  double linear_tolerance = 1e-3;
+  double linear_tolerance = 1e-2;
   /// A contact whose stick/slip status flipped this many times within an increment keeps its
   /// elastic-predictor (stick) tangential stiffness in the iteration matrix (open/closed flips:
   /// always after two, with the last closed normal stiffness).
