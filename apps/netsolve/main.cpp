@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/LU>
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -189,8 +190,22 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   app::write_file_atomic(out / "history.csv", csv);
   write_snapshot(solver, out, "final");
   const auto& tm = solver.timings();
+  // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
+  // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
+  int outside = 0;
+  {
+    const Eigen::Matrix2d Finv = solver.box_deformation().inverse();
+    for (std::size_t p = 0; p < solver.size(); ++p) {
+      const Eigen::Vector2d q = Finv * Eigen::Vector2d(solver.x()[p], solver.y()[p]);  // in the initial box
+      outside += q.x() < pk.box.x_min || q.x() > pk.box.x_max || q.y() < pk.box.y_min || q.y() > pk.box.y_max;
+    }
+  }
+  if (outside > 0)
+    std::fprintf(stderr, "netsolve: warning: %d disk centres left the box between the peripheral disks (die mode)\n",
+                 outside);
   nlohmann::json j;
   j["command"] = g_command;
+  j["centres_outside_box"] = outside;
   j["packing"] = source;
   j["seed"] = pk.seed;
   j["particles"] = pk.size();

@@ -26,6 +26,7 @@ if "$ns" compact --width 12 --increments 5 --to-density 0.83 --quiet --out "$goo
    [ -s "$good/history.csv" ] && [ -s "$good/summary.json" ] && [ -s "$good/command.txt" ] && [ -s "$good/packing.csv" ] &&
    [ -s "$good/particles_final.vtp" ] && [ -s "$good/contacts_final.vtp" ] &&
    head -1 "$good/history.csv" | grep -q "D,S11,S22,S12" && grep -q '"seed"' "$good/summary.json" &&
+   grep -q '"centres_outside_box": 0' "$good/summary.json" &&
    [ "$(find "$good" -name '.*tmp*' | wc -l)" -eq 0 ]; then
   pass=$((pass + 1))
 else
