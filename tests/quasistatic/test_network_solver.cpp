@@ -81,6 +81,25 @@ RunResult compact(const packing::Packing& pk, const qs::SolverOptions& so, const
   return rr;
 }
 
+// Pure Newton (no drag) to 1e-5 of the mean contact force with sticking friction on the small
+// random packing (seed 3), compacted hydrostatically by 0.02 in density.
+struct NewtonCase {
+  packing::Packing pk;
+  qs::SolverOptions so;
+  double D = 0;
+};
+NewtonCase sticking_newton_case() {
+  NewtonCase c;
+  c.pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
+  c.so.law.mu = kInf;
+  c.so.viscosity = 0.0;
+  c.so.residual_tol = 1e-5;
+  c.so.max_residual_tol = 1e-5;
+  c.so.max_newton = 300;
+  c.D = c.pk.density() + 0.02;
+  return c;
+}
+
 }  // namespace
 
 // Square lattice, hydrostatic and closed-die, affine and die boundary conditions, with and
@@ -168,24 +187,16 @@ TEST(NetworkSolver, ReversibleLawAndSwitchToElasticUnloading) {
 // On a random packing the stress from the boundary reactions (Eq 13) equals the contact
 // (Love-Weber) average when the free particles are in equilibrium.
 TEST(NetworkSolver, ReactionStressEqualsContactStressAtEquilibrium) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  for (double mu : {kInf}) {
-    qs::SolverOptions so;
-    so.law.mu = mu;
-    so.viscosity = 0.0;  // pure Newton: the drag would be an external force
-    so.residual_tol = 1e-5;
-    so.max_residual_tol = 1e-5;
-    so.max_newton = 300;
-    auto rr = compact(pk, so, qs::StrainPath::hydrostatic(), pk.density() + 0.02, 40);
-    EXPECT_LT(rr.m.S22, 0.0);
-    EXPECT_LT(rr.m.S11, 0.0);
-    EXPECT_EQ(rr.unconverged, 0);
-    const double tol = 1e-4 * std::fabs(rr.m.S22);  // residual <= 1e-5 of the mean contact force
-    EXPECT_NEAR(rr.m.S11, rr.m.S11_contacts, tol) << "mu=" << mu;
-    EXPECT_NEAR(rr.m.S22, rr.m.S22_contacts, tol) << "mu=" << mu;
-    std::printf("mu=%g: S11=%.5f S22=%.5f (contacts %.5f %.5f), Z=%.3f, unconverged %d, max residual %.2e\n", mu,
-                rr.m.S11, rr.m.S22, rr.m.S11_contacts, rr.m.S22_contacts, rr.m.Z, rr.unconverged, rr.max_residual);
-  }
+  const auto [pk, so, D] = sticking_newton_case();  // pure Newton: a drag would be an external force
+  const auto rr = compact(pk, so, qs::StrainPath::hydrostatic(), D, 40);
+  EXPECT_LT(rr.m.S22, 0.0);
+  EXPECT_LT(rr.m.S11, 0.0);
+  EXPECT_EQ(rr.unconverged, 0);
+  const double tol = 1e-4 * std::fabs(rr.m.S22);  // residual <= 1e-5 of the mean contact force
+  EXPECT_NEAR(rr.m.S11, rr.m.S11_contacts, tol);
+  EXPECT_NEAR(rr.m.S22, rr.m.S22_contacts, tol);
+  std::printf("sticking: S11=%.5f S22=%.5f (contacts %.5f %.5f), Z=%.3f, unconverged %d, max residual %.2e\n",
+              rr.m.S11, rr.m.S22, rr.m.S11_contacts, rr.m.S22_contacts, rr.m.Z, rr.unconverged, rr.max_residual);
 }
 
 // Affine mode on a random packing: with no rearrangement the contact overlaps follow Eq 16 and
@@ -204,14 +215,7 @@ TEST(NetworkSolver, AffineModeHasNoAffineDeviation) {
 
 // Equilibrium correction: the final stress converges as the strain increment shrinks.
 TEST(NetworkSolver, IncrementConvergence) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.viscosity = 0.0;
-  so.residual_tol = 1e-5;
-  so.max_residual_tol = 1e-5;
-  so.max_newton = 300;
-  const double D = pk.density() + 0.02;
+  const auto [pk, so, D] = sticking_newton_case();
   const int ref_n = 160;
   const auto ref_run = compact(pk, so, qs::StrainPath::hydrostatic(), D, ref_n);
   ASSERT_EQ(ref_run.unconverged, 0);
@@ -247,31 +251,24 @@ TEST(NetworkSolver, RejectsImpossibleTargetsAndBadOptions) {
   EXPECT_THROW(qs::NetworkSolver(pk, so), std::invalid_argument);
 }
 
-// The viscous regularisation acts on the non-affine motion per increment, so its effect on the
-// stress vanishes as the increments shrink: the regularised runs approach the pure-Newton one.
 namespace {
-// Sticking friction on a small random packing with a tight Newton tolerance, compacted by 0.02 in
-// density; ref = S22 of pure Newton (no drag) in 40 increments; so comes back with viscosity 0.1.
+// sticking_newton_case() with ref = S22 of pure Newton in 40 increments; so comes back with
+// viscosity 0.1.
 struct DragCase {
   packing::Packing pk;
   qs::SolverOptions so;
   double D = 0, ref = 0;
 };
 DragCase drag_case() {
-  DragCase c;
-  c.pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  c.so.law.mu = kInf;
-  c.so.residual_tol = 1e-5;
-  c.so.max_residual_tol = 1e-5;
-  c.so.max_newton = 300;
-  c.D = c.pk.density() + 0.02;
-  c.so.viscosity = 0.0;
-  c.ref = compact(c.pk, c.so, qs::StrainPath::hydrostatic(), c.D, 40).m.S22;
-  c.so.viscosity = 0.1;
-  return c;
+  auto [pk, so, D] = sticking_newton_case();
+  const double ref = compact(pk, so, qs::StrainPath::hydrostatic(), D, 40).m.S22;
+  so.viscosity = 0.1;
+  return {pk, so, D, ref};
 }
 }  // namespace
 
+// The viscous regularisation acts on the non-affine motion per increment, so its effect on the
+// stress vanishes as the increments shrink: the regularised runs approach the pure-Newton one.
 TEST(NetworkSolver, ViscousDragVanishesWithIncrementSize) {
   auto [pk, so, D, ref] = drag_case();
   double prev = kInf;
@@ -396,14 +393,7 @@ TEST(NetworkSolver, SubsteppingReproducesUniformFinerIncrements) {
 // converge faster here (measured: still unconverged sub-steps at 1/64 of the increment), but the
 // cut run must stay as accurate as a converged 10-increment run (test IncrementConvergence).
 TEST(NetworkSolver, SubsteppingKeepsAccuracy) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.viscosity = 0.0;
-  so.residual_tol = 1e-5;
-  so.max_residual_tol = 1e-5;
-  const double D = pk.density() + 0.02;
-  so.max_newton = 300;
+  auto [pk, so, D] = sticking_newton_case();
   const auto ref = compact_with_cuts(pk, so, D, 160);
   ASSERT_EQ(ref.rr.unconverged, 0);
   so.max_newton = 10;
@@ -425,14 +415,7 @@ TEST(NetworkSolver, SubsteppingKeepsAccuracy) {
 // fraction and late freezing, pure Newton (no drag) on the 20R packing with sticking friction
 // converges to 1e-5 of the mean contact force in a fraction of the iterations, to the same state.
 TEST(NetworkSolver, SmallSlideStiffnessConvergesFaster) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.viscosity = 0.0;
-  so.residual_tol = 1e-5;
-  so.max_residual_tol = 1e-5;
-  so.max_newton = 300;
-  const double D = pk.density() + 0.02;
+  auto [pk, so, D] = sticking_newton_case();
   const auto old_run = compact_with_cuts(pk, so, D, 10);
   so.slide_stiffness_fraction = 0.01;
   so.freeze_after = 8;
