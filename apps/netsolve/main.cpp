@@ -44,11 +44,11 @@ std::string g_command;
 
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
-  std::string path = "hydrostatic", friction = "inf", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, slide_fraction = 0.05, linear_tol = 1e-2;
-  int increments = 100, max_newton = 10;
+  std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
+  double to_density = 0.85, slide_fraction = 0.05, linear_tol = 1e-2;
+  int increments = 100;
   std::string line_search = "residual";
-  std::string normal_unloading = "reversible";
+  netdem::app::netsolve::LawArgs law;
   netdem::qs::SolverOptions solver;  // defaults of the newer Newton knobs (step limits, sub-stepping, continuation)
 };
 
@@ -117,13 +117,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
   so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
   so.rotations = !a.no_rotation;
-  so.law.mu = parse_friction(a.friction);
-  so.law.k_t = a.k_t;
-  so.law.sigma_y = a.sigma_y;
-  so.law.reversible = a.normal_unloading == "reversible";
-  so.residual_tol = a.tol;
-  so.max_newton = a.max_newton;
-  so.viscosity = a.viscosity;
+  netdem::app::netsolve::apply_law_args(a.law, so);
   so.slide_stiffness_fraction = a.slide_fraction;
   so.geometric_stiffness = a.geometric;
   so.linear_tolerance = a.linear_tol;
@@ -211,13 +205,13 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   j["particles"] = pk.size();
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
-  j["friction"] = a.friction;
+  j["friction"] = a.law.friction;
   j["mode"] = a.affine ? "affine" : "die";
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
   j["increments"] = co.increments;
   j["k_t"] = so.law.k_t;
-  j["normal_unloading"] = a.normal_unloading;
+  j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
@@ -262,16 +256,10 @@ int main(int argc, char** argv) {
   comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
   comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
   comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
-  comp->add_option("--friction", ca.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
   comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");
   comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
-  comp->add_option("--k-t", ca.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
-  comp->add_option("--sigma-y", ca.sigma_y, "yield stress of the solid")->capture_default_str();
-  comp->add_option("--tol", ca.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
-  comp->add_option("--max-newton", ca.max_newton, "Newton iterations per increment")->capture_default_str();
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
-  comp->add_option("--viscosity", ca.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")->capture_default_str();
   comp->add_option("--slide-fraction", ca.slide_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
   comp->add_option("--linear-tol", ca.linear_tol, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_flag("--geometric-stiffness", ca.geometric, "add the geometric stiffness of the contact forces to the iteration matrix");
@@ -285,11 +273,9 @@ int main(int argc, char** argv) {
   comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
   comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
   comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "strain-rate viscosity: the drag of an increment dE is --viscosity x this / |dE| (0: per increment)")->capture_default_str();
-  comp->add_option("--normal-unloading", ca.normal_unloading,
-                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
-                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4")
-      ->check(CLI::IsMember({"reversible", "elastic"}))
-      ->capture_default_str();
+  netdem::app::netsolve::add_law_options(*comp, ca.law,
+                  "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
+                  "'elastic' follows the 10^3 stiffer unloading line of section 3.4");
   comp->add_option("--viscosity-start", ca.solver.viscosity_start, "viscosity continuation: drag of the first Newton iteration of an increment, reduced to --viscosity (0: off)")->capture_default_str();
   comp->add_option("--viscosity-decay", ca.solver.viscosity_decay, "viscosity continuation: factor per Newton iteration")->capture_default_str();
   comp->add_option("--line-search", ca.line_search, "Newton globalisation: 'energy' (slope of the incremental potential) or 'residual' (backtracking on the RMS residual)")->capture_default_str();

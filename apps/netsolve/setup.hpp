@@ -1,14 +1,18 @@
 #pragma once
-// Packing set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield).
+// Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield): the
+// packing, and the contact-law / Newton options both `compact` and `yield` take.
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "netdem/packing/ballistic.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+#include "parse.hpp"
 
 namespace netdem::app::netsolve {
 
@@ -46,6 +50,38 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
   source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", a.width, a.mono ? 1.0 : a.r_min,
                        a.mono ? 1.0 : a.r_max, a.seed);
   return make_packing(a);
+}
+
+/// Contact law and Newton options common to `compact` and `yield`.
+struct LawArgs {
+  std::string friction = "inf", normal_unloading = "reversible";
+  double k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01;
+  int max_newton = 10;
+};
+
+/// Registers the LawArgs options; `unloading_help` describes --normal-unloading for this command.
+inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unloading_help) {
+  app.add_option("--friction", a.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  app.add_option("--k-t", a.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
+  app.add_option("--sigma-y", a.sigma_y, "yield stress of the solid")->capture_default_str();
+  app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
+  app.add_option("--max-newton", a.max_newton, "Newton iterations per increment")->capture_default_str();
+  app.add_option("--viscosity", a.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")
+      ->capture_default_str();
+  app.add_option("--normal-unloading", a.normal_unloading, unloading_help)
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
+}
+
+/// Copies the LawArgs into the solver options; throws std::invalid_argument for a bad --friction.
+inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
+  so.law.mu = parse_friction(a.friction);
+  so.law.k_t = a.k_t;
+  so.law.sigma_y = a.sigma_y;
+  so.law.reversible = a.normal_unloading == "reversible";
+  so.residual_tol = a.tol;
+  so.max_newton = a.max_newton;
+  so.viscosity = a.viscosity;
 }
 
 }  // namespace netdem::app::netsolve

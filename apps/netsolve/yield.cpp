@@ -73,13 +73,11 @@ struct YieldArgs {
   netdem::app::netsolve::PackArgs pack;  // a new deposition (lid: centre)
   std::string packing_file;
   // precompaction
-  std::string precompact = "hydrostatic", friction = "inf", compact_bc = "die", probe_bc;
-  std::string normal_unloading = "reversible";  // normal law during the precompaction
+  std::string precompact = "hydrostatic", compact_bc = "die", probe_bc;
   double to_density = 0.85;
   int increments = 100;
-  // solver
-  double sigma_y = 1.0, k_t = 1e3, tol = 1e-3, viscosity = 0.01;
-  int max_newton = 10;
+  // contact law and solver (--normal-unloading: the law during the precompaction)
+  netdem::app::netsolve::LawArgs law;
   // probing
   int directions = 24;
   std::string probe_slice, probe_list;
@@ -404,13 +402,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   const auto compact_mode = parse_bc(a.compact_bc, "--compact-bc");
   const auto probe_mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
   so.mode = compact_mode;
-  so.law.mu = parse_friction(a.friction);
-  so.law.k_t = a.k_t;
-  so.law.sigma_y = a.sigma_y;
-  so.law.reversible = a.normal_unloading == "reversible";
-  so.residual_tol = a.tol;
-  so.max_newton = a.max_newton;
-  so.viscosity = a.viscosity;
+  netdem::app::netsolve::apply_law_args(a.law, so);
   so.validate();
   if (compact_mode != probe_mode && so.law.mu != 0.0)
     throw std::invalid_argument(
@@ -449,7 +441,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   if (!a.quiet)
     std::fprintf(stderr, "netsolve yield: %zu particles, D0 = %.4f (%s); %s %s-%s, friction %s, %zu of %d probes, %d jobs\n",
                  pk.size(), pk.density(), source.c_str(), a.precompact.c_str(), bc_name(compact_mode), bc_name(probe_mode),
-                 a.friction.c_str(), selection.size(), a.directions, jobs);
+                 a.law.friction.c_str(), selection.size(), a.directions, jobs);
 
   // ---- precompaction
   auto t0 = Clock::now();
@@ -475,8 +467,8 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   json setup;
   setup["precompact"] = a.precompact;
   setup["to_density"] = a.to_density;
-  setup["friction"] = a.friction;
-  setup["normal_unloading"] = a.normal_unloading;
+  setup["friction"] = a.law.friction;
+  setup["normal_unloading"] = a.law.normal_unloading;
   setup["compact_bc"] = bc_name(compact_mode);
   setup["probe_bc"] = bc_name(probe_mode);
   setup["directions"] = a.directions;
@@ -766,7 +758,6 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
     app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();
-    app.add_option("--friction", a.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
     app.add_option("--compact-bc", a.compact_bc, "affine | die (local relaxation) during precompaction")->capture_default_str();
     app.add_option("--probe-bc", a.probe_bc, "affine | die during unloading and probing (default: --compact-bc)");
     app.add_option("--directions", a.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
@@ -779,16 +770,10 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--fine", a.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
     app.add_option("--growth", a.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
     app.add_option("--unload-tol", a.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
-    app.add_option("--sigma-y", a.sigma_y, "yield stress of the solid")->capture_default_str();
-    app.add_option("--k-t", a.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
-    app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
-    app.add_option("--max-newton", a.max_newton, "Newton iterations per increment")->capture_default_str();
-    app.add_option("--normal-unloading", a.normal_unloading,
-                   "normal law during the precompaction: 'reversible' (Eq 2 both ways, the paper's compaction) or "
-                   "'elastic' (section 3.4 branch throughout); unloading and probes always use the elastic branch")
-        ->check(CLI::IsMember({"reversible", "elastic"}))
-        ->capture_default_str();
-    app.add_option("--viscosity", a.viscosity, "drag on non-affine motion / mean contact stiffness")->capture_default_str();
+    netdem::app::netsolve::add_law_options(
+        app, a.law,
+        "normal law during the precompaction: 'reversible' (Eq 2 both ways, the paper's compaction) or "
+        "'elastic' (section 3.4 branch throughout); unloading and probes always use the elastic branch");
     app.add_flag("--quiet", a.quiet, "no progress on stderr");
     app.add_option("--out", a.out, "output folder")->capture_default_str();
   } else {
