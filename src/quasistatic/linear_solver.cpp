@@ -185,17 +185,15 @@ struct LinearSolver::Impl {
 
   [[nodiscard]] int n() const { return static_cast<int>(M.rows()); }
 
-  /// Non-owning CHOLMOD view of M (lower triangle used: stype = -1).
-  cholmod_sparse view() {
+  /// Non-owning CHOLMOD view of a square compressed-column matrix whose lower triangle is used
+  /// (stype = -1, sorted and packed).
+  static cholmod_sparse lower_view(int n, std::size_t nz, int* p, int* i, double* x) {
     cholmod_sparse A{};
-    A.nrow = static_cast<size_t>(M.rows());
-    A.ncol = static_cast<size_t>(M.cols());
-    A.nzmax = static_cast<size_t>(M.nonZeros());
-    A.p = M.outerIndexPtr();
-    A.i = M.innerIndexPtr();
-    A.nz = nullptr;
-    A.x = M.valuePtr();
-    A.z = nullptr;
+    A.nrow = A.ncol = static_cast<size_t>(n);
+    A.nzmax = nz;
+    A.p = p;
+    A.i = i;
+    A.x = x;
     A.stype = -1;
     A.itype = CHOLMOD_INT;
     A.xtype = CHOLMOD_REAL;
@@ -203,6 +201,11 @@ struct LinearSolver::Impl {
     A.sorted = 1;
     A.packed = 1;
     return A;
+  }
+
+  /// Non-owning CHOLMOD view of M.
+  cholmod_sparse view() {
+    return lower_view(n(), static_cast<std::size_t>(M.nonZeros()), M.outerIndexPtr(), M.innerIndexPtr(), M.valuePtr());
   }
 
   void set_ordering() {
@@ -385,18 +388,7 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
       // conversion), without its two transposes (allocation + 2 passes over M per call):
       // the permuted lower triangle S is gathered from M through smap, bit for bit the same
       for (std::size_t t = 0; t < smap.size(); ++t) Sx[t] = M.valuePtr()[smap[t]];
-      cholmod_sparse S{};
-      S.nrow = S.ncol = static_cast<size_t>(nn);
-      S.nzmax = Sx.size();
-      S.p = Sp.data();
-      S.i = Si.data();
-      S.x = Sx.data();
-      S.stype = -1;
-      S.itype = CHOLMOD_INT;
-      S.xtype = CHOLMOD_REAL;
-      S.dtype = CHOLMOD_DOUBLE;
-      S.sorted = 1;
-      S.packed = 1;
+      cholmod_sparse S = lower_view(nn, Sx.size(), Sp.data(), Si.data(), Sx.data());
       double beta[2] = {0.0, 0.0};
       cholmod_super_numeric(&S, nullptr, beta, L, &cm);
     } else {
