@@ -209,6 +209,14 @@ def grid_sims(sims, n, p):
     return dict(sorted(out.items()))
 
 
+def save(fig, out, name):
+    """Lays out, writes out/name (110 dpi) and closes fig; returns name."""
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, name), dpi=110)
+    plt.close(fig)
+    return name
+
+
 def fig8(sims, nb, out):
     g = grid_sims(sims, nb, 100)
     if not g:
@@ -228,11 +236,7 @@ def fig8(sims, nb, out):
     ax[0].legend(fontsize=8)
     ax[1].legend(fontsize=8)
     ax[0].set_title(f"Fig 8 style: temperature and stiffness, N = {nb}, p = 100")
-    fig.tight_layout()
-    name = "fig08_T_k1.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig08_T_k1.png")
 
 
 def fig9(sims, nb, out):
@@ -256,11 +260,7 @@ def fig9(sims, nb, out):
     if not any_:
         plt.close(fig)
         return None
-    fig.tight_layout()
-    name = "fig09_density.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig09_density.png")
 
 
 def fig10(sims, ns, out):
@@ -280,11 +280,7 @@ def fig10(sims, ns, out):
         ax[0, k].set_ylabel("C")
         ax[0, k].set_title(f"Fig 10 style: N = {n}, t_s = 1")
         ax[0, k].legend(fontsize=8)
-    fig.tight_layout()
-    name = "fig10_coordination.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig10_coordination.png")
 
 
 def fig11(sims, nb, out):
@@ -302,11 +298,7 @@ def fig11(sims, nb, out):
         ax[k].set_xlabel("t [s]")
         ax[k].set_title(f"Fig 11 style: sintering t_s = 1, N = {nb}, p = {p}")
         ax[k].legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    name = "fig11_nu_C_szz.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig11_nu_C_szz.png")
 
 
 def fig_overlap(sims, nb, phase, fig_no, out):
@@ -326,11 +318,7 @@ def fig_overlap(sims, nb, phase, fig_no, out):
         ax[k].set_ylabel("pdf")
         ax[k].set_title(f"Fig {fig_no} style: N = {nb}, p = {p}, after {phase}")
         ax[k].legend(fontsize=8)
-    fig.tight_layout()
-    name = f"fig{fig_no}_overlap_{phase}.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, f"fig{fig_no}_overlap_{phase}.png")
 
 
 def fig_force(sims, nb, p, fig_no, out):
@@ -354,11 +342,7 @@ def fig_force(sims, nb, p, fig_no, out):
         ax[k].set_ylabel("pdf")
         ax[k].set_title(f"Fig {fig_no} style: N = {nb}, p = {p}, after {'sintering' if phase == 'sinter' else 'cool-down and relaxation'}")
         ax[k].legend(fontsize=8)
-    fig.tight_layout()
-    name = f"fig{fig_no}_force_p{p}.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, f"fig{fig_no}_force_p{p}.png")
 
 
 def test_group(tests, kind, n, p):
@@ -392,11 +376,7 @@ def fig_compress(tests, n, col_name, ylabel, fig_no, out, role="compress"):
     if not any_:
         plt.close(fig)
         return None
-    fig.tight_layout()
-    name = f"fig{fig_no}_{role}_N{n}_{col_name}.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, f"fig{fig_no}_{role}_N{n}_{col_name}.png")
 
 
 def fig_vibrate(tests, ns, out):
@@ -424,11 +404,7 @@ def fig_vibrate(tests, ns, out):
         a.set_ylim(-0.02, 1.02)
         a.legend(fontsize=8)
     ax[0].set_title("Figs 21-22 style: vibration f = 100 Hz, a = 0.2 mm, t = 0.1")
-    fig.tight_layout()
-    name = "fig21_22_vibration_clusters.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig21_22_vibration_clusters.png")
 
 
 def fig_cluster_sizes(tests, nb, out):
@@ -450,11 +426,7 @@ def fig_cluster_sizes(tests, nb, out):
     if not any_:
         plt.close(fig)
         return None
-    fig.tight_layout()
-    name = "fig21_22_cluster_sizes.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig21_22_cluster_sizes.png")
 
 
 def read_vtp(path):
@@ -504,11 +476,7 @@ def fig_vibration_snapshots(tests, nb, out):
                         f"single grains {sm.get('single_grain_fraction', float('nan')):.2f} N (grey)", fontsize=9)
         fig.suptitle(f"Fig {fig_no} style: after vibration (t = 0.1, f = 100 Hz, a = 0.2 mm), N = {nb}, p = {p}; "
                      "colour = cluster of touching disks", fontsize=9)
-        fig.tight_layout()
-        name = f"fig{fig_no}_vibration_snapshots_p{p}.png"
-        fig.savefig(os.path.join(out, name), dpi=110)
-        plt.close(fig)
-        names.append(name)
+        names.append(save(fig, out, f"fig{fig_no}_vibration_snapshots_p{p}.png"))
     return names
 
 
@@ -541,11 +509,7 @@ def fig_controls(sims, nb, out):
     ax[1].set_ylim(0.8, None)
     ax[0].set_title("three-particle controls (t_s = 1)")
     ax[1].set_title("da_T = 0 control and mu_w = 0.5 investigation")
-    fig.tight_layout()
-    name = "fig_controls.png"
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
-    return name
+    return save(fig, out, "fig_controls.png")
 
 
 # ---------------------------------------------------------------------------------------- findings

@@ -135,18 +135,14 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
     # material tests on the final states
     for g in grid:
         state = os.path.join(g.dir, "state_relax.txt")
-        if "compress" in tests:
-            name = g.name + "_compress"
+        for role, par in (("compress", COMPRESS), ("compress_slow", COMPRESS_SLOW)):
+            if role not in tests:
+                continue
+            name = f"{g.name}_{role}"
             out.append(Run(name, "compress",
-                           ["compress", "--state", state, "--strain-rate", f"{COMPRESS['strain_rate']:g}",
-                            "--max-strain", f"{COMPRESS['max_strain']:g}", "--out", d(name), "--quiet"],
-                           deps=[g.name], info=dict(g.info, role="compress", sample=g.name)))
-        if "compress_slow" in tests:
-            name = g.name + "_compress_slow"
-            out.append(Run(name, "compress",
-                           ["compress", "--state", state, "--strain-rate", f"{COMPRESS_SLOW['strain_rate']:g}",
-                            "--max-strain", f"{COMPRESS_SLOW['max_strain']:g}", "--out", d(name), "--quiet"],
-                           deps=[g.name], info=dict(g.info, role="compress_slow", sample=g.name)))
+                           ["compress", "--state", state, "--strain-rate", f"{par['strain_rate']:g}",
+                            "--max-strain", f"{par['max_strain']:g}", "--out", d(name), "--quiet"],
+                           deps=[g.name], info=dict(g.info, role=role, sample=g.name)))
         if "vibrate" in tests:
             name = g.name + "_vibrate"
             out.append(Run(name, "vibrate",
