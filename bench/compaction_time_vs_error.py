@@ -18,6 +18,9 @@ Writes <out>/<name>.csv and <out>/<name>.png (--name, default time_vs_error).
     /usr/bin/python3 bench/compaction_time_vs_error.py --viscosities 0.01 --max-newtons 3,5,10 --seeds 1,2,3 \
         --increments 25,50,100,200 --name time_vs_error_newton      # Newton cap x seeds (2026-11-26)
 
+    /usr/bin/python3 bench/compaction_time_vs_error.py --viscosities 0.01 --seeds 1,2,3 --increments 25,50,100,200 \
+        --reference-extra "--tol 1e-3" --name time_vs_error_strain_drag   # defaults since 2026-11-26 06:00 UTC
+
 --max-newtons and --seeds add two more loops (each seed and cap gets its own reference run).
 
 The netsolve binary is copied to a temporary file first, so rebuilding it meanwhile is harmless.
@@ -67,8 +70,8 @@ def s22_fit(hist, d_lo=0.84, d_hi=0.85):
     return ms + slope * (d_hi - md)
 
 
-def run(netsolve, n, viscosity, max_newton, seed, workdir, extra, reuse, nice):
-    out = workdir / f"visc{viscosity:g}_newton{max_newton}_seed{seed}_N{n}"
+def run(netsolve, n, viscosity, max_newton, seed, workdir, extra, reuse, nice, tag=""):
+    out = workdir / f"visc{viscosity:g}_newton{max_newton}_seed{seed}_N{n}{tag}"
     args = ["--increments", str(n), "--viscosity", str(viscosity), "--max-newton", str(max_newton), "--seed", str(seed)]
     res = run_compact(netsolve, out, args + extra, reuse, nice, f"N = {n}")
     if res is None:
@@ -102,6 +105,9 @@ def main():
     ap.add_argument("--viscosities", default="0.1,0.01", help="comma list; the first is netsolve's default")
     ap.add_argument("--max-newtons", default="10", help="comma list of --max-newton values (Newton iterations per increment)")
     ap.add_argument("--seeds", default="1", help="comma list of deposition seeds (each with its own reference run)")
+    ap.add_argument("--reference-extra", default="",
+                    help="extra netsolve arguments of the reference runs only, e.g. '--tol 1e-3' (a tighter Newton "
+                         "tolerance, so that the error includes the tolerance's)")
     ap.add_argument("--time", choices=("cpu", "wall"), default="cpu",
                     help="x axis of the plot: process CPU time (user+sys, robust on a shared machine) or solver wall time")
     add_common_args(ap, "time_vs_error", "/tmp/netdem-bench/time_vs_error")
@@ -118,7 +124,8 @@ def main():
       for mn in mns:
         for seed in seeds:
             print(f"viscosity {v:g}, max-newton {mn}, seed {seed}: reference N = {a.reference}", flush=True)
-            ref = run(netsolve, a.reference, v, mn, seed, workdir, extra, a.reuse, nice)
+            ref = run(netsolve, a.reference, v, mn, seed, workdir, extra + a.reference_extra.split(), a.reuse, nice,
+                      tag="_ref" if a.reference_extra else "")
             if ref is None:
                 print("  reference failed; skipping", file=sys.stderr)
                 continue

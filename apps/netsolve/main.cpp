@@ -42,14 +42,34 @@ using netdem::app::netsolve::PackArgs;
 
 std::string g_command;
 
+// Compaction defaults that differ from the library's (docs/quasistatic.md "Drag and tolerance"):
+// the drag is a strain-rate viscosity (--viscosity 0.01 at the reference increment |dE| = 3.57e-4,
+// the increment of the 100-increment default run), so that refining the increments converges to
+// one problem, and Newton stops at an RMS residual of 3e-3 of the mean contact force (the answer
+// moves by 0.1 % against 1e-3 on the default scene, 0.2 % on 100k particles; 1e-2 moves it 1.5 % there).
+// Each tangent and its factorisation serve three iterations (two chord steps), and GMRES stops at
+// 0.3 of the Newton residual (usually one iteration): the outer iteration converges linearly
+// anyway, and on 100k particles this halves the run time (docs/performance.md).
+netdem::app::netsolve::LawArgs compact_law_defaults() {
+  netdem::app::netsolve::LawArgs a;
+  a.tol = 3e-3;
+  return a;
+}
+netdem::qs::SolverOptions compact_solver_defaults() {
+  netdem::qs::SolverOptions o;
+  o.viscosity_strain = 3.57e-4;
+  o.chord_steps = 2;
+  return o;
+}
+
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
   std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, slide_fraction = 0.05, linear_tol = 1e-2;
+  double to_density = 0.85, slide_fraction = 0.05, linear_tol = 0.3;
   int increments = 100;
   std::string line_search = "residual";
-  netdem::app::netsolve::LawArgs law;
-  netdem::qs::SolverOptions solver;  // defaults of the newer Newton knobs (step limits, sub-stepping, continuation)
+  netdem::app::netsolve::LawArgs law = compact_law_defaults();
+  netdem::qs::SolverOptions solver = compact_solver_defaults();  // the newer Newton knobs (step limits, sub-stepping, continuation)
 };
 
 
@@ -219,7 +239,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual}, {"cuts", cuts},
                  {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
                  {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
-                 {"solves", tm.solves}};
+                 {"solves", tm.solves},                 {"tol", so.residual_tol},
+                 {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
+                 {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
@@ -266,13 +288,14 @@ int main(int argc, char** argv) {
   comp->add_option("--max-step", ca.solver.max_step, "cap on a Newton step's translation of one particle [R]")->capture_default_str();
   comp->add_option("--max-rotation-step", ca.solver.max_rotation_step, "cap on a Newton step's rotation of one particle [rad]")->capture_default_str();
   comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
+  comp->add_option("--chord-steps", ca.solver.chord_steps, "modified Newton: iterations that reuse the last tangent and its factorisation after each fresh one (0: off)")->capture_default_str();
   comp->add_option("--kink-freeze-after", ca.solver.kink_freeze_after, "plastic contacts that switched loading/unloading this often in an increment get the unloading stiffness in the iteration matrix (0: off)")->capture_default_str();
   comp->add_option("--local-sweeps", ca.solver.local_sweeps, "nonlinear Gauss-Seidel sweeps over the worst particles after each Newton step (0: off)")->capture_default_str();
   comp->add_option("--local-iterations", ca.solver.local_iterations, "damped Newton iterations per particle in a local sweep")->capture_default_str();
   comp->add_option("--local-threshold", ca.solver.local_threshold, "local sweeps treat particles whose residual exceeds this multiple of the RMS residual")->capture_default_str();
   comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
   comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
-  comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "strain-rate viscosity: the drag of an increment dE is --viscosity x this / |dE| (0: per increment)")->capture_default_str();
+  comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "drag per unit strain: an increment dE gets the drag --viscosity x mean stiffness x this / |dE|, i.e. --viscosity at |dE| = this (default: the increment of the 100-increment default run); 0: --viscosity in every increment whatever its size")->capture_default_str();
   netdem::app::netsolve::add_law_options(*comp, ca.law,
                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4");

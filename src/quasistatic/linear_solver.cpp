@@ -162,6 +162,7 @@ struct LinearSolver::Impl {
   bool analysed = false;      // L holds a symbolic analysis of M's pattern
   bool factor_valid = false;  // L holds a valid numeric factor of M
   Eigen::MatrixXd V;          // GMRES Krylov basis (kept between solves to avoid reallocation)
+  Eigen::MatrixXd Z;          // GMRES preconditioned vectors M^-1 v_j (x += Z y without another solve)
   // tril(P M P') in CSC form with sorted rows (the matrix cholmod_factorize builds from M on every
   // call with two transposes); built once per analysis, refilled by a gather through smap
   std::vector<int> Sp, Si, smap;
@@ -464,8 +465,9 @@ LinearStatus LinearSolver::Impl::gmres(const SpMat& A, const VecX& b, VecX& x) {
   const double bnorm = b.norm();
   const double target = opt.gmres_tolerance * bnorm;
   if (V.rows() != nn || V.cols() < m + 1) V.resize(nn, m + 1);
+  if (Z.rows() != nn || Z.cols() < m) Z.resize(nn, m);  // z_j = M^-1 v_j, kept for the update
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m + 1, m);
-  VecX cs(m), sn(m), g(m + 1), z(nn), w(nn);
+  VecX cs(m), sn(m), g(m + 1), w(nn);
 
   x.setZero(nn);
   VecX r = b;
@@ -478,9 +480,9 @@ LinearStatus LinearSolver::Impl::gmres(const SpMat& A, const VecX& b, VecX& x) {
     g[0] = beta;
     int k = 0;  // number of Arnoldi vectors used in this cycle
     for (int j = 0; j < m && it < maxit; ++j) {
-      if (!apply_factor(V.col(j).data(), z.data()))
+      if (!apply_factor(V.col(j).data(), Z.col(j).data()))
         return failure(fmt::format("CHOLMOD solve failed inside GMRES: {}", cholmod_status_name(cm.status)));
-      w.noalias() = A * z;
+      w.noalias() = A * Z.col(j);
       ++it;
       const double wnorm0 = w.norm();
       for (int i = 0; i <= j; ++i) {  // modified Gram-Schmidt
@@ -509,11 +511,9 @@ LinearStatus LinearSolver::Impl::gmres(const SpMat& A, const VecX& b, VecX& x) {
       if (std::abs(g[j + 1]) <= target) break;
     }
     if (k > 0) {
+      // x += M^-1 V y = Z y (the stored preconditioned vectors: no extra factor solve)
       const VecX y = H.topLeftCorner(k, k).triangularView<Eigen::Upper>().solve(g.head(k));
-      w.noalias() = V.leftCols(k) * y;
-      if (!apply_factor(w.data(), z.data()))
-        return failure(fmt::format("CHOLMOD solve failed inside GMRES: {}", cholmod_status_name(cm.status)));
-      x += z;
+      x.noalias() += Z.leftCols(k) * y;
     } else {
       singular = true;  // no progress possible
     }

@@ -71,6 +71,7 @@ void SolverOptions::validate() const {
           fmt::format("solver: local_iterations must be in [1, 100], got {}", local_iterations));
   require(std::isfinite(local_threshold) && local_threshold >= 0.0,
           fmt::format("solver: local_threshold must be non-negative, got {}", local_threshold));
+  require(chord_steps >= 0 && chord_steps <= 100, fmt::format("solver: chord_steps must be in [0, 100], got {}", chord_steps));
   require(kink_freeze_after >= 0 && kink_freeze_after <= 100,
           fmt::format("solver: kink_freeze_after must be in [0, 100], got {}", kink_freeze_after));
   require(max_cuts >= 0 && max_cuts <= 20, fmt::format("solver: max_cuts must be in [0, 20], got {}", max_cuts));
@@ -816,9 +817,11 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
   double fbar = 1.0;
   for (int it = 0;; ++it) {
     const bool want_tangent = it < s.opt.max_newton;
+    // chord steps: between fresh tangents, iterations reuse the last assembled K and its factor
+    const bool fresh = s.opt.chord_steps <= 0 || it % (s.opt.chord_steps + 1) == 0;
     bool nonsym = false;
     auto ta = Clock::now();
-    s.evaluate(want_tangent && s.nfree > 0, nonsym);
+    s.evaluate(want_tangent && s.nfree > 0 && fresh, nonsym);
     s.tim.assemble += seconds_since(ta);
     if (s.eta < 0.0 && want_tangent && s.nfree > 0) {
       // viscosity continuation: start at viscosity_start, reduce by viscosity_decay per Newton
@@ -860,10 +863,13 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
       break;
     }
     if (!want_tangent) break;
-    s.regularise();
-    LinearStatus st = s.lin.factorise(s.M, s.pattern_changed);
-    s.pattern_changed = false;
-    if (!st.ok) throw std::runtime_error("increment: " + st.message);
+    LinearStatus st;
+    if (fresh) {
+      s.regularise();
+      st = s.lin.factorise(s.M, s.pattern_changed);
+      s.pattern_changed = false;
+      if (!st.ok) throw std::runtime_error("increment: " + st.message);
+    }
     st = nonsym ? s.lin.solve(s.K, s.rhs, s.sol) : s.lin.solve(s.rhs, s.sol);
     if (!st.ok) {
       // GMRES hit its cap: fall back to the symmetric slip-status tangent (defect correction)

@@ -429,6 +429,42 @@ TEST(NetworkSolver, SmallSlideStiffnessConvergesFaster) {
   EXPECT_NEAR(new_run.rr.m.S11, old_run.rr.m.S11, 1e-4 * std::fabs(old_run.rr.m.S22));
 }
 
+// Chord steps (modified Newton): iterations between fresh tangents reuse the last assembled
+// tangent and its factorisation. The residual is the same, so converged increments must reach
+// the same equilibrium (to the tolerance), with fewer factorisations than Newton iterations.
+TEST(NetworkSolver, ChordStepsReachTheSameEquilibrium) {
+  auto [pk, so, D] = sticking_newton_case();
+  auto run = [&](int chord, double linear_tol) {
+    qs::SolverOptions o = so;
+    o.chord_steps = chord;
+    o.linear_tolerance = linear_tol;
+    qs::NetworkSolver s(pk, o);
+    qs::CompactionOptions co;
+    co.target_density = D;
+    co.increments = 10;
+    int unconverged = 0;
+    qs::run_compaction(s, co, [&](const qs::CompactionRow& row) {
+      if (row.increment > 0) unconverged += !row.report.converged;
+    });
+    const auto& t = s.timings();
+    std::printf("chord steps %d, GMRES tolerance %g: %ld Newton iterations, %ld factorisations, %d unconverged, "
+                "S22 %.8f\n", chord, linear_tol, t.newton_iterations, t.factorisations, unconverged, s.measures().S22);
+    EXPECT_EQ(unconverged, 0);
+    return std::make_tuple(s.measures(), t.newton_iterations, t.factorisations);
+  };
+  const auto [m0, it0, f0] = run(0, 1e-2);
+  EXPECT_EQ(f0, it0);  // every Newton iteration factorises
+  for (const auto& [chord, lt] : {std::pair{2, 1e-2}, std::pair{2, 0.3}}) {
+    const auto [m, it, f] = run(chord, lt);
+    EXPECT_LE(f, (it + chord) / (chord + 1) + 10);  // one factorisation per chord + 1 iterations (+1 per increment)
+    EXPECT_LT(f, f0);
+    EXPECT_NEAR(m.S22, m0.S22, 1e-4 * std::fabs(m0.S22));
+    EXPECT_NEAR(m.S11, m0.S11, 1e-4 * std::fabs(m0.S22));
+  }
+  so.chord_steps = -1;
+  EXPECT_THROW(so.validate(), std::invalid_argument);
+}
+
 // Nonlinear Gauss-Seidel smoothing: the Newton residual that is left after the global steps sits
 // on a few particles (contacts cycling open/closed, two-contact chain particles, sliding
 // contacts). A damped Newton iteration on each of these particles alone must converge many more

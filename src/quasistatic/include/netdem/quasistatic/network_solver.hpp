@@ -75,6 +75,9 @@ struct SolverOptions {
   /// elastic-predictor (stick) tangential stiffness in the iteration matrix (open/closed flips:
   /// always after two, with the last closed normal stiffness).
   int freeze_after = 2;
+  /// Chord (modified Newton) steps: after each fresh tangent and factorisation, up to this many
+  /// iterations reuse them (residual re-evaluated, no assembly, no factorisation; 0: off).
+  int chord_steps = 0;
   /// A plastic contact that switched between loading and elastic unloading this many times within
   /// an increment gets the unloading stiffness in the iteration matrix (0: off).
   int kink_freeze_after = 0;
