@@ -122,6 +122,7 @@ struct NetworkSolver::Impl {
 
   // trial buffers
   std::vector<double> du, f;
+  std::vector<double> pf;  // 6 per pair: the pair's force on (i, j) in the trial state (summed into f)
   std::vector<ct::PairGeometry> g0;
   std::vector<ct::PlasticIndentationResult> trial;
   std::vector<double> trial_slip;
@@ -309,6 +310,7 @@ struct NetworkSolver::Impl {
   // Fills f (3n), trial results, and (if assemble) the values of K and M.
   void evaluate(bool assemble, bool& any_nonsymmetric) {
     std::fill(f.begin(), f.end(), 0.0);
+    pf.resize(6 * pi.size());
     if (assemble) {
       std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
       std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
@@ -329,12 +331,14 @@ struct NetworkSolver::Impl {
       if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
         trial[k] = ct::PlasticIndentationResult{};
         trial_slip[k] = 0.0;
+        std::fill_n(&pf[6 * k], 6, 0.0);
         if (assemble) open_contact_stiffness(k, g1);
         continue;
       }
       ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
       trial[k] = e.law;
       trial_slip[k] = e.dslip;
+      for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
       for (int a = 0; a < 3; ++a) {
         f[3 * i + a] += e.force(a);
         f[3 * j + a] += e.force(3 + a);
@@ -419,6 +423,42 @@ struct NetworkSolver::Impl {
         M.valuePtr()[q] += v;
       }
   }
+
+  /// Re-evaluates (forces only) the pairs of the given particles after their du changed, keeping
+  /// f, pf and the trial state consistent with du without a full evaluate().
+  void refresh_particles(const std::vector<int>& ps) {
+    ct::PairElement e;
+    for (const int p : ps)
+      for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+        const auto k = static_cast<std::size_t>(adj_pair[q]);
+        if (refreshed[k]) continue;
+        refreshed[k] = 1;
+        const int i = pi[k], j = pj[k];
+        for (int a = 0; a < 3; ++a) {
+          f[3 * i + a] -= pf[6 * k + a];
+          f[3 * j + a] -= pf[6 * k + 3 + a];
+        }
+        const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                      ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+        if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+          trial[k] = ct::PlasticIndentationResult{};
+          trial_slip[k] = 0.0;
+          std::fill_n(&pf[6 * k], 6, 0.0);
+          continue;
+        }
+        ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+        trial[k] = e.law;
+        trial_slip[k] = e.dslip;
+        for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+        for (int a = 0; a < 3; ++a) {
+          f[3 * i + a] += e.force(a);
+          f[3 * j + a] += e.force(3 + a);
+        }
+      }
+    for (const int p : ps)
+      for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
+  }
+  std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
 
   double mean_normal_force() const {
     double s = 0.0;
@@ -625,6 +665,7 @@ struct NetworkSolver::Impl {
     }
     std::sort(bad.begin(), bad.end(), std::greater<>());
     std::vector<std::uint8_t> done(n, 0);
+    std::vector<int> moved;
     for (const auto& b : bad) {
       int ps[2] = {b.second, -1}, m = 1;
       if (done[ps[0]]) continue;
@@ -640,8 +681,13 @@ struct NetworkSolver::Impl {
         if (ps[1] >= 0) m = 2;
       }
       relax_set(ps, m, fbar);
-      for (int t = 0; t < m; ++t) done[ps[t]] = 1;
+      for (int t = 0; t < m; ++t) {
+        done[ps[t]] = 1;
+        moved.push_back(ps[t]);
+      }
     }
+    refreshed.resize(pi.size(), 0);
+    refresh_particles(moved);  // f and the trial state follow the relaxed du
     return static_cast<int>(bad.size());
   }
 
@@ -815,13 +861,19 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
   s.eta = -1.0;
   double eta_target = 0.0, eta_floor = 0.0;
   double fbar = 1.0;
+  bool f_valid = false;  // f, pf and the trial state belong to the current du
   for (int it = 0;; ++it) {
     const bool want_tangent = it < s.opt.max_newton;
     // chord steps: between fresh tangents, iterations reuse the last assembled K and its factor
     const bool fresh = s.opt.chord_steps <= 0 || it % (s.opt.chord_steps + 1) == 0;
     bool nonsym = false;
     auto ta = Clock::now();
-    s.evaluate(want_tangent && s.nfree > 0 && fresh, nonsym);
+    const bool assemble = want_tangent && s.nfree > 0 && fresh;
+    if (assemble || !f_valid) {
+      s.evaluate(assemble, nonsym);
+    } else {  // a chord step from a state the line search and the local sweep left current
+      nonsym = s.opt.law.frictional() || s.opt.geometric_stiffness;
+    }
     s.tim.assemble += seconds_since(ta);
     if (s.eta < 0.0 && want_tangent && s.nfree > 0) {
       // viscosity continuation: start at viscosity_start, reduce by viscosity_decay per Newton
@@ -938,9 +990,10 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
     if (s.opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
     for (int sweep = 0; sweep < s.opt.local_sweeps; ++sweep) {
       // nonlinear Gauss-Seidel on the worst particles (the global step has just been taken)
-      if (sweep > 0 || !f_current) {
+      if (!f_current) {
         bool dummy;
         s.evaluate(false, dummy);
+        f_current = true;
       }
       const double fb = std::max(s.mean_normal_force(), 1e-300);
       const double rms = s.residual(fb, false);
@@ -948,6 +1001,7 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
       if (s.opt.verbose) std::fprintf(stderr, "    local relaxation: %d particles\n", relaxed);
       if (relaxed == 0) break;
     }
+    f_valid = f_current;  // relax_worst refreshes the pairs of the particles it moved
     ++rep.newton_iterations;
     if (s.eta > eta_target) {
       s.eta *= s.opt.viscosity_decay;
