@@ -47,9 +47,11 @@ std::string g_command;
 // the increment of the 100-increment default run), so that refining the increments converges to
 // one problem, and Newton stops at an RMS residual of 3e-3 of the mean contact force (the answer
 // moves by 0.1 % against 1e-3 on the default scene, 0.2 % on 100k particles; 1e-2 moves it 1.5 % there).
-// Each tangent and its factorisation serve three iterations (two chord steps), and GMRES stops at
-// 0.3 of the Newton residual (usually one iteration): the outer iteration converges linearly
-// anyway, and on 100k particles this halves the run time (docs/performance.md).
+// Each tangent and its factorisation serve four iterations (three chord steps), GMRES stops at
+// 0.3 of the Newton residual (usually one iteration), and the line search tries the steps 1, 1/2,
+// 1/4 only (40 % of the searches find no lower residual, and their five trials cost more than the
+// two smaller steps bring): the outer iteration converges linearly anyway, and on 100k particles
+// this divides the run time by four (docs/performance.md).
 netdem::app::netsolve::LawArgs compact_law_defaults() {
   netdem::app::netsolve::LawArgs a;
   a.tol = 3e-3;
@@ -58,7 +60,8 @@ netdem::app::netsolve::LawArgs compact_law_defaults() {
 netdem::qs::SolverOptions compact_solver_defaults() {
   netdem::qs::SolverOptions o;
   o.viscosity_strain = 3.57e-4;
-  o.chord_steps = 2;
+  o.chord_steps = 3;
+  o.backtracks = 3;
   return o;
 }
 
@@ -289,6 +292,7 @@ int main(int argc, char** argv) {
   comp->add_option("--max-rotation-step", ca.solver.max_rotation_step, "cap on a Newton step's rotation of one particle [rad]")->capture_default_str();
   comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
   comp->add_option("--chord-steps", ca.solver.chord_steps, "modified Newton: iterations that reuse the last tangent and its factorisation after each fresh one (0: off)")->capture_default_str();
+  comp->add_option("--backtracks", ca.solver.backtracks, "residual line search: step lengths tried (1, 1/2, 1/4, ...)")->capture_default_str();
   comp->add_option("--kink-freeze-after", ca.solver.kink_freeze_after, "plastic contacts that switched loading/unloading this often in an increment get the unloading stiffness in the iteration matrix (0: off)")->capture_default_str();
   comp->add_option("--local-sweeps", ca.solver.local_sweeps, "nonlinear Gauss-Seidel sweeps over the worst particles after each Newton step (0: off)")->capture_default_str();
   comp->add_option("--local-iterations", ca.solver.local_iterations, "damped Newton iterations per particle in a local sweep")->capture_default_str();

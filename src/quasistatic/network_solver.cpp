@@ -71,6 +71,7 @@ void SolverOptions::validate() const {
           fmt::format("solver: local_iterations must be in [1, 100], got {}", local_iterations));
   require(std::isfinite(local_threshold) && local_threshold >= 0.0,
           fmt::format("solver: local_threshold must be non-negative, got {}", local_threshold));
+  require(backtracks >= 1 && backtracks <= 30, fmt::format("solver: backtracks must be in [1, 30], got {}", backtracks));
   require(chord_steps >= 0 && chord_steps <= 100, fmt::format("solver: chord_steps must be in [0, 100], got {}", chord_steps));
   require(kink_freeze_after >= 0 && kink_freeze_after <= 100,
           fmt::format("solver: kink_freeze_after must be in [0, 100], got {}", kink_freeze_after));
@@ -233,7 +234,6 @@ struct NetworkSolver::Impl {
     xb = x;
     yb = y;
     Fb = Fbox;
-    build_pattern();
     adj_start.assign(n + 1, 0);
     for (std::size_t k = 0; k < pi.size(); ++k) {
       ++adj_start[pi[k] + 1];
@@ -246,32 +246,53 @@ struct NetworkSolver::Impl {
       adj_pair[fill[pi[k]]++] = static_cast<int>(k);
       adj_pair[fill[pj[k]]++] = static_cast<int>(k);
     }
+    build_pattern();
     tim.neighbours += seconds_since(t0);
   }
 
-  // Sparsity pattern of the free-DOF matrix: diagonal 3x3 blocks + one block pair per neighbour pair.
+  // Sparsity pattern of the free-DOF matrix: diagonal 3x3 blocks + one block pair per neighbour
+  // pair, written directly in compressed column form from the particle adjacency (adj_start,
+  // adj_pair): column (p, b) holds the free DOFs of p and of its neighbours, in DOF order (DOFs
+  // are numbered particle by particle).
   void build_pattern() {
-    std::vector<Eigen::Triplet<double, int>> trip;
-    trip.reserve(9 * n + 36 * pi.size());
-    for (int p = 0; p < n; ++p)
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-          const int ra = dof[3 * p + a], cb = dof[3 * p + b];
-          if (ra >= 0 && cb >= 0) trip.emplace_back(ra, cb, 0.0);
-        }
-    for (std::size_t k = 0; k < pi.size(); ++k) {
-      const int nodes[2] = {pi[k], pj[k]};
-      for (int A = 0; A < 2; ++A)
-        for (int B = 0; B < 2; ++B)
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) {
-              const int ra = dof[3 * nodes[A] + a], cb = dof[3 * nodes[B] + b];
-              if (ra >= 0 && cb >= 0) trip.emplace_back(ra, cb, 0.0);
-            }
-    }
+    std::vector<int> near;  // p and its neighbours, sorted
+    auto neighbourhood = [&](int p) {
+      near.clear();
+      near.push_back(p);
+      for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+        const auto k = static_cast<std::size_t>(adj_pair[q]);
+        near.push_back(pi[k] == p ? pj[k] : pi[k]);
+      }
+      std::sort(near.begin(), near.end());
+    };
+    auto free_of = [&](int q) { return (dof[3 * q] >= 0) + (dof[3 * q + 1] >= 0) + (dof[3 * q + 2] >= 0); };
     K.resize(nfree, nfree);
-    K.setFromTriplets(trip.begin(), trip.end());
-    K.makeCompressed();
+    int* outer = K.outerIndexPtr();
+    outer[0] = 0;
+    for (int p = 0; p < n; ++p) {
+      if (free_of(p) == 0) continue;
+      neighbourhood(p);
+      int rows = 0;
+      for (const int q : near) rows += free_of(q);
+      for (int b = 0; b < 3; ++b)
+        if (const int d = dof[3 * p + b]; d >= 0) outer[d + 1] = rows;
+    }
+    for (int d = 0; d < nfree; ++d) outer[d + 1] += outer[d];
+    K.resizeNonZeros(outer[nfree]);
+    int* inner = K.innerIndexPtr();
+    std::fill(K.valuePtr(), K.valuePtr() + outer[nfree], 0.0);
+    for (int p = 0; p < n; ++p) {
+      if (free_of(p) == 0) continue;
+      neighbourhood(p);
+      for (int b = 0; b < 3; ++b) {
+        const int d = dof[3 * p + b];
+        if (d < 0) continue;
+        int at = outer[d];
+        for (const int q : near)
+          for (int a = 0; a < 3; ++a)
+            if (const int r = dof[3 * q + a]; r >= 0) inner[at++] = r;
+      }
+    }
     M = K;
     auto find = [&](int row, int col) -> int {
       const int* inner = K.innerIndexPtr();
@@ -970,7 +991,7 @@ IncrementReport NetworkSolver::attempt(const Eigen::Matrix2d& dE, bool accept_un
       // best step tried
       const double r_before = newton_res;
       double best_alpha = 1.0, best_r = std::numeric_limits<double>::infinity();
-      for (int ls = 0; ls < 5; ++ls, alpha *= 0.5) {
+      for (int ls = 0; ls < s.opt.backtracks; ++ls, alpha *= 0.5) {
         apply(alpha);
         bool dummy;
         s.evaluate(false, dummy);

@@ -98,7 +98,10 @@ struct SolverOptions {
   /// state as two halves, recursively up to max_cuts levels (0: off).
   int max_cuts = 0;
   LineSearch line_search = LineSearch::Residual;
-  int line_search_max = 6;         ///< residual evaluations per line search
+  int line_search_max = 6;         ///< energy line search: residual evaluations per line search
+  /// Residual line search: step lengths tried (1, 1/2, 1/4, ...); the first that lowers the RMS
+  /// residual is taken, else the best of them.
+  int backtracks = 5;
   double line_search_tol = 0.5;    ///< energy line search: accept |slope| <= tol * initial slope
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
