@@ -293,6 +293,7 @@ int main(int argc, char** argv) {
   comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
   comp->add_option("--chord-steps", ca.solver.chord_steps, "modified Newton: iterations that reuse the last tangent and its factorisation after each fresh one (0: off)")->capture_default_str();
   comp->add_option("--backtracks", ca.solver.backtracks, "residual line search: step lengths tried (1, 1/2, 1/4, ...)")->capture_default_str();
+  comp->add_option("--threads", ca.solver.threads, "threads for the force evaluations (line search, chord steps); the linear algebra stays serial; results are identical for any number")->capture_default_str();
   comp->add_option("--kink-freeze-after", ca.solver.kink_freeze_after, "plastic contacts that switched loading/unloading this often in an increment get the unloading stiffness in the iteration matrix (0: off)")->capture_default_str();
   comp->add_option("--local-sweeps", ca.solver.local_sweeps, "nonlinear Gauss-Seidel sweeps over the worst particles after each Newton step (0: off)")->capture_default_str();
   comp->add_option("--local-iterations", ca.solver.local_iterations, "damped Newton iterations per particle in a local sweep")->capture_default_str();

@@ -167,6 +167,51 @@ struct LinearSolver::Impl {
   // call with two transposes); built once per analysis, refilled by a gather through smap
   std::vector<int> Sp, Si, smap;
   std::vector<double> Sx;
+  std::vector<int> blocks;  // row -> block (node) for the nested-dissection ordering; empty: rows
+
+  /// Nested-dissection ordering (METIS) of the block (node) graph of M, expanded to its rows in block
+  /// order (a block's rows stay together, in increasing order). Empty if there are no blocks.
+  std::vector<int> block_ordering() {
+    const int nn = n();
+    if (static_cast<int>(blocks.size()) != nn || nn == 0) return {};
+    const int nb = *std::max_element(blocks.begin(), blocks.end()) + 1;
+    std::vector<int> bstart(nb + 1, 0), brows(nn);
+    for (const int b : blocks) ++bstart[b + 1];
+    for (int b = 0; b < nb; ++b) bstart[b + 1] += bstart[b];
+    {
+      std::vector<int> at(bstart.begin(), bstart.end() - 1);
+      for (int r = 0; r < nn; ++r) brows[at[blocks[r]]++] = r;
+    }
+    // lower triangle of the block graph (row block >= column block), pattern only
+    std::vector<int> Qp(nb + 1, 0), Qi, mark(nb, -1);
+    const int* Mp = M.outerIndexPtr();
+    const int* Mi = M.innerIndexPtr();
+    for (int bc = 0; bc < nb; ++bc) {
+      const auto first = Qi.size();
+      for (int t = bstart[bc]; t < bstart[bc + 1]; ++t) {
+        const int c = brows[t];
+        for (int q = Mp[c]; q < Mp[c + 1]; ++q) {
+          const int br = blocks[Mi[q]];
+          if (br >= bc && mark[br] != bc) {
+            mark[br] = bc;
+            Qi.push_back(br);
+          }
+        }
+      }
+      std::sort(Qi.begin() + static_cast<std::ptrdiff_t>(first), Qi.end());
+      Qp[bc + 1] = static_cast<int>(Qi.size());
+    }
+    cholmod_sparse Q = lower_view(nb, Qi.size(), Qp.data(), Qi.data(), nullptr);
+    Q.xtype = CHOLMOD_PATTERN;
+    // METIS_NodeND on the block graph (no postorder: the analysis of M postorders)
+    std::vector<int> bp(static_cast<std::size_t>(nb));
+    if (!cholmod_metis(&Q, nullptr, 0, 0, bp.data(), &cm)) return {};
+    std::vector<int> perm;
+    perm.reserve(static_cast<std::size_t>(nn));
+    for (int k = 0; k < nb; ++k)
+      for (int t = bstart[bp[k]]; t < bstart[bp[k] + 1]; ++t) perm.push_back(brows[t]);
+    return perm;
+  }
 
   explicit Impl(const LinearSolverOptions& o) : opt(o) {
     cholmod_start(&cm);
@@ -307,22 +352,33 @@ void LinearSolver::Impl::build_permuted() {
   const auto* perm = static_cast<const int*>(L->Perm);
   std::vector<int> inv(nn);
   for (int k = 0; k < nn; ++k) inv[perm[k]] = k;
-  // entry (i, j), i >= j, of the stored lower triangle goes to permuted (max, min) of (inv i, inv j)
-  std::vector<std::vector<std::pair<int, int>>> cols(nn);
-  for (int j = 0; j < nn; ++j)
-    for (int q = M.outerIndexPtr()[j]; q < M.outerIndexPtr()[j + 1]; ++q) {
-      const int i = M.innerIndexPtr()[q];
-      if (i < j) continue;
-      const int a = inv[i], b = inv[j];
-      cols[std::min(a, b)].emplace_back(std::max(a, b), q);
-    }
+  // entry (i, j), i >= j, of the stored lower triangle goes to permuted (max, min) of (inv i, inv j);
+  // bucketed by permuted column (counting sort), then each column's rows sorted
+  const int* Mp = M.outerIndexPtr();
+  const int* Mi = M.innerIndexPtr();
   Sp.assign(nn + 1, 0);
+  for (int j = 0; j < nn; ++j)
+    for (int q = Mp[j]; q < Mp[j + 1]; ++q)
+      if (Mi[q] >= j) ++Sp[std::min(inv[Mi[q]], inv[j]) + 1];
+  for (int c = 0; c < nn; ++c) Sp[c + 1] += Sp[c];
+  std::vector<std::pair<int, int>> entry(static_cast<std::size_t>(Sp[nn]));  // (permuted row, q)
+  {
+    std::vector<int> at(Sp.begin(), Sp.end() - 1);
+    for (int j = 0; j < nn; ++j)
+      for (int q = Mp[j]; q < Mp[j + 1]; ++q) {
+        const int i = Mi[q];
+        if (i < j) continue;
+        const int a = inv[i], b = inv[j];
+        entry[static_cast<std::size_t>(at[std::min(a, b)]++)] = {std::max(a, b), q};
+      }
+  }
+  Si.resize(entry.size());
+  smap.resize(entry.size());
   for (int c = 0; c < nn; ++c) {
-    std::sort(cols[c].begin(), cols[c].end());
-    Sp[c + 1] = Sp[c] + static_cast<int>(cols[c].size());
-    for (const auto& [row, q] : cols[c]) {
-      Si.push_back(row);
-      smap.push_back(q);
+    std::sort(entry.begin() + Sp[c], entry.begin() + Sp[c + 1]);
+    for (int t = Sp[c]; t < Sp[c + 1]; ++t) {
+      Si[t] = entry[t].first;
+      smap[t] = entry[t].second;
     }
   }
   Sx.assign(smap.size(), 0.0);
@@ -356,7 +412,15 @@ LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_change
       set_ordering();
       cholmod_sparse A = view();
       const SerialCholmod serial;
-      L = cholmod_analyze(&A, &cm);
+      std::vector<int> perm;
+      if (cm.nmethods == 1 && cm.method[0].ordering == CHOLMOD_NESDIS) perm = block_ordering();
+      if (!perm.empty()) {  // symbolic factorisation with the block ordering
+        cm.nmethods = 1;
+        cm.method[0].ordering = CHOLMOD_GIVEN;
+        L = cholmod_analyze_p(&A, perm.data(), nullptr, 0, &cm);
+      } else {
+        L = cholmod_analyze(&A, &cm);
+      }
       stats.t_analyse += seconds_since(t0);
       ++stats.analyses;
       if (L == nullptr)
@@ -564,6 +628,14 @@ LinearSolver& LinearSolver::operator=(LinearSolver&&) noexcept = default;
 namespace {
 [[noreturn]] void moved_from() { throw std::logic_error("LinearSolver: use of a moved-from solver"); }
 }  // namespace
+
+void LinearSolver::set_row_blocks(std::vector<int> block_of_row) {
+  if (!impl_) moved_from();
+  for (const int b : block_of_row)
+    if (b < 0) throw std::invalid_argument("LinearSolver::set_row_blocks: negative block index");
+  impl_->blocks = std::move(block_of_row);
+  impl_->analysed = false;  // the next factorisation re-analyses with the new blocks
+}
 
 LinearStatus LinearSolver::factorise(const SpMat& M, bool pattern_changed) {
   if (!impl_) moved_from();

@@ -11,6 +11,7 @@
 
 #include <Eigen/LU>
 #include <fmt/format.h>
+#include <omp.h>
 
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
@@ -72,6 +73,7 @@ void SolverOptions::validate() const {
   require(std::isfinite(local_threshold) && local_threshold >= 0.0,
           fmt::format("solver: local_threshold must be non-negative, got {}", local_threshold));
   require(backtracks >= 1 && backtracks <= 30, fmt::format("solver: backtracks must be in [1, 30], got {}", backtracks));
+  require(threads >= 1 && threads <= 256, fmt::format("solver: threads must be in [1, 256], got {}", threads));
   require(chord_steps >= 0 && chord_steps <= 100, fmt::format("solver: chord_steps must be in [0, 100], got {}", chord_steps));
   require(kink_freeze_after >= 0 && kink_freeze_after <= 100,
           fmt::format("solver: kink_freeze_after must be in [0, 100], got {}", kink_freeze_after));
@@ -330,6 +332,11 @@ struct NetworkSolver::Impl {
   // Trial evaluation of every pair from the committed state and the increment du.
   // Fills f (3n), trial results, and (if assemble) the values of K and M.
   void evaluate(bool assemble, bool& any_nonsymmetric) {
+    if (!assemble && opt.threads > 1) {
+      evaluate_forces_parallel();
+      any_nonsymmetric = opt.law.frictional() || opt.geometric_stiffness;
+      return;
+    }
     std::fill(f.begin(), f.end(), 0.0);
     pf.resize(6 * pi.size());
     if (assemble) {
@@ -423,6 +430,52 @@ struct NetworkSolver::Impl {
     }
     // stick tangents differ slightly from M too; the geometric stiffness is not in M at all
     if (opt.law.frictional() || opt.geometric_stiffness) any_nonsymmetric = true;
+  }
+
+  // evaluate(false) on opt.threads threads: the pairs in parallel, then f gathered per particle
+  // over its pairs in increasing pair order, i.e. the same sums in the same order as the serial
+  // loop (bit-identical results for any number of threads).
+  void evaluate_forces_parallel() {
+    pf.resize(6 * pi.size());
+    const auto np = static_cast<std::ptrdiff_t>(pi.size());
+    const int levels = omp_get_max_active_levels();
+    omp_set_max_active_levels(1);  // LinearSolver sets 0 to keep CHOLMOD serial
+#pragma omp parallel num_threads(opt.threads)
+    {
+      ct::PairElement e;
+#pragma omp for schedule(static)
+      for (std::ptrdiff_t kk = 0; kk < np; ++kk) {
+        const auto k = static_cast<std::size_t>(kk);
+        const int i = pi[k], j = pj[k];
+        const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                      ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+        if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+          trial[k] = ct::PlasticIndentationResult{};
+          trial_slip[k] = 0.0;
+          std::fill_n(&pf[6 * k], 6, 0.0);
+          continue;
+        }
+        ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+        trial[k] = e.law;
+        trial_slip[k] = e.dslip;
+        for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+      }
+#pragma omp for schedule(static)
+      for (int p = 0; p < n; ++p) {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+          const auto k = static_cast<std::size_t>(adj_pair[q]);
+          const double* fk = &pf[6 * k + (pi[k] == p ? 0 : 3)];
+          s0 += fk[0];
+          s1 += fk[1];
+          s2 += fk[2];
+        }
+        f[3 * p] = s0;
+        f[3 * p + 1] = s1;
+        f[3 * p + 2] = s2;
+      }
+    }
+    omp_set_max_active_levels(levels);
   }
 
   // Open/closed cycling: a pair that closed and opened again within this increment keeps the
@@ -793,6 +846,12 @@ NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& op
   s.r_mean = std::accumulate(s.r.begin(), s.r.end(), 0.0) / s.n;
   s.r_max = *std::max_element(s.r.begin(), s.r.end());
   s.build_dofs();
+  {
+    std::vector<int> particle_of_dof(static_cast<std::size_t>(s.nfree));
+    for (int q = 0; q < 3 * s.n; ++q)
+      if (s.dof[q] >= 0) particle_of_dof[s.dof[q]] = q / 3;
+    s.lin.set_row_blocks(std::move(particle_of_dof));
+  }
   s.du.assign(3 * s.n, 0.0);
   s.f.assign(3 * s.n, 0.0);
   s.f_c.assign(3 * s.n, 0.0);

@@ -465,6 +465,30 @@ TEST(NetworkSolver, ChordStepsReachTheSameEquilibrium) {
   EXPECT_THROW(so.validate(), std::invalid_argument);
 }
 
+// The force evaluations of the line search and the chord steps may run on several threads: the
+// pairs are evaluated in parallel and each particle's force is summed over its pairs in the same
+// order as the serial loop, so the whole run must be bit-identical.
+TEST(NetworkSolver, ThreadedForceEvaluationIsBitIdentical) {
+  auto [pk, so, D] = sticking_newton_case();
+  so.chord_steps = 2;
+  so.viscosity = 0.01;
+  so.residual_tol = 1e-3;
+  so.max_residual_tol = kInf;
+  auto run = [&](int threads) {
+    qs::SolverOptions o = so;
+    o.threads = threads;
+    return compact(pk, o, qs::StrainPath::hydrostatic(), D, 10).m;
+  };
+  const auto a = run(1), b = run(2);
+  EXPECT_EQ(a.S11, b.S11);
+  EXPECT_EQ(a.S22, b.S22);
+  EXPECT_EQ(a.S12, b.S12);
+  EXPECT_EQ(a.contacts, b.contacts);
+  EXPECT_LT(a.S22, 0.0);
+  so.threads = 0;
+  EXPECT_THROW(so.validate(), std::invalid_argument);
+}
+
 // Nonlinear Gauss-Seidel smoothing: the Newton residual that is left after the global steps sits
 // on a few particles (contacts cycling open/closed, two-contact chain particles, sliding
 // contacts). A damped Newton iteration on each of these particles alone must converge many more

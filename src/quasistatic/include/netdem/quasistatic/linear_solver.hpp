@@ -84,6 +84,15 @@ class LinearSolver {
   /// A 0x0 M is a valid (trivial) system. Throws std::invalid_argument if M is not square.
   LinearStatus factorise(const SpMat& M, bool pattern_changed);
 
+  /// Rows that belong together (the DOFs of one particle): where the rows would get a
+  /// nested-dissection ordering (from 2e5 rows on, or with Ordering::Nesdis), METIS orders the
+  /// graph of the blocks instead and the order is expanded to their rows, which keeps a block's
+  /// rows together and orders a 3x smaller graph with 9x fewer edges (W = 640 R: 0.94 -> 0.4 s
+  /// per analysis, same fill). block_of_row.size() must equal the matrix size at the next analysis
+  /// (otherwise the rows are ordered individually). Throws std::invalid_argument for a negative
+  /// block index.
+  void set_row_blocks(std::vector<int> block_of_row);
+
   /// Solves M x = b with the factor (direct). ok = false (x = 0) if there is no valid factor.
   /// residual is computed with the stored copy of M (one extra mat-vec).
   LinearStatus solve(const VecX& b, VecX& x);

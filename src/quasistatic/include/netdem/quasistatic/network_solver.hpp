@@ -103,6 +103,9 @@ struct SolverOptions {
   /// residual is taken, else the best of them.
   int backtracks = 5;
   double line_search_tol = 0.5;    ///< energy line search: accept |slope| <= tol * initial slope
+  /// Threads for the force evaluations of the line search and the chord steps (OpenMP; results
+  /// are bit-identical for any number). The linear algebra stays on one core.
+  int threads = 1;
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
 };
