@@ -749,13 +749,16 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
              "prescribes only the peripheral layer, and a frictionless packing can squeeze disks out between "
              "peripheral disks; docs/quasistatic.md).\n")
     L.append("\nResidual: the `residual` column of history.csv at commit (max nodal out-of-balance force / mean "
-             "contact force); an increment is converged below --tol = 1e-6.\n")
+             "contact force, the drag-held imbalance); an increment is converged when the RMS Newton residual "
+             "(contact force minus drag) is below --tol (3e-3 of the mean contact force, netsolve's default).\n")
 
     inc = increment_check(R)
     L.append("## Increment check\n")
     if inc:
         L.append("Same case with the default and twice the number of increments (value / value at 2x, "
-                 "relative difference):\n")
+                 "relative difference). The drag is a viscosity per unit strain (netsolve's default since "
+                 "2026-11-26), so both runs solve the same regularised problem and the difference is the "
+                 "increment's:\n")
         L.append("| case | increments | D | S11/sy | S22/sy | Z |")
         L.append("|---|---|---|---|---|---|")
         L += inc
@@ -783,7 +786,8 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
         L.append("## Regularisation study (frictionless, hydrostatic)\n")
         L.append("The frictionless findings (3a, 3b, 7a, 8d) are where the network must rearrange, and there the "
                  "viscous drag that keeps the Newton iteration stable (docs/quasistatic.md) holds the network "
-                 "closer to the affine motion. Same case at weaker drag (below 0.01 the default Newton settings "
+                 "closer to the affine motion. Same case at weaker drag (--viscosity 0.003 and 0.001 instead of 0.01, i.e. "
+                 "0.3 and 0.1 times the default drag per unit strain; below 0.01 the default Newton settings "
                  "lose the network, so these runs use up to 20 iterations and the energy line search; they are "
                  "information, not findings):\n")
         L += vs
