@@ -65,3 +65,29 @@ def run_compact(netsolve, out, args, reuse, nice, label):
         return float(f.read_text()) if f.exists() else float("nan")
 
     return json.loads(summ.read_text()), read("process_wall_s.txt"), read("process_cpu_s.txt")
+
+
+def write_rows_csv(out, name, cols, rows):
+    """Writes rows (dicts) as <out>/<name>.csv with the header cols (floats to 6 digits)."""
+    import csv
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / f"{name}.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for r in rows:
+            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
+    print("wrote", out / f"{name}.csv")
+    return out
+
+
+def pyplot():
+    """matplotlib.pyplot with the Agg backend, or None (with a message) if matplotlib is missing."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib not available: no plot", file=sys.stderr)
+        return None
+    return plt

@@ -29,9 +29,8 @@ import argparse
 import csv
 import shutil
 import sys
-from pathlib import Path
 
-from bench_common import add_common_args, run_compact, setup
+from bench_common import add_common_args, pyplot, run_compact, setup, write_rows_csv
 CHECKPOINTS = (0.82, 0.83, 0.84, 0.85)
 
 
@@ -150,23 +149,12 @@ def main():
                       f"  unconverged {r['unconverged_increments']}/{n}", flush=True)
     shutil.rmtree(netsolve.parent, ignore_errors=True)
 
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
     cols = ["viscosity", "max_newton", "seed", "N", "N_ref", "particles", "wall_s", "process_wall_s", "process_cpu_s", "S22", "err_S22_final",
             "err_S22_max_checkpoints", "S22_fit", "err_S22_fit", "newton_iterations", "factorisations", "unconverged_increments", "max_residual"]
-    with open(out / f"{a.name}.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for r in rows:
-            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
-    print("wrote", out / f"{a.name}.csv")
+    out = write_rows_csv(a.out, a.name, cols, rows)
 
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib not available: no plot", file=sys.stderr)
+    plt = pyplot()
+    if plt is None:
         return
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for v in viscs:

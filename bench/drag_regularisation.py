@@ -15,12 +15,9 @@ Writes <out>/<name>.csv and <out>/<name>.png.
     /usr/bin/python3 bench/drag_regularisation.py --netsolve build/apps/netsolve --seeds 1,2,3 --levels 4
 """
 import argparse
-import csv
 import shutil
-import sys
-from pathlib import Path
 
-from bench_common import add_common_args, run_compact, setup
+from bench_common import add_common_args, pyplot, run_compact, setup, write_rows_csv
 
 REF_STRAIN = 3.57e-4  # netsolve's default --viscosity-strain
 
@@ -57,22 +54,11 @@ def main():
     for r in rows:
         base = next(q for q in rows if q["seed"] == r["seed"] and q["level"] == 0)
         r["S22_rel_default"] = r["S22"] / base["S22"]
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
     cols = ["seed", "level", "viscosity_strain", "increments", "S22", "S22_rel_default", "S11", "Z",
             "unconverged_increments", "newton_iterations", "process_cpu_s"]
-    with open(out / f"{a.name}.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for r in rows:
-            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
-    print("wrote", out / f"{a.name}.csv")
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib not available: no plot", file=sys.stderr)
+    out = write_rows_csv(a.out, a.name, cols, rows)
+    plt = pyplot()
+    if plt is None:
         return
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
     for seed in seeds:

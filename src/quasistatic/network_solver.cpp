@@ -432,6 +432,23 @@ struct NetworkSolver::Impl {
     if (opt.law.frictional() || opt.geometric_stiffness) any_nonsymmetric = true;
   }
 
+  /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch.
+  void pair_forces(std::size_t k, ct::PairElement& e) {
+    const int i = pi[k], j = pj[k];
+    const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                  ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+    if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+      trial[k] = ct::PlasticIndentationResult{};
+      trial_slip[k] = 0.0;
+      std::fill_n(&pf[6 * k], 6, 0.0);
+      return;
+    }
+    ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+    trial[k] = e.law;
+    trial_slip[k] = e.dslip;
+    for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+  }
+
   // evaluate(false) on opt.threads threads: the pairs in parallel, then f gathered per particle
   // over its pairs in increasing pair order, i.e. the same sums in the same order as the serial
   // loop (bit-identical results for any number of threads).
@@ -445,20 +462,7 @@ struct NetworkSolver::Impl {
       ct::PairElement e;
 #pragma omp for schedule(static)
       for (std::ptrdiff_t kk = 0; kk < np; ++kk) {
-        const auto k = static_cast<std::size_t>(kk);
-        const int i = pi[k], j = pj[k];
-        const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                      ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
-        if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
-          trial[k] = ct::PlasticIndentationResult{};
-          trial_slip[k] = 0.0;
-          std::fill_n(&pf[6 * k], 6, 0.0);
-          continue;
-        }
-        ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
-        trial[k] = e.law;
-        trial_slip[k] = e.dslip;
-        for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+        pair_forces(static_cast<std::size_t>(kk), e);
       }
 #pragma omp for schedule(static)
       for (int p = 0; p < n; ++p) {
@@ -512,21 +516,10 @@ struct NetworkSolver::Impl {
           f[3 * i + a] -= pf[6 * k + a];
           f[3 * j + a] -= pf[6 * k + 3 + a];
         }
-        const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                      ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
-        if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
-          trial[k] = ct::PlasticIndentationResult{};
-          trial_slip[k] = 0.0;
-          std::fill_n(&pf[6 * k], 6, 0.0);
-          continue;
-        }
-        ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
-        trial[k] = e.law;
-        trial_slip[k] = e.dslip;
-        for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+        pair_forces(k, e);
         for (int a = 0; a < 3; ++a) {
-          f[3 * i + a] += e.force(a);
-          f[3 * j + a] += e.force(3 + a);
+          f[3 * i + a] += pf[6 * k + a];
+          f[3 * j + a] += pf[6 * k + 3 + a];
         }
       }
     for (const int p : ps)
