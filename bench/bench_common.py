@@ -91,3 +91,12 @@ def pyplot():
         print("matplotlib not available: no plot", file=sys.stderr)
         return None
     return plt
+
+
+def finish_plot(fig, ax, out, name):
+    """Legend, log grid, tight layout; saves <out>/<name>.png."""
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(Path(out) / f"{name}.png", dpi=130)
+    print("wrote", Path(out) / f"{name}.png")

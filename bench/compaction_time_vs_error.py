@@ -30,7 +30,7 @@ import csv
 import shutil
 import sys
 
-from bench_common import add_common_args, pyplot, run_compact, setup, write_rows_csv
+from bench_common import add_common_args, finish_plot, pyplot, run_compact, setup, write_rows_csv
 CHECKPOINTS = (0.82, 0.83, 0.84, 0.85)
 
 
@@ -182,11 +182,7 @@ def main():
                   else "solver wall time (summary.json timing_s.wall) [s]")
     ax.set_ylabel("relative error of $\\Sigma_{22}$ at D = 0.85 [%]")
     ax.set_title("default compaction (W = 80R, sticking, hydrostatic)")
-    ax.legend(fontsize=8)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / f"{a.name}.png", dpi=130)
-    print("wrote", out / f"{a.name}.png")
+    finish_plot(fig, ax, out, a.name)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ Writes <out>/<name>.csv and <out>/<name>.png.
 import argparse
 import shutil
 
-from bench_common import add_common_args, pyplot, run_compact, setup, write_rows_csv
+from bench_common import add_common_args, finish_plot, pyplot, run_compact, setup, write_rows_csv
 
 REF_STRAIN = 3.57e-4  # netsolve's default --viscosity-strain
 
@@ -69,11 +69,7 @@ def main():
     ax.set_xlabel("--viscosity-strain (drag per unit strain / (0.01 x mean stiffness))")
     ax.set_ylabel("$-\\Sigma_{22}/\\sigma_y$ at D = 0.85")
     ax.set_title("drag regularisation (W = 80R, sticking, hydrostatic; N x 3 per level)")
-    ax.legend(fontsize=8)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / f"{a.name}.png", dpi=130)
-    print("wrote", out / f"{a.name}.png")
+    finish_plot(fig, ax, out, a.name)
 
 
 if __name__ == "__main__":
