@@ -87,7 +87,7 @@ class LinearSolver {
   /// Rows that belong together (the DOFs of one particle): where the rows would get a
   /// nested-dissection ordering (from 2e5 rows on, or with Ordering::Nesdis), METIS orders the
   /// graph of the blocks instead and the order is expanded to their rows, which keeps a block's
-  /// rows together and orders a 3x smaller graph with 9x fewer edges (W = 640 R: 0.94 -> 0.4 s
+  /// rows together and orders a 3x smaller graph with 9x fewer edges (W = 640 R: 0.94 -> 0.58 s
   /// per analysis, same fill). block_of_row.size() must equal the matrix size at the next analysis
   /// (otherwise the rows are ordered individually). Throws std::invalid_argument for a negative
   /// block index.

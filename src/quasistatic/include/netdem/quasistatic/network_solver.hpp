@@ -10,6 +10,8 @@
 // the increment is accepted. If Newton does not reach the tolerance within max_newton iterations
 // the increment is accepted anyway and its residual is carried into the next increment
 // (forward Euler with equilibrium correction); the residual norm is reported per increment.
+// With chord_steps > 0 an assembled tangent and its factorisation serve several iterations
+// (modified Newton; `netsolve compact` uses 3).
 //
 // Linear algebra: the global tangent K is assembled into a fixed sparsity pattern built from the
 // neighbour list (pairs with gap < skin, non-touching ones stored as explicit zeros), analysed by
@@ -103,8 +105,8 @@ struct SolverOptions {
   /// residual is taken, else the best of them.
   int backtracks = 5;
   double line_search_tol = 0.5;    ///< energy line search: accept |slope| <= tol * initial slope
-  /// Threads for the force evaluations of the line search and the chord steps (OpenMP; results
-  /// are bit-identical for any number). The linear algebra stays on one core.
+  /// Threads for the force evaluations without tangent (line search, local-sweep restarts;
+  /// OpenMP, results bit-identical for any number). Assembly and linear algebra stay on one core.
   int threads = 1;
   bool verbose = false;  ///< print every Newton iteration on stderr
   void validate() const;  ///< throws std::invalid_argument (one line)
