@@ -126,6 +126,7 @@ struct NetworkSolver::Impl {
   // trial buffers
   std::vector<double> du, f;
   std::vector<double> pf;  // 6 per pair: the pair's force on (i, j) in the trial state (summed into f)
+  std::vector<std::uint8_t> apart;  // per pair: never touched, apart, trial state and pf already zero
   std::vector<ct::PairGeometry> g0;
   std::vector<ct::PlasticIndentationResult> trial;
   std::vector<double> trial_slip;
@@ -228,6 +229,7 @@ struct NetworkSolver::Impl {
     }
     pi.swap(npi);
     pj.swap(npj);
+    apart.assign(pi.size(), 0);  // new pair indices: nothing is known to be zero
     hist.swap(nh);
     aux.swap(na);
     fn_c.swap(nfn);
@@ -332,13 +334,14 @@ struct NetworkSolver::Impl {
   // Trial evaluation of every pair from the committed state and the increment du.
   // Fills f (3n), trial results, and (if assemble) the values of K and M.
   void evaluate(bool assemble, bool& any_nonsymmetric) {
-    if (!assemble && opt.threads > 1) {
-      evaluate_forces_parallel();
+    if (!assemble) {
+      evaluate_forces();
       any_nonsymmetric = opt.law.frictional() || opt.geometric_stiffness;
       return;
     }
     std::fill(f.begin(), f.end(), 0.0);
     pf.resize(6 * pi.size());
+    apart.resize(pi.size(), 0);
     if (assemble) {
       std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
       std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
@@ -360,9 +363,11 @@ struct NetworkSolver::Impl {
         trial[k] = ct::PlasticIndentationResult{};
         trial_slip[k] = 0.0;
         std::fill_n(&pf[6 * k], 6, 0.0);
+        apart[k] = 1;
         if (assemble) open_contact_stiffness(k, g1);
         continue;
       }
+      apart[k] = 0;
       ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
       trial[k] = e.law;
       trial_slip[k] = e.dslip;
@@ -432,9 +437,25 @@ struct NetworkSolver::Impl {
     if (opt.law.frictional() || opt.geometric_stiffness) any_nonsymmetric = true;
   }
 
-  /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch.
+  /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
+  /// that has never touched and is clearly apart costs a squared distance (its zero trial state
+  /// and force are written once, then flagged in `apart`).
   void pair_forces(std::size_t k, ct::PairElement& e) {
     const int i = pi[k], j = pj[k];
+    if (hist[k].u_max <= 0.0) {
+      const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
+      const double rs = r[i] + r[j];
+      if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
+        if (!apart[k]) {
+          trial[k] = ct::PlasticIndentationResult{};
+          trial_slip[k] = 0.0;
+          std::fill_n(&pf[6 * k], 6, 0.0);
+          apart[k] = 1;
+        }
+        return;
+      }
+    }
+    apart[k] = 0;
     const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
                                                   ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
     if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
@@ -449,11 +470,12 @@ struct NetworkSolver::Impl {
     for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
   }
 
-  // evaluate(false) on opt.threads threads: the pairs in parallel, then f gathered per particle
-  // over its pairs in increasing pair order, i.e. the same sums in the same order as the serial
-  // loop (bit-identical results for any number of threads).
-  void evaluate_forces_parallel() {
+  // evaluate(false), on opt.threads threads: the pairs (in parallel), then f gathered per particle
+  // over its pairs in increasing pair order, i.e. the same sums in the same order as the
+  // assembling loop (bit-identical results for any number of threads).
+  void evaluate_forces() {
     pf.resize(6 * pi.size());
+    apart.resize(pi.size(), 0);
     const auto np = static_cast<std::ptrdiff_t>(pi.size());
     const int levels = omp_get_max_active_levels();
     omp_set_max_active_levels(1);  // LinearSolver sets 0 to keep CHOLMOD serial
