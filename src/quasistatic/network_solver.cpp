@@ -127,6 +127,12 @@ struct NetworkSolver::Impl {
   std::vector<double> du, f;
   std::vector<double> pf;  // 6 per pair: the pair's force on (i, j) in the trial state (summed into f)
   std::vector<std::uint8_t> apart;  // per pair: never touched, apart, trial state and pf already zero
+  std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
+  // scratch of relax_worst (kept: it runs every Newton iteration)
+  std::vector<double> relax_rp;
+  std::vector<std::uint8_t> relax_done;
+  std::vector<int> relax_moved;
+  std::vector<std::pair<double, int>> relax_bad;
   std::vector<ct::PairGeometry> g0;
   std::vector<ct::PlasticIndentationResult> trial;
   std::vector<double> trial_slip;
@@ -332,7 +338,8 @@ struct NetworkSolver::Impl {
   }
 
   // Trial evaluation of every pair from the committed state and the increment du.
-  // Fills f (3n), trial results, and (if assemble) the values of K and M.
+  // Fills f (3n), pf, the trial results, and (if assemble) the values of K and M; without
+  // assembly it is evaluate_forces().
   void evaluate(bool assemble, bool& any_nonsymmetric) {
     if (!assemble) {
       evaluate_forces();
@@ -342,10 +349,8 @@ struct NetworkSolver::Impl {
     std::fill(f.begin(), f.end(), 0.0);
     pf.resize(6 * pi.size());
     apart.resize(pi.size(), 0);
-    if (assemble) {
-      std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
-      std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
-    }
+    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+    std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
     any_nonsymmetric = false;
     ct::TangentOptions topt;
     topt.geometric = opt.geometric_stiffness;
@@ -360,15 +365,12 @@ struct NetworkSolver::Impl {
       const ct::PairGeometry& g = g0[k];
       // pairs that are apart and have never touched cost only the geometry
       if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
-        trial[k] = ct::PlasticIndentationResult{};
-        trial_slip[k] = 0.0;
-        std::fill_n(&pf[6 * k], 6, 0.0);
-        apart[k] = 1;
-        if (assemble) open_contact_stiffness(k, g1);
+        set_apart(k);
+        open_contact_stiffness(k, g1);
         continue;
       }
       apart[k] = 0;
-      ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, assemble ? &topt : nullptr);
+      ct::element(opt.law, hist[k], g, g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
       trial[k] = e.law;
       trial_slip[k] = e.dslip;
       for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
@@ -376,7 +378,6 @@ struct NetworkSolver::Impl {
         f[3 * i + a] += e.force(a);
         f[3 * j + a] += e.force(3 + a);
       }
-      if (!assemble) continue;
       if (e.law.branch == ct::NormalBranch::Open) {
         open_contact_stiffness(k, g1);
         continue;
@@ -437,6 +438,14 @@ struct NetworkSolver::Impl {
     if (opt.law.frictional() || opt.geometric_stiffness) any_nonsymmetric = true;
   }
 
+  /// Pair k has never touched and is apart: zero trial state and force.
+  void set_apart(std::size_t k) {
+    trial[k] = ct::PlasticIndentationResult{};
+    trial_slip[k] = 0.0;
+    std::fill_n(&pf[6 * k], 6, 0.0);
+    apart[k] = 1;
+  }
+
   /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
   /// that has never touched and is clearly apart costs a squared distance (its zero trial state
   /// and force are written once, then flagged in `apart`).
@@ -446,12 +455,7 @@ struct NetworkSolver::Impl {
       const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
       const double rs = r[i] + r[j];
       if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
-        if (!apart[k]) {
-          trial[k] = ct::PlasticIndentationResult{};
-          trial_slip[k] = 0.0;
-          std::fill_n(&pf[6 * k], 6, 0.0);
-          apart[k] = 1;
-        }
+        if (!apart[k]) set_apart(k);
         return;
       }
     }
@@ -459,9 +463,7 @@ struct NetworkSolver::Impl {
     const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
                                                   ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
     if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
-      trial[k] = ct::PlasticIndentationResult{};
-      trial_slip[k] = 0.0;
-      std::fill_n(&pf[6 * k], 6, 0.0);
+      set_apart(k);
       return;
     }
     ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
@@ -547,7 +549,6 @@ struct NetworkSolver::Impl {
     for (const int p : ps)
       for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
   }
-  std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
 
   double mean_normal_force() const {
     double s = 0.0;
@@ -740,8 +741,10 @@ struct NetworkSolver::Impl {
   int relax_worst(double fbar, double rms) {
     const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
     const double thr = std::max(opt.local_threshold * rms, opt.residual_tol) * fbar;
-    std::vector<std::pair<double, int>> bad;
-    std::vector<double> rp(n, 0.0);
+    auto& bad = relax_bad;
+    auto& rp = relax_rp;
+    bad.clear();
+    rp.resize(n);
     for (int p = 0; p < n; ++p) {
       double s2 = 0.0;
       for (int a = 0; a < 3; ++a)
@@ -753,8 +756,10 @@ struct NetworkSolver::Impl {
       if (rp[p] > thr) bad.emplace_back(rp[p], p);
     }
     std::sort(bad.begin(), bad.end(), std::greater<>());
-    std::vector<std::uint8_t> done(n, 0);
-    std::vector<int> moved;
+    auto& done = relax_done;
+    auto& moved = relax_moved;
+    done.assign(n, 0);
+    moved.clear();
     for (const auto& b : bad) {
       int ps[2] = {b.second, -1}, m = 1;
       if (done[ps[0]]) continue;
