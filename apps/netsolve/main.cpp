@@ -42,39 +42,16 @@ using netdem::app::netsolve::PackArgs;
 
 std::string g_command;
 
-// Compaction defaults that differ from the library's (docs/quasistatic.md "Drag and tolerance"):
-// the drag is a strain-rate viscosity (--viscosity 0.01 at the reference increment |dE| = 3.57e-4,
-// the increment of the 100-increment default run), so that refining the increments converges to
-// one problem, and Newton stops at an RMS residual of 3e-3 of the mean contact force (the answer
-// moves by 0.1 % against 1e-3 on the default scene, 0.2 % on 100k particles; 1e-2 moves it 1.5 % there).
-// Each tangent and its factorisation serve four iterations (three chord steps), GMRES stops at
-// 0.3 of the Newton residual (usually one iteration), and the line search tries the steps 1, 1/2,
-// 1/4 only (40 % of the searches find no lower residual, and their five trials cost more than the
-// two smaller steps bring): the outer iteration converges linearly anyway, and on 100k particles
-// this divides the run time by four (docs/performance.md).
-netdem::app::netsolve::LawArgs compact_law_defaults() {
-  netdem::app::netsolve::LawArgs a;
-  a.tol = 3e-3;
-  return a;
-}
-netdem::qs::SolverOptions compact_solver_defaults() {
-  netdem::qs::SolverOptions o;
-  o.viscosity_strain = 3.57e-4;
-  o.chord_steps = 3;
-  o.backtracks = 3;
-  return o;
-}
-
+// The defaults of `compact` are the library preset qs::SolverOptions::compact()
+// (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
 struct CompactArgs {
-  bool affine = false, no_rotation = false, quiet = false, verbose = false, geometric = false;
+  bool affine = false, no_rotation = false, quiet = false, verbose = false;
   std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85, slide_fraction = 0.05, linear_tol = 0.3;
+  double to_density = 0.85;
   int increments = 100;
-  std::string line_search = "residual";
-  netdem::app::netsolve::LawArgs law = compact_law_defaults();
-  netdem::qs::SolverOptions solver = compact_solver_defaults();  // the newer Newton knobs (step limits, sub-stepping, continuation)
+  netdem::qs::SolverOptions solver = netdem::qs::SolverOptions::compact();  // bound directly by the command line
+  netdem::app::netsolve::LawArgs law = netdem::app::netsolve::law_args(solver);
 };
-
 
 std::vector<double> parse_list(const std::string& s, const char* what) {
   std::vector<double> out;
@@ -141,17 +118,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
   so.rotations = !a.no_rotation;
   netdem::app::netsolve::apply_law_args(a.law, so);
-  so.slide_stiffness_fraction = a.slide_fraction;
-  so.geometric_stiffness = a.geometric;
-  so.linear_tolerance = a.linear_tol;
   so.verbose = a.verbose;
-  if (a.line_search == "energy") {
-    so.line_search = qs::LineSearch::Energy;
-  } else if (a.line_search == "residual") {
-    so.line_search = qs::LineSearch::Residual;
-  } else {
-    throw std::invalid_argument(fmt::format("--line-search '{}' is not 'energy' or 'residual'", a.line_search));
-  }
   so.validate();
   qs::CompactionOptions co;
   co.path = qs::StrainPath::parse(a.path);
@@ -173,9 +140,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
       "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
-      "linear_iterations,converged,cuts\n";
+      "linear_iterations,converged\n";
   std::size_t next_snap = 0;
-  int unconverged = 0, cuts = 0;
+  int unconverged = 0;
   double max_residual = 0.0;
   qs::StateMeasures last;
   app::Progress progress("compact", co.increments, a.quiet);
@@ -183,15 +150,14 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
-                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0, row.report.cuts);
+                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
     if (row.increment > 0) {
       unconverged += !row.report.converged;
-      cuts += row.report.cuts;
       max_residual = std::max(max_residual, row.report.residual);
     }
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
@@ -239,7 +205,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
                 {"E22", last.E22},          {"E12", last.E12}};
-  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual}, {"cuts", cuts},
+  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
                  {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
                  {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
                  {"solves", tm.solves},                 {"tol", so.residual_tol},
@@ -285,28 +251,21 @@ int main(int argc, char** argv) {
   comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
-  comp->add_option("--slide-fraction", ca.slide_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
-  comp->add_option("--linear-tol", ca.linear_tol, "GMRES tolerance relative to the Newton residual")->capture_default_str();
-  comp->add_flag("--geometric-stiffness", ca.geometric, "add the geometric stiffness of the contact forces to the iteration matrix");
+  comp->add_option("--slide-fraction", ca.solver.slide_stiffness_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
+  comp->add_option("--linear-tol", ca.solver.linear_tolerance, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_option("--max-step", ca.solver.max_step, "cap on a Newton step's translation of one particle [R]")->capture_default_str();
   comp->add_option("--max-rotation-step", ca.solver.max_rotation_step, "cap on a Newton step's rotation of one particle [rad]")->capture_default_str();
   comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
   comp->add_option("--chord-steps", ca.solver.chord_steps, "modified Newton: iterations that reuse the last tangent and its factorisation after each fresh one (0: off)")->capture_default_str();
   comp->add_option("--backtracks", ca.solver.backtracks, "residual line search: step lengths tried (1, 1/2, 1/4, ...)")->capture_default_str();
   comp->add_option("--threads", ca.solver.threads, "threads for the force evaluations (line search, chord steps); the linear algebra stays serial; results are identical for any number")->capture_default_str();
-  comp->add_option("--kink-freeze-after", ca.solver.kink_freeze_after, "plastic contacts that switched loading/unloading this often in an increment get the unloading stiffness in the iteration matrix (0: off)")->capture_default_str();
   comp->add_option("--local-sweeps", ca.solver.local_sweeps, "nonlinear Gauss-Seidel sweeps over the worst particles after each Newton step (0: off)")->capture_default_str();
   comp->add_option("--local-iterations", ca.solver.local_iterations, "damped Newton iterations per particle in a local sweep")->capture_default_str();
   comp->add_option("--local-threshold", ca.solver.local_threshold, "local sweeps treat particles whose residual exceeds this multiple of the RMS residual")->capture_default_str();
-  comp->add_flag("--local-pairs", ca.solver.local_pairs, "local sweeps relax a particle together with its worst loaded contact partner");
-  comp->add_option("--max-cuts", ca.solver.max_cuts, "adaptive sub-stepping: an unconverged increment is redone as two halves, up to this many levels (0: off)")->capture_default_str();
   comp->add_option("--viscosity-strain", ca.solver.viscosity_strain, "drag per unit strain: an increment dE gets the drag --viscosity x mean stiffness x this / |dE|, i.e. --viscosity at |dE| = this (default: the increment of the 100-increment default run); 0: --viscosity in every increment whatever its size")->capture_default_str();
   netdem::app::netsolve::add_law_options(*comp, ca.law,
                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4");
-  comp->add_option("--viscosity-start", ca.solver.viscosity_start, "viscosity continuation: drag of the first Newton iteration of an increment, reduced to --viscosity (0: off)")->capture_default_str();
-  comp->add_option("--viscosity-decay", ca.solver.viscosity_decay, "viscosity continuation: factor per Newton iteration")->capture_default_str();
-  comp->add_option("--line-search", ca.line_search, "Newton globalisation: 'energy' (slope of the incremental potential) or 'residual' (backtracking on the RMS residual)")->capture_default_str();
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_option("--out", out, "output folder")->default_val("results/compact");

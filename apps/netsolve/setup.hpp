@@ -1,6 +1,7 @@
 #pragma once
 // Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield): the
 // packing, and the contact-law / Newton options both `compact` and `yield` take.
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -58,6 +59,19 @@ struct LawArgs {
   double k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01;
   int max_newton = 10;
 };
+
+/// The LawArgs of a library preset (the command's defaults).
+inline LawArgs law_args(const qs::SolverOptions& o) {
+  LawArgs a;
+  a.friction = std::isinf(o.law.mu) ? "inf" : fmt::format("{}", o.law.mu);
+  a.normal_unloading = o.law.reversible ? "reversible" : "elastic";
+  a.k_t = o.law.k_t;
+  a.sigma_y = o.law.sigma_y;
+  a.tol = o.residual_tol;
+  a.viscosity = o.viscosity;
+  a.max_newton = o.max_newton;
+  return a;
+}
 
 /// Registers the LawArgs options; `unloading_help` describes --normal-unloading for this command.
 inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unloading_help) {

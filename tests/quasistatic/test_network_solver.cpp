@@ -330,83 +330,30 @@ TEST(NetworkSolver, RattlerIsHarmless) {
 
 namespace {
 
-// Runs a compaction and records the sub-stepping counters of every increment.
-struct CutRun {
+// Runs a compaction and records the Newton counters of every increment.
+struct CountedRun {
   RunResult rr;
-  int cuts = 0, substeps = 0, increments = 0, newton = 0;
-  int min_cuts = 1 << 30, max_cuts = 0;
+  int increments = 0, newton = 0;
 };
 
-CutRun compact_with_cuts(const packing::Packing& pk, const qs::SolverOptions& so, double D, int increments) {
+CountedRun compact_counted(const packing::Packing& pk, const qs::SolverOptions& so, double D, int increments) {
   qs::NetworkSolver s(pk, so);
   qs::CompactionOptions co;
   co.target_density = D;
   co.increments = increments;
-  CutRun c;
+  CountedRun c;
   qs::run_compaction(s, co, [&](const qs::CompactionRow& row) {
     c.rr.m = row.state;
     if (row.increment == 0) return;
     c.rr.unconverged += !row.report.converged;
     c.rr.max_residual = std::max(c.rr.max_residual, row.report.residual);
-    c.cuts += row.report.cuts;
     c.newton += row.report.newton_iterations;
-    c.substeps += row.report.substeps;
-    c.min_cuts = std::min(c.min_cuts, row.report.cuts);
-    c.max_cuts = std::max(c.max_cuts, row.report.cuts);
     ++c.increments;
   });
   return c;
 }
 
 }  // namespace
-
-// Adaptive sub-stepping restarts a failed increment from the committed state as two halves. When
-// every attempt fails (no Newton iterations, an unreachable tolerance) and two levels of cuts are
-// allowed, each increment becomes four quarter increments: the run must reproduce a uniform run
-// with four times as many increments (nothing of a failed attempt may leak into the state).
-TEST(NetworkSolver, SubsteppingReproducesUniformFinerIncrements) {
-  const auto pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  qs::SolverOptions so;
-  so.law.mu = kInf;
-  so.viscosity = 0.0;
-  so.max_newton = 0;           // forward Euler with equilibrium correction: every attempt "fails" ...
-  so.residual_tol = 1e-300;    // ... because the tolerance is unreachable
-  const double D = pk.density() + 0.02;
-  so.max_cuts = 0;
-  const auto uniform = compact_with_cuts(pk, so, D, 40);
-  so.max_cuts = 2;
-  const auto cut = compact_with_cuts(pk, so, D, 10);
-  EXPECT_EQ(uniform.cuts, 0);
-  EXPECT_EQ(cut.increments, 10);
-  EXPECT_EQ(cut.min_cuts, 3);  // the increment and both halves were cut
-  EXPECT_EQ(cut.max_cuts, 3);
-  EXPECT_EQ(cut.substeps, 40);
-  const double scale = std::fabs(uniform.rr.m.S22);
-  EXPECT_NEAR(cut.rr.m.density, uniform.rr.m.density, 1e-12);
-  EXPECT_NEAR(cut.rr.m.S11, uniform.rr.m.S11, 1e-9 * scale);
-  EXPECT_NEAR(cut.rr.m.S22, uniform.rr.m.S22, 1e-9 * scale);
-  EXPECT_EQ(cut.rr.m.contacts, uniform.rr.m.contacts);
-}
-
-// With too few Newton iterations per increment (the modified Newton iteration converges
-// linearly), sub-stepping cuts the increments that do not converge. Smaller increments do not
-// converge faster here (measured: still unconverged sub-steps at 1/64 of the increment), but the
-// cut run must stay as accurate as a converged 10-increment run (test IncrementConvergence).
-TEST(NetworkSolver, SubsteppingKeepsAccuracy) {
-  auto [pk, so, D] = sticking_newton_case();
-  const auto ref = compact_with_cuts(pk, so, D, 160);
-  ASSERT_EQ(ref.rr.unconverged, 0);
-  so.max_newton = 10;
-  so.max_cuts = 3;
-  const auto cut = compact_with_cuts(pk, so, D, 10);
-  const double err = std::fabs(cut.rr.m.S22 - ref.rr.m.S22) / std::fabs(ref.rr.m.S22);
-  std::printf("10 Newton iterations, 10 increments, up to 3 cuts: %d unconverged, %d cuts, %d sub-steps, "
-              "S22 error vs 160 increments %.2e\n",
-              cut.rr.unconverged, cut.cuts, cut.substeps, err);
-  EXPECT_GT(cut.cuts, 0);
-  EXPECT_EQ(cut.substeps, 10 + cut.cuts);  // every cut replaces one attempt by two
-  EXPECT_LT(err, 1e-3);
-}
 
 // Sliding contacts keep a fraction of their tangential spring in the iteration matrix (their
 // consistent tangent has none), and contacts that flip stick/slip are frozen to the full spring.
@@ -416,10 +363,10 @@ TEST(NetworkSolver, SubsteppingKeepsAccuracy) {
 // converges to 1e-5 of the mean contact force in a fraction of the iterations, to the same state.
 TEST(NetworkSolver, SmallSlideStiffnessConvergesFaster) {
   auto [pk, so, D] = sticking_newton_case();
-  const auto old_run = compact_with_cuts(pk, so, D, 10);
+  const auto old_run = compact_counted(pk, so, D, 10);
   so.slide_stiffness_fraction = 0.01;
   so.freeze_after = 8;
-  const auto new_run = compact_with_cuts(pk, so, D, 10);
+  const auto new_run = compact_counted(pk, so, D, 10);
   std::printf("Newton iterations for 10 increments: %d (slide fraction 0.05, freeze after 2), %d (0.01, 8)\n",
               old_run.newton, new_run.newton);
   EXPECT_LE(old_run.rr.unconverged, 1);  // one increment needs more than 300 iterations
@@ -501,10 +448,10 @@ TEST(NetworkSolver, LocalRelaxationConvergesMoreIncrements) {
     qs::SolverOptions so;
     so.law.mu = mu;
     so.local_sweeps = 0;
-    const auto plain = compact_with_cuts(pk, so, 0.85, 100);
+    const auto plain = compact_counted(pk, so, 0.85, 100);
     so.local_sweeps = 1;
     so.local_iterations = 10;
-    const auto relaxed = compact_with_cuts(pk, so, 0.85, 100);
+    const auto relaxed = compact_counted(pk, so, 0.85, 100);
     std::printf("mu=%g: unconverged increments %d without, %d with local relaxation; S22 %.4f, %.4f\n", mu,
                 plain.rr.unconverged, relaxed.rr.unconverged, plain.rr.m.S22, relaxed.rr.m.S22);
     if (mu == 0.0) {  // measured: 82 -> 52 of 100

@@ -7,11 +7,10 @@
 // affine mode; peripheral rotations are always held), then finds the free DOFs by Newton
 // iterations on the equilibrium equations (Eq 10-12). The trial state is always recomputed from
 // the committed contact history plus the whole increment (return mapping) and committed only when
-// the increment is accepted. If Newton does not reach the tolerance within max_newton iterations
-// the increment is accepted anyway and its residual is carried into the next increment
-// (forward Euler with equilibrium correction); the residual norm is reported per increment.
-// With chord_steps > 0 an assembled tangent and its factorisation serve several iterations
-// (modified Newton; `netsolve compact` uses 3).
+// the increment ends. If Newton does not reach the tolerance within max_newton iterations the
+// increment is accepted anyway and its residual is carried into the next increment (forward Euler
+// with equilibrium correction); the residual norm is reported per increment. With chord_steps > 0
+// an assembled tangent and its factorisation serve several iterations (modified Newton).
 //
 // Linear algebra: the global tangent K is assembled into a fixed sparsity pattern built from the
 // neighbour list (pairs with gap < skin, non-touching ones stored as explicit zeros), analysed by
@@ -25,8 +24,12 @@
 // particles with a single contact) are removed by a tiny diagonal regularisation of the matrix
 // only (it changes the Newton path, never the equilibrium being solved), and Newton steps are
 // limited in size. A genuinely indefinite tangent (localisation) is reported as an error.
+//
+// The committed state (NetworkState) can be taken, copied, saved to a file and restored: a solver
+// restored from a state continues bit-identically to the solver it was taken from.
+//
+// Where the parts live: src/quasistatic/solver_impl.hpp.
 #include <cstdint>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,83 +37,13 @@
 #include <Eigen/Core>
 
 #include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/quasistatic/solver_options.hpp"
 
 namespace netdem::packing {
 struct Packing;
 }
 
 namespace netdem::qs {
-
-enum class BoundaryMode { Die, Affine };
-
-/// Globalisation of the Newton step.
-enum class LineSearch {
-  Residual,  ///< backtracking (halving) on the RMS residual (the original scheme)
-  Energy     ///< Crisfield: zero of the slope step . r(u + a step), i.e. the minimum of the incremental potential
-};
-
-struct SolverOptions {
-  BoundaryMode mode = BoundaryMode::Die;
-  bool rotations = true;  ///< false: forbid every particle rotation
-  contact::PlasticIndentationParams law;
-  double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
-  int max_newton = 10;             ///< Newton iterations per increment (then the residual is carried)
-  double residual_tol = 1e-3;      ///< converged when RMS(residual) <= tol * mean normal contact force ...
-  double max_residual_tol = std::numeric_limits<double>::infinity();  ///< ... and max|residual| <= this
-  double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
-  double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle
-  double regularisation = 1e-9;    ///< diagonal shift, relative to the mean translational diagonal
-  double slide_stiffness_fraction = 0.05;  ///< tangential stiffness kept by sliding contacts in the iteration matrix
-  bool geometric_stiffness = false;        ///< add the geometric stiffness to the tangent
-  /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
-  /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
-  double viscosity = 0.01;
-  /// 0: the drag coefficient is viscosity x mean stiffness in every increment (so the drag per
-  /// unit strain grows as the increments shrink). > 0: a strain-rate viscosity, the drag
-  /// coefficient of an increment dE is viscosity x mean stiffness x viscosity_strain / |dE|
-  /// (Frobenius norm), so that refining the increments converges to one regularised problem.
-  double viscosity_strain = 0.0;
-  /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
-  /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
-  double linear_tolerance = 1e-2;
-  /// A contact whose stick/slip status flipped this many times within an increment keeps its
-  /// elastic-predictor (stick) tangential stiffness in the iteration matrix (open/closed flips:
-  /// always after two, with the last closed normal stiffness).
-  int freeze_after = 2;
-  /// Chord (modified Newton) steps: after each fresh tangent and factorisation, up to this many
-  /// iterations reuse them (residual re-evaluated, no assembly, no factorisation; 0: off).
-  int chord_steps = 0;
-  /// A plastic contact that switched between loading and elastic unloading this many times within
-  /// an increment gets the unloading stiffness in the iteration matrix (0: off).
-  int kink_freeze_after = 0;
-  /// Nonlinear Gauss-Seidel smoothing after each Newton step: local_sweeps sweeps over the
-  /// particles whose residual exceeds local_threshold x the RMS residual, each a damped Newton
-  /// iteration (local_iterations at most) on the particle's own DOFs with its neighbours held
-  /// (0: off).
-  int local_sweeps = 1;
-  int local_iterations = 10;
-  double local_threshold = 3.0;
-  bool local_pairs = false;  ///< relax a particle together with its worst loaded contact partner
-  /// Viscosity continuation: the first Newton iteration of an increment uses
-  /// max(viscosity, viscosity_start), each further one viscosity_decay times the previous value
-  /// down to `viscosity`; only the target viscosity counts as converged (0: off).
-  double viscosity_start = 0.0;
-  double viscosity_decay = 0.5;
-  /// Adaptive sub-stepping: an increment that does not converge is redone from the committed
-  /// state as two halves, recursively up to max_cuts levels (0: off).
-  int max_cuts = 0;
-  LineSearch line_search = LineSearch::Residual;
-  int line_search_max = 6;         ///< energy line search: residual evaluations per line search
-  /// Residual line search: step lengths tried (1, 1/2, 1/4, ...); the first that lowers the RMS
-  /// residual is taken, else the best of them.
-  int backtracks = 5;
-  double line_search_tol = 0.5;    ///< energy line search: accept |slope| <= tol * initial slope
-  /// Threads for the force evaluations without tangent (line search, local-sweep restarts;
-  /// OpenMP, results bit-identical for any number). Assembly and linear algebra stay on one core.
-  int threads = 1;
-  bool verbose = false;  ///< print every Newton iteration on stderr
-  void validate() const;  ///< throws std::invalid_argument (one line)
-};
 
 /// What one increment did.
 struct IncrementReport {
@@ -122,8 +55,6 @@ struct IncrementReport {
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
   int new_contacts = 0, lost_contacts = 0, sliding = 0;
-  int cuts = 0;      ///< failed attempts that were split in two (adaptive sub-stepping)
-  int substeps = 1;  ///< committed sub-increments
 };
 
 /// Macroscopic and microscopic measures of the committed state.
@@ -156,12 +87,55 @@ struct ContactView {
   bool sliding;
 };
 
+/// Affine-deviation bookkeeping of one contact (section 3.3, Figs 7-8).
+struct PairAux {
+  Eigen::Matrix2d E_form = Eigen::Matrix2d::Zero();  ///< accumulated strain when the contact formed
+  double slip = 0.0;    ///< accumulated slip with rotations (Eq 5)
+  double centre = 0.0;  ///< accumulated tangential displacement of the centres (L dphi)
+};
+
+/// Everything a solver needs to continue a run: the particles, the contact table with its
+/// committed history, the committed forces and the predictor of the next increment. Plain data:
+/// copy it, save it (save_state), restore it (NetworkSolver(state, options)).
+struct NetworkState {
+  std::vector<double> x, y, theta, r;
+  std::vector<std::uint8_t> peripheral;
+  double solid_area = 0, initial_density = 0, box_area0 = 0;
+  Eigen::Matrix2d box_deformation = Eigen::Matrix2d::Identity();  ///< initial box -> current box
+  Eigen::Matrix2d strain = Eigen::Matrix2d::Zero();               ///< accumulated E
+  // contact table (pairs i < j sorted) and its committed history
+  std::vector<int> pair_i, pair_j;
+  std::vector<contact::PlasticIndentationHistory> history;
+  std::vector<PairAux> aux;
+  std::vector<double> f_n, f_t;
+  std::vector<std::uint8_t> sliding;
+  std::vector<double> x_build, y_build;  ///< positions at the last neighbour rebuild
+  Eigen::Matrix2d box_deformation_build = Eigen::Matrix2d::Identity();
+  std::vector<double> f_contact;  ///< 3 per particle: committed contact forces (Eq 13 reactions)
+  std::vector<double> du_prev;    ///< 3 per particle: the last increment (predictor); empty at start
+  Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
+  SolverTimings timings;
+
+  /// Throws std::invalid_argument (one line) if sizes, order or values are inconsistent.
+  void validate() const;
+};
+
+/// Writes the state exactly (hexadecimal floating point), atomically (temporary file + rename).
+/// Throws std::runtime_error naming the file on failure.
+void save_state(const NetworkState& state, const std::string& path);
+/// Reads and validates a state file written by save_state; throws std::runtime_error (one line,
+/// naming the file and line) on a missing, truncated or inconsistent file.
+NetworkState load_state(const std::string& path);
+
 class NetworkSolver {
  public:
   /// Throws std::invalid_argument on invalid options or packing.
   NetworkSolver(const packing::Packing& packing, const SolverOptions& options);
+  /// Continues from a state (bit-identical to the solver it was taken from when `options` are
+  /// that solver's). The boundary mode may differ; throws std::invalid_argument on a bad state.
+  NetworkSolver(const NetworkState& state, const SolverOptions& options);
   ~NetworkSolver();
-  NetworkSolver(const NetworkSolver&) = delete;
+  NetworkSolver(const NetworkSolver& other);  ///< = NetworkSolver(other.state(), other.options())
   NetworkSolver& operator=(const NetworkSolver&) = delete;
 
   /// One load increment with the macroscopic strain increment dE (symmetric 2x2).
@@ -174,6 +148,8 @@ class NetworkSolver {
   /// jumps; pairs apart start fresh. Takes effect from the next increment.
   void set_reversible_normal(bool reversible);
 
+  NetworkState state() const;
+  const SolverOptions& options() const;
   StateMeasures measures() const;
   const SolverTimings& timings() const;
 
@@ -190,10 +166,9 @@ class NetworkSolver {
   double initial_density() const;
   int free_dofs() const;
 
- private:
-  IncrementReport substep(const Eigen::Matrix2d& dE, int depth);
-  IncrementReport attempt(const Eigen::Matrix2d& dE, bool accept_unconverged);
   struct Impl;
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 

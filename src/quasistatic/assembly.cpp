@@ -1,0 +1,316 @@
+// Assembly of the network solver: the sparsity pattern of the free-DOF matrices, the trial
+// forces of every pair (threaded, bit-identical for any thread count), the iteration matrix K
+// and its symmetric slip-status twin M (preconditioner / direct solve), and the diagonal drag and
+// regularisation. The residual, not the matrix, defines the equilibrium: every modification of
+// the iteration matrix below changes the Newton path only (docs/quasistatic.md).
+#include <algorithm>
+
+#include <omp.h>
+
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+// Sparsity pattern of the free-DOF matrix: diagonal 3x3 blocks + one block pair per neighbour
+// pair, written directly in compressed column form from the particle adjacency (adj_start,
+// adj_pair): column (p, b) holds the free DOFs of p and of its neighbours, in DOF order (DOFs
+// are numbered particle by particle).
+void NetworkSolver::Impl::build_pattern() {
+  std::vector<int> near;  // p and its neighbours, sorted
+  auto neighbourhood = [&](int p) {
+    near.clear();
+    near.push_back(p);
+    for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+      const auto k = static_cast<std::size_t>(adj_pair[q]);
+      near.push_back(pi[k] == p ? pj[k] : pi[k]);
+    }
+    std::sort(near.begin(), near.end());
+  };
+  auto free_of = [&](int q) { return (dof[3 * q] >= 0) + (dof[3 * q + 1] >= 0) + (dof[3 * q + 2] >= 0); };
+  K.resize(nfree, nfree);
+  int* outer = K.outerIndexPtr();
+  outer[0] = 0;
+  for (int p = 0; p < n; ++p) {
+    if (free_of(p) == 0) continue;
+    neighbourhood(p);
+    int rows = 0;
+    for (const int q : near) rows += free_of(q);
+    for (int b = 0; b < 3; ++b)
+      if (const int d = dof[3 * p + b]; d >= 0) outer[d + 1] = rows;
+  }
+  for (int d = 0; d < nfree; ++d) outer[d + 1] += outer[d];
+  K.resizeNonZeros(outer[nfree]);
+  int* inner = K.innerIndexPtr();
+  std::fill(K.valuePtr(), K.valuePtr() + outer[nfree], 0.0);
+  for (int p = 0; p < n; ++p) {
+    if (free_of(p) == 0) continue;
+    neighbourhood(p);
+    for (int b = 0; b < 3; ++b) {
+      const int d = dof[3 * p + b];
+      if (d < 0) continue;
+      int at = outer[d];
+      for (const int q : near)
+        for (int a = 0; a < 3; ++a)
+          if (const int row = dof[3 * q + a]; row >= 0) inner[at++] = row;
+    }
+  }
+  M = K;
+  auto find = [&](int row, int col) -> int {
+    const int* in = K.innerIndexPtr();
+    const int b = K.outerIndexPtr()[col], e = K.outerIndexPtr()[col + 1];
+    const int* it = std::lower_bound(in + b, in + e, row);
+    return static_cast<int>(it - in);
+  };
+  pos.assign(36 * pi.size(), -1);
+  for (std::size_t k = 0; k < pi.size(); ++k) {
+    const int nodes[2] = {pi[k], pj[k]};
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b < 6; ++b) {
+        const int ra = dof[3 * nodes[a / 3] + a % 3], cb = dof[3 * nodes[b / 3] + b % 3];
+        if (ra >= 0 && cb >= 0) pos[36 * k + 6 * b + a] = find(ra, cb);
+      }
+  }
+  diag_pos.resize(nfree);
+  for (int d = 0; d < nfree; ++d) diag_pos[d] = find(d, d);
+  pattern_changed = true;
+}
+
+// Trial evaluation of every pair from the committed state and the increment du, with assembly:
+// fills f (3n), pf, the trial results and the values of K and M.
+void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
+  std::fill(f.begin(), f.end(), 0.0);
+  pf.resize(6 * pi.size());
+  apart.resize(pi.size(), 0);
+  std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+  std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
+  any_nonsymmetric = false;
+  const ct::TangentOptions topt;
+  ct::PairElement e;
+  for (std::size_t k = 0; k < pi.size(); ++k) {
+    const int i = pi[k], j = pj[k];
+    const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                  ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+    // pairs that are apart and have never touched cost only the geometry
+    if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+      set_apart(k);
+      open_contact_stiffness(k, g1);
+      continue;
+    }
+    apart[k] = 0;
+    ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+    trial[k] = e.law;
+    trial_slip[k] = e.dslip;
+    for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+    for (int a = 0; a < 3; ++a) {
+      f[3 * i + a] += e.force(a);
+      f[3 * j + a] += e.force(3 + a);
+    }
+    if (e.law.branch == ct::NormalBranch::Open) {
+      open_contact_stiffness(k, g1);
+      continue;
+    }
+    if (last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
+    last_open[k] = 0;
+    if (e.law.sliding) any_nonsymmetric = true;
+    const ct::PairVec bn = ct::normal_gradient(g1), bt = ct::slip_gradient(g1);
+    const double kn_sym = iteration_stiffness(k, g1, bn, bt, e);
+    last_kn[k] = kn_sym;
+    scatter(k, e, bn, bt, kn_sym);
+  }
+  // stick tangents differ slightly from M too
+  if (opt.law.frictional()) any_nonsymmetric = true;
+}
+
+// Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix;
+// returns the normal stiffness of the symmetric matrix M.
+double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairGeometry& g1, const ct::PairVec& bn,
+                                                const ct::PairVec& bt, ct::PairElement& e) {
+  const ct::PairGeometry& g = g0[k];
+  // Eq 2 is concave with a tangent that is singular at first touch, and Newton on the tangent
+  // overshoots into separation: on the plastic branch the iteration matrix uses the secant of
+  // Eq 2 over the increment (from the start overlap, or from touch) when it is stiffer.
+  double kn_extra = 0.0;
+  const double u_sep = ct::separation_overlap(opt.law, g1.r_eff, hist[k].u_max);
+  if (e.law.branch == ct::NormalBranch::Plastic) {
+    const double u_from = std::max(g.overlap, u_sep);
+    if (g1.overlap > u_from) {
+      const double ksec = ct::normal_secant(opt.law, g1.r_eff, hist[k].u_max, u_from, g1.overlap);
+      kn_extra = std::max(0.0, ksec - e.law.k_n);
+    }
+  }
+  if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
+  // Sliding contacts keep a fraction slide_stiffness_fraction of their tangential spring: the
+  // consistent tangent has none, which leaves the rotation of a particle whose contacts all slide
+  // without stiffness. A contact whose stick/slip status flipped freeze_after times in this
+  // increment keeps its full spring (elastic predictor; slower, but it cannot cycle).
+  if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
+  last_sliding[k] = e.law.sliding ? 1 : 0;
+  const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
+  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * opt.law.k_t * e.law.area * bt * bt.transpose();
+  return e.law.k_n + kn_extra;
+}
+
+// Adds pair k's iteration matrix to K and its symmetric slip-status tangent to M.
+void NetworkSolver::Impl::scatter(std::size_t k, const ct::PairElement& e, const ct::PairVec& bn, const ct::PairVec& bt,
+                                  double kn_sym) {
+  const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
+  const double kt = opt.law.frictional() ? opt.law.k_t * e.law.area * (e.law.sliding ? frac : 1.0) : 0.0;
+  double* Kv = K.valuePtr();
+  double* Mv = M.valuePtr();
+  const int* pk = &pos[36 * k];
+  for (int b = 0; b < 6; ++b)
+    for (int a = 0; a < 6; ++a) {
+      const int q = pk[6 * b + a];
+      if (q < 0) continue;
+      Kv[q] += e.stiffness(a, b);
+      Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
+    }
+}
+
+/// Pair k has never touched and is apart: zero trial state and force.
+void NetworkSolver::Impl::set_apart(std::size_t k) {
+  trial[k] = ct::PlasticIndentationResult{};
+  trial_slip[k] = 0.0;
+  std::fill_n(&pf[6 * k], 6, 0.0);
+  apart[k] = 1;
+}
+
+/// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
+/// that has never touched and is clearly apart costs a squared distance (its zero trial state
+/// and force are written once, then flagged in `apart`).
+void NetworkSolver::Impl::pair_forces(std::size_t k, ct::PairElement& e) {
+  const int i = pi[k], j = pj[k];
+  if (hist[k].u_max <= 0.0) {
+    const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
+    const double rs = r[i] + r[j];
+    if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
+      if (!apart[k]) set_apart(k);
+      return;
+    }
+  }
+  apart[k] = 0;
+  const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+  if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+    set_apart(k);
+    return;
+  }
+  ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+  trial[k] = e.law;
+  trial_slip[k] = e.dslip;
+  for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+}
+
+// Forces only, on opt.threads threads: the pairs (in parallel), then f gathered per particle
+// over its pairs in increasing pair order, i.e. the same sums in the same order as the
+// assembling loop (bit-identical results for any number of threads).
+void NetworkSolver::Impl::evaluate_forces() {
+  pf.resize(6 * pi.size());
+  apart.resize(pi.size(), 0);
+  const auto np = static_cast<std::ptrdiff_t>(pi.size());
+  const int levels = omp_get_max_active_levels();
+  omp_set_max_active_levels(1);  // LinearSolver sets 0 to keep CHOLMOD serial
+#pragma omp parallel num_threads(opt.threads)
+  {
+    ct::PairElement e;
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t kk = 0; kk < np; ++kk) {
+      pair_forces(static_cast<std::size_t>(kk), e);
+    }
+#pragma omp for schedule(static)
+    for (int p = 0; p < n; ++p) {
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+        const auto k = static_cast<std::size_t>(adj_pair[q]);
+        const double* fk = &pf[6 * k + (pi[k] == p ? 0 : 3)];
+        s0 += fk[0];
+        s1 += fk[1];
+        s2 += fk[2];
+      }
+      f[3 * p] = s0;
+      f[3 * p + 1] = s1;
+      f[3 * p + 2] = s2;
+    }
+  }
+  omp_set_max_active_levels(levels);
+}
+
+// Open/closed cycling: a pair that closed and opened again within this increment keeps the
+// normal stiffness it last had while closed, so that the Newton step lands near touch instead
+// of jumping across it (iteration matrix only).
+void NetworkSolver::Impl::open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1) {
+  if (!last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
+  last_open[k] = 1;
+  if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
+  const double kn = last_kn[k];
+  const ct::PairVec bn = ct::normal_gradient(g1);
+  const int* pk = &pos[36 * k];
+  for (int b = 0; b < 6; ++b)
+    for (int a = 0; a < 6; ++a) {
+      const int q = pk[6 * b + a];
+      if (q < 0) continue;
+      const double v = kn * bn(a) * bn(b);
+      K.valuePtr()[q] += v;
+      M.valuePtr()[q] += v;
+    }
+}
+
+/// Re-evaluates (forces only) the pairs of the given particles after their du changed, keeping
+/// f, pf and the trial state consistent with du without a full evaluation.
+void NetworkSolver::Impl::refresh_particles(const std::vector<int>& ps) {
+  ct::PairElement e;
+  for (const int p : ps)
+    for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
+      const auto k = static_cast<std::size_t>(adj_pair[q]);
+      if (refreshed[k]) continue;
+      refreshed[k] = 1;
+      const int i = pi[k], j = pj[k];
+      for (int a = 0; a < 3; ++a) {
+        f[3 * i + a] -= pf[6 * k + a];
+        f[3 * j + a] -= pf[6 * k + 3 + a];
+      }
+      pair_forces(k, e);
+      for (int a = 0; a < 3; ++a) {
+        f[3 * i + a] += pf[6 * k + a];
+        f[3 * j + a] += pf[6 * k + 3 + a];
+      }
+    }
+  for (const int p : ps)
+    for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
+}
+
+/// Mean translational diagonal of the iteration matrix (rotational if no translation is free).
+double NetworkSolver::Impl::mean_diagonal() const {
+  double sum = 0.0, rot = 0.0;
+  int c = 0, cr = 0;
+  for (int p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a)
+      if (const int d = dof[3 * p + a]; d >= 0) {
+        if (a < 2) {
+          sum += M.valuePtr()[diag_pos[d]];
+          ++c;
+        } else {
+          rot += M.valuePtr()[diag_pos[d]];
+          ++cr;
+        }
+      }
+  if (c > 0 && sum > 0.0) return sum / c;
+  if (cr > 0 && rot > 0.0) return rot / cr / (r_mean * r_mean);
+  return opt.law.sigma_y;
+}
+
+/// Adds the viscous drag and the tiny regularisation to the diagonal of K and M.
+void NetworkSolver::Impl::regularise() {
+  const double ref = mean_diagonal();
+  const double eps = opt.regularisation * ref;
+  const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+  for (int p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a)
+      if (const int d = dof[3 * p + a]; d >= 0) {
+        const double add = eps * (a == 2 ? r_mean * r_mean : 1.0) + (a == 2 ? eta_r : eta_t);
+        K.valuePtr()[diag_pos[d]] += add;
+        M.valuePtr()[diag_pos[d]] += add;
+      }
+}
+
+}  // namespace netdem::qs

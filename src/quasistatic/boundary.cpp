@@ -1,0 +1,66 @@
+// Boundary conditions of the network solver (Redanz & Fleck 2001 section 2.4, Eqs 14-15): which
+// DOFs are prescribed (DofMap) and the prescribed motion and predictor of an increment.
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+Eigen::Matrix2d small_expm(const Eigen::Matrix2d& A) {
+  Eigen::Matrix2d term = Eigen::Matrix2d::Identity(), sum = Eigen::Matrix2d::Identity();
+  for (int k = 1; k <= 8; ++k) {
+    term = term * A / static_cast<double>(k);
+    sum += term;
+  }
+  return sum;
+}
+
+void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph) {
+  const int n = static_cast<int>(periph.size());
+  dof.assign(3 * n, -1);
+  nfree = 0;
+  for (int p = 0; p < n; ++p) {
+    const bool translations_free = mode == BoundaryMode::Die && !periph[p];
+    if (translations_free) {
+      dof[3 * p] = nfree++;
+      dof[3 * p + 1] = nfree++;
+    }
+    // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes
+    if (rotations_free && !periph[p]) dof[3 * p + 2] = nfree++;
+  }
+}
+
+// The prescribed motion (Eqs 14-15 on current coordinates) is the affine motion of the increment;
+// the predictor for the free DOFs is the previous increment's displacement (scaled) on an
+// unchanged strain path, else the affine motion.
+void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
+  const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
+  du_aff.assign(3 * n, 0.0);
+  for (int p = 0; p < n; ++p) {
+    const Eigen::Vector2d u = A * Eigen::Vector2d(x[p], y[p]);
+    du_aff[3 * p] = u.x();
+    du_aff[3 * p + 1] = u.y();
+  }
+  const double dn = dE.norm(), dpn = dE_prev.norm();
+  const bool reuse = !du_prev.empty() && dpn > 0.0 && dn > 0.0 &&
+                     (dE.array() * dE_prev.array()).sum() / (dn * dpn) > 0.999;
+  const double scale = reuse ? dn / dpn : 0.0;
+  for (int q = 0; q < 3 * n; ++q) du[q] = (dof[q] >= 0 && reuse) ? scale * du_prev[q] : du_aff[q];
+}
+
+void NetworkSolver::set_reversible_normal(bool reversible) {
+  auto& s = *impl_;
+  if (!reversible && s.opt.law.reversible) {
+    for (std::size_t k = 0; k < s.pi.size(); ++k) {
+      const int i = s.pi[k], j = s.pj[k];
+      const double u =
+          ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]).overlap;
+      s.hist[k].u_max = std::max(u, 0.0);
+      if (u <= 0.0) {
+        s.hist[k].f_t = 0.0;
+        s.hist[k].sliding = 0;
+      }
+    }
+  }
+  s.opt.law.reversible = reversible;
+}
+
+}  // namespace netdem::qs

@@ -1,0 +1,83 @@
+#pragma once
+// Options of the quasi-static network solver (network_solver.hpp) and its three presets.
+//
+// `SolverOptions{}` is the plain base: full Newton, a drag per increment, tolerance 1e-3. The
+// commands never use it directly: they start from a preset, whose values are stated once here
+// and explained in docs/quasistatic.md ("Presets"):
+//   compact()             `netsolve compact` (and its tests): strain-rate drag, chord steps
+//   yield_precompaction() the precompaction of `netsolve yield`: exactly compact()
+//   yield_probe()         unloading and probing of `netsolve yield`: the base options on the
+//                         section 3.4 elastic unloading branch
+// Options that were measured and not kept (energy line search, adaptive sub-stepping, viscosity
+// continuation, kink freezing, pair relaxation, the geometric stiffness) are gone from the code;
+// their findings and the commit in which the code last existed are in docs/quasistatic.md.
+#include <limits>
+
+#include "netdem/contact/plastic_indentation.hpp"
+
+namespace netdem::qs {
+
+/// Die: the peripheral layer is prescribed (section 2.4), the interior is free. Affine: every
+/// centre follows the macroscopic strain, only the interior rotations are free.
+enum class BoundaryMode { Die, Affine };
+
+struct SolverOptions {
+  BoundaryMode mode = BoundaryMode::Die;
+  bool rotations = true;  ///< false: forbid every particle rotation
+  contact::PlasticIndentationParams law;
+  double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
+  int max_newton = 10;             ///< Newton iterations per increment (then the residual is carried)
+  double residual_tol = 1e-3;      ///< converged when RMS(residual) <= tol * mean normal contact force ...
+  double max_residual_tol = std::numeric_limits<double>::infinity();  ///< ... and max|residual| <= this
+  double max_step = 0.02;          ///< cap on a Newton step's translation of one particle (mean radii) ...
+  double max_rotation_step = 0.01; ///< ... and rotation (rad), per particle
+  double regularisation = 1e-9;    ///< diagonal shift, relative to the mean translational diagonal
+  double slide_stiffness_fraction = 0.05;  ///< tangential stiffness kept by sliding contacts in the iteration matrix
+  /// Viscous drag on the non-affine motion of the free DOFs, relative to the mean contact
+  /// stiffness (pseudo-time regularisation; 0 = purely quasi-static Newton).
+  double viscosity = 0.01;
+  /// 0: the drag coefficient is viscosity x mean stiffness in every increment (so the drag per
+  /// unit strain grows as the increments shrink). > 0: a strain-rate viscosity, the drag
+  /// coefficient of an increment dE is viscosity x mean stiffness x viscosity_strain / |dE|
+  /// (Frobenius norm), so that refining the increments converges to one regularised problem.
+  double viscosity_strain = 0.0;
+  /// GMRES tolerance relative to the Newton residual (inexact Newton: the outer iteration is
+  /// far from quadratic convergence, so solving the linear system to 1e-10 is wasted work).
+  double linear_tolerance = 1e-2;
+  /// A contact whose stick/slip status flipped this many times within an increment keeps its
+  /// elastic-predictor (stick) tangential stiffness in the iteration matrix (open/closed flips:
+  /// always after two, with the last closed normal stiffness).
+  int freeze_after = 2;
+  /// Chord (modified Newton) steps: after each fresh tangent and factorisation, up to this many
+  /// iterations reuse them (residual re-evaluated, no assembly, no factorisation; 0: off).
+  int chord_steps = 0;
+  /// Nonlinear Gauss-Seidel smoothing after each Newton step: local_sweeps sweeps over the
+  /// particles whose residual exceeds local_threshold x the RMS residual, each a damped Newton
+  /// iteration (local_iterations at most) on the particle's own DOFs with its neighbours held
+  /// (0: off).
+  int local_sweeps = 1;
+  int local_iterations = 10;
+  double local_threshold = 3.0;
+  /// Residual line search: step lengths tried (1, 1/2, 1/4, ...); the first that lowers the RMS
+  /// residual is taken, else the best of them.
+  int backtracks = 5;
+  /// Threads for the force evaluations without tangent (line search, local-sweep restarts;
+  /// OpenMP, results bit-identical for any number). Assembly and linear algebra stay on one core.
+  int threads = 1;
+  bool verbose = false;  ///< print every Newton iteration on stderr
+
+  void validate() const;  ///< throws std::invalid_argument (one line)
+
+  /// `netsolve compact`: sticking, reversible Eq 2, drag per unit strain (viscosity 0.01 at
+  /// |dE| = 3.57e-4, the increment of the 100-increment default run), tolerance 3e-3, three
+  /// chord steps, GMRES to 0.3 of the Newton residual, line search 1, 1/2, 1/4.
+  static SolverOptions compact();
+  /// `netsolve yield` precompaction: the same as compact().
+  static SolverOptions yield_precompaction();
+  /// `netsolve yield` unloading and probes: SolverOptions{} (per-increment drag 0.01, tolerance
+  /// 1e-3, full Newton, GMRES 1e-2, five backtracks) with sticking friction on the section 3.4
+  /// elastic unloading branch (law.reversible = false).
+  static SolverOptions yield_probe();
+};
+
+}  // namespace netdem::qs

@@ -1,0 +1,180 @@
+// Measures of the network solver's committed state: the Eq 13 stress from the reactions of the
+// prescribed particles, the Love-Weber contact stress, Z, the affine-deviation measures of Figs 7-8
+// (section 3.3), the contact list for output, and the verbose diagnostics of the Newton driver.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include <Eigen/LU>
+
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+StateMeasures NetworkSolver::measures() const {
+  const auto& s = *impl_;
+  StateMeasures m;
+  m.E11 = s.E(0, 0);
+  m.E22 = s.E(1, 1);
+  m.E12 = s.E(0, 1);
+  const double V = s.box_area0 * s.Fbox.determinant();
+  m.density = s.solid_area / V;
+  // Eq 13: reactions of the prescribed particles (translational DOFs prescribed)
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
+  for (int p = 0; p < s.n; ++p) {
+    if (s.dof[3 * p] >= 0) continue;
+    const Eigen::Vector2d Fapp(-s.f_c[3 * p], -s.f_c[3 * p + 1]);
+    S += Fapp * Eigen::Vector2d(s.x[p], s.y[p]).transpose();
+  }
+  S /= V;
+  m.S11 = S(0, 0);
+  m.S22 = S(1, 1);
+  m.S12 = 0.5 * (S(0, 1) + S(1, 0));
+  m.S_asym = 0.5 * (S(0, 1) - S(1, 0));
+  // Love-Weber average over the contacts and the affine-deviation measures
+  Eigen::Matrix2d SC = Eigen::Matrix2d::Zero();
+  double sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_tc = 0, sum_tr = 0, sum_ta = 0;
+  int n_ratio = 0, loaded = 0;
+  double sum_fn = 0;
+  for (std::size_t k = 0; k < s.pi.size(); ++k) {
+    if (s.fn_c[k] <= 0.0) continue;
+    const int i = s.pi[k], j = s.pj[k];
+    const auto g = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
+    const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
+    SC -= fj * (g.L * g.n).transpose();
+    ++loaded;
+    sum_fn += s.fn_c[k];
+    m.sliding += s.slide_c[k];
+    // Eq 16 with the strain accumulated since the contact formed
+    const Eigen::Matrix2d dEc = s.E - s.aux[k].E_form;
+    const double Rsum = s.r[i] + s.r[j];
+    const double una = -(g.n.dot(dEc * g.n)) * Rsum;
+    const double uta = g.t.dot(dEc * g.n) * Rsum;
+    const double un = g.overlap;
+    sum_absdev += std::fabs(un - una);
+    sum_una += una;
+    if (una > 1e-12 * s.r_mean) {
+      sum_ratio += std::fabs(un - una) / una;
+      ++n_ratio;
+    }
+    sum_tc += std::fabs(s.aux[k].centre - uta);
+    sum_tr += std::fabs(s.aux[k].slip - uta);
+    sum_ta += std::fabs(uta);
+  }
+  SC /= V;
+  m.S11_contacts = SC(0, 0);
+  m.S22_contacts = SC(1, 1);
+  m.S12_contacts = 0.5 * (SC(0, 1) + SC(1, 0));
+  if (loaded == 0) {  // initial state: count geometric contacts
+    for (std::size_t k = 0; k < s.pi.size(); ++k) {
+      const int i = s.pi[k], j = s.pj[k];
+      const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
+      if (L <= (s.r[i] + s.r[j]) * (1.0 + 1e-6)) ++loaded;
+    }
+  }
+  m.contacts = loaded;
+  m.Z = 2.0 * loaded / s.n;
+  m.mean_normal_force = loaded > 0 ? sum_fn / loaded : 0.0;
+  const int nl = std::max(loaded, 1);
+  const double una_mean = sum_una / nl;
+  m.dev_normal_mean_ratio = n_ratio > 0 ? sum_ratio / n_ratio : 0.0;
+  m.dev_normal_ratio_of_means = una_mean > 0 ? (sum_absdev / nl) / una_mean : 0.0;
+  m.dev_tangential_centres = una_mean > 0 ? (sum_tc / nl) / una_mean : 0.0;
+  m.dev_tangential_rotations = una_mean > 0 ? (sum_tr / nl) / una_mean : 0.0;
+  m.affine_tangential = una_mean > 0 ? (sum_ta / nl) / una_mean : 0.0;
+  return m;
+}
+
+std::vector<ContactView> NetworkSolver::contacts() const {
+  const auto& s = *impl_;
+  std::vector<ContactView> out;
+  for (std::size_t k = 0; k < s.pi.size(); ++k) {
+    if (s.fn_c[k] <= 0.0) continue;
+    const int i = s.pi[k], j = s.pj[k];
+    const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
+    out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.r[i] + s.r[j] - L, s.slide_c[k] != 0});
+  }
+  return out;
+}
+
+
+/// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
+/// out-of-balance contact force, i.e. the viscous drag that holds the increment.
+double NetworkSolver::Impl::unbalance(double fbar, double* rms) const {
+  double m = 0.0, s2 = 0.0;
+  int c = 0;
+  for (int p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a)
+      if (dof[3 * p + a] >= 0) {
+        const double v = std::fabs(f[3 * p + a]) / (a == 2 ? r_mean : 1.0);
+        m = std::max(m, v);
+        s2 += v * v;
+        ++c;
+      }
+  if (rms) *rms = c > 0 ? std::sqrt(s2 / c) / std::max(fbar, 1e-300) : 0.0;
+  return m / std::max(fbar, 1e-300);
+}
+
+
+/// Diagnostics (verbose): one line per Newton iteration with the branch transitions since the last.
+void NetworkSolver::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
+  const std::size_t np = pi.size();
+  int tr[3][3] = {}, ss = 0;
+  if (it == 0) diag_branch.assign(np, 0);
+  for (std::size_t k = 0; k < np; ++k) {
+    const int b = static_cast<int>(trial[k].branch), sl = trial[k].sliding ? 1 : 0;
+    const int ob = diag_branch[k] & 3, osl = diag_branch[k] >> 2;
+    if (it > 0) {
+      if (ob != b) ++tr[ob][b];
+      if (b != 0 && ob != 0 && sl != osl) ++ss;
+    }
+    diag_branch[k] = static_cast<std::uint8_t>(b + 4 * sl);
+  }
+  std::fprintf(stderr,
+               "  iteration %d: residual rms %.3e max %.3e (mean contact force %.3e) O>P %d O>E %d P>O %d P>E %d "
+               "E>O %d E>P %d stick/slip %d\n",
+               it, newton_res, newton_max, fbar, tr[0][1], tr[0][2], tr[1][0], tr[1][2], tr[2][0], tr[2][1], ss);
+}
+
+/// Diagnostics (verbose): the particles with the largest Newton residual.
+void NetworkSolver::Impl::print_worst(double fbar) const {
+  const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+  std::vector<std::pair<double, int>> worst;
+  for (int p = 0; p < n; ++p) {
+    double m = 0.0;
+    for (int a = 0; a < 3; ++a)
+      if (dof[3 * p + a] >= 0) {
+        const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+        m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
+      }
+    worst.emplace_back(m / std::max(fbar, 1e-300), p);
+  }
+  const std::size_t nw = std::min<std::size_t>(6, worst.size());
+  std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(nw), worst.end(), std::greater<>());
+  std::vector<int> closed(n, 0), slid(n, 0);
+  for (std::size_t k = 0; k < pi.size(); ++k)
+    if (trial[k].branch != ct::NormalBranch::Open) {
+      ++closed[pi[k]];
+      ++closed[pj[k]];
+      if (trial[k].sliding) {
+        ++slid[pi[k]];
+        ++slid[pj[k]];
+      }
+    }
+  for (std::size_t w = 0; w < nw; ++w) {
+    const int p = worst[w].second;
+    std::fprintf(stderr, "    worst p=%d |r|/fbar=%.3e contacts=%d sliding=%d non-affine motion %.3e R\n", p,
+                 worst[w].first, closed[p], slid[p],
+                 std::hypot(du[3 * p] - du_aff[3 * p], du[3 * p + 1] - du_aff[3 * p + 1]) / r_mean);
+    if (w >= 2) continue;
+    for (std::size_t k = 0; k < pi.size(); ++k)
+      if ((pi[k] == p || pj[k] == p) && trial[k].branch != ct::NormalBranch::Open)
+        std::fprintf(stderr, "      pair %d-%d f_n %.4e k_n %.4e (iteration matrix %.4e) branch %d u_max %.3e\n", pi[k],
+                     pj[k], trial[k].f_n, trial[k].k_n, last_kn[k], static_cast<int>(trial[k].branch), hist[k].u_max);
+  }
+}
+
+}  // namespace netdem::qs

@@ -1,0 +1,278 @@
+// The Newton driver of one increment: predictor, Newton iterations (fresh tangents and chord
+// steps), the linear solve, the residual line search, the local sweep, and the commit of the
+// converged (or carried) trial state.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
+  if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
+  return impl_->attempt(dE);
+}
+
+IncrementReport NetworkSolver::Impl::attempt(const Eigen::Matrix2d& dE) {
+  const auto t_start = Clock::now();
+  IncrementReport rep;
+  if (needs_rebuild(x, y, Fbox, opt.skin * r_mean, r_max)) {
+    build_neighbours();
+    rep.reanalysed = true;
+  }
+  begin_increment(dE);
+  double fbar = 1.0;
+  bool f_valid = false;  // f, pf and the trial state belong to the current du
+  for (int it = 0;; ++it) {
+    const bool want_tangent = it < opt.max_newton;
+    // chord steps: between fresh tangents, iterations reuse the last assembled K and its factor
+    const bool fresh = opt.chord_steps <= 0 || it % (opt.chord_steps + 1) == 0;
+    bool nonsym = opt.law.frictional();
+    const auto ta = Clock::now();
+    if (want_tangent && nfree > 0 && fresh) {
+      assemble(nonsym);
+    } else if (!f_valid) {
+      evaluate_forces();
+    }  // else: a chord step from a state the line search and the local sweep left current
+    tim.assemble += seconds_since(ta);
+    if (eta < 0.0 && want_tangent && nfree > 0) start_drag(dE);
+    fbar = mean_normal_force();
+    if (fbar <= 0.0) fbar = opt.law.sigma_y * r_mean * 1e-6;
+    double newton_max = 0.0;
+    const double newton_res = nfree > 0 ? residual(fbar, true, &newton_max) : 0.0;  // RMS
+    rep.newton_residual = newton_res;
+    if (!std::isfinite(newton_res))
+      throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
+    if (opt.verbose) print_iteration(it, newton_res, newton_max, fbar);
+    if ((newton_res <= opt.residual_tol && newton_max <= opt.max_residual_tol) || nfree == 0) {
+      rep.converged = true;
+      break;
+    }
+    if (!want_tangent) break;
+    linear_step(fresh, nonsym, rep);
+    const bool f_current = line_search(newton_res);
+    f_valid = local_sweeps(f_current);  // relax_worst refreshes the pairs of the particles it moved
+    ++rep.newton_iterations;
+  }
+  rep.residual = nfree > 0 ? unbalance(fbar, &rep.residual_rms) : 0.0;
+  if (opt.verbose && nfree > 0) print_worst(fbar);
+  commit(dE, rep);
+  tim.newton_iterations += rep.newton_iterations;
+  tim.total += seconds_since(t_start);
+  return rep;
+}
+
+// Per-increment set-up: the start geometry of every pair, the prescribed motion and predictor,
+// the flip counters of the iteration matrix, and the drag (computed at the first assembly).
+void NetworkSolver::Impl::begin_increment(const Eigen::Matrix2d& dE) {
+  const std::size_t np = pi.size();
+  g0.resize(np);
+  trial.resize(np);
+  trial_slip.resize(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    const int i = pi[k], j = pj[k];
+    g0[k] = ct::pair_geometry(ct::Vec(x[i], y[i]), ct::Vec(x[j], y[j]), r[i], r[j]);
+  }
+  prescribe(dE);
+  last_sliding.assign(np, 0);
+  flips.assign(np, 0);
+  last_open.assign(np, 0);
+  open_flips.assign(np, 0);
+  last_kn.assign(np, 0.0);
+  for (std::size_t k = 0; k < np; ++k) {
+    last_sliding[k] = slide_c[k];
+    last_open[k] = fn_c[k] > 0.0 ? 0 : 1;
+  }
+  rhs.resize(nfree);
+  sol.resize(nfree);
+  eta = -1.0;
+}
+
+// Viscous regularisation (pseudo-time): the free DOFs feel a drag eta (du - du_affine) relative
+// to the affine motion, so mechanisms and collapsing regions get a finite stiffness eta and move
+// at a finite rate instead of making the tangent singular. Homogeneous (affine) motion is not
+// resisted; its size, max|f_contact| / mean contact force, is reported as the unbalanced force
+// of the increment. With viscosity_strain > 0 the drag is per unit strain (|dE| scaled).
+void NetworkSolver::Impl::start_drag(const Eigen::Matrix2d& dE) {
+  const double md = mean_diagonal();
+  kl_ref = md;
+  eta = opt.viscosity * md;
+  if (opt.viscosity_strain > 0.0 && dE.norm() > 0.0) eta *= opt.viscosity_strain / dE.norm();
+}
+
+// The Newton step into sol: a fresh factorisation of M (with drag and regularisation) on fresh
+// iterations, then GMRES on K preconditioned by it (direct solve when symmetric); clipped.
+bool NetworkSolver::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
+  LinearStatus st;
+  if (fresh) {
+    regularise();
+    st = lin.factorise(M, pattern_changed);
+    pattern_changed = false;
+    if (!st.ok) throw std::runtime_error("increment: " + st.message);
+  }
+  st = nonsym ? lin.solve(K, rhs, sol) : lin.solve(rhs, sol);
+  if (!st.ok) {
+    // GMRES hit its cap: fall back to the symmetric slip-status tangent (defect correction)
+    st = lin.solve(rhs, sol);
+    if (!st.ok) throw std::runtime_error("increment: " + st.message);
+  }
+  rep.linear_iterations += st.iterations;
+  clip_step();
+  return true;
+}
+
+// Backtracking line search on the RMS residual (steps 1, 1/2, ... backtracks of them): the first
+// step that lowers it, else the best step tried. Returns whether f and the trial state belong to
+// the final du (false when it went back to an earlier step).
+bool NetworkSolver::Impl::line_search(double newton_res) {
+  bool f_current = true;
+  du_start = du;
+  auto apply = [&](double a) {
+    for (int p = 0; p < n; ++p)
+      for (int c = 0; c < 3; ++c)
+        if (const int d = dof[3 * p + c]; d >= 0) du[3 * p + c] = du_start[3 * p + c] + a * sol(d);
+  };
+  double alpha = 1.0;
+  const double r_before = newton_res;
+  double best_alpha = 1.0, best_r = std::numeric_limits<double>::infinity();
+  for (int ls = 0; ls < opt.backtracks; ++ls, alpha *= 0.5) {
+    apply(alpha);
+    evaluate_forces();
+    const double rr = residual(std::max(mean_normal_force(), 1e-300), false);
+    if (rr < best_r) {
+      best_r = rr;
+      best_alpha = alpha;
+    }
+    if (rr < r_before) break;
+  }
+  if (best_alpha != alpha || best_r >= r_before) {
+    alpha = best_alpha;
+    apply(alpha);
+    f_current = false;  // f and trial belong to the last step tried, not to best_alpha
+  }
+  if (opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
+  return f_current;
+}
+
+// Nonlinear Gauss-Seidel on the worst particles after the global step; returns whether f and
+// the trial state belong to the final du.
+bool NetworkSolver::Impl::local_sweeps(bool f_current) {
+  for (int sweep = 0; sweep < opt.local_sweeps; ++sweep) {
+    if (!f_current) {
+      evaluate_forces();
+      f_current = true;
+    }
+    const double fb = std::max(mean_normal_force(), 1e-300);
+    const double rms = residual(fb, false);
+    const int relaxed = relax_worst(fb, rms);
+    if (opt.verbose) std::fprintf(stderr, "    local relaxation: %d particles\n", relaxed);
+    if (relaxed == 0) break;
+  }
+  return f_current;
+}
+
+// Commits the trial state of the increment: contact histories, affine-deviation bookkeeping,
+// committed forces, positions, the strain and the box.
+void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep) {
+  const Eigen::Matrix2d E_old = E;
+  for (std::size_t k = 0; k < pi.size(); ++k) {
+    const auto& t = trial[k];
+    const bool was_loaded = fn_c[k] > 0.0;
+    const bool loaded = t.branch != ct::NormalBranch::Open;
+    if (loaded && hist[k].u_max <= 0.0) {  // first touch: start the affine-deviation bookkeeping
+      aux[k] = PairAux{};
+      aux[k].E_form = E_old;
+    }
+    if (loaded && !was_loaded) ++rep.new_contacts;
+    if (!loaded && was_loaded) ++rep.lost_contacts;
+    if (loaded || hist[k].u_max > 0.0) {
+      hist[k] = t.history;
+      aux[k].slip += trial_slip[k];
+      // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
+      const int i = pi[k], j = pj[k];
+      const ct::PairGeometry& g = g0[k];
+      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+      aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
+    }
+    fn_c[k] = t.f_n;
+    ft_c[k] = t.f_t;
+    slide_c[k] = t.sliding ? 1 : 0;
+    rep.sliding += t.sliding;
+  }
+  for (int p = 0; p < n; ++p) {
+    x[p] += du[3 * p];
+    y[p] += du[3 * p + 1];
+    th[p] += du[3 * p + 2];
+  }
+  f_c = f;
+  E += dE;
+  Fbox = small_expm(dE) * Fbox;
+  du_prev = du;
+  dE_prev = dE;
+  const auto& ls = lin.stats();
+  tim.analyses = lin_base.analyses + ls.analyses;
+  tim.factorisations = lin_base.factorisations + ls.factorisations;
+  tim.solves = lin_base.solves + ls.solves;
+  tim.analyse = lin_base.analyse + ls.t_analyse;
+  tim.factorise = lin_base.factorise + ls.t_factorise;
+  tim.solve = lin_base.solve + ls.t_solve;
+  tim.increments += 1;
+}
+
+double NetworkSolver::Impl::mean_normal_force() const {
+  double s = 0.0;
+  int c = 0;
+  for (const auto& t : trial)
+    if (t.branch != ct::NormalBranch::Open) {
+      s += t.f_n;
+      ++c;
+    }
+  return c > 0 ? s / c : 0.0;
+}
+
+/// Newton residual r = f_contact - eta (du - du_affine) on the free DOFs, as RMS / fbar (max-norm
+/// in max_norm). If fill_rhs, also stores r in rhs for the linear solve.
+double NetworkSolver::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
+  const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+  double m = 0.0, s2 = 0.0;
+  for (int p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a)
+      if (const int d = dof[3 * p + a]; d >= 0) {
+        const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+        if (fill_rhs) rhs(d) = rv;
+        const double v = std::fabs(rv) / (a == 2 ? r_mean : 1.0);
+        m = std::max(m, v);
+        s2 += v * v;
+      }
+  const double scale = 1.0 / std::max(fbar, 1e-300);
+  if (max_norm) *max_norm = m * scale;
+  return std::sqrt(s2 / std::max(nfree, 1)) * scale;
+}
+
+/// Per-particle step limits: a single soft mode must not freeze the whole network.
+void NetworkSolver::Impl::clip_step() {
+  for (int p = 0; p < n; ++p) {
+    const int dx = dof[3 * p], dy = dof[3 * p + 1], dr = dof[3 * p + 2];
+    if (dx >= 0) {
+      const double t = std::hypot(sol(dx), sol(dy)), tl = opt.max_step * r_mean;
+      if (t > tl) {
+        sol(dx) *= tl / t;
+        sol(dy) *= tl / t;
+      }
+    }
+    if (dr >= 0) sol(dr) = std::clamp(sol(dr), -opt.max_rotation_step, opt.max_rotation_step);
+  }
+}
+
+}  // namespace netdem::qs

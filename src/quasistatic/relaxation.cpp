@@ -1,0 +1,149 @@
+// The local nonlinear Gauss-Seidel sweep of the network solver: after each global Newton step
+// the particles with the largest residual are relaxed one at a time (damped Newton on their own
+// DOFs, neighbours held), largest first.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include <Eigen/LU>
+
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+/// Residual (contact force - drag) and tangent of a set of m particles (1 or 2) alone, with all
+/// other particles held at their current trial positions: 3 entries per particle.
+void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
+  res.setZero(3 * m);
+  Kl.setZero(3 * m, 3 * m);
+  const ct::TangentOptions topt;
+  ct::PairElement e;
+  auto slot = [&](int p) {
+    for (int t = 0; t < m; ++t)
+      if (ps[t] == p) return t;
+    return -1;
+  };
+  for (int sp = 0; sp < m; ++sp)
+    for (int q = adj_start[ps[sp]]; q < adj_start[ps[sp] + 1]; ++q) {
+      const int k = adj_pair[q], i = pi[k], j = pj[k];
+      const int si = slot(i), sj = slot(j);
+      if ((si >= 0 && si < sp) || (sj >= 0 && sj < sp)) continue;  // pair inside the set: once
+      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
+                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+      if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) continue;
+      ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+      const int sl[2] = {si, sj};
+      for (int A = 0; A < 2; ++A)
+        if (sl[A] >= 0) res.segment<3>(3 * sl[A]) += e.force.segment<3>(3 * A);
+      if (e.law.branch == ct::NormalBranch::Open) continue;
+      if (e.law.sliding && opt.slide_stiffness_fraction > 0.0) {
+        const ct::PairVec bt = ct::slip_gradient(g1);
+        e.stiffness.noalias() += opt.slide_stiffness_fraction * opt.law.k_t * e.law.area * bt * bt.transpose();
+      }
+      for (int A = 0; A < 2; ++A)
+        for (int B = 0; B < 2; ++B)
+          if (sl[A] >= 0 && sl[B] >= 0) Kl.block<3, 3>(3 * sl[A], 3 * sl[B]) += e.stiffness.block<3, 3>(3 * A, 3 * B);
+    }
+  const double eta_t = std::max(eta, 0.0);
+  for (int t = 0; t < m; ++t)
+    for (int a = 0; a < 3; ++a) {
+      const int p = ps[t];
+      const double ea = a == 2 ? eta_t * r_mean * r_mean : eta_t;
+      res(3 * t + a) -= ea * (du[3 * p + a] - du_aff[3 * p + a]);
+      Kl(3 * t + a, 3 * t + a) += ea + 1e-9 * kl_ref * (a == 2 ? r_mean * r_mean : 1.0);
+    }
+}
+
+/// Nonlinear Gauss-Seidel on a set of particles: damped Newton on their own free DOFs.
+void NetworkSolver::Impl::relax_set(const int* ps, int m, double fbar) {
+  int idx[6], nf = 0;  // local index 3 t + a of the free DOFs
+  for (int t = 0; t < m; ++t)
+    for (int a = 0; a < 3; ++a)
+      if (dof[3 * ps[t] + a] >= 0) idx[nf++] = 3 * t + a;
+  if (nf == 0) return;
+  auto norm = [&](const Eigen::VectorXd& v) {
+    double s2 = 0.0;
+    for (int c = 0; c < nf; ++c) s2 += std::pow(v(idx[c]) / (idx[c] % 3 == 2 ? r_mean : 1.0), 2);
+    return std::sqrt(s2);
+  };
+  auto at = [&](int c) -> double& { return du[3 * ps[idx[c] / 3] + idx[c] % 3]; };
+  Eigen::VectorXd res, res2;
+  Eigen::MatrixXd Kl, Kl2;
+  local_eval(ps, m, res, Kl);
+  double rn = norm(res);
+  for (int it = 0; it < opt.local_iterations && rn > 0.1 * opt.residual_tol * fbar; ++it) {
+    Eigen::MatrixXd A(nf, nf);
+    Eigen::VectorXd b(nf);
+    for (int c = 0; c < nf; ++c) {
+      b(c) = res(idx[c]);
+      for (int d = 0; d < nf; ++d) A(c, d) = Kl(idx[c], idx[d]);
+    }
+    Eigen::VectorXd step = A.partialPivLu().solve(b);
+    if (!step.allFinite()) return;
+    // same per-particle limits as the global step
+    double scale = 1.0;
+    for (int c = 0; c < nf; ++c) {
+      const double lim = idx[c] % 3 == 2 ? opt.max_rotation_step : opt.max_step * r_mean;
+      if (std::fabs(step(c)) > lim) scale = std::min(scale, lim / std::fabs(step(c)));
+    }
+    step *= scale;
+    double old[6];
+    for (int c = 0; c < nf; ++c) old[c] = at(c);
+    bool accepted = false;
+    for (double alpha = 1.0; alpha > 0.01; alpha *= 0.5) {
+      for (int c = 0; c < nf; ++c) at(c) = old[c] + alpha * step(c);
+      local_eval(ps, m, res2, Kl2);
+      const double rn2 = norm(res2);
+      if (rn2 < rn) {
+        rn = rn2;
+        res = res2;
+        Kl = Kl2;
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      for (int c = 0; c < nf; ++c) at(c) = old[c];
+      return;
+    }
+  }
+}
+
+/// One Gauss-Seidel sweep over the particles whose residual exceeds local_threshold x the RMS
+/// residual (and the tolerance), largest first. Needs f from the current trial state; leaves f
+/// and the trial state current (the pairs of the moved particles are refreshed).
+int NetworkSolver::Impl::relax_worst(double fbar, double rms) {
+  const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+  const double thr = std::max(opt.local_threshold * rms, opt.residual_tol) * fbar;
+  auto& bad = relax_bad;
+  auto& rp = relax_rp;
+  bad.clear();
+  rp.resize(n);
+  for (int p = 0; p < n; ++p) {
+    double s2 = 0.0;
+    for (int a = 0; a < 3; ++a)
+      if (dof[3 * p + a] >= 0) {
+        const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+        s2 += std::pow(rv / (a == 2 ? r_mean : 1.0), 2);
+      }
+    rp[p] = std::sqrt(s2);
+    if (rp[p] > thr) bad.emplace_back(rp[p], p);
+  }
+  std::sort(bad.begin(), bad.end(), std::greater<>());
+  auto& done = relax_done;
+  auto& moved = relax_moved;
+  done.assign(n, 0);
+  moved.clear();
+  for (const auto& b : bad) {
+    const int p = b.second;
+    if (done[p]) continue;
+    relax_set(&p, 1, fbar);
+    done[p] = 1;
+    moved.push_back(p);
+  }
+  refreshed.resize(pi.size(), 0);
+  refresh_particles(moved);  // f and the trial state follow the relaxed du
+  return static_cast<int>(bad.size());
+}
+
+}  // namespace netdem::qs

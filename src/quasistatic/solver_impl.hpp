@@ -1,0 +1,154 @@
+#pragma once
+// Private: the parts of the network solver (NetworkSolver::Impl) and which file owns what.
+//
+//   contact_table.cpp  ContactTable: the neighbour pairs and their committed history, and its
+//                      lifecycle across neighbour rebuilds
+//   boundary.cpp       DofMap and the prescribed motion of an increment (boundary conditions)
+//   assembly.cpp       sparsity pattern, trial forces, iteration matrix, drag and regularisation
+//   newton.cpp         the Newton driver of one increment (predictor, iterations, line search, commit)
+//   relaxation.cpp     the local nonlinear Gauss-Seidel sweep over the worst particles
+//   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
+//   network_solver.cpp construction, the public accessors, the copyable state
+//   state_io.cpp       the state file (save/restore)
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/quasistatic/linear_solver.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+
+namespace netdem::qs {
+
+namespace ct = netdem::contact;
+
+/// The contact table: one row per neighbour pair (i < j, sorted by (i, j)), i.e. every pair with
+/// a gap below the skin at the last rebuild, touching or not. Per row it holds the committed
+/// history of the contact law, the affine-deviation bookkeeping and the committed forces.
+/// Lifecycle: a row is created (zero history, E_form = the strain at creation) when a pair comes
+/// within the skin; it keeps its history across rebuilds while the pair stays within the skin;
+/// it is dropped, history and all, when a rebuild finds the pair farther apart than the skin
+/// (plastic flattening u_max included: a pair that far apart cannot touch again before the next
+/// rebuild). The adjacency (pairs of each particle, CSR) follows every rebuild.
+struct ContactTable {
+  std::vector<int> pi, pj;
+  std::vector<ct::PlasticIndentationHistory> hist;
+  std::vector<PairAux> aux;
+  std::vector<double> fn_c, ft_c;   ///< committed normal and tangential forces
+  std::vector<std::uint8_t> slide_c;  ///< committed sliding flag
+  std::vector<int> adj_start, adj_pair;  ///< pairs of each particle (CSR, increasing pair index)
+  std::vector<double> xb, yb;       ///< positions at the last rebuild
+  Eigen::Matrix2d Fb = Eigen::Matrix2d::Identity();  ///< box deformation at the last rebuild
+
+  std::size_t pairs() const { return pi.size(); }
+  /// New neighbour list (gap < skin) merged with the committed history (both sorted).
+  void rebuild(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& r,
+               double skin, double r_max, const Eigen::Matrix2d& E, const Eigen::Matrix2d& Fbox);
+  void build_adjacency(int n);
+  /// Displacement relative to the affine motion since the last rebuild, plus the affine part of
+  /// the relative motion of two neighbours, exceeds the skin.
+  bool needs_rebuild(const std::vector<double>& x, const std::vector<double>& y, const Eigen::Matrix2d& Fbox,
+                     double skin, double r_max) const;
+};
+
+/// The boundary conditions as a DOF map: dof[3p + c] = free index or -1 (prescribed).
+/// Die mode: the peripheral layer's translations are prescribed; affine mode: every centre's.
+/// Peripheral rotations are always held (section 2.4); interior rotations are free when the law
+/// has friction and rotations are allowed.
+struct DofMap {
+  std::vector<int> dof;
+  int nfree = 0;
+  void build(BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph);
+};
+
+struct NetworkSolver::Impl : ContactTable, DofMap {
+  SolverOptions opt;
+  int n = 0;
+  std::vector<double> x, y, th, r;
+  std::vector<std::uint8_t> periph;
+  double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;
+  Eigen::Matrix2d Fbox = Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d E = Eigen::Matrix2d::Zero();
+  std::vector<double> f_c;  ///< 3n contact forces on the particles (committed state)
+  std::vector<double> du_prev;  ///< the last committed increment's displacements (predictor)
+  Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
+
+  // sparse pattern (free DOFs only, full storage)
+  SpMat K, M;
+  std::vector<int> pos;       // 36 per pair: position in valuePtr, -1 if a DOF is prescribed
+  std::vector<int> diag_pos;  // per free DOF
+  bool pattern_changed = true;
+
+  // trial buffers of the current increment
+  std::vector<double> du, f;
+  std::vector<double> pf;  // 6 per pair: the pair's force on (i, j) in the trial state (summed into f)
+  std::vector<std::uint8_t> apart;      // per pair: never touched, apart, trial state and pf already zero
+  std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
+  std::vector<double> relax_rp;         // scratch of relax_worst (it runs every Newton iteration)
+  std::vector<std::uint8_t> relax_done;
+  std::vector<int> relax_moved;
+  std::vector<std::pair<double, int>> relax_bad;
+  std::vector<ct::PairGeometry> g0;
+  std::vector<ct::PlasticIndentationResult> trial;
+  std::vector<double> trial_slip;
+  std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
+  std::vector<std::uint8_t> last_open, open_flips;
+  std::vector<double> last_kn;
+  std::vector<std::uint8_t> diag_branch;  // verbose diagnostics: branch + 4*sliding at the last iteration
+  std::vector<double> du_aff;  // affine motion of the increment (drag reference)
+  double eta = -1.0;           // viscous drag coefficient of the current increment
+  double kl_ref = 1.0;         // mean translational diagonal (local regularisation)
+  std::vector<double> du_start;  // du at the start of a line search
+  VecX rhs, sol;
+
+  LinearSolver lin;
+  SolverTimings tim;
+  SolverTimings lin_base;  ///< linear-solver counters of the solver(s) this one was restored from
+
+  // construction (network_solver.cpp)
+  void init_linear_solver();
+  // contact_table.cpp
+  void build_neighbours();
+  // boundary.cpp
+  void prescribe(const Eigen::Matrix2d& dE);
+  // assembly.cpp
+  void build_pattern();
+  void assemble(bool& any_nonsymmetric);
+  double iteration_stiffness(std::size_t k, const ct::PairGeometry& g1, const ct::PairVec& bn, const ct::PairVec& bt,
+                             ct::PairElement& e);
+  void scatter(std::size_t k, const ct::PairElement& e, const ct::PairVec& bn, const ct::PairVec& bt, double kn_sym);
+  void set_apart(std::size_t k);
+  void pair_forces(std::size_t k, ct::PairElement& e);
+  void evaluate_forces();
+  void open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1);
+  void refresh_particles(const std::vector<int>& ps);
+  double mean_diagonal() const;
+  void regularise();
+  // newton.cpp
+  IncrementReport attempt(const Eigen::Matrix2d& dE);
+  void begin_increment(const Eigen::Matrix2d& dE);
+  void start_drag(const Eigen::Matrix2d& dE);
+  bool linear_step(bool fresh, bool nonsym, IncrementReport& rep);
+  bool line_search(double newton_res);
+  bool local_sweeps(bool f_current);
+  void commit(const Eigen::Matrix2d& dE, IncrementReport& rep);
+  double mean_normal_force() const;
+  double residual(double fbar, bool fill_rhs, double* max_norm = nullptr);
+  void clip_step();
+  // relaxation.cpp
+  void local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
+  void relax_set(const int* ps, int m, double fbar);
+  int relax_worst(double fbar, double rms);
+  // measures.cpp
+  double unbalance(double fbar, double* rms = nullptr) const;
+  void print_iteration(int it, double newton_res, double newton_max, double fbar);
+  void print_worst(double fbar) const;
+};
+
+/// exp(A) for a small symmetric 2x2 matrix (series; |A| << 1 per increment).
+Eigen::Matrix2d small_expm(const Eigen::Matrix2d& A);
+
+}  // namespace netdem::qs
