@@ -77,10 +77,10 @@ CASES = {
     # below 0.01 the default Newton settings lose the network, so these use the settings that keep it
     "hydro_mu0_visc0.003": ("hydrostatic, mu = 0, viscosity 0.003",
                             {"path": "hydrostatic", "friction": "0",
-                             "extra": ["--viscosity", "0.003", "--max-newton", "20", "--line-search", "energy"]}),
+                             "extra": ["--viscosity", "0.003", "--max-newton", "20"]}),
     "hydro_mu0_visc0.001": ("hydrostatic, mu = 0, viscosity 0.001",
                             {"path": "hydrostatic", "friction": "0",
-                             "extra": ["--viscosity", "0.001", "--max-newton", "20", "--line-search", "energy"]}),
+                             "extra": ["--viscosity", "0.001", "--max-newton", "20"]}),
 }
 # cases rerun with --normal-unloading elastic for the comparison of the normal law
 ALT_LAW_CASES = [n for n in CASES if not n.endswith("_2x") and "visc" not in n]
