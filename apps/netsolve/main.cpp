@@ -45,7 +45,7 @@ std::string g_command;
 // The defaults of `compact` are the library preset qs::SolverOptions::compact()
 // (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
 struct CompactArgs {
-  bool affine = false, no_rotation = false, quiet = false, verbose = false;
+  bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
   std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
   double to_density = 0.85;
   int increments = 100;
@@ -172,6 +172,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   app::write_file_atomic(out / "history.csv", csv);
   write_snapshot(solver, out, "final");
+  if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
   const auto& tm = solver.timings();
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
@@ -211,6 +212,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
                  {"solves", tm.solves},                 {"tol", so.residual_tol},
                  {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
                  {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
+  j["state"] = a.save_state ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
@@ -266,6 +268,7 @@ int main(int argc, char** argv) {
   netdem::app::netsolve::add_law_options(*comp, ca.law,
                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4");
+  comp->add_flag("--save-state", ca.save_state, "write the final solver state to state.txt (exact; netsolve yield --from-state continues from it)");
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_option("--out", out, "output folder")->default_val("results/compact");

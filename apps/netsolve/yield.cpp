@@ -6,13 +6,16 @@
 //                  [--probe i/N | --probes LIST] [--jobs J] [--out DIR]
 //   netsolve yield-merge DIR... [--out DIR]
 //
-// The process compacts, unloads, then fork()s one child per probe (at most --jobs at a time): every
-// child starts from the same unloaded state (the solver cannot be copied), runs its probe, writes
-// probes/probe_NNN.csv and .json atomically and _exit()s. The parent assembles yield_points.csv
-// from the probe files. yield-merge does the same from the probe files of several runs.
+// The command compacts (or restores a compacted state, --from-state), unloads, then runs the
+// probes on --jobs threads, each on its own solver restored from the unloaded state
+// (qs::run_probes, src/quasistatic/yield_driver.hpp); each finished probe writes
+// probes/probe_NNN.csv and .json atomically, and yield_points.csv is assembled from the records.
+// yield-merge does the same from the probe files of several runs. The physics lives in the
+// library (compaction, switch_boundary_mode, unload, run_probes); this file parses and writes.
 #ifdef __linux__
 #include <sys/prctl.h>
 #endif
+#include <spawn.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -22,6 +25,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -45,6 +50,7 @@
 #include "netdem/quasistatic/analytic_yield.hpp"
 #include "netdem/quasistatic/compaction.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/quasistatic/yield_driver.hpp"
 #include "netdem/quasistatic/yield_probe.hpp"
 #include "output.hpp"
 #include "parse.hpp"
@@ -71,7 +77,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 struct YieldArgs {
   // packing
   netdem::app::netsolve::PackArgs pack;  // a new deposition (lid: centre)
-  std::string packing_file;
+  std::string packing_file, from_state;
   // precompaction
   std::string precompact = "hydrostatic", compact_bc = "die", probe_bc;
   double to_density = 0.85;
@@ -86,6 +92,8 @@ struct YieldArgs {
   int fine = 20;
   bool quiet = false;
   std::string out = "results/yield";
+  int probe_worker = -1;          ///< hidden: run probe k from out/probes/unloaded_state.txt (a worker process)
+  std::vector<std::string> argv;  ///< the command line, to start the workers
 };
 
 
@@ -310,64 +318,40 @@ std::string setup_title(const json& setup) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// One probe, in a child process.
-json run_one_probe(qs::NetworkSolver& solver, int index, const YieldArgs& a, double sy, double first_step,
-                   double loading_norm, const Analytic& an, const json& setup, const fs::path& out) {
-  const auto t0 = Clock::now();
-  const double theta = 2 * kPi * index / a.directions;
-  qs::ProbeOptions po;
-  po.first_step = first_step;
-  po.fine_increments = a.fine;
-  po.growth = a.growth;
-  po.max_strain = a.max_strain;
-  po.offset = a.offset;
-  po.max_step = std::max(first_step, a.offset / 4);
-  const auto curve = qs::probe(solver, theta, sy, po);
-  std::vector<double> x, y, s11, s22;
+// One probe's files (probes/probe_NNN.csv and .json) and its record.
+json probe_record(const qs::ProbeResult& p, const YieldArgs& a, const Analytic& an, const json& setup, const fs::path& out) {
   std::string csv = "increment,strain,stress,S11,S22,S12,D,Z,newton,converged,residual\n";
-  for (std::size_t i = 0; i < curve.samples.size(); ++i) {
-    const auto& p = curve.samples[i];
-    x.push_back(p.strain);
-    y.push_back(p.stress);
-    s11.push_back(p.S11);
-    s22.push_back(p.S22);
-    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.3e}\n", i, p.strain, p.stress, p.S11,
-                       p.S22, p.S12, p.density, p.Z, p.newton, p.converged ? 1 : 0, p.residual);
+  for (std::size_t i = 0; i < p.curve.samples.size(); ++i) {
+    const auto& q = p.curve.samples[i];
+    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.3e}\n", i, q.strain, q.stress, q.S11,
+                       q.S22, q.S12, q.density, q.Z, q.newton, q.converged ? 1 : 0, q.residual);
   }
-  qs::YieldOptions yo;
-  yo.offset = a.offset;
-  yo.window = a.window;
-  yo.min_rise = 0.02 * loading_norm;
-  const auto yc = qs::yield_by_curvature(x, y, yo);
-  const auto yf = qs::yield_by_offset(x, y, yo);
-  const auto ap = analytic_point(an, theta);
+  const auto ap = analytic_point(an, p.theta);
+  const auto& yc = p.curvature;
+  const auto& yf = p.offset;
   json r;
-  r["probe"] = index;
+  r["probe"] = p.index;
   r["directions"] = a.directions;
-  r["theta"] = theta * 180.0 / kPi;
-  r["S11"] = jnum(yc.found ? qs::interpolate_at(s11, yc.position) : kNaN);
-  r["S22"] = jnum(yc.found ? qs::interpolate_at(s22, yc.position) : kNaN);
-  r["S11_offset"] = jnum(yf.found ? qs::interpolate_at(s11, yf.position) : kNaN);
-  r["S22_offset"] = jnum(yf.found ? qs::interpolate_at(s22, yf.position) : kNaN);
+  r["theta"] = p.theta * 180.0 / kPi;
+  r["S11"] = jnum(p.S11);
+  r["S22"] = jnum(p.S22);
+  r["S11_offset"] = jnum(p.S11_offset);
+  r["S22_offset"] = jnum(p.S22_offset);
   r["S11_analytic"] = jnum(ap.S11);
   r["S22_analytic"] = jnum(ap.S22);
   r["strain"] = jnum(yc.found ? yc.strain : kNaN);
   r["strain_offset"] = jnum(yf.found ? yf.strain : kNaN);
   r["stress"] = jnum(yc.found ? yc.stress : kNaN);
   r["stress_offset"] = jnum(yf.found ? yf.stress : kNaN);
-  const auto fit = qs::elastic_fit(x, y, yo.fit_points);
-  r["elastic_slope"] = jnum(fit.ok ? fit.slope : kNaN);
+  r["elastic_slope"] = jnum(p.fit.ok ? p.fit.slope : kNaN);
   r["curvature"] = jnum(yc.found ? yc.curvature : kNaN);
-  r["increments"] = static_cast<int>(curve.samples.size()) - 1;
-  r["unconverged"] = curve.unconverged;
-  std::string status;
-  if (!yc.found) status = "no curvature point: " + yc.reason;
-  if (!yf.found) status += (status.empty() ? "" : "; ") + std::string("no offset point: ") + yf.reason;
-  r["status"] = status.empty() ? "ok" : status;
-  r["end"] = curve.end;
-  r["wall_s"] = seconds_since(t0);
+  r["increments"] = static_cast<int>(p.curve.samples.size()) - 1;
+  r["unconverged"] = p.curve.unconverged;
+  r["status"] = p.status;
+  r["end"] = p.curve.end;
+  r["wall_s"] = p.wall_s;
   r["setup"] = setup;
-  const auto stem = fmt::format("probe_{:03d}", index);
+  const auto stem = fmt::format("probe_{:03d}", p.index);
   netdem::app::write_file_atomic(out / "probes" / (stem + ".csv"), csv);
   netdem::app::write_file_atomic(out / "probes" / (stem + ".json"), r.dump(1) + "\n");
   return r;
@@ -394,16 +378,134 @@ json failed_record(int index, int directions, const std::string& why, const Anal
 }
 
 // ---------------------------------------------------------------------------------------------
+/// The solver options of the two phases: the precompaction preset with the command's law and
+/// Newton options, and the probe preset with the same law (docs/quasistatic.md "Presets").
+void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions& probe) {
+  pre = qs::SolverOptions::yield_precompaction();
+  pre.mode = parse_bc(a.compact_bc, "--compact-bc");
+  netdem::app::netsolve::apply_law_args(a.law, pre);
+  pre.validate();
+  probe = qs::SolverOptions::yield_probe();
+  probe.mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
+  probe.law = pre.law;  // unloading switches it to the elastic branch (set_reversible_normal)
+  probe.validate();
+}
+
+/// The compacted state of --from-state; its strain must lie along --precompact's path.
+std::unique_ptr<qs::NetworkSolver> restore_compacted(const YieldArgs& a, const qs::StrainPath& path,
+                                                     const qs::SolverOptions& pre) {
+  const qs::NetworkState st = qs::load_state(a.from_state);
+  const Eigen::Matrix2d E = st.strain, R = path.rate();
+  const double cosine = (E.array() * R.array()).sum() / (E.norm() * R.norm());
+  if (!(E.norm() > 0.0) || !(cosine > 1.0 - 1e-9))
+    throw std::invalid_argument(fmt::format("--from-state {}: its strain (E11, E22, E12) = ({:.4g}, {:.4g}, {:.4g}) does not "
+                                            "lie along --precompact {}",
+                                            a.from_state, E(0, 0), E(1, 1), E(0, 1), path.name));
+  return std::make_unique<qs::NetworkSolver>(st, pre);
+}
+
+/// The files and record of a finished probe (a failed one gets the record of failed_record).
+json write_probe(const qs::ProbeResult& p, const YieldArgs& a, const Analytic& an, const json& setup, const fs::path& out) {
+  if (p.status.rfind("error: ", 0) != 0) return probe_record(p, a, an, setup, out);
+  json r = failed_record(p.index, a.directions, csv_text(p.status), an, setup);
+  netdem::app::write_file_atomic(out / "probes" / fmt::format("probe_{:03d}.json", p.index), r.dump(1) + "\n");
+  return r;
+}
+
+/// Runs the probes in worker processes (this program with --probe-worker k, at most `jobs` at a
+/// time), each restoring out/probes/unloaded_state.txt; a worker that fails gets a failed record.
+void run_workers(const YieldArgs& a, const std::vector<int>& selection, int jobs, const fs::path& out, const Analytic& an,
+                 const json& setup, const std::function<void(int, const json&)>& finished) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  std::map<pid_t, int> running;
+  std::size_t next = 0;
+  auto reap = [&]() {
+    int st = 0;
+    const pid_t pid = ::waitpid(-1, &st, 0);
+    if (pid <= 0) throw std::runtime_error("waitpid failed while probes were running");
+    const auto it = running.find(pid);
+    if (it == running.end()) return;
+    const int idx = it->second;
+    running.erase(it);
+    const auto jf = out / "probes" / fmt::format("probe_{:03d}.json", idx);
+    json r;
+    bool have = false;
+    if (WIFEXITED(st) && WEXITSTATUS(st) == 0 && fs::exists(jf)) {
+      std::ifstream in(jf);
+      try {
+        in >> r;
+        have = true;
+      } catch (const std::exception&) {
+      }
+    }
+    if (!have) {
+      const std::string why = WIFSIGNALED(st) ? fmt::format("crashed: signal {}", WTERMSIG(st))
+                                              : fmt::format("failed: exit status {}", WIFEXITED(st) ? WEXITSTATUS(st) : -1);
+      r = failed_record(idx, a.directions, why, an, setup);
+      netdem::app::write_file_atomic(jf, r.dump(1) + "\n");
+    }
+    finished(idx, r);
+  };
+  while (next < selection.size() || !running.empty()) {
+    if (next < selection.size() && static_cast<int>(running.size()) < jobs) {
+      const int idx = selection[next++];
+      std::vector<std::string> args = a.argv;
+      args.push_back("--probe-worker");
+      args.push_back(std::to_string(idx));
+      std::vector<char*> cargs;
+      for (auto& s : args) cargs.push_back(s.data());
+      cargs.push_back(nullptr);
+      pid_t pid = 0;
+      const int rc = ::posix_spawn(&pid, "/proc/self/exe", nullptr, nullptr, cargs.data(), environ);
+      if (rc != 0) throw std::runtime_error(fmt::format("cannot start a probe worker: {}", std::strerror(rc)));
+      running[pid] = idx;
+    } else {
+      reap();
+    }
+  }
+}
+
+/// Worker process: probe k from the unloaded state of the run folder, written as probe files.
+int run_probe_worker(const YieldArgs& a) {
+#ifdef __linux__
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // a killed run leaves no probe running
+#endif
+  qs::SolverOptions so, po;
+  yield_options(a, so, po);
+  po.law.reversible = false;  // the state was saved on the elastic branch
+  const fs::path out = a.out;
+  const auto state = qs::load_state((out / "probes" / "unloaded_state.txt").string());
+  json w;
+  {
+    std::ifstream in(out / "probes" / "worker.json");
+    if (!in) throw std::runtime_error(fmt::format("probe worker: {} is missing", (out / "probes" / "worker.json").string()));
+    in >> w;
+  }
+  const json setup = w.at("setup");
+  const Analytic an = make_analytic(setup.at("analytic"));
+  qs::ProbeSettings ps;
+  ps.directions = a.directions;
+  ps.offset = a.offset;
+  ps.max_strain = a.max_strain;
+  ps.window = a.window;
+  ps.growth = a.growth;
+  ps.fine = a.fine;
+  ps.first_step = w.at("first_step").get<double>();
+  ps.loading_norm = w.at("loading_norm").get<double>();
+  ps.sigma_y = so.law.sigma_y;
+  qs::run_probes(state, po, {a.probe_worker}, ps, [&](const qs::ProbeResult& p) { write_probe(p, a, an, setup, out); });
+  return 0;
+}
+
 int run_yield(const YieldArgs& a, const std::string& command) {
   using namespace netdem;
+  if (a.probe_worker >= 0) return run_probe_worker(a);
   const auto t_start = Clock::now();
   // ---- validate everything before the output folder exists
-  qs::SolverOptions so;
-  const auto compact_mode = parse_bc(a.compact_bc, "--compact-bc");
-  const auto probe_mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
-  so.mode = compact_mode;
-  netdem::app::netsolve::apply_law_args(a.law, so);
-  so.validate();
+  qs::SolverOptions so, po;
+  yield_options(a, so, po);
+  const auto compact_mode = so.mode, probe_mode = po.mode;
   if (compact_mode != probe_mode && so.law.mu != 0.0)
     throw std::invalid_argument(
         "--compact-bc differs from --probe-bc: only frictionless runs (--friction 0) can switch, the solver is rebuilt "
@@ -421,10 +523,18 @@ int run_yield(const YieldArgs& a, const std::string& command) {
         "probe options: need --offset > 0, --max-strain > --offset, --window > 0, --unload-tol > 0, --growth >= 1, --fine >= 5");
   const int jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
+  if (!a.from_state.empty() && !a.packing_file.empty()) throw std::invalid_argument("--from-state and --packing exclude each other");
 
   std::string source;
-  const packing::Packing pk = app::netsolve::input_packing(a.packing_file, a.pack, source);
-  co.validate(pk.density());
+  packing::Packing pk;
+  std::unique_ptr<qs::NetworkSolver> solver;
+  if (a.from_state.empty()) {
+    pk = app::netsolve::input_packing(a.packing_file, a.pack, source);
+    co.validate(pk.density());
+  } else {
+    solver = restore_compacted(a, co.path, so);
+    source = "state " + a.from_state;
+  }
 
   const fs::path out = a.out;
   app::start_run_dir(out);
@@ -436,44 +546,49 @@ int run_yield(const YieldArgs& a, const std::string& command) {
       fs::remove(e.path());
   }
   app::write_file_atomic(out / "command.txt", command + "\n");
-  packing::write_packing_csv(pk, out / "packing.csv");
+  if (!solver) packing::write_packing_csv(pk, out / "packing.csv");
   const double sy = so.law.sigma_y;
   if (!a.quiet)
     std::fprintf(stderr, "netsolve yield: %zu particles, D0 = %.4f (%s); %s %s-%s, friction %s, %zu of %d probes, %d jobs\n",
-                 pk.size(), pk.density(), source.c_str(), a.precompact.c_str(), bc_name(compact_mode), bc_name(probe_mode),
-                 a.law.friction.c_str(), selection.size(), a.directions, jobs);
+                 solver ? solver->size() : pk.size(), solver ? solver->initial_density() : pk.density(), source.c_str(),
+                 a.precompact.c_str(), bc_name(compact_mode), bc_name(probe_mode), a.law.friction.c_str(), selection.size(),
+                 a.directions, jobs);
 
-  // ---- precompaction
+  // ---- precompaction (or the restored state)
   auto t0 = Clock::now();
-  auto solver = std::make_unique<qs::NetworkSolver>(pk, so);
-  const double D0 = solver->initial_density();
-  std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged\n";
   int unconverged = 0;
   qs::StateMeasures loaded;
-  app::Progress progress("precompact", co.increments, a.quiet);
-  qs::run_compaction(*solver, co, [&](const qs::CompactionRow& row) {
-    const auto& m = row.state;
-    hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{}\n", row.increment, m.E11, m.E22,
-                        m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.Z, m.contacts, row.report.residual,
-                        row.report.newton_iterations, row.report.converged ? 1 : 0);
-    if (row.increment > 0) unconverged += !row.report.converged;
-    progress.update(row.increment);
-    loaded = m;
-  });
-  progress.finish();
-  app::write_file_atomic(out / "history.csv", hist);
+  if (!solver) {
+    solver = std::make_unique<qs::NetworkSolver>(pk, so);
+    std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged\n";
+    app::Progress progress("precompact", co.increments, a.quiet);
+    qs::run_compaction(*solver, co, [&](const qs::CompactionRow& row) {
+      const auto& m = row.state;
+      hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{}\n", row.increment, m.E11,
+                          m.E22, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.Z, m.contacts, row.report.residual,
+                          row.report.newton_iterations, row.report.converged ? 1 : 0);
+      if (row.increment > 0) unconverged += !row.report.converged;
+      progress.update(row.increment);
+      loaded = m;
+    });
+    progress.finish();
+    app::write_file_atomic(out / "history.csv", hist);
+  } else {
+    loaded = solver->measures();
+  }
+  const double D0 = solver->initial_density();
   const double t_compact = seconds_since(t0);
 
   json setup;
   setup["precompact"] = a.precompact;
-  setup["to_density"] = a.to_density;
+  setup["to_density"] = a.from_state.empty() ? a.to_density : loaded.density;
   setup["friction"] = a.law.friction;
   setup["normal_unloading"] = a.law.normal_unloading;
   setup["compact_bc"] = bc_name(compact_mode);
   setup["probe_bc"] = bc_name(probe_mode);
   setup["directions"] = a.directions;
   setup["packing"] = source;
-  setup["particles"] = pk.size();
+  setup["particles"] = solver->size();
   setup["sigma_y"] = sy;
   setup["offset"] = a.offset;
   setup["window"] = a.window;
@@ -491,58 +606,20 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   }
   const Analytic an = make_analytic(setup["analytic"]);
 
-  // ---- switch of boundary mode: rebuild the solver from the compacted state (frictionless only)
+  // ---- the probe phase's options; a switch of boundary mode rebuilds the solver (frictionless only)
   json handover = nullptr;
   if (probe_mode != compact_mode) {
-    packing::Packing hp;
-    hp.x = solver->x();
-    hp.y = solver->y();
-    hp.r = solver->radius();
-    hp.seed = pk.seed;
-    const Eigen::Matrix2d F = solver->box_deformation();
-    const Eigen::Vector2d c0 = F * Eigen::Vector2d(pk.box.x_min, pk.box.y_min), c1 = F * Eigen::Vector2d(pk.box.x_max, pk.box.y_max);
-    hp.box = {std::min(c0.x(), c1.x()), std::min(c0.y(), c1.y()), std::max(c0.x(), c1.x()), std::max(c0.y(), c1.y())};
-    // A die compaction can squeeze a disk between two peripheral disks until its centre leaves the
-    // box; the rebuilt packing must hold every centre, so the box grows just enough (reported: it
-    // lowers D and the stresses of the new solver by the area ratio).
-    const double area_box = (hp.box.x_max - hp.box.x_min) * (hp.box.y_max - hp.box.y_min);
-    int outside = 0;
-    for (std::size_t p = 0; p < hp.x.size(); ++p) {
-      const double m = 1e-9 * hp.r[p];
-      if (hp.x[p] <= hp.box.x_min || hp.x[p] >= hp.box.x_max || hp.y[p] <= hp.box.y_min || hp.y[p] >= hp.box.y_max) ++outside;
-      hp.box.x_min = std::min(hp.box.x_min, hp.x[p] - m);
-      hp.box.x_max = std::max(hp.box.x_max, hp.x[p] + m);
-      hp.box.y_min = std::min(hp.box.y_min, hp.y[p] - m);
-      hp.box.y_max = std::max(hp.box.y_max, hp.y[p] + m);
-    }
-    const double box_growth = (hp.box.x_max - hp.box.x_min) * (hp.box.y_max - hp.box.y_min) / area_box - 1.0;
-    int elastic = 0, total = 0;
-    for (const auto& c : solver->contacts()) {
-      const double ri = hp.r[c.i], rj = hp.r[c.j];
-      const double fp = contact::plastic_force(so.law, ri * rj / (ri + rj), c.overlap);
-      ++total;
-      elastic += c.f_n < fp * (1 - 1e-6);
-    }
-    auto so2 = so;
-    so2.mode = probe_mode;
-    so2.law.reversible = false;  // unloading and probing on the section 3.4 branch
-    solver = std::make_unique<qs::NetworkSolver>(hp, so2);
-    // A new solver has no committed contact forces yet: zero-strain increments evaluate them (and,
-    // affine -> die, let the interior relax once the affine constraint is released).
-    int relax = 0, relax_unconverged = 0;
-    for (; relax < 10; ++relax) {
-      const auto rep = solver->increment(Eigen::Matrix2d::Zero());
-      relax_unconverged += !rep.converged;
-      if (rep.converged && relax >= 1) break;
-    }
-    const auto m2 = solver->measures();
-    handover = {{"contacts", total},
-                {"contacts_unloaded_before_handover", elastic},
-                {"S11_before", loaded.S11 / sy}, {"S22_before", loaded.S22 / sy},
-                {"S11_after", m2.S11 / sy},      {"S22_after", m2.S22 / sy},
-                {"zero_strain_increments", relax + 1}, {"unconverged", relax_unconverged},
-                {"centres_outside_box", outside}, {"box_area_growth", box_growth}};
-    packing::write_packing_csv(hp, out / "packing_compacted.csv");
+    qs::HandoverReport h;
+    solver = qs::switch_boundary_mode(*solver, solver->initial_box(), solver->seed(), po, h);
+    handover = {{"contacts", h.contacts},
+                {"contacts_unloaded_before_handover", h.contacts_unloaded},
+                {"S11_before", h.S11_before}, {"S22_before", h.S22_before},
+                {"S11_after", h.S11_after},   {"S22_after", h.S22_after},
+                {"zero_strain_increments", h.zero_strain_increments}, {"unconverged", h.unconverged},
+                {"centres_outside_box", h.centres_outside_box}, {"box_area_growth", h.box_area_growth}};
+    packing::write_packing_csv(h.compacted, out / "packing_compacted.csv");
+  } else {
+    solver = std::make_unique<qs::NetworkSolver>(solver->state(), po);
   }
 
   // ---- unloading: from here on the section 3.4 elastic un/reloading branch, every contact
@@ -566,72 +643,38 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   const double first_step = un.strain > 0 ? un.strain / 10 : 1e-6;
   const double loading_norm = std::sqrt(loaded.S11 * loaded.S11 + loaded.S22 * loaded.S22 + 2 * loaded.S12 * loaded.S12) / sy;
 
-  // ---- probes: one child process each, at most `jobs` at a time
+  // ---- probes: each on its own solver restored from the unloaded state, on `jobs` threads
   t0 = Clock::now();
-  std::fflush(stdout);
-  std::fflush(stderr);
-  std::map<pid_t, int> running;
+  qs::ProbeSettings ps;
+  ps.directions = a.directions;
+  ps.offset = a.offset;
+  ps.max_strain = a.max_strain;
+  ps.window = a.window;
+  ps.growth = a.growth;
+  ps.fine = a.fine;
+  ps.first_step = first_step;
+  ps.loading_norm = loading_norm;
+  ps.sigma_y = sy;
+  // the unloaded state and the probe settings, which the worker processes (and anyone who wants to
+  // rerun a probe) start from
+  qs::save_state(solver->state(), (out / "probes" / "unloaded_state.txt").string());
+  app::write_file_atomic(out / "probes" / "worker.json",
+                         json({{"setup", setup}, {"first_step", first_step}, {"loading_norm", loading_norm}}).dump(1) + "\n");
   std::map<int, json> records;
-  std::size_t next = 0, done = 0;
-  auto reap = [&]() {
-    int st = 0;
-    const pid_t pid = ::waitpid(-1, &st, 0);
-    if (pid <= 0) return;
-    const auto it = running.find(pid);
-    if (it == running.end()) return;
-    const int idx = it->second;
-    running.erase(it);
-    const auto jf = out / "probes" / fmt::format("probe_{:03d}.json", idx);
-    json r;
-    bool have = false;
-    if (WIFEXITED(st) && WEXITSTATUS(st) == 0 && fs::exists(jf)) {
-      std::ifstream in(jf);
-      try {
-        in >> r;
-        have = true;
-      } catch (const std::exception&) {
-      }
-    }
-    if (!have) {
-      const std::string why = WIFSIGNALED(st) ? fmt::format("crashed: signal {}", WTERMSIG(st))
-                                              : fmt::format("failed: exit status {}", WIFEXITED(st) ? WEXITSTATUS(st) : -1);
-      r = failed_record(idx, a.directions, why, an, setup);
-      app::write_file_atomic(jf, r.dump(1) + "\n");
-    }
+  std::size_t done = 0;
+  auto finished = [&](int idx, const json& r) {
     ++done;
     if (!a.quiet)
       std::fprintf(stderr, "probe %3d (theta %6.1f deg): %s [%zu/%zu]\n", idx, from_json(r["theta"]),
                    r.value("status", "?").c_str(), done, selection.size());
     records[idx] = r;
   };
-  while (next < selection.size() || !running.empty()) {
-    if (next < selection.size() && static_cast<int>(running.size()) < jobs) {
-      const int idx = selection[next++];
-      const pid_t pid = ::fork();
-      if (pid < 0) throw std::runtime_error("fork failed");
-      if (pid == 0) {
-#ifdef __linux__
-        ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // a killed run leaves no probe running
-#endif
-        int code = 0;
-        try {
-          run_one_probe(*solver, idx, a, sy, first_step, loading_norm, an, setup, out);
-        } catch (const std::exception& e) {
-          try {
-            auto r = failed_record(idx, a.directions, csv_text(std::string("error: ") + e.what()), an, setup);
-            app::write_file_atomic(out / "probes" / fmt::format("probe_{:03d}.json", idx), r.dump(1) + "\n");
-          } catch (...) {
-            code = 3;
-          }
-        }
-        std::fflush(stdout);
-        std::fflush(stderr);
-        ::_exit(code);
-      }
-      running[pid] = idx;
-    } else {
-      reap();
-    }
+  if (jobs == 1 || selection.size() == 1) {
+    qs::run_probes(solver->state(), solver->options(), selection, ps, [&](const qs::ProbeResult& p) {
+      finished(p.index, write_probe(p, a, an, setup, out));
+    });
+  } else {
+    run_workers(a, selection, jobs, out, an, setup, finished);
   }
   const double t_probes = seconds_since(t0);
 
@@ -649,12 +692,17 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   json j;
   j["command"] = command;
   j["setup"] = setup;
-  j["seed"] = pk.seed;
+  j["seed"] = solver->seed();
   j["initial_density"] = D0;
   j["precompaction"] = {{"D", loaded.density}, {"Z", loaded.Z},           {"S11", loaded.S11 / sy},
                         {"S22", loaded.S22 / sy}, {"S12", loaded.S12 / sy}, {"E11", loaded.E11},
                         {"E22", loaded.E22},   {"contacts", loaded.contacts}, {"unconverged_increments", unconverged},
                         {"increments", co.increments}};
+  if (!a.from_state.empty()) {
+    j["precompaction"]["from_state"] = a.from_state;
+    j["precompaction"]["unconverged_increments"] = nullptr;  // not known from the state
+    j["precompaction"]["increments"] = nullptr;
+  }
   j["analytic"] = {{"ok", an.ok}, {"message", an.message}};
   if (an.ok) {
     const auto lp = qs::affine_loading_point(an.in);
@@ -669,6 +717,12 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   j["probes"] = {{"run", selection.size()},  {"ok", ok},  {"directions", a.directions}, {"jobs", jobs},
                  {"first_step", first_step}, {"offset", a.offset}, {"max_strain", a.max_strain}, {"window", a.window},
                  {"indices", selection}};
+  j["solver"] = {{"precompaction", {{"tol", so.residual_tol}, {"viscosity", so.viscosity},
+                                    {"viscosity_strain", so.viscosity_strain}, {"chord_steps", so.chord_steps},
+                                    {"linear_tol", so.linear_tolerance}, {"max_newton", so.max_newton}}},
+                 {"probes", {{"tol", po.residual_tol}, {"viscosity", po.viscosity},
+                             {"viscosity_strain", po.viscosity_strain}, {"chord_steps", po.chord_steps},
+                             {"linear_tol", po.linear_tolerance}, {"max_newton", po.max_newton}}}};
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact},
                    {"unloading", t_unload},
@@ -743,6 +797,8 @@ int run_yield_command(int argc, char** argv) {
   const std::string sub = argv[1];
   CLI::App app{"netsolve " + sub};
   YieldArgs a;
+  a.law = netdem::app::netsolve::law_args(qs::SolverOptions::yield_precompaction());
+  for (int k = 0; k < argc; ++k) a.argv.emplace_back(argv[k]);
   std::vector<std::string> dirs;
   std::string merge_out = "results/yield_merged";
   if (sub == "yield") {
@@ -755,6 +811,9 @@ int run_yield_command(int argc, char** argv) {
     app.add_flag("--mono", a.pack.mono, "monosized disks");
     app.add_option("--seed", a.pack.seed, "random seed of the deposition")->capture_default_str();
     app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition");
+    app.add_option("--from-state", a.from_state,
+                   "start from a compacted state (state.txt of `netsolve compact --save-state`) instead of precompacting; "
+                   "its strain must lie along --precompact");
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
     app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();
@@ -776,6 +835,8 @@ int run_yield_command(int argc, char** argv) {
         "'elastic' (section 3.4 branch throughout); unloading and probes always use the elastic branch");
     app.add_flag("--quiet", a.quiet, "no progress on stderr");
     app.add_option("--out", a.out, "output folder")->capture_default_str();
+    app.add_option("--probe-worker", a.probe_worker, "internal: run one probe from the run folder's unloaded state")
+        ->group("");
   } else {
     app.description("netsolve yield-merge: assemble yield_points.csv and surface.svg from the probe files of several yield runs");
     app.add_option("dirs", dirs, "run folders (each with probes/)")->required();

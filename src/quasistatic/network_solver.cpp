@@ -43,6 +43,8 @@ NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& op
   s.periph = packing::peripheral_layer(pk);
   s.solid_area = pk.solid_area();
   s.box_area0 = pk.box.area();
+  s.box0 = pk.box;
+  s.seed = pk.seed;
   s.D0 = s.solid_area / s.box_area0;
   s.init_linear_solver();
   s.f_c.assign(3 * s.n, 0.0);
@@ -62,6 +64,8 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   s.periph = st.peripheral;
   s.solid_area = st.solid_area;
   s.box_area0 = st.box_area0;
+  s.box0 = st.box0;
+  s.seed = st.seed;
   s.D0 = st.initial_density;
   s.Fbox = st.box_deformation;
   s.E = st.strain;
@@ -101,6 +105,8 @@ NetworkState NetworkSolver::state() const {
   st.solid_area = s.solid_area;
   st.initial_density = s.D0;
   st.box_area0 = s.box_area0;
+  st.box0 = s.box0;
+  st.seed = s.seed;
   st.box_deformation = s.Fbox;
   st.strain = s.E;
   st.pair_i = s.pi;
@@ -154,6 +160,9 @@ void NetworkState::validate() const {
   if (!(std::isfinite(solid_area) && solid_area > 0 && std::isfinite(box_area0) && box_area0 > 0 &&
         std::isfinite(initial_density) && initial_density > 0))
     bad("solid area, box area and initial density must be positive");
+  if (!(std::isfinite(box0.x_min) && std::isfinite(box0.y_min) && std::isfinite(box0.x_max) && std::isfinite(box0.y_max) &&
+        box0.x_max > box0.x_min && box0.y_max > box0.y_min))
+    bad("the initial box must be finite with positive size");
   if (!box_deformation.allFinite() || !(box_deformation.determinant() > 0.0) || !box_deformation_build.allFinite() ||
       !(box_deformation_build.determinant() > 0.0))
     bad("box deformation must be finite with a positive determinant");
@@ -171,6 +180,8 @@ const std::vector<std::uint8_t>& NetworkSolver::peripheral() const { return impl
 Eigen::Matrix2d NetworkSolver::box_deformation() const { return impl_->Fbox; }
 double NetworkSolver::solid_area() const { return impl_->solid_area; }
 double NetworkSolver::initial_density() const { return impl_->D0; }
+const packing::Box& NetworkSolver::initial_box() const { return impl_->box0; }
+std::uint64_t NetworkSolver::seed() const { return impl_->seed; }
 int NetworkSolver::free_dofs() const { return impl_->nfree; }
 
 }  // namespace netdem::qs

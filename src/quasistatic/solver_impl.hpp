@@ -70,6 +70,8 @@ struct NetworkSolver::Impl : ContactTable, DofMap {
   std::vector<double> x, y, th, r;
   std::vector<std::uint8_t> periph;
   double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;
+  packing::Box box0;
+  std::uint64_t seed = 0;
   Eigen::Matrix2d Fbox = Eigen::Matrix2d::Identity();
   Eigen::Matrix2d E = Eigen::Matrix2d::Zero();
   std::vector<double> f_c;  ///< 3n contact forces on the particles (committed state)

@@ -6,6 +6,8 @@
 //   particles N
 //   x y theta r peripheral x_build y_build f0 f1 f2 [du0 du1 du2]      (N lines; du if predictor 1)
 //   scalars solid_area initial_density box_area0
+//   box0 x_min y_min x_max y_max
+//   seed S
 //   box_deformation a11 a12 a21 a22      (and strain, box_deformation_build, dE_prev)
 //   pairs P
 //   i j u_max f_t hist_sliding E11 E12 E21 E22 slip centre f_n f_t sliding   (P lines)
@@ -106,6 +108,8 @@ void save_state(const NetworkState& s, const std::string& path) {
     out += '\n';
   }
   out += fmt::format("scalars {} {} {}\n", hx(s.solid_area), hx(s.initial_density), hx(s.box_area0));
+  out += fmt::format("box0 {} {} {} {}\nseed {}\n", hx(s.box0.x_min), hx(s.box0.y_min), hx(s.box0.x_max), hx(s.box0.y_max),
+                     s.seed);
   put_matrix(out, "box_deformation", s.box_deformation);
   put_matrix(out, "strain", s.strain);
   put_matrix(out, "box_deformation_build", s.box_deformation_build);
@@ -168,6 +172,16 @@ NetworkState load_state(const std::string& path) {
   s.solid_area = in.real(sc[0]);
   s.initial_density = in.real(sc[1]);
   s.box_area0 = in.real(sc[2]);
+  const auto b0 = in.next("box0", 4);
+  s.box0 = {in.real(b0[0]), in.real(b0[1]), in.real(b0[2]), in.real(b0[3])};
+  {
+    const std::string t = in.next("seed", 1)[0];
+    errno = 0;
+    char* end = nullptr;
+    if (t.empty() || t[0] == '-') in.fail("seed must be a non-negative integer");
+    s.seed = std::strtoull(t.c_str(), &end, 10);
+    if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", t.substr(0, 40)));
+  }
   s.box_deformation = in.matrix("box_deformation");
   s.strain = in.matrix("strain");
   s.box_deformation_build = in.matrix("box_deformation_build");

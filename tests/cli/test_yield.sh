@@ -51,13 +51,27 @@ if "$ns" "${args[@]}" --probe 0/2 --out "$tmp/ys0" >/dev/null 2>"$tmp/stderr" &&
 else
   ko yield_slices_merge
 fi
-# the probes are independent processes: one at a time gives the same points as several
+# the probes run in worker processes from the saved unloaded state: one at a time in this
+# process gives the same points, byte for byte, as two workers
 if "$ns" "${args[@]}" --jobs 1 --out "$tmp/yj1" >/dev/null 2>"$tmp/stderr" &&
-   cmp -s <(cut -d, -f1-8 "$good/yield_points.csv") <(cut -d, -f1-8 "$tmp/yj1/yield_points.csv"); then
+   cmp -s "$good/yield_points.csv" "$tmp/yj1/yield_points.csv" && [ -s "$good/probes/unloaded_state.txt" ]; then
   ok
 else
   ko yield_jobs1_equals_parallel
 fi
+# restart: `compact --save-state` then `yield --from-state` gives the points of the uninterrupted
+# yield run (same preset, same increments), byte for byte; a state along another path is refused
+cargs=(compact --width 12 --increments 10 --to-density 0.83 --quiet)
+if "$ns" "${cargs[@]}" --save-state --out "$tmp/cstate" >/dev/null 2>"$tmp/stderr" &&
+   [ -s "$tmp/cstate/state.txt" ] &&
+   "$ns" yield --from-state "$tmp/cstate/state.txt" --directions 4 --quiet --out "$tmp/yfs" >/dev/null 2>"$tmp/stderr" &&
+   cmp -s "$good/yield_points.csv" "$tmp/yfs/yield_points.csv" && cmp -s "$good/unload.csv" "$tmp/yfs/unload.csv"; then
+  ok
+else
+  ko yield_from_state_equals_uninterrupted
+fi
+check_bad yield_from_state_path "does not lie along" yield --from-state "$tmp/cstate/state.txt" --precompact closed-die --directions 4
+check_bad yield_from_state_missing "cannot be opened" yield --from-state "$tmp/no_such_state.txt" --directions 4
 # merging runs of different setups is refused
 if "$ns" "${args[@]}" --friction 0 --probes 0 --out "$tmp/ysf" >/dev/null 2>"$tmp/stderr"; then
   check_bad yield_merge_mismatch "different setup" yield-merge "$tmp/ys0" "$tmp/ysf"

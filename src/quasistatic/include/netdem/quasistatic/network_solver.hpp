@@ -37,11 +37,8 @@
 #include <Eigen/Core>
 
 #include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/solver_options.hpp"
-
-namespace netdem::packing {
-struct Packing;
-}
 
 namespace netdem::qs {
 
@@ -101,6 +98,8 @@ struct NetworkState {
   std::vector<double> x, y, theta, r;
   std::vector<std::uint8_t> peripheral;
   double solid_area = 0, initial_density = 0, box_area0 = 0;
+  packing::Box box0;       ///< the packing's box (box_deformation maps it to the current one)
+  std::uint64_t seed = 0;  ///< the packing's seed (0 if unknown)
   Eigen::Matrix2d box_deformation = Eigen::Matrix2d::Identity();  ///< initial box -> current box
   Eigen::Matrix2d strain = Eigen::Matrix2d::Zero();               ///< accumulated E
   // contact table (pairs i < j sorted) and its committed history
@@ -164,6 +163,8 @@ class NetworkSolver {
   Eigen::Matrix2d box_deformation() const;     ///< maps the initial box to the current one
   double solid_area() const;
   double initial_density() const;
+  const packing::Box& initial_box() const;  ///< the packing's box
+  std::uint64_t seed() const;               ///< the packing's seed
   int free_dofs() const;
 
   struct Impl;
