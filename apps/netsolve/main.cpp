@@ -24,6 +24,7 @@
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/compaction.hpp"
+#include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "output.hpp"
 #include "parse.hpp"
@@ -212,6 +213,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
                  {"solves", tm.solves},                 {"tol", so.residual_tol},
                  {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
                  {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
+  {
+    std::string why;
+    const bool inl = qs::cholmod_inline_openmp(&why);
+    j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
+  }
   j["state"] = a.save_state ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};

@@ -1,6 +1,5 @@
 #include "netdem/quasistatic/linear_solver.hpp"
 
-#include <dlfcn.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -13,6 +12,8 @@
 
 #include <cholmod.h>
 #include <fmt/format.h>
+
+#include "cholmod_omp.hpp"
 
 #include <Eigen/SparseCore>
 
@@ -75,55 +76,11 @@ int first_non_finite_row(const VecX& v) {
   return -1;
 }
 
-/// Set while this thread is inside a CHOLMOD call made by a LinearSolver (see GOMP_parallel below).
-thread_local int serial_cholmod_depth = 0;
-
-struct SerialCholmod {  // RAII: CHOLMOD's OpenMP regions run inline while alive
-  SerialCholmod() { ++serial_cholmod_depth; }
-  ~SerialCholmod() { --serial_cholmod_depth; }
-  SerialCholmod(const SerialCholmod&) = delete;
-  SerialCholmod& operator=(const SerialCholmod&) = delete;
-};
+using detail::SerialCholmod;  // cholmod_omp.hpp: CHOLMOD's OpenMP regions inline inside our calls
 
 }  // namespace
 }  // namespace netdem::qs
 
-#if NETDEM_CHOLMOD_INLINE_OMP
-// Debian's CHOLMOD 3 opens an OpenMP region (num_threads(4), usually with a false if-clause) for
-// several loops of every supernode: ~4000 regions per numeric factorisation of the default scene.
-// Even serial (omp_set_max_active_levels(0), see the constructor) each inactive region costs a
-// team allocation and a futex syscall in libgomp (3.4 M syscalls, 1.5 s of a 6.5 s default
-// compaction; docs/performance.md, 2026-11-26). The solver is serial by design, so while a
-// LinearSolver is inside CHOLMOD the outlined region body is called directly on this thread:
-// outside a team omp_get_num_threads() = 1 and omp_get_thread_num() = 0, which is what the
-// static-schedule loops of CHOLMOD (its only OpenMP use: GOMP_parallel, omp_get_num_threads,
-// omp_get_thread_num) need. Results are bit-identical. Every other caller (and every call when
-// this definition does not take precedence, e.g. in a shared-library build) goes to libgomp.
-extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
-  if (netdem::qs::serial_cholmod_depth > 0) {
-    fn(data);
-    return;
-  }
-  using Real = void (*)(void (*)(void*), void*, unsigned, unsigned);
-  static const Real real = reinterpret_cast<Real>(dlsym(RTLD_NEXT, "GOMP_parallel"));
-  if (real == nullptr) {  // no libgomp behind us: run the region on this thread
-    fn(data);
-    return;
-  }
-  real(fn, data, num_threads, flags);
-}
-
-// The supernodal factorisation also reads the clock (SuiteSparse_time, clock_gettime) around every
-// BLAS call of every supernode, only for CHOLMOD's internal statistics (Common->CHOLMOD_CPU_*_TIME),
-// which nothing here reads: 4 % of the default compaction. Inside a LinearSolver call it returns 0.
-extern "C" double SuiteSparse_time(void) {
-  if (netdem::qs::serial_cholmod_depth > 0) return 0.0;
-  using Real = double (*)();
-  static const Real real = reinterpret_cast<Real>(dlsym(RTLD_NEXT, "SuiteSparse_time"));
-  if (real == nullptr) return 0.0;
-  return real();
-}
-#endif  // NETDEM_CHOLMOD_INLINE_OMP (CMake option, default ON)
 
 namespace netdem::qs {
 
@@ -619,6 +576,7 @@ LinearSolver::LinearSolver(LinearSolverOptions options) {
   // serial by design (one core per job; parallelism is across probes/runs): no nested or active
   // OpenMP parallelism for this thread.
   omp_set_max_active_levels(0);
+  detail::inline_omp_active();  // the self-test of the inline OpenMP regions, once per process
   impl_ = std::make_unique<Impl>(options);
 }
 LinearSolver::~LinearSolver() = default;

@@ -67,6 +67,11 @@ struct LinearSolverStats {
   long factor_nnz = 0;  ///< nonzeros of the current factor L (fill; 0 before the first analysis)
 };
 
+/// Whether CHOLMOD's OpenMP regions run inline inside LinearSolver calls in this process (the
+/// start-up self-test of src/quasistatic/cholmod_omp.cpp passed); if not, `why` says why.
+/// Results are the same either way; inline is faster (docs/quasistatic.md "CHOLMOD and OpenMP").
+bool cholmod_inline_openmp(std::string* why = nullptr);
+
 class LinearSolver {
  public:
   explicit LinearSolver(LinearSolverOptions options = {});  // validates the options
