@@ -13,17 +13,16 @@
 #include <fmt/format.h>
 
 #include "netdem/dynamic/state.hpp"
+#include "netdem/packing/random_fill.hpp"
 #include "output.hpp"
 
 namespace fs = std::filesystem;
 using namespace netdem::dem;
+using netdem::packing::uniform01;
 
 namespace netdem::app::dem {
 
 namespace {
-
-/// Uniform in [0, 1) from the 64-bit output (platform independent).
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 struct Counts {
   std::size_t pairs = 0, walls = 0;
@@ -171,31 +170,13 @@ Particles place_sample(const SampleArgs& a, const LudingParams& lp, Box& box) {
   const double L = std::sqrt(area / a.initial_density);
   box.x_min = box.y_min = 0.0;
   box.x_max = box.y_max = L;
-  // cell grid for the overlap check (cell >= largest diameter)
-  const double cell = 2.0 * lp.a0 * (1.0 + lp.w0);
-  const auto nc = static_cast<std::size_t>(std::max(1.0, std::floor(L / cell)));
-  std::vector<std::vector<std::size_t>> grid(nc * nc);
-  auto cell_of = [&](double v) { return std::min(nc - 1, static_cast<std::size_t>(v / L * static_cast<double>(nc))); };
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    bool placed = false;
-    for (int attempt = 0; attempt < 100000 && !placed; ++attempt) {
-      const double x = r[i] + (L - 2 * r[i]) * uniform01(rng), y = r[i] + (L - 2 * r[i]) * uniform01(rng);
-      const std::size_t cx = cell_of(x), cy = cell_of(y);
-      placed = true;
-      for (std::size_t gy = cy > 0 ? cy - 1 : 0; gy <= std::min(nc - 1, cy + 1) && placed; ++gy)
-        for (std::size_t gx = cx > 0 ? cx - 1 : 0; gx <= std::min(nc - 1, cx + 1) && placed; ++gx)
-          for (std::size_t k : grid[gy * nc + gx])
-            if (std::hypot(x - P.x[k], y - P.y[k]) < r[i] + P.radius[k]) {
-              placed = false;
-              break;
-            }
-      if (placed) {
-        grid[cy * nc + cx].push_back(P.add(x, y, r[i], lp));
-      }
-    }
-    if (!placed)
-      throw std::runtime_error(fmt::format("could not place disk {} without overlap at density {}", i, a.initial_density));
+  netdem::packing::Packing placed;
+  try {
+    placed = netdem::packing::random_fill(r, {0.0, 0.0, L, L}, rng);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("{} at density {}", e.what(), a.initial_density));
   }
+  for (std::size_t i = 0; i < r.size(); ++i) P.add(placed.x[i], placed.y[i], r[i], lp);
   const double v0 = 0.01;  // [m/s]
   for (std::size_t i = 0; i < r.size(); ++i) {
     P.vx[i] = v0 * (2.0 * uniform01(rng) - 1.0);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "netdem/contact/luding.hpp"
+#include "netdem/packing/cell_grid.hpp"
 
 namespace netdem::dem {
 
@@ -229,7 +230,7 @@ class DynamicSolver {
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_;
-  std::vector<std::uint32_t> cell_start_, cell_items_, cell_cursor_;
+  packing::CellGrid grid_;  ///< over the positions of the last table build (storage reused)
   // wall histories: 4 per particle (left, right, bottom, top); wall state
   std::vector<LudingHistory> wall_hist_;
   /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force
