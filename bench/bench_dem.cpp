@@ -126,21 +126,6 @@ Packing place(int n, std::uint64_t seed, const LudingParams& lp) {
   return s;
 }
 
-Particles to_particles(const Packing& pk, const LudingParams& lp) {
-  Particles P;
-  for (std::size_t i = 0; i < pk.r.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], lp);
-  return P;
-}
-
-Box fixed_box(const Packing& pk) {
-  Box b;
-  b.x_min = pk.box.x_min;
-  b.y_min = pk.box.y_min;
-  b.x_max = pk.box.x_max;
-  b.y_max = pk.box.y_max;
-  return b;
-}
-
 struct Stage {
   double nu = 0, sxx = 0, syy = 0, ekin = 0;
 };
@@ -148,7 +133,7 @@ struct Stage {
 /// Walls: fixed at pk's box, or stress-controlled right/top walls (p, m_w = 0.01 kg, gamma_w).
 Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
                 const LudingParams& lp, std::size_t steps, double gamma_w) {
-  Box box = fixed_box(pk);
+  Box box(pk.box);
   if (gamma_w > 0.0)
     for (MovingWall* w : {&box.right, &box.top}) {
       w->mode = WallMode::Stress;
@@ -169,8 +154,7 @@ Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
   pk.y = q.y;
   vx = q.vx;
   vy = q.vy;
-  pk.box.x_max = s.box().x_max;
-  pk.box.y_max = s.box().y_max;
+  pk.box = s.box();
   const Stress2 ws = s.wall_stress(), cs = s.contact_stress();
   Stage st;
   st.nu = s.density();
@@ -208,7 +192,7 @@ Packing compress(const Packing& start, const LudingParams& lp) {
                n, area / (pk.box.x_max * pk.box.y_max), steps, wall_now() - t0);
   // (b) stress-controlled right/top walls; gamma_w = p L / (0.5 m/s) keeps the wall speed below
   //     0.5 m/s at every N; one solver, checked every 2000 steps
-  Box box = fixed_box(pk);
+  Box box(pk.box);
   for (MovingWall* w : {&box.right, &box.top}) {
     w->mode = WallMode::Stress;
     w->pressure = kPressure;
@@ -219,7 +203,7 @@ Packing compress(const Packing& start, const LudingParams& lp) {
   o.model = ContactModel::Linear;
   o.dt = scene_dt(lp);
   o.skin = kSkin;
-  DynamicSolver s(to_particles(pk, lp), lp, box, o);
+  DynamicSolver s(particles_from(pk, lp), lp, box, o);
   double nu_prev = s.density();
   for (int chunk = 0; chunk < 100; ++chunk) {
     s.run(2000);
@@ -239,8 +223,7 @@ Packing compress(const Packing& start, const LudingParams& lp) {
   const Particles& q = s.particles();
   pk.x = q.x;
   pk.y = q.y;
-  pk.box.x_max = s.box().x_max;
-  pk.box.y_max = s.box().y_max;
+  pk.box = s.box();
   return pk;
 }
 
@@ -304,7 +287,7 @@ Row time_model(const Packing& pk, const std::string& model, std::size_t warm, st
   o.dt = scene_dt(linear_params());
   o.skin = kSkin;
   o.temperature = 80.0;
-  DynamicSolver s(to_particles(pk, lp), lp, fixed_box(pk), o);
+  DynamicSolver s(particles_from(pk, lp), lp, Box(pk.box), o);
   s.run(warm);
   const std::size_t b0 = s.rebuilds();
   const double c0 = cpu_now(), w0 = wall_now();

@@ -105,6 +105,21 @@ std::size_t Particles::add(double px, double py, double r, const LudingParams& p
   return x.size() - 1;
 }
 
+Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
+  Particles P;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
+  return P;
+}
+
+packing::Packing to_packing(const Particles& P, const packing::Box& box) {
+  packing::Packing pk;
+  pk.x = P.x;
+  pk.y = P.y;
+  pk.r = P.radius;
+  pk.box = box;
+  return pk;
+}
+
 void DynamicOptions::validate() const {
   if (!(steps_per_contact > 0.0)) fail("DynamicOptions: steps_per_contact must be > 0");
   if (!(min_steps_per_contact >= 0.0)) fail("DynamicOptions: min_steps_per_contact must be >= 0");
