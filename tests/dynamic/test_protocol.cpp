@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "netdem/dynamic/material_tests.hpp"
 #include "netdem/dynamic/protocol.hpp"
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/packing/ballistic.hpp"
@@ -223,6 +224,69 @@ TEST(Protocol, RunPhasesSamplesAndEndsEveryPhase) {
   EXPECT_EQ(c.pairs, buf.size());
   EXPECT_EQ(c.walls, s.wall_contacts());
   EXPECT_DOUBLE_EQ(c.coordination(20), (2.0 * c.pairs + c.walls) / 20.0);
+}
+
+TEST(MaterialTests, CompressionFiguresAndClusters) {
+  CompressionRun run;
+  for (int k = 0; k <= 20; ++k) {
+    run.eps.push_back(0.0005 * k);
+    run.szz.push_back(k <= 12 ? 3.0 + 2000.0 * 0.0005 * k : 15.0 - k);  // peak at sample 12
+  }
+  CompressionFigures f = compression_figures(run, 0.005);
+  EXPECT_EQ(f.peak, 12u);
+  EXPECT_NEAR(f.stiffness, 2000.0, 1e-9);
+  run.eps = {0.0, 0.1, 0.2};
+  f = compression_figures(run, 0.005);  // one sample in the window
+  EXPECT_TRUE(std::isnan(f.stiffness));
+
+  // clusters: 0-1-2 overlapping in a chain, 3 alone, 4-5 a pair
+  LudingParams lp;
+  const double a = lp.a0;
+  Particles P;
+  for (double x : {0.0, 1.9, 3.8}) P.add(x * a, 0.0, a, lp);
+  P.add(20 * a, 0.0, a, lp);
+  P.add(40 * a, 0.0, a, lp);
+  P.add(41.9 * a, 0.0, a, lp);
+  Box box;
+  box.enabled = false;
+  const DynamicSolver s(P, lp, box, DynamicOptions{});
+  Clusters c;
+  c.update(s);
+  EXPECT_EQ(c.largest(), 3u);
+  EXPECT_EQ(c.single_grains(), 1u);
+  EXPECT_EQ(c.sizes(), (std::vector<std::uint32_t>{3, 2, 1}));
+  EXPECT_EQ(c.rank(), (std::vector<double>{0, 0, 0, 2, 1, 1}));
+  EXPECT_EQ(c.label()[0], c.label()[2]);
+  EXPECT_NE(c.label()[0], c.label()[4]);
+}
+
+TEST(MaterialTests, OpenBoxAndBadTests) {
+  SolverState st;
+  st.box.x_min = 0.0;
+  st.box.x_max = 0.02;
+  st.box.y_max = 0.03;
+  st.box.right.mode = WallMode::Stress;
+  st.box.top.mode = WallMode::Strain;
+  st.wall_velocity[1] = -0.5;
+  open_box_for_vibration(st);
+  EXPECT_EQ(st.box.x_min, -1.0);
+  EXPECT_EQ(st.box.x_max, 1.02);
+  EXPECT_EQ(st.box.y_min, 0.0);  // the floor stays
+  EXPECT_EQ(st.box.y_max, 1.03);
+  EXPECT_EQ(st.box.right.mode, WallMode::Fixed);
+  EXPECT_EQ(st.box.top.mode, WallMode::Fixed);
+  EXPECT_EQ(st.wall_velocity[1], 0.0);
+  CompressionTest c;
+  c.max_strain = 0.95;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
+  c = {};
+  c.strain_rate = 0.0;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
+  VibrationTest v;
+  v.frequency = -1.0;
+  EXPECT_THROW(v.validate(), std::invalid_argument);
+  v = {};
+  EXPECT_NO_THROW(v.validate());
 }
 
 }  // namespace
