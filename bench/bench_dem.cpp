@@ -15,7 +15,8 @@
 //    more than skin/2.
 //  * square box with four walls (LMM05 Fig 1; the LAMMPS scene of the shared report is periodic,
 //    the solver has no periodic boundaries).
-//  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.txt): all radii drawn first
+//  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.csv, the packing CSV of
+//    netdem/packing/io.hpp in metres): all radii drawn first
 //    (std::mt19937_64(seed), the platform-independent uniform of demsolve), then random sequential
 //    placement without overlap, largest disks first, at solid fraction 0.45, particles renumbered
 //    in Morton order of a grid of cell a_max (spatial locality, as LAMMPS's atom sorting); all

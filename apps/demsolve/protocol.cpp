@@ -1,4 +1,5 @@
-// demsolve run driver (see protocol.hpp and docs/dynamic.md, docs/sintering.md).
+// demsolve prepare / sinter: the options into the library calls of netdem/dynamic/protocol.hpp, and
+// the output files (see protocol.hpp and docs/dynamic.md, docs/sintering.md).
 #include "protocol.hpp"
 
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <cstdio>
 #include <ctime>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -21,23 +21,6 @@ using namespace netdem::dem;
 namespace netdem::app::dem {
 
 namespace {
-
-/// Average stress of each particle, p_i = (1 / (2 pi a_i^2)) sum_c f_n d_i (normal forces,
-/// compression positive, N/m like the wall pressure), and its number of contacts.
-void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
-                     std::vector<double>& z) {
-  p.assign(P.size(), 0.0);
-  z.assign(P.size(), 0.0);
-  for (const auto& c : cs) {
-    p[c.i] += c.f_n * c.d_i;
-    z[c.i] += 1.0;
-    if (c.wall < 0) {
-      p[c.j] += c.f_n * c.d_j;
-      z[c.j] += 1.0;
-    }
-  }
-  for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
-}
 
 std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   std::vector<double> ps, z;

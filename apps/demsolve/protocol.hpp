@@ -1,7 +1,8 @@
 #pragma once
-// demsolve run driver: a sequence of temperature/friction phases (LMM05 section 4.1) on one
-// DynamicSolver, with the time series, snapshots, contact distributions and a restartable state
-// after every phase, all under one output folder.
+// demsolve's commands: the parsed options, the calls into netdem/dynamic/protocol.hpp (the
+// sintering protocol of LMM05 section 4.1) and material_tests.hpp (section 4.4), and the output:
+// time series, snapshots, contact distributions and a restartable state after every phase, all
+// under one output folder.
 #include <cstdint>
 #include <filesystem>
 #include <string>

@@ -132,6 +132,21 @@ ContactCounts count_contacts(const DynamicSolver& s, std::vector<std::pair<std::
   return {buffer.size(), s.wall_contacts()};
 }
 
+void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
+                     std::vector<double>& z) {
+  p.assign(P.size(), 0.0);
+  z.assign(P.size(), 0.0);
+  for (const auto& c : cs) {
+    p[c.i] += c.f_n * c.d_i;
+    z[c.i] += 1.0;
+    if (c.wall < 0) {
+      p[c.j] += c.f_n * c.d_j;
+      z[c.j] += 1.0;
+    }
+  }
+  for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
+}
+
 PhaseRun run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const PhaseFriction& fr,
                     std::int64_t samples, PhaseObserver& obs) {
   const double dt = s.dt();

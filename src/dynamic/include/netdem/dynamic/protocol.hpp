@@ -72,6 +72,12 @@ struct ContactCounts {
 /// The contacts (overlap > 0) at the current state; `buffer` is the workspace of touching_pairs.
 ContactCounts count_contacts(const DynamicSolver& s, std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer);
 
+/// Average stress of each particle, p_i = (1 / (2 pi a_i^2)) sum_c f_n d_i over its contacts in
+/// `contacts` (DynamicSolver::contacts; normal forces, compression positive, N/m like the wall
+/// pressure; LMM05 Fig 20's colouring), and its number of contacts z_i.
+void particle_stress(const Particles& P, const std::vector<ContactInfo>& contacts, std::vector<double>& p,
+                     std::vector<double>& z);
+
 /// What the caller records while run_phases() steps.
 class PhaseObserver {
  public:
