@@ -15,7 +15,8 @@
 //    more than skin/2.
 //  * square box with four walls (LMM05 Fig 1; the LAMMPS scene of the shared report is periodic,
 //    the solver has no periodic boundaries).
-//  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.txt): all radii drawn first
+//  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.csv, the packing CSV of
+//    netdem/packing/io.hpp in metres): all radii drawn first
 //    (std::mt19937_64(seed), the platform-independent uniform of demsolve), then random sequential
 //    placement without overlap, largest disks first, at solid fraction 0.45, particles renumbered
 //    in Morton order of a grid of cell a_max (spatial locality, as LAMMPS's atom sorting); all
@@ -49,17 +50,19 @@
 #include <vector>
 
 #include "netdem/dynamic/solver.hpp"
+#include "netdem/packing/io.hpp"
+#include "netdem/packing/random_fill.hpp"
 
 namespace fs = std::filesystem;
 using namespace netdem::dem;
+using netdem::packing::Packing;
+using netdem::packing::uniform01;
 
 namespace {
 
 constexpr double kPressure = 100.0;    // N/m (LMM05 section 4.1, params.in Pt)
 constexpr double kSkin = 0.2e-3;       // m (params.in)
 constexpr double kPlaceDensity = 0.45;  // solid fraction of the random placement
-
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 double cpu_now() {
   timespec t{};
@@ -86,11 +89,6 @@ double scene_dt(const LudingParams& p) {
   return contact_duration(p.k2, p.gamma_n, 0.5 * m0) / 50.0;
 }
 
-struct Packing {
-  std::vector<double> x, y, r;
-  double x_min = 0, y_min = 0, x_max = 0, y_max = 0;
-};
-
 std::uint64_t morton(std::uint32_t a, std::uint32_t b) {
   std::uint64_t m = 0;
   for (int k = 0; k < 32; ++k)
@@ -111,36 +109,8 @@ Packing place(int n, std::uint64_t seed, const LudingParams& lp) {
     rmax = std::max(rmax, r);
   }
   const double L = std::sqrt(area / kPlaceDensity);
-  pk.x_max = pk.y_max = L;
-  const double c = 2.0 * rmax;
-  const std::size_t g = static_cast<std::size_t>(L / c) + 1;
-  std::vector<std::vector<std::uint32_t>> cells(g * g);
-  auto cell = [&](double v) { return std::min(g - 1, static_cast<std::size_t>(v / c)); };
   std::sort(pk.r.begin(), pk.r.end(), std::greater<>());  // largest first: denser placement
-  for (std::size_t i = 0; i < pk.r.size(); ++i) {
-    const double ri = pk.r[i];
-    bool placed = false;
-    for (long attempt = 0; attempt < 10000000 && !placed; ++attempt) {
-      const double x = ri + (L - 2 * ri) * uniform01(rng), y = ri + (L - 2 * ri) * uniform01(rng);
-      const std::size_t cx = cell(x), cy = cell(y);
-      placed = true;
-      for (std::size_t gy = cy > 0 ? cy - 1 : 0; gy <= std::min(g - 1, cy + 1) && placed; ++gy)
-        for (std::size_t gx = cx > 0 ? cx - 1 : 0; gx <= std::min(g - 1, cx + 1) && placed; ++gx)
-          for (std::uint32_t k : cells[gy * g + gx]) {
-            const double dx = x - pk.x[k], dy = y - pk.y[k], s = ri + pk.r[k];
-            if (dx * dx + dy * dy < s * s) {
-              placed = false;
-              break;
-            }
-          }
-      if (placed) {
-        pk.x.push_back(x);
-        pk.y.push_back(y);
-        cells[cy * g + cx].push_back(static_cast<std::uint32_t>(i));
-      }
-    }
-    if (!placed) throw std::runtime_error("could not place disk " + std::to_string(i));
-  }
+  pk = netdem::packing::random_fill(pk.r, {0.0, 0.0, L, L}, rng, 10000000);
   // renumber in Morton order of a grid of side a_max (locality of the particle arrays)
   std::vector<std::pair<std::uint64_t, std::uint32_t>> key(pk.r.size());
   for (std::size_t i = 0; i < key.size(); ++i)
@@ -157,21 +127,6 @@ Packing place(int n, std::uint64_t seed, const LudingParams& lp) {
   return s;
 }
 
-Particles to_particles(const Packing& pk, const LudingParams& lp) {
-  Particles P;
-  for (std::size_t i = 0; i < pk.r.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], lp);
-  return P;
-}
-
-Box fixed_box(const Packing& pk) {
-  Box b;
-  b.x_min = pk.x_min;
-  b.y_min = pk.y_min;
-  b.x_max = pk.x_max;
-  b.y_max = pk.y_max;
-  return b;
-}
-
 struct Stage {
   double nu = 0, sxx = 0, syy = 0, ekin = 0;
 };
@@ -179,7 +134,7 @@ struct Stage {
 /// Walls: fixed at pk's box, or stress-controlled right/top walls (p, m_w = 0.01 kg, gamma_w).
 Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
                 const LudingParams& lp, std::size_t steps, double gamma_w) {
-  Box box = fixed_box(pk);
+  Box box(pk.box);
   if (gamma_w > 0.0)
     for (MovingWall* w : {&box.right, &box.top}) {
       w->mode = WallMode::Stress;
@@ -200,8 +155,7 @@ Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
   pk.y = q.y;
   vx = q.vx;
   vy = q.vy;
-  pk.x_max = s.box().x_max;
-  pk.y_max = s.box().y_max;
+  pk.box = s.box();
   const Stress2 ws = s.wall_stress(), cs = s.contact_stress();
   Stage st;
   st.nu = s.density();
@@ -222,35 +176,35 @@ Packing compress(const Packing& start, const LudingParams& lp) {
   // (a) affine compression of the gas: strain 0.2 % per 200-step chunk, velocities zeroed after
   //     each chunk, up to solid fraction 0.70
   std::size_t steps = 0;
-  while (area / (pk.x_max * pk.y_max) < 0.70) {
+  while (area / (pk.box.x_max * pk.box.y_max) < 0.70) {
     const double f = 0.998;
     for (std::size_t i = 0; i < n; ++i) {
       pk.x[i] *= f;
       pk.y[i] *= f;
     }
-    pk.x_max *= f;
-    pk.y_max *= f;
+    pk.box.x_max *= f;
+    pk.box.y_max *= f;
     std::fill(vx.begin(), vx.end(), 0.0);
     std::fill(vy.begin(), vy.end(), 0.0);
     run_stage(pk, vx, vy, lp, 200, 0.0);
     steps += 200;
   }
   std::fprintf(stderr, "  prepare N=%zu: affine compression to nu = %.4f in %zu steps (%.0f s)\n",
-               n, area / (pk.x_max * pk.y_max), steps, wall_now() - t0);
+               n, area / (pk.box.x_max * pk.box.y_max), steps, wall_now() - t0);
   // (b) stress-controlled right/top walls; gamma_w = p L / (0.5 m/s) keeps the wall speed below
   //     0.5 m/s at every N; one solver, checked every 2000 steps
-  Box box = fixed_box(pk);
+  Box box(pk.box);
   for (MovingWall* w : {&box.right, &box.top}) {
     w->mode = WallMode::Stress;
     w->pressure = kPressure;
     w->mass = 0.01;
-    w->damping = kPressure * pk.x_max / 0.5;
+    w->damping = kPressure * pk.box.x_max / 0.5;
   }
   DynamicOptions o;
   o.model = ContactModel::Linear;
   o.dt = scene_dt(lp);
   o.skin = kSkin;
-  DynamicSolver s(to_particles(pk, lp), lp, box, o);
+  DynamicSolver s(particles_from(pk, lp), lp, box, o);
   double nu_prev = s.density();
   for (int chunk = 0; chunk < 100; ++chunk) {
     s.run(2000);
@@ -270,44 +224,8 @@ Packing compress(const Packing& start, const LudingParams& lp) {
   const Particles& q = s.particles();
   pk.x = q.x;
   pk.y = q.y;
-  pk.x_max = s.box().x_max;
-  pk.y_max = s.box().y_max;
+  pk.box = s.box();
   return pk;
-}
-
-void write_packing(const fs::path& f, const Packing& pk, int n, std::uint64_t seed) {
-  const fs::path tmp = f.string() + ".tmp";
-  {
-    std::ofstream o(tmp);
-    o << "# bench_dem packing v1 N " << n << " seed " << seed << "\n";
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "# box %.17g %.17g %.17g %.17g\n", pk.x_min, pk.y_min, pk.x_max,
-                  pk.y_max);
-    o << buf;
-    for (std::size_t i = 0; i < pk.r.size(); ++i) {
-      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", pk.x[i], pk.y[i], pk.r[i]);
-      o << buf;
-    }
-    if (!o) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, f);
-}
-
-bool read_packing(const fs::path& f, Packing& pk) {
-  std::ifstream in(f);
-  if (!in) return false;
-  std::string line;
-  std::getline(in, line);
-  std::getline(in, line);
-  std::istringstream b(line.substr(6));
-  b >> pk.x_min >> pk.y_min >> pk.x_max >> pk.y_max;
-  double x, y, r;
-  while (in >> x >> y >> r) {
-    pk.x.push_back(x);
-    pk.y.push_back(y);
-    pk.r.push_back(r);
-  }
-  return !pk.r.empty();
 }
 
 /// LAMMPS data file (atom_style sphere: id type diameter density x y z). The density column is
@@ -320,7 +238,7 @@ void write_lammps_data(const fs::path& f, const Packing& pk) {
   std::snprintf(buf, sizeof buf,
                 "%.17g %.17g xlo xhi\n%.17g %.17g ylo yhi\n-0.001 0.001 zlo zhi\n\n"
                 "Atoms # sphere\n\n",
-                pk.x_min, pk.x_max, pk.y_min, pk.y_max);
+                pk.box.x_min, pk.box.x_max, pk.box.y_min, pk.box.y_max);
   o << buf;
   for (std::size_t i = 0; i < pk.r.size(); ++i) {
     std::snprintf(buf, sizeof buf, "%zu 1 %.17g 1.0 %.17g %.17g 0.0\n", i + 1, 2.0 * pk.r[i],
@@ -330,15 +248,17 @@ void write_lammps_data(const fs::path& f, const Packing& pk) {
 }
 
 Packing get_packing(int n, std::uint64_t seed, const fs::path& cache) {
-  const fs::path f = cache / ("pack_N" + std::to_string(n) + "_s" + std::to_string(seed) + ".txt");
+  const fs::path f = cache / ("pack_N" + std::to_string(n) + "_s" + std::to_string(seed) + ".csv");
+  if (fs::exists(f)) return netdem::packing::read_packing_csv(f);
   Packing pk;
-  if (read_packing(f, pk)) return pk;
   const LudingParams lp = linear_params();
   const double t0 = cpu_now();
   pk = compress(place(n, seed, lp), lp);
   std::fprintf(stderr, "  prepared N=%d in %.1f s CPU -> %s\n", n, cpu_now() - t0, f.c_str());
   fs::create_directories(cache);
-  write_packing(f, pk, n, seed);
+  pk.seed = seed;
+  pk.comments = {"bench_dem packing N " + std::to_string(n) + " (SI units, m)"};
+  netdem::packing::write_packing_csv(pk, f);
   return pk;
 }
 
@@ -368,7 +288,7 @@ Row time_model(const Packing& pk, const std::string& model, std::size_t warm, st
   o.dt = scene_dt(linear_params());
   o.skin = kSkin;
   o.temperature = 80.0;
-  DynamicSolver s(to_particles(pk, lp), lp, fixed_box(pk), o);
+  DynamicSolver s(particles_from(pk, lp), lp, Box(pk.box), o);
   s.run(warm);
   const std::size_t b0 = s.rebuilds();
   const double c0 = cpu_now(), w0 = wall_now();

@@ -1,6 +1,7 @@
 // demsolve: explicit 2D DEM with Luding's sintering contact law (Luding, Manetsberger & Muellers 2005).
 //
 //   demsolve prepare [--n 300] [--pressure 100] [--seed 1] [--time 0.2] [--out DIR] [--quiet]
+//                    [--packing FILE [--length-unit M]]
 //   demsolve sinter  [--n 300] [--pressure 100] [--sinter-time 1.0] [--seed 1] [--state FILE] [--out DIR]
 //   demsolve compress --state FILE [--strain-rate 1] [--max-strain 0.1] [--out DIR]
 //   demsolve vibrate  --state FILE [--frequency 100] [--amplitude 2e-4] [--time 0.1] [--out DIR]
@@ -8,6 +9,8 @@
 // prepare (section 4.1): disks with radii uniform in a0[1 - w0, 1 + w0] placed at random (no
 // overlap) in a square box at density 0.35 with random velocities, compressed by the
 // stress-controlled right and top walls (Eq 1) at isotropic pressure p, frictionless, 80 deg C.
+// With --packing FILE the disks of a packing CSV (netsolve pack) at rest instead, every length
+// times --length-unit (default: the file's mean radius mapped onto a0).
 // sinter: the whole protocol of section 4.1 (prepare, heat, sinter, cool, relax; Fig 7).
 // Both write command.txt, parameters.json, timeseries.csv, summary.json, particles_*.vtp,
 // contacts_*.vtp/.csv and state_<phase>.txt after every phase (state.txt at the end).
@@ -28,7 +31,7 @@ int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
   CLI::App app{"demsolve: explicit 2D DEM with Luding's sintering contact law (Luding et al. 2005)"};
   app.require_subcommand(1);
-  SampleArgs sample;
+  netdem::dem::SampleSpec sample;
   RunArgs run;
   netdem::dem::SinterProtocol prot;
   std::string out_prepare, out_sinter;
@@ -41,6 +44,13 @@ int main(int argc, char** argv) {
             ->capture_default_str());
     c->add_option("--seed", sample.seed, "random seed of placement and velocities")->capture_default_str();
     c->add_option("--arrangement", sample.arrangement, "random, or the three-particle control: triangle | line (--n 3)")
+        ->capture_default_str();
+    c->add_option("--packing", sample.packing_file,
+                  "start from the disks of this packing CSV (e.g. netsolve pack's packing.csv), at rest; --n, --seed and "
+                  "--arrangement are then unused");
+    c->add_option("--length-unit", sample.length_unit,
+                  "metres per length unit of the --packing file; 0: the file's mean radius becomes Luding's a0 "
+                  "(Table 1, 1 mm), i.e. a0 / mean r (docs/sintering.md)")
         ->capture_default_str();
     c->add_option("--mu", run.mu, "particle friction once friction is on (Table 1)")->capture_default_str();
     c->add_option("--mu-wall", run.mu_wall_prepare, "wall friction during preparation (switched off at t_heat)")

@@ -1,4 +1,5 @@
-// demsolve run driver (see protocol.hpp and docs/dynamic.md, docs/sintering.md).
+// demsolve prepare / sinter: the options into the library calls of netdem/dynamic/protocol.hpp, and
+// the output files (see protocol.hpp and docs/dynamic.md, docs/sintering.md).
 #include "protocol.hpp"
 
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <cstdio>
 #include <ctime>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -21,35 +21,6 @@ using namespace netdem::dem;
 namespace netdem::app::dem {
 
 namespace {
-
-/// Uniform in [0, 1) from the 64-bit output (platform independent).
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-
-struct Counts {
-  std::size_t pairs = 0, walls = 0;
-};
-
-Counts count_contacts(const DynamicSolver& s, std::vector<std::pair<std::uint32_t, std::uint32_t>>& buf) {
-  s.touching_pairs(buf);
-  return {buf.size(), s.wall_contacts()};
-}
-
-/// Average stress of each particle, p_i = (1 / (2 pi a_i^2)) sum_c f_n d_i (normal forces,
-/// compression positive, N/m like the wall pressure), and its number of contacts.
-void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
-                     std::vector<double>& z) {
-  p.assign(P.size(), 0.0);
-  z.assign(P.size(), 0.0);
-  for (const auto& c : cs) {
-    p[c.i] += c.f_n * c.d_i;
-    z[c.i] += 1.0;
-    if (c.wall < 0) {
-      p[c.j] += c.f_n * c.d_j;
-      z[c.j] += 1.0;
-    }
-  }
-  for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
-}
 
 std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   std::vector<double> ps, z;
@@ -134,194 +105,122 @@ SolverState load_state(const std::string& file, const std::vector<std::string>& 
   return st;
 }
 
-Particles place_sample(const SampleArgs& a, const LudingParams& lp, Box& box) {
-  if (a.n < 1 || a.n > 1000000) throw std::invalid_argument(fmt::format("--n must be in [1, 1e6], got {}", a.n));
-  if (!(a.initial_density > 0.0 && a.initial_density < 0.6))
-    throw std::invalid_argument(fmt::format("initial density must be in (0, 0.6), got {}", a.initial_density));
-  Particles P;
-  if (a.arrangement != "random") {  // LMM05 section 4.1.3 control: three equal disks
-    if (a.n != 3) throw std::invalid_argument("--arrangement triangle|line needs --n 3");
-    const double r = lp.a0;
-    if (a.arrangement == "line") {
-      box.x_min = box.y_min = 0.0;
-      box.x_max = 6.0 * r;
-      box.y_max = 2.0 * r;
-      for (int k = 0; k < 3; ++k) P.add((1.0 + 2.0 * k) * r, r, r, lp);
-    } else if (a.arrangement == "triangle") {
-      // two on the floor, one on top; the box closes around them
-      const double h = std::sqrt(3.0) * r;
-      box.x_min = box.y_min = 0.0;
-      box.x_max = 4.0 * r;
-      box.y_max = 2.0 * r + h;
-      P.add(r, r, r, lp);
-      P.add(3.0 * r, r, r, lp);
-      P.add(2.0 * r, r + h, r, lp);
-    } else {
-      throw std::invalid_argument("--arrangement must be random, triangle or line, got '" + a.arrangement + "'");
-    }
-    return P;
-  }
-  std::mt19937_64 rng(a.seed);
-  std::vector<double> r(static_cast<std::size_t>(a.n));
-  double area = 0.0;
-  for (auto& ri : r) {  // draw order: all radii first, then positions, then velocities
-    ri = lp.a0 * (1.0 - lp.w0 + 2.0 * lp.w0 * uniform01(rng));
-    area += std::numbers::pi * ri * ri;
-  }
-  const double L = std::sqrt(area / a.initial_density);
-  box.x_min = box.y_min = 0.0;
-  box.x_max = box.y_max = L;
-  // cell grid for the overlap check (cell >= largest diameter)
-  const double cell = 2.0 * lp.a0 * (1.0 + lp.w0);
-  const auto nc = static_cast<std::size_t>(std::max(1.0, std::floor(L / cell)));
-  std::vector<std::vector<std::size_t>> grid(nc * nc);
-  auto cell_of = [&](double v) { return std::min(nc - 1, static_cast<std::size_t>(v / L * static_cast<double>(nc))); };
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    bool placed = false;
-    for (int attempt = 0; attempt < 100000 && !placed; ++attempt) {
-      const double x = r[i] + (L - 2 * r[i]) * uniform01(rng), y = r[i] + (L - 2 * r[i]) * uniform01(rng);
-      const std::size_t cx = cell_of(x), cy = cell_of(y);
-      placed = true;
-      for (std::size_t gy = cy > 0 ? cy - 1 : 0; gy <= std::min(nc - 1, cy + 1) && placed; ++gy)
-        for (std::size_t gx = cx > 0 ? cx - 1 : 0; gx <= std::min(nc - 1, cx + 1) && placed; ++gx)
-          for (std::size_t k : grid[gy * nc + gx])
-            if (std::hypot(x - P.x[k], y - P.y[k]) < r[i] + P.radius[k]) {
-              placed = false;
-              break;
-            }
-      if (placed) {
-        grid[cy * nc + cx].push_back(P.add(x, y, r[i], lp));
-      }
-    }
-    if (!placed)
-      throw std::runtime_error(fmt::format("could not place disk {} without overlap at density {}", i, a.initial_density));
-  }
-  const double v0 = 0.01;  // [m/s]
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    P.vx[i] = v0 * (2.0 * uniform01(rng) - 1.0);
-    P.vy[i] = v0 * (2.0 * uniform01(rng) - 1.0);
-  }
-  return P;
-}
+namespace {
 
-int run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const RunArgs& a,
-               const fs::path& out, nlohmann::json& summary) {
-  const double dt = s.dt();
-  const std::size_t n = s.particles().size();
-  const double pressure = s.box().right.pressure > 0.0 ? s.box().right.pressure : a.pressure;
-  auto step_of = [dt](double t) { return static_cast<std::int64_t>(std::ceil(t / dt - 1e-6)); };
-  const std::int64_t k0 = static_cast<std::int64_t>(std::llround(s.time() / dt));
-  const std::int64_t K = step_of(phase_end(phases, phases.size() - 1));
-  std::vector<std::int64_t> ends;
-  for (std::size_t p = 0; p < phases.size(); ++p) ends.push_back(step_of(phase_end(phases, p)));
-  const std::int64_t total = std::max<std::int64_t>(0, K - k0);
-  const std::int64_t every = std::max<std::int64_t>(1, total / 3000);
-  const double k1c = s.params().k1();
-  const LudingParams base = s.params();
+/// The output of a protocol run: timeseries rows, and per phase its state, snapshot and summary.
+class PhaseWriter final : public PhaseObserver {
+ public:
+  PhaseWriter(const DynamicSolver& s, const std::vector<SinterPhase>& phases, double pressure, const fs::path& out,
+              std::int64_t total, bool quiet)
+      : phases_(phases),
+        pressure_(pressure),
+        k1c_(s.params().k1()),
+        out_(out),
+        progress_("demsolve", static_cast<double>(total), quiet),
+        cpu_phase_(cpu_now()),
+        cpu_start_(cpu_phase_),
+        t_start_(std::chrono::steady_clock::now()),
+        t_phase_(t_start_) {
+    csv_ =
+        "t,phase,T,k1,nu,C,C_without_walls,sxx,szz,sxx_over_p,szz_over_p,sxx_contacts,szz_contacts,"
+        "Ekin,box_width,box_height\n";
+  }
 
-  std::string csv =
-      "t,phase,T,k1,nu,C,C_without_walls,sxx,szz,sxx_over_p,szz_over_p,sxx_contacts,szz_contacts,"
-      "Ekin,box_width,box_height\n";
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> buf;
-  std::vector<ContactInfo> cs;
-  std::size_t cur_phase = schedule_at(phases, s.time()).phase;
-  auto row = [&] {
-    const Counts c = count_contacts(s, buf);
+  void sample(const DynamicSolver& s, std::size_t phase, std::int64_t steps) override {
+    if (steps == 0) write_snapshot(s, out_, "initial", cs_);
+    const ContactCounts c = count_contacts(s, buf_);
     const auto ws = s.wall_stress();
     const auto cst = s.contact_stress();
-    const double nn = static_cast<double>(n);
-    csv += fmt::format("{:.9g},{},{:.6g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g}\n",
-                       s.time(), phases[cur_phase].name, s.thermal().T, s.thermal().k1_Tt / k1c, s.density(),
-                       (2.0 * static_cast<double>(c.pairs) + static_cast<double>(c.walls)) / nn,
-                       2.0 * static_cast<double>(c.pairs) / nn, ws.xx, ws.yy, ws.xx / pressure, ws.yy / pressure,
-                       cst.xx, cst.yy, s.energies().kinetic, s.box().x_max - s.box().x_min,
-                       s.box().y_max - s.box().y_min);
-  };
-  auto snapshot = [&](const std::string& label) { write_snapshot(s, out, label, cs); };
-  auto cpu_now = [] { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; };
-  double cpu_phase = cpu_now();
-  const double cpu_start = cpu_phase;
-  auto phase_json = [&](const std::string& name, double wall_s, double cpu_s) {
-    const Counts c = count_contacts(s, buf);
-    const auto ws = s.wall_stress();
-    const double nn = static_cast<double>(n);
-    return nlohmann::json{{"phase", name},
-                           {"t", s.time()},
-                           {"T", s.thermal().T},
-                           {"k1_over_k1", s.thermal().k1_Tt / k1c},
-                           {"nu", s.density()},
-                           {"C", (2.0 * static_cast<double>(c.pairs) + static_cast<double>(c.walls)) / nn},
-                           {"C_without_walls", 2.0 * static_cast<double>(c.pairs) / nn},
-                           {"sxx_over_p", ws.xx / pressure},
-                           {"szz_over_p", ws.yy / pressure},
-                           {"Ekin_J", s.energies().kinetic},
-                           {"wall_time_s", wall_s},
-                           {"cpu_time_s", cpu_s}};
-  };
-
-  snapshot("initial");
-  row();
-  bool friction_known = false, friction = false;
-  Progress progress("demsolve", static_cast<double>(total), a.quiet);
-  const auto t_start = std::chrono::steady_clock::now();
-  auto t_phase = t_start;
-  nlohmann::json phase_list = nlohmann::json::array();
-  std::int64_t steps_done = 0;
-  const double t_final = phase_end(phases, phases.size() - 1);
-  for (std::int64_t k = k0 + 1; k <= K; ++k) {
-    // the last step may end a fraction of dt past the protocol: it still belongs to the last
-    // phase of non-zero length (zero-length trailing phases must not change T)
-    const double t = std::min(static_cast<double>(k) * dt, t_final);
-    const ScheduleAt at = schedule_at(phases, t);
-    cur_phase = at.phase;
-    if (!friction_known || at.friction != friction) {  // LMM05 4.1: mu on and mu_w off at t_heat
-      LudingParams q = base;
-      q.mu = at.friction ? a.mu : 0.0;
-      q.mu_wall = at.friction ? 0.0 : a.mu_wall_prepare;
-      s.set_params(q);
-      friction = at.friction;
-      friction_known = true;
-    }
-    s.advance_temperature(at.T, dt, at.t0);
-    s.step();
-    ++steps_done;
-    if ((k - k0) % every == 0) {
-      row();
-      progress.update(static_cast<double>(k - k0));
-    }
-    for (std::size_t p = 0; p < phases.size(); ++p) {
-      if (ends[p] != k) continue;
-      const auto now = std::chrono::steady_clock::now();
-      const std::string& name = phases[p].name;
-      write_file_atomic(out / fmt::format("state_{}.txt", name), format_state(s.state()));
-      snapshot(name);
-      const double cpu = cpu_now();
-      phase_list.push_back(phase_json(name, std::chrono::duration<double>(now - t_phase).count(), cpu - cpu_phase));
-      t_phase = now;
-      cpu_phase = cpu;
-    }
+    const std::size_t n = s.particles().size();
+    csv_ += fmt::format("{:.9g},{},{:.6g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g}\n",
+                        s.time(), phases_[phase].name, s.thermal().T, s.thermal().k1_Tt / k1c_, s.density(),
+                        c.coordination(n), c.coordination_without_walls(n), ws.xx, ws.yy, ws.xx / pressure_,
+                        ws.yy / pressure_, cst.xx, cst.yy, s.energies().kinetic, s.box().x_max - s.box().x_min,
+                        s.box().y_max - s.box().y_min);
+    if (steps > 0) progress_.update(static_cast<double>(steps));
   }
-  progress.finish();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  if ((K - k0) % every != 0 || total == 0) row();
-  write_file_atomic(out / "timeseries.csv", csv);
-  write_file_atomic(out / "state.txt", format_state(s.state()));
-  snapshot("final");
-  summary["phases"] = phase_list;
-  const double cpu = cpu_now() - cpu_start;
-  summary["final"] = phase_json("final", wall, cpu);
-  summary["cpu_time_s"] = cpu;
-  summary["particle_steps_per_cpu_s"] = static_cast<double>(steps_done) * static_cast<double>(n) / std::max(cpu, 1e-9);
-  summary["steps"] = steps_done;
-  summary["dt_s"] = dt;
-  summary["wall_time_s"] = wall;
-  summary["particle_steps_per_s"] = static_cast<double>(steps_done) * static_cast<double>(n) / std::max(wall, 1e-9);
-  summary["neighbour_rebuilds"] = s.rebuilds();
-  summary["mean_radius_m"] = mean_radius(s.particles());
-  return 0;
+
+  void phase_end(const DynamicSolver& s, std::size_t p) override {
+    const auto now = std::chrono::steady_clock::now();
+    const std::string& name = phases_[p].name;
+    write_file_atomic(out_ / fmt::format("state_{}.txt", name), format_state(s.state()));
+    write_snapshot(s, out_, name, cs_);
+    const double cpu = cpu_now();
+    phase_list_.push_back(phase_json(s, name, std::chrono::duration<double>(now - t_phase_).count(), cpu - cpu_phase_));
+    t_phase_ = now;
+    cpu_phase_ = cpu;
+  }
+
+  /// timeseries.csv, state.txt, the final snapshot and the summary entries.
+  void finish(const DynamicSolver& s, const PhaseRun& run, nlohmann::json& summary) {
+    progress_.finish();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
+    write_file_atomic(out_ / "timeseries.csv", csv_);
+    write_file_atomic(out_ / "state.txt", format_state(s.state()));
+    write_snapshot(s, out_, "final", cs_);
+    const auto n = static_cast<double>(s.particles().size());
+    summary["phases"] = phase_list_;
+    const double cpu = cpu_now() - cpu_start_;
+    summary["final"] = phase_json(s, "final", wall, cpu);
+    summary["cpu_time_s"] = cpu;
+    summary["particle_steps_per_cpu_s"] = static_cast<double>(run.steps) * n / std::max(cpu, 1e-9);
+    summary["steps"] = run.steps;
+    summary["dt_s"] = s.dt();
+    summary["wall_time_s"] = wall;
+    summary["particle_steps_per_s"] = static_cast<double>(run.steps) * n / std::max(wall, 1e-9);
+    summary["neighbour_rebuilds"] = s.rebuilds();
+    summary["mean_radius_m"] = mean_radius(s.particles());
+  }
+
+ private:
+  static double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+  nlohmann::json phase_json(const DynamicSolver& s, const std::string& name, double wall_s, double cpu_s) {
+    const ContactCounts c = count_contacts(s, buf_);
+    const auto ws = s.wall_stress();
+    const std::size_t n = s.particles().size();
+    return nlohmann::json{{"phase", name},
+                          {"t", s.time()},
+                          {"T", s.thermal().T},
+                          {"k1_over_k1", s.thermal().k1_Tt / k1c_},
+                          {"nu", s.density()},
+                          {"C", c.coordination(n)},
+                          {"C_without_walls", c.coordination_without_walls(n)},
+                          {"sxx_over_p", ws.xx / pressure_},
+                          {"szz_over_p", ws.yy / pressure_},
+                          {"Ekin_J", s.energies().kinetic},
+                          {"wall_time_s", wall_s},
+                          {"cpu_time_s", cpu_s}};
+  }
+
+  const std::vector<SinterPhase>& phases_;
+  double pressure_, k1c_;
+  fs::path out_;
+  Progress progress_;
+  double cpu_phase_, cpu_start_;
+  std::chrono::steady_clock::time_point t_start_, t_phase_;
+  std::string csv_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> buf_;
+  std::vector<ContactInfo> cs_;
+  nlohmann::json phase_list_ = nlohmann::json::array();
+};
+
+/// Runs the phases from the solver's current time to the end of the last phase, writing
+/// timeseries.csv, per-phase state/vtp/contact files and filling `summary`.
+void run_and_write_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const RunArgs& a,
+                          const fs::path& out, nlohmann::json& summary) {
+  const double pressure = s.box().right.pressure > 0.0 ? s.box().right.pressure : a.pressure;
+  const double dt = s.dt();
+  const auto k0 = static_cast<std::int64_t>(std::llround(s.time() / dt));
+  const auto K = static_cast<std::int64_t>(std::ceil(phase_end(phases, phases.size() - 1) / dt - 1e-6));
+  PhaseWriter writer(s, phases, pressure, out, std::max<std::int64_t>(0, K - k0), a.quiet);
+  const PhaseRun run = netdem::dem::run_phases(s, phases, {a.mu, a.mu_wall_prepare}, 3000, writer);
+  writer.finish(s, run, summary);
 }
 
-int run_protocol(const std::string& command, const SampleArgs& sample, const RunArgs& args,
+}  // namespace
+
+int run_protocol(const std::string& command, const SampleSpec& sample, const RunArgs& args,
                  const SinterProtocol& protocol, bool prepare_only, const fs::path& out) {
   if (!(std::isfinite(args.pressure) && args.pressure > 0.0))
     throw std::invalid_argument(fmt::format("--pressure must be a positive number of N/m, got {}", args.pressure));
@@ -353,17 +252,16 @@ int run_protocol(const std::string& command, const SampleArgs& sample, const Run
     LudingParams lp;
     apply_overrides(lp, args.param_overrides);
     Box box;
-    Particles P = place_sample(sample, lp, box);
-    const double p = args.pressure;
-    for (MovingWall* w : {&box.right, &box.top}) {
-      w->mode = WallMode::Stress;
-      w->pressure = p;
-      w->mass = lp.m_wall;
-      w->damping = lp.gamma_wall;
-    }
+    double length_unit = 0.0;
+    Particles P = make_sample(sample, lp, box, &length_unit);
+    set_stress_walls(box, args.pressure, lp);
     s = std::make_unique<DynamicSolver>(std::move(P), lp, box, opt);
     summary["seed"] = sample.seed;
     summary["arrangement"] = sample.arrangement;
+    if (!sample.packing_file.empty()) {
+      summary["packing_file"] = sample.packing_file;
+      summary["length_unit_m"] = length_unit;
+    }
   }
   start_run_dir(out);
   write_file_atomic(out / "command.txt", command + "\n");
@@ -388,7 +286,7 @@ int run_protocol(const std::string& command, const SampleArgs& sample, const Run
   summary["particles"] = s->particles().size();
   summary["pressure_N_per_m"] = pressure;
   summary["steps_per_contact_lightest_pair"] = s->time_step().steps_per_contact_lightest;
-  run_phases(*s, phases, args, out, summary);
+  run_and_write_phases(*s, phases, args, out, summary);
   // densification nu(t_f) / nu(t_heat) - 1 (LMM05 section 4.1.3)
   for (const auto& ph : summary["phases"])
     if (!prepare_only && ph["phase"] == "prepare") summary["densification"] = summary["final"]["nu"].get<double>() / ph["nu"].get<double>() - 1.0;

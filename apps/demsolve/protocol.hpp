@@ -1,7 +1,8 @@
 #pragma once
-// demsolve run driver: a sequence of temperature/friction phases (LMM05 section 4.1) on one
-// DynamicSolver, with the time series, snapshots, contact distributions and a restartable state
-// after every phase, all under one output folder.
+// demsolve's commands: the parsed options, the calls into netdem/dynamic/protocol.hpp (the
+// sintering protocol of LMM05 section 4.1) and material_tests.hpp (section 4.4), and the output:
+// time series, snapshots, contact distributions and a restartable state after every phase, all
+// under one output folder.
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -9,19 +10,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "netdem/dynamic/protocol.hpp"
 #include "netdem/dynamic/schedule.hpp"
 #include "netdem/dynamic/solver.hpp"
 #include "output.hpp"
 
 namespace netdem::app::dem {
-
-/// Sample: random disks in a square box (prepare/sinter without --state).
-struct SampleArgs {
-  int n = 300;
-  double initial_density = 0.35;
-  std::uint64_t seed = 1;
-  std::string arrangement = "random";  ///< random | triangle | line (three-particle control)
-};
 
 struct RunArgs {
   double pressure = 100.0;  ///< isotropic wall pressure p [N/m] (Eq 1)
@@ -34,11 +28,6 @@ struct RunArgs {
   std::vector<std::string> param_overrides;  ///< NAME=VALUE for LudingParams
 };
 
-/// Random non-overlapping disks (radii uniform in a0 [1 - w0, 1 + w0] at T_radius_ref) with random
-/// velocities in a square box of the given solid fraction; or the three-particle arrangements.
-netdem::dem::Particles place_sample(const SampleArgs& a, const netdem::dem::LudingParams& lp,
-                                    netdem::dem::Box& box);
-
 /// Applies NAME=VALUE overrides; throws std::invalid_argument naming the bad item.
 void apply_overrides(netdem::dem::LudingParams& p, const std::vector<std::string>& items);
 
@@ -50,11 +39,6 @@ void write_snapshot(const netdem::dem::DynamicSolver& s, const std::filesystem::
 
 /// Loads a state file with NAME=VALUE overrides applied to its contact parameters.
 netdem::dem::SolverState load_state(const std::string& file, const std::vector<std::string>& overrides);
-
-/// Runs the phases from the solver's current time to the end of the last phase, writing
-/// timeseries.csv, per-phase state/vtp/contact files and filling `summary`. Returns 0.
-int run_phases(netdem::dem::DynamicSolver& s, const std::vector<netdem::dem::SinterPhase>& phases,
-               const RunArgs& a, const std::filesystem::path& out, nlohmann::json& summary);
 
 /// Everything for `demsolve prepare` / `demsolve sinter`: builds or loads the sample and runs.
 /// demsolve compress: the bi-axial test of LMM05 section 4.4.1 on a state.
@@ -81,7 +65,7 @@ struct VibrateArgs {
 };
 int run_vibrate(const std::string& command, const VibrateArgs& a, const std::filesystem::path& out);
 
-int run_protocol(const std::string& command, const SampleArgs& sample, const RunArgs& args,
+int run_protocol(const std::string& command, const netdem::dem::SampleSpec& sample, const RunArgs& args,
                  const netdem::dem::SinterProtocol& protocol, bool prepare_only,
                  const std::filesystem::path& out);
 

@@ -105,6 +105,21 @@ std::size_t Particles::add(double px, double py, double r, const LudingParams& p
   return x.size() - 1;
 }
 
+Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
+  Particles P;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
+  return P;
+}
+
+packing::Packing to_packing(const Particles& P, const packing::Box& box) {
+  packing::Packing pk;
+  pk.x = P.x;
+  pk.y = P.y;
+  pk.r = P.radius;
+  pk.box = box;
+  return pk;
+}
+
 void DynamicOptions::validate() const {
   if (!(steps_per_contact > 0.0)) fail("DynamicOptions: steps_per_contact must be > 0");
   if (!(min_steps_per_contact >= 0.0)) fail("DynamicOptions: min_steps_per_contact must be >= 0");
@@ -280,54 +295,18 @@ void DynamicSolver::build_table() {
   build_wall_list();
   new_key_.clear();
   if (n >= 2) {
-    double xlo = P_.x[0], xhi = xlo, ylo = P_.y[0], yhi = ylo, rmax = 0.0;
+    double rmax = 0.0;
+    for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.radius[i]);
+    // cell side >= largest interaction range 2 rmax + skin (3 x 3 cells per query); <= ~4 n cells
+    grid_.rebuild(P_.x, P_.y, 2.0 * rmax + skin_);
     for (std::size_t i = 0; i < n; ++i) {
-      xlo = std::min(xlo, P_.x[i]);
-      xhi = std::max(xhi, P_.x[i]);
-      ylo = std::min(ylo, P_.y[i]);
-      yhi = std::max(yhi, P_.y[i]);
-      rmax = std::max(rmax, P_.radius[i]);
-    }
-    // cell side >= largest interaction range 2 rmax + skin; at most ~4 n cells
-    double c = 2.0 * rmax + skin_;
-    const double cmin =
-        std::sqrt((xhi - xlo + c) * (yhi - ylo + c) / (4.0 * static_cast<double>(n)));
-    c = std::max(c, cmin);
-    const std::size_t nx = static_cast<std::size_t>((xhi - xlo) / c) + 1;
-    const std::size_t ny = static_cast<std::size_t>((yhi - ylo) / c) + 1;
-    auto cell_of = [&](std::size_t i, std::size_t& cx, std::size_t& cy) {
-      cx = std::min(nx - 1, static_cast<std::size_t>((P_.x[i] - xlo) / c));
-      cy = std::min(ny - 1, static_cast<std::size_t>((P_.y[i] - ylo) / c));
-    };
-    cell_start_.assign(nx * ny + 1, 0);
-    cell_items_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {  // counting sort of particles by cell
-      std::size_t cx, cy;
-      cell_of(i, cx, cy);
-      ++cell_start_[cy * nx + cx + 1];
-    }
-    for (std::size_t k = 0; k < nx * ny; ++k) cell_start_[k + 1] += cell_start_[k];
-    cell_cursor_.assign(cell_start_.begin(), cell_start_.end() - 1);
-    std::vector<std::uint32_t>& cursor = cell_cursor_;
-    for (std::size_t i = 0; i < n; ++i) {
-      std::size_t cx, cy;
-      cell_of(i, cx, cy);
-      cell_items_[cursor[cy * nx + cx]++] = static_cast<std::uint32_t>(i);
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      std::size_t cx, cy;
-      cell_of(i, cx, cy);
-      for (std::size_t gy = (cy > 0 ? cy - 1 : 0); gy <= std::min(ny - 1, cy + 1); ++gy)
-        for (std::size_t gx = (cx > 0 ? cx - 1 : 0); gx <= std::min(nx - 1, cx + 1); ++gx)
-          for (std::uint32_t k = cell_start_[gy * nx + gx]; k < cell_start_[gy * nx + gx + 1];
-               ++k) {
-            const std::uint32_t j = cell_items_[k];
-            if (j <= i) continue;
-            const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
-            const double range = P_.radius[i] + P_.radius[j] + skin_;
-            if (dx * dx + dy * dy < range * range)
-              new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
-          }
+      const double xi = P_.x[i], yi = P_.y[i], ri = P_.radius[i];
+      grid_.for_each_near(xi, yi, ri + rmax + skin_, [&](std::uint32_t j) {
+        if (j <= i) return;
+        const double dx = P_.x[j] - xi, dy = P_.y[j] - yi;
+        const double range = ri + P_.radius[j] + skin_;
+        if (dx * dx + dy * dy < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+      });
     }
     std::sort(new_key_.begin(), new_key_.end());
   }

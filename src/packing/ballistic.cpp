@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "netdem/packing/cell_grid.hpp"
+
 namespace netdem::packing {
 
 void DepositionOptions::validate() const {
@@ -79,12 +81,9 @@ class Depositor {
   Depositor(double w, double h, double rmax, Packing& out)
       : out_(out),
         w_(w),
-        h_(h),
         rmax_(rmax),
         cell_(2 * rmax_),
-        nx_(std::max(1L, static_cast<long>(std::ceil(w_ / cell_)))),
-        ny_(std::max(1L, static_cast<long>(std::ceil(h_ / cell_)))),
-        cells_(static_cast<std::size_t>(nx_ * ny_)) {}
+        grid_(layout(w, h, cell_)) {}
 
   /// Settles a disk of radius r dropped at abscissa x0 (section 2.2: path of steepest descent).
   void settle(double r, double x0, double& px, double& py) {
@@ -110,17 +109,22 @@ class Depositor {
     out_.x.push_back(x);
     out_.y.push_back(y);
     out_.r.push_back(r);
-    cells_[static_cast<std::size_t>(row(y) * nx_ + col(x))].push_back(id);
+    grid_.insert(static_cast<std::uint32_t>(id), x, y);
     top_row_ = std::max(top_row_, row(y));
   }
 
  private:
-  long col(double x) const { return std::clamp(static_cast<long>(std::floor(x / cell_)), 0L, nx_ - 1); }
-  long row(double y) const {
-    if (!(y < static_cast<double>(ny_) * cell_)) return ny_ - 1;  // also +inf
-    return std::max(0L, static_cast<long>(std::floor(y / cell_)));
+  /// Cells of side 2 r_max from the origin, ceil(w / cell) x ceil(h / cell) (the fall's row bound
+  /// below relies on the rows starting at y = 0).
+  static GridLayout layout(double w, double h, double cell) {
+    GridLayout g;
+    g.cell = cell;
+    g.count = {std::max(1L, static_cast<long>(std::ceil(w / cell))), std::max(1L, static_cast<long>(std::ceil(h / cell)))};
+    return g;
   }
-  const std::vector<int>& cell(long c, long r) const { return cells_[static_cast<std::size_t>(r * nx_ + c)]; }
+  long col(double x) const { return grid_.layout().coord(0, x); }
+  long row(double y) const { return grid_.layout().coord(1, y); }
+  const std::vector<std::uint32_t>& cell(long c, long r) const { return grid_.cell(c, r); }
   bool in_contact(int id) const {
     return std::any_of(contacts_.begin(), contacts_.end(), [id](const Contact& c) { return c.id == id; });
   }
@@ -157,16 +161,13 @@ class Depositor {
   void gather(double px, double py, double r) {
     contacts_.clear();
     const double reach = (r + rmax_) * (1 + kContactTol);
-    const long c0 = col(px - reach), c1 = col(px + reach), r0 = row(py - reach), r1 = row(py + reach);
-    for (long rw = r0; rw <= r1; ++rw)
-      for (long c = c0; c <= c1; ++c)
-        for (int k : cell(c, rw)) {
-          const double dx = px - xs(k), dy = py - ys(k), lim = (r + rs(k)) * (1 + kContactTol);
-          const double d2 = dx * dx + dy * dy;
-          if (d2 > lim * lim) continue;
-          const double d = std::sqrt(d2);
-          contacts_.push_back({k, dx / d, dy / d});
-        }
+    grid_.for_each_near(px, py, reach, [&](int k) {
+      const double dx = px - xs(k), dy = py - ys(k), lim = (r + rs(k)) * (1 + kContactTol);
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > lim * lim) return;
+      const double d = std::sqrt(d2);
+      contacts_.push_back({k, dx / d, dy / d});
+    });
     if (px - r <= kContactTol * r) contacts_.push_back({kLeftWall, 1.0, 0.0});
     if (w_ - r - px <= kContactTol * r) contacts_.push_back({kRightWall, -1.0, 0.0});
     if (py - r <= kContactTol * r) contacts_.push_back({kFloor, 0.0, 1.0});
@@ -220,33 +221,30 @@ class Depositor {
     double best = kPi / 2;
     int event = kEquator;
     const double reach = l + r + rmax_;
-    const long c0 = col(xj - reach), c1 = col(xj + reach), r0 = row(yj - r - rmax_), r1 = row(yj + reach);
-    for (long rw = r0; rw <= r1; ++rw)
-      for (long c = c0; c <= c1; ++c)
-        for (int k : cell(c, rw)) {
-          if (k == j) continue;
-          const double dx = xs(k) - xj, dy = ys(k) - yj, m = r + rs(k), d2 = dx * dx + dy * dy;
-          if (d2 >= (l + m) * (l + m)) continue;
-          const double d = std::sqrt(d2);
-          const double cb = (l * l + d2 - m * m) / (2 * l * d);
-          if (cb >= 1) continue;  // tangent from outside: grazing, no hit
-          const double beta = std::acos(std::max(cb, -1.0));  // half-angle of the blocked arc
-          if (beta <= kGrazing) continue;  // grazing (overlap < 1e-12 (r + r_k)); see kGrazing
-          const double alpha = s * std::atan2(dx, dy);         // direction of k, in psi
-          const double to_entry = wrap_2pi(alpha - beta - psi0), to_exit = wrap_2pi(alpha + beta - psi0);
-          if (in_contact(k)) {
-            // At an end of k's blocked arc. At its entry end we move tangentially (decide() found
-            // the motion admissible): no event. At its exit end we move away, and re-enter after
-            // 2 pi - 2 beta, which can lie on the path for large radius ratios.
-            if (to_entry < kArcEnd || to_entry > 2 * kPi - kArcEnd) continue;
-          } else if (to_exit < to_entry) {
-            continue;  // inside the blocked arc: only by rounding
-          }
-          if (psi0 + to_entry < best) {
-            best = psi0 + to_entry;
-            event = k;
-          }
-        }
+    grid_.for_each_in(xj - reach, xj + reach, yj - r - rmax_, yj + reach, [&](int k) {
+      if (k == j) return;
+      const double dx = xs(k) - xj, dy = ys(k) - yj, m = r + rs(k), d2 = dx * dx + dy * dy;
+      if (d2 >= (l + m) * (l + m)) return;
+      const double d = std::sqrt(d2);
+      const double cb = (l * l + d2 - m * m) / (2 * l * d);
+      if (cb >= 1) return;  // tangent from outside: grazing, no hit
+      const double beta = std::acos(std::max(cb, -1.0));  // half-angle of the blocked arc
+      if (beta <= kGrazing) return;  // grazing (overlap < 1e-12 (r + r_k)); see kGrazing
+      const double alpha = s * std::atan2(dx, dy);  // direction of k, in psi
+      const double to_entry = wrap_2pi(alpha - beta - psi0), to_exit = wrap_2pi(alpha + beta - psi0);
+      if (in_contact(k)) {
+        // At an end of k's blocked arc. At its entry end we move tangentially (decide() found
+        // the motion admissible): no event. At its exit end we move away, and re-enter after
+        // 2 pi - 2 beta, which can lie on the path for large radius ratios.
+        if (to_entry < kArcEnd || to_entry > 2 * kPi - kArcEnd) return;
+      } else if (to_exit < to_entry) {
+        return;  // inside the blocked arc: only by rounding
+      }
+      if (psi0 + to_entry < best) {
+        best = psi0 + to_entry;
+        event = k;
+      }
+    });
     const int wall = s > 0 ? kRightWall : kLeftWall;
     const double xw = s > 0 ? w_ - r : r;
     if (!in_contact(wall) && s * (xw - xj) < l) {
@@ -284,10 +282,9 @@ class Depositor {
   }
 
   Packing& out_;
-  double w_, h_, rmax_, cell_;
-  long nx_, ny_;
+  double w_, rmax_, cell_;
+  GrowingCellGrid grid_;
   long top_row_ = -1;
-  std::vector<std::vector<int>> cells_;
   std::vector<Contact> contacts_;  // reused workspace
 };
 

@@ -10,7 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "cell_grid.hpp"
+#include "netdem/packing/cell_grid.hpp"
 
 namespace netdem::packing {
 
@@ -52,7 +52,7 @@ std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol) {
   if (n < 2) return pairs;
   const double rmax = max_radius(p);
   const double f = 1.0 + tol;
-  const detail::StaticGrid grid(p.x, p.y, 2.0 * rmax * f);
+  const CellGrid grid(p.x, p.y, 2.0 * rmax * f);
   for (std::size_t i = 0; i < n; ++i) {
     grid.for_each_near(p.x[i], p.y[i], (p.r[i] + rmax) * f, [&](int j) {
       if (static_cast<std::size_t>(j) <= i) return;
@@ -118,7 +118,7 @@ std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol) {
   // Step 2, exact test for the survivors: the owner of the envelope can only change at the ends of
   // the half-circles and at circle-circle intersections, so testing the midpoint of every interval
   // between consecutive breakpoints is exact (up to tol).
-  const detail::StaticGrid grid(p.x, p.y, 2.0 * rmax);
+  const CellGrid grid(p.x, p.y, 2.0 * rmax);
   std::vector<int> above;
   std::vector<double> brk;
   for (std::size_t i = 0; i < n; ++i) {
@@ -191,7 +191,7 @@ void validate(const Packing& p) {
   }
   // Duplicates: centres closer than 1e-12 (r_i + r_j). Report the pair with the smallest later id.
   const double rmax = max_radius(p);
-  const detail::StaticGrid grid(p.x, p.y, 2.0 * rmax);
+  const CellGrid grid(p.x, p.y, 2.0 * rmax);
   std::size_t dup = p.size(), first = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     grid.for_each_near(p.x[i], p.y[i], 2e-12 * (p.r[i] + rmax), [&](int j) {

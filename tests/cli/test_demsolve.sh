@@ -3,9 +3,12 @@
 # non-zero exit and no output folder; short good runs write every documented file, are
 # deterministic, and a sinter run restarted from its own state after preparation ends in the
 # same final state, bit for bit.
-# usage: test_demsolve.sh PATH/TO/demsolve
+# With netsolve given, a netsolve packing read by demsolve prepare --packing starts the DEM at the
+# file's positions times the documented length unit.
+# usage: test_demsolve.sh PATH/TO/demsolve [PATH/TO/netsolve]
 set -u
 ds="$1"
+ns="${2:-}"
 tool="$1"
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
@@ -69,6 +72,47 @@ result restart_from_prepare_is_exact $?
   /usr/bin/env python3 -c "import json,sys; f=json.load(open('$tmp/z/summary.json'))['final']; sys.exit(0 if f['T'] == 140.0 else 1)"
 result zero_length_phases_end_hot $?
 check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
+
+# a packing CSV (netsolve's format) as the starting sample
+printf '# box 0 0 10 10\nid,x,y,r\n0,2,2,1\n1,5,5,1.5\n' >"$tmp/two.csv"
+printf '# box 0 0 10 10\nid,x,y,r\n0,2,2,1\n1,9,5,1.5\n' >"$tmp/through_wall.csv"
+printf '# box 0 0 10 10\nid,x,y,r\n0,2,2,1\n1,5,5,0\n' >"$tmp/zero_radius.csv"
+check_bad packing_missing "cannot open" prepare --packing "$tmp/none.csv"
+check_bad packing_zero_radius "r <= 0" prepare --packing "$tmp/zero_radius.csv"
+check_bad packing_through_wall "side wall" prepare --packing "$tmp/through_wall.csv"
+check_bad packing_radius_range "length-unit" prepare --packing "$tmp/two.csv" --length-unit 1
+check_bad packing_bad_unit "length-unit" prepare --packing "$tmp/two.csv" --length-unit -1
+if [ -n "$ns" ]; then
+  "$ns" pack --width 12 --seed 4 --out "$tmp/np" >/dev/null 2>"$tmp/stderr" &&
+    "$ds" prepare --packing "$tmp/np/packing.csv" --length-unit 2e-4 --time 1e-9 --quiet --out "$tmp/dp" \
+      >/dev/null 2>"$tmp/stderr" &&
+    grep -q '"length_unit_m": 0.0002' "$tmp/dp/summary.json" &&
+    /usr/bin/env python3 - "$tmp/np/packing.csv" "$tmp/dp/state.txt" <<'PY'
+import sys
+rows = [l.strip().split(",") for l in open(sys.argv[1]) if l[0].isdigit()]
+lines = open(sys.argv[2]).read().splitlines()
+k = next(i for i, l in enumerate(lines) if l.startswith("id,x,y,"))
+head = lines[k].split(",")
+state = [dict(zip(head, l.split(","))) for l in lines[k + 1:k + 1 + len(rows)]]
+s = 2e-4
+ok = len(state) == len(rows) and all(
+    float(d["radius_ref"]) == s * float(r[3]) and abs(float(d["x"]) - s * float(r[1])) <= 1e-15 and
+    abs(float(d["y"]) - s * float(r[2])) <= 1e-15 for d, r in zip(state, rows))
+sys.exit(0 if ok else 1)
+PY
+  result packing_from_netsolve $?
+  "$ds" prepare --packing "$tmp/np/packing.csv" --time 1e-9 --quiet --out "$tmp/dq" >/dev/null 2>"$tmp/stderr" &&
+    /usr/bin/env python3 - "$tmp/dq/state.txt" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+k = next(i for i, l in enumerate(lines) if l.startswith("id,x,y,"))
+col = lines[k].split(",").index("radius_ref")
+n = int(lines[k - 1].split()[1])  # "particles N"
+r = [float(l.split(",")[col]) for l in lines[k + 1:k + 1 + n]]
+sys.exit(0 if r and abs(sum(r) / len(r) - 1e-3) < 1e-15 else 1)  # the mean radius becomes a0
+PY
+  result packing_default_unit_is_a0 $?
+fi
 
 # material tests on the sintered sample
 check_bad compress_needs_state "state" compress

@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "netdem/contact/luding.hpp"
+#include "netdem/packing/cell_grid.hpp"
+#include "netdem/packing/packing.hpp"
 
 namespace netdem::dem {
 
@@ -33,6 +35,11 @@ struct Particles {
   std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
                   double pvy = 0.0, double pomega = 0.0);
 };
+
+/// The particles of a packing (x, y, r; SI units, m) at rest: add() of each disk in order.
+Particles particles_from(const packing::Packing& p, const LudingParams& params);
+/// The geometric description of the particles (x, y, radius) in `box`; seed 0, no comments.
+packing::Packing to_packing(const Particles& P, const packing::Box& box);
 
 /// Contact-law instantiation, chosen once per run (no virtual call per contact).
 enum class ContactModel : std::uint8_t {
@@ -52,11 +59,15 @@ struct MovingWall {
   double damping = 0.2;   ///< Stress: gamma_w [kg/s] (Eq 1; Table 1)
 };
 
-/// Bi-axial box (LMM05 Fig 1): left (x_min) and bottom (y_min) walls fixed.
-struct Box {
+/// Bi-axial box (LMM05 Fig 1): the geometry is the toolkit's one box, packing::Box (x_min, y_min,
+/// x_max, y_max, as in the packings and the network solver), with the control of its walls: left
+/// (x_min) and bottom (y_min) walls fixed, right and top walls moving.
+struct Box : packing::Box {
   bool enabled = true;  ///< false: no walls, unbounded free system
-  double x_min = 0.0, y_min = 0.0, x_max = 1.0, y_max = 1.0;
   MovingWall right, top;
+  Box() : packing::Box{0.0, 0.0, 1.0, 1.0} {}
+  /// Fixed walls at the sides of `b`.
+  explicit Box(const packing::Box& b) : packing::Box(b) {}
 };
 
 enum class TimeStepRule : std::uint8_t {
@@ -229,7 +240,7 @@ class DynamicSolver {
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_;
-  std::vector<std::uint32_t> cell_start_, cell_items_, cell_cursor_;
+  packing::CellGrid grid_;  ///< over the positions of the last table build (storage reused)
   // wall histories: 4 per particle (left, right, bottom, top); wall state
   std::vector<LudingHistory> wall_hist_;
   /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force

@@ -1,0 +1,191 @@
+// The sintering protocol as library functions (netdem/dynamic/protocol.hpp, docs/sintering.md).
+#include "netdem/dynamic/protocol.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+
+#include "netdem/packing/io.hpp"
+#include "netdem/packing/random_fill.hpp"
+
+namespace netdem::dem {
+
+using packing::uniform01;
+
+Particles place_sample(const SampleSpec& a, const LudingParams& lp, Box& box) {
+  if (a.n < 1 || a.n > 1000000) throw std::invalid_argument(fmt::format("--n must be in [1, 1e6], got {}", a.n));
+  if (!(a.initial_density > 0.0 && a.initial_density < 0.6))
+    throw std::invalid_argument(fmt::format("initial density must be in (0, 0.6), got {}", a.initial_density));
+  Particles P;
+  if (a.arrangement != "random") {  // LMM05 section 4.1.3 control: three equal disks
+    if (a.n != 3) throw std::invalid_argument("--arrangement triangle|line needs --n 3");
+    const double r = lp.a0;
+    if (a.arrangement == "line") {
+      box.x_min = box.y_min = 0.0;
+      box.x_max = 6.0 * r;
+      box.y_max = 2.0 * r;
+      for (int k = 0; k < 3; ++k) P.add((1.0 + 2.0 * k) * r, r, r, lp);
+    } else if (a.arrangement == "triangle") {
+      // two on the floor, one on top; the box closes around them
+      const double h = std::sqrt(3.0) * r;
+      box.x_min = box.y_min = 0.0;
+      box.x_max = 4.0 * r;
+      box.y_max = 2.0 * r + h;
+      P.add(r, r, r, lp);
+      P.add(3.0 * r, r, r, lp);
+      P.add(2.0 * r, r + h, r, lp);
+    } else {
+      throw std::invalid_argument("--arrangement must be random, triangle or line, got '" + a.arrangement + "'");
+    }
+    return P;
+  }
+  std::mt19937_64 rng(a.seed);
+  std::vector<double> r(static_cast<std::size_t>(a.n));
+  double area = 0.0;
+  for (auto& ri : r) {  // draw order: all radii first, then positions, then velocities
+    ri = lp.a0 * (1.0 - lp.w0 + 2.0 * lp.w0 * uniform01(rng));
+    area += std::numbers::pi * ri * ri;
+  }
+  const double L = std::sqrt(area / a.initial_density);
+  box.x_min = box.y_min = 0.0;
+  box.x_max = box.y_max = L;
+  netdem::packing::Packing placed;
+  try {
+    placed = netdem::packing::random_fill(r, {0.0, 0.0, L, L}, rng);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("{} at density {}", e.what(), a.initial_density));
+  }
+  for (std::size_t i = 0; i < r.size(); ++i) P.add(placed.x[i], placed.y[i], r[i], lp);
+  const double v0 = 0.01;  // [m/s]
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    P.vx[i] = v0 * (2.0 * uniform01(rng) - 1.0);
+    P.vy[i] = v0 * (2.0 * uniform01(rng) - 1.0);
+  }
+  return P;
+}
+
+double packing_length_unit(const packing::Packing& p, const LudingParams& lp, double length_unit) {
+  if (!(std::isfinite(length_unit) && length_unit >= 0.0))
+    throw std::invalid_argument(fmt::format("--length-unit must be a number of metres >= 0, got {}", length_unit));
+  if (length_unit > 0.0) return length_unit;
+  double mean = 0.0;
+  for (double r : p.r) mean += r;
+  mean /= static_cast<double>(std::max<std::size_t>(1, p.size()));
+  if (!(mean > 0.0)) throw std::invalid_argument("the packing has no disks");
+  return lp.a0 / mean;
+}
+
+Particles particles_from_packing(const packing::Packing& p, const LudingParams& lp, double length_unit, Box& box) {
+  packing::validate(p);
+  const double s = packing_length_unit(p, lp, length_unit);
+  packing::Packing q = p;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    q.x[i] *= s;
+    q.y[i] *= s;
+    q.r[i] *= s;
+  }
+  box.x_min = s * p.box.x_min;
+  box.y_min = s * p.box.y_min;
+  box.x_max = s * p.box.x_max;
+  box.y_max = s * p.box.y_max;
+  // the lid of a packing is open (netsolve's default deposition lets the top layer stick out by
+  // less than a radius): the top wall starts at the highest disk top if that is above the lid
+  for (std::size_t i = 0; i < q.size(); ++i) box.y_max = std::max(box.y_max, q.y[i] + q.r[i]);
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const double x = q.x[i], y = q.y[i], r = q.r[i], tol = 1e-9 * r;
+    if (!(r >= 0.01 * lp.a0 && r <= 100.0 * lp.a0))
+      throw std::invalid_argument(fmt::format(
+          "disk {} has radius {} m after the unit conversion ({} m per file unit), outside [a0 / 100, 100 a0] = "
+          "[{}, {}] m: check --length-unit",
+          i, r, s, 0.01 * lp.a0, 100.0 * lp.a0));
+    if (x - r < box.x_min - tol || x + r > box.x_max + tol || y - r < box.y_min - tol)
+      throw std::invalid_argument(fmt::format(
+          "disk {} (centre ({}, {}), r = {} in file units) reaches through a side wall or the floor of the box", i,
+          p.x[i], p.y[i], p.r[i]));
+  }
+  return particles_from(q, lp);
+}
+
+Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
+  if (spec.packing_file.empty()) return place_sample(spec, lp, box);
+  const packing::Packing p = packing::read_packing_csv(spec.packing_file);
+  const double unit = packing_length_unit(p, lp, spec.length_unit);
+  if (length_unit) *length_unit = unit;
+  return particles_from_packing(p, lp, unit, box);
+}
+
+void set_stress_walls(Box& box, double pressure, const LudingParams& lp) {
+  for (MovingWall* w : {&box.right, &box.top}) {
+    w->mode = WallMode::Stress;
+    w->pressure = pressure;
+    w->mass = lp.m_wall;
+    w->damping = lp.gamma_wall;
+  }
+}
+
+ContactCounts count_contacts(const DynamicSolver& s, std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  s.touching_pairs(buffer);
+  return {buffer.size(), s.wall_contacts()};
+}
+
+void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
+                     std::vector<double>& z) {
+  p.assign(P.size(), 0.0);
+  z.assign(P.size(), 0.0);
+  for (const auto& c : cs) {
+    p[c.i] += c.f_n * c.d_i;
+    z[c.i] += 1.0;
+    if (c.wall < 0) {
+      p[c.j] += c.f_n * c.d_j;
+      z[c.j] += 1.0;
+    }
+  }
+  for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
+}
+
+PhaseRun run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const PhaseFriction& fr,
+                    std::int64_t samples, PhaseObserver& obs) {
+  const double dt = s.dt();
+  auto step_of = [dt](double t) { return static_cast<std::int64_t>(std::ceil(t / dt - 1e-6)); };
+  const std::int64_t k0 = static_cast<std::int64_t>(std::llround(s.time() / dt));
+  const std::int64_t K = step_of(phase_end(phases, phases.size() - 1));
+  std::vector<std::int64_t> ends;
+  for (std::size_t p = 0; p < phases.size(); ++p) ends.push_back(step_of(phase_end(phases, p)));
+  const std::int64_t total = std::max<std::int64_t>(0, K - k0);
+  PhaseRun run;
+  run.sample_every = std::max<std::int64_t>(1, total / std::max<std::int64_t>(1, samples));
+  const LudingParams base = s.params();
+  std::size_t cur_phase = schedule_at(phases, s.time()).phase;
+  obs.sample(s, cur_phase, 0);
+  bool friction_known = false, friction = false;
+  const double t_final = phase_end(phases, phases.size() - 1);
+  for (std::int64_t k = k0 + 1; k <= K; ++k) {
+    // the last step may end a fraction of dt past the protocol: it still belongs to the last
+    // phase of non-zero length (zero-length trailing phases must not change T)
+    const double t = std::min(static_cast<double>(k) * dt, t_final);
+    const ScheduleAt at = schedule_at(phases, t);
+    cur_phase = at.phase;
+    if (!friction_known || at.friction != friction) {  // LMM05 4.1: mu on and mu_w off at t_heat
+      LudingParams q = base;
+      q.mu = at.friction ? fr.mu : 0.0;
+      q.mu_wall = at.friction ? 0.0 : fr.mu_wall_prepare;
+      s.set_params(q);
+      friction = at.friction;
+      friction_known = true;
+    }
+    s.advance_temperature(at.T, dt, at.t0);
+    s.step();
+    ++run.steps;
+    if ((k - k0) % run.sample_every == 0) obs.sample(s, cur_phase, run.steps);
+    for (std::size_t p = 0; p < phases.size(); ++p)
+      if (ends[p] == k) obs.phase_end(s, p);
+  }
+  if ((K - k0) % run.sample_every != 0 || total == 0) obs.sample(s, cur_phase, run.steps);
+  return run;
+}
+
+}  // namespace netdem::dem
