@@ -12,43 +12,17 @@ namespace netdem::qs {
 void ContactTable::rebuild(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& r,
                            double skin, double r_max, const Eigen::Matrix2d& E, const Eigen::Matrix2d& Fbox) {
   const int n = static_cast<int>(x.size());
-  const double cell = 2.0 * r_max + skin;
-  double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0];
-  for (int p = 1; p < n; ++p) {
-    xmin = std::min(xmin, x[p]);
-    xmax = std::max(xmax, x[p]);
-    ymin = std::min(ymin, y[p]);
-    ymax = std::max(ymax, y[p]);
-  }
-  const int nx = std::max(1, static_cast<int>((xmax - xmin) / cell) + 1);
-  const int ny = std::max(1, static_cast<int>((ymax - ymin) / cell) + 1);
-  std::vector<int> head(static_cast<std::size_t>(nx) * ny, -1), next(n, -1);
-  auto cell_of = [&](int p, int& cx, int& cy) {
-    cx = std::min(nx - 1, static_cast<int>((x[p] - xmin) / cell));
-    cy = std::min(ny - 1, static_cast<int>((y[p] - ymin) / cell));
-  };
-  for (int p = n - 1; p >= 0; --p) {
-    int cx, cy;
-    cell_of(p, cx, cy);
-    next[p] = head[cy * nx + cx];
-    head[cy * nx + cx] = p;
-  }
+  grid.rebuild(x, y, 2.0 * r_max + skin);  // the toolkit's one cell grid (netdem/packing/cell_grid.hpp)
   std::vector<std::pair<int, int>> found;
   found.reserve(pi.size() + n);
   for (int p = 0; p < n; ++p) {
-    int cx, cy;
-    cell_of(p, cx, cy);
-    for (int oy = -1; oy <= 1; ++oy)
-      for (int ox = -1; ox <= 1; ++ox) {
-        const int qx = cx + ox, qy = cy + oy;
-        if (qx < 0 || qy < 0 || qx >= nx || qy >= ny) continue;
-        for (int q = head[qy * nx + qx]; q >= 0; q = next[q]) {
-          if (q <= p) continue;
-          const double dx = x[q] - x[p], dy = y[q] - y[p];
-          const double gap = std::sqrt(dx * dx + dy * dy) - r[p] - r[q];
-          if (gap < skin) found.emplace_back(p, q);
-        }
-      }
+    grid.for_each_near(x[p], y[p], r[p] + r_max + skin, [&](std::uint32_t qq) {
+      const int q = static_cast<int>(qq);
+      if (q <= p) return;
+      const double dx = x[q] - x[p], dy = y[q] - y[p];
+      const double gap = std::sqrt(dx * dx + dy * dy) - r[p] - r[q];
+      if (gap < skin) found.emplace_back(p, q);
+    });
   }
   std::sort(found.begin(), found.end());
   // merge the committed history (both lists sorted); pairs farther apart than the skin lose it

@@ -18,6 +18,7 @@
 #include <Eigen/LU>
 
 #include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 
@@ -42,6 +43,7 @@ struct ContactTable {
   std::vector<int> adj_start, adj_pair;  ///< pairs of each particle (CSR, increasing pair index)
   std::vector<double> xb, yb;       ///< positions at the last rebuild
   Eigen::Matrix2d Fb = Eigen::Matrix2d::Identity();  ///< box deformation at the last rebuild
+  packing::CellGrid grid;           ///< neighbour search (storage reused across rebuilds)
 
   std::size_t pairs() const { return pi.size(); }
   /// New neighbour list (gap < skin) merged with the committed history (both sorted).
