@@ -139,20 +139,14 @@ void save_state(const NetworkState& s, const std::string& path) {
   if (ec) throw std::runtime_error(fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message()));
 }
 
-NetworkState load_state(const std::string& path) {
-  Reader in(path);
-  NetworkState s;
-  if (in.next("netdem-network-state", 1)[0] != "1") in.fail("unsupported state file version");
-  constexpr long kMaxParticles = 100000000, kMaxPairs = 1000000000;
+namespace {
+
+void read_particles(Reader& in, NetworkState& s) {
+  constexpr long kMaxParticles = 100000000;
   const bool pred = in.integer(in.next("predictor", 1)[0], 0, 1) == 1;
   const auto n = static_cast<std::size_t>(in.integer(in.next("particles", 1)[0], 1, kMaxParticles));
-  s.x.resize(n);
-  s.y.resize(n);
-  s.theta.resize(n);
-  s.r.resize(n);
+  for (auto* v : {&s.x, &s.y, &s.theta, &s.r, &s.x_build, &s.y_build}) v->resize(n);
   s.peripheral.resize(n);
-  s.x_build.resize(n);
-  s.y_build.resize(n);
   s.f_contact.resize(3 * n);
   if (pred) s.du_prev.resize(3 * n);
   for (std::size_t p = 0; p < n; ++p) {
@@ -168,24 +162,29 @@ NetworkState load_state(const std::string& path) {
     if (pred)
       for (int c = 0; c < 3; ++c) s.du_prev[3 * p + c] = in.real(t[10 + c]);
   }
+}
+
+void read_globals(Reader& in, NetworkState& s) {
   const auto sc = in.next("scalars", 3);
   s.solid_area = in.real(sc[0]);
   s.initial_density = in.real(sc[1]);
   s.box_area0 = in.real(sc[2]);
   const auto b0 = in.next("box0", 4);
   s.box0 = {in.real(b0[0]), in.real(b0[1]), in.real(b0[2]), in.real(b0[3])};
-  {
-    const std::string t = in.next("seed", 1)[0];
-    errno = 0;
-    char* end = nullptr;
-    if (t.empty() || t[0] == '-') in.fail("seed must be a non-negative integer");
-    s.seed = std::strtoull(t.c_str(), &end, 10);
-    if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", t.substr(0, 40)));
-  }
+  const std::string t = in.next("seed", 1)[0];
+  errno = 0;
+  char* end = nullptr;
+  if (t.empty() || t[0] == '-') in.fail("seed must be a non-negative integer");
+  s.seed = std::strtoull(t.c_str(), &end, 10);
+  if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", t.substr(0, 40)));
   s.box_deformation = in.matrix("box_deformation");
   s.strain = in.matrix("strain");
   s.box_deformation_build = in.matrix("box_deformation_build");
   s.dE_prev = in.matrix("dE_prev");
+}
+
+void read_pairs(Reader& in, NetworkState& s) {
+  constexpr long kMaxPairs = 1000000000;
   const auto np = static_cast<std::size_t>(in.integer(in.next("pairs", 1)[0], 0, kMaxPairs));
   s.pair_i.resize(np);
   s.pair_j.resize(np);
@@ -194,7 +193,7 @@ NetworkState load_state(const std::string& path) {
   s.f_n.resize(np);
   s.f_t.resize(np);
   s.sliding.resize(np);
-  const long last = static_cast<long>(n) - 1;
+  const long last = static_cast<long>(s.x.size()) - 1;
   for (std::size_t k = 0; k < np; ++k) {
     const auto t = in.next("", 14);
     s.pair_i[k] = static_cast<int>(in.integer(t[0], 0, last));
@@ -209,8 +208,10 @@ NetworkState load_state(const std::string& path) {
     s.f_t[k] = in.real(t[12]);
     s.sliding[k] = static_cast<std::uint8_t>(in.integer(t[13], 0, 1));
   }
+}
+
+void read_timings(Reader& in, SolverTimings& T) {
   const auto tm = in.next("timings", 11);
-  auto& T = s.timings;
   T.assemble = in.real(tm[0]);
   T.analyse = in.real(tm[1]);
   T.factorise = in.real(tm[2]);
@@ -223,6 +224,18 @@ NetworkState load_state(const std::string& path) {
   T.solves = in.integer(tm[8], 0, kBig);
   T.increments = in.integer(tm[9], 0, kBig);
   T.newton_iterations = in.integer(tm[10], 0, kBig);
+}
+
+}  // namespace
+
+NetworkState load_state(const std::string& path) {
+  Reader in(path);
+  NetworkState s;
+  if (in.next("netdem-network-state", 1)[0] != "1") in.fail("unsupported state file version");
+  read_particles(in, s);
+  read_globals(in, s);
+  read_pairs(in, s);
+  read_timings(in, s.timings);
   in.next("end", 0);
   try {
     s.validate();
