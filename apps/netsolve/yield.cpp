@@ -404,6 +404,21 @@ std::unique_ptr<qs::NetworkSolver> restore_compacted(const YieldArgs& a, const q
   return std::make_unique<qs::NetworkSolver>(st, pre);
 }
 
+/// The probe settings of the command line, with the fine step and the loading stress of the run.
+qs::ProbeSettings probe_settings(const YieldArgs& a, double first_step, double loading_norm, double sigma_y) {
+  qs::ProbeSettings ps;
+  ps.directions = a.directions;
+  ps.offset = a.offset;
+  ps.max_strain = a.max_strain;
+  ps.window = a.window;
+  ps.growth = a.growth;
+  ps.fine = a.fine;
+  ps.first_step = first_step;
+  ps.loading_norm = loading_norm;
+  ps.sigma_y = sigma_y;
+  return ps;
+}
+
 /// The files and record of a finished probe (a failed one gets the record of failed_record).
 json write_probe(const qs::ProbeResult& p, const YieldArgs& a, const Analytic& an, const json& setup, const fs::path& out) {
   if (p.status.rfind("error: ", 0) != 0) return probe_record(p, a, an, setup, out);
@@ -484,16 +499,8 @@ int run_probe_worker(const YieldArgs& a) {
   }
   const json setup = w.at("setup");
   const Analytic an = make_analytic(setup.at("analytic"));
-  qs::ProbeSettings ps;
-  ps.directions = a.directions;
-  ps.offset = a.offset;
-  ps.max_strain = a.max_strain;
-  ps.window = a.window;
-  ps.growth = a.growth;
-  ps.fine = a.fine;
-  ps.first_step = w.at("first_step").get<double>();
-  ps.loading_norm = w.at("loading_norm").get<double>();
-  ps.sigma_y = so.law.sigma_y;
+  const qs::ProbeSettings ps =
+      probe_settings(a, w.at("first_step").get<double>(), w.at("loading_norm").get<double>(), so.law.sigma_y);
   qs::run_probes(state, po, {a.probe_worker}, ps, [&](const qs::ProbeResult& p) { write_probe(p, a, an, setup, out); });
   return 0;
 }
@@ -643,18 +650,9 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   const double first_step = un.strain > 0 ? un.strain / 10 : 1e-6;
   const double loading_norm = std::sqrt(loaded.S11 * loaded.S11 + loaded.S22 * loaded.S22 + 2 * loaded.S12 * loaded.S12) / sy;
 
-  // ---- probes: each on its own solver restored from the unloaded state, on `jobs` threads
+  // ---- probes: each on its own solver restored from the unloaded state, in `jobs` worker processes
   t0 = Clock::now();
-  qs::ProbeSettings ps;
-  ps.directions = a.directions;
-  ps.offset = a.offset;
-  ps.max_strain = a.max_strain;
-  ps.window = a.window;
-  ps.growth = a.growth;
-  ps.fine = a.fine;
-  ps.first_step = first_step;
-  ps.loading_norm = loading_norm;
-  ps.sigma_y = sy;
+  const qs::ProbeSettings ps = probe_settings(a, first_step, loading_norm, sy);
   // the unloaded state and the probe settings, which the worker processes (and anyone who wants to
   // rerun a probe) start from
   qs::save_state(solver->state(), (out / "probes" / "unloaded_state.txt").string());
