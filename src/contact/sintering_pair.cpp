@@ -417,12 +417,27 @@ TemperatureProfile::TemperatureProfile(std::vector<double> t, std::vector<double
       o << "temperature profile: T must be positive [K], got " << T_[i] << " at t = " << t_[i];
       throw std::invalid_argument(o.str());
     }
-    if (i > 0 && !(t_[i] > t_[i - 1])) {
+    if (i > 0 && t_[i] < t_[i - 1]) {
       std::ostringstream o;
-      o << "temperature profile: times must increase strictly, got " << t_[i - 1] << " then " << t_[i];
+      o << "temperature profile: times must not decrease, got " << t_[i - 1] << " then " << t_[i];
+      throw std::invalid_argument(o.str());
+    }
+    if (i > 1 && t_[i] == t_[i - 1] && t_[i - 1] == t_[i - 2]) {
+      std::ostringstream o;
+      o << "temperature profile: more than two breakpoints at t = " << t_[i];
       throw std::invalid_argument(o.str());
     }
   }
+}
+
+TemperatureProfile::Segment TemperatureProfile::segment_at(double t) const {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const std::size_t n = t_.size();
+  if (t < t_[0]) return {-inf, t_[0], T_[0], T_[0]};
+  // the last breakpoint i with t_i <= t (the right one of a jump)
+  const std::size_t i = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin()) - 1;
+  if (i + 1 >= n) return {t_[n - 1], inf, T_[n - 1], T_[n - 1]};
+  return {t_[i], t_[i + 1], T_[i], T_[i + 1]};
 }
 
 TemperatureProfile TemperatureProfile::parse_csv(const std::string& text, const std::string& origin) {
@@ -463,25 +478,6 @@ TemperatureProfile TemperatureProfile::read_csv(const std::filesystem::path& fil
   std::ostringstream s;
   s << f.rdbuf();
   return parse_csv(s.str(), file.string());
-}
-
-double TemperatureProfile::operator()(double t) const {
-  const std::size_t n = t_.size();
-  if (n == 1 || t <= t_[0]) return T_[0];
-  if (t >= t_[n - 1]) return T_[n - 1];
-  std::size_t i = last_ < n - 1 ? last_ : 0;
-  if (!(t_[i] <= t && t < t_[i + 1])) {
-    i = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin()) - 1;
-    last_ = i;
-  }
-  const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
-  return T_[i] + w * (T_[i + 1] - T_[i]);  // linear interpolation between breakpoints
-}
-
-double TemperatureProfile::next_breakpoint(double t) const {
-  if (t_.size() <= 1) return std::numeric_limits<double>::infinity();
-  const auto it = std::upper_bound(t_.begin(), t_.end(), t);
-  return it == t_.end() ? std::numeric_limits<double>::infinity() : *it;
 }
 
 // ================================================================================================
@@ -563,9 +559,10 @@ struct Rhs {
   const PairProblem& p;
   DiffCache cache;
   long* evals;
+  TemperatureProfile::Segment seg;  // the piece of T(t) of the current segment
   bool operator()(double t, const State& q, State& dq) {
     ++*evals;
-    return pair_rhs(q, cache.at((*p.temperature)(t)), p.F, *p.material, p.paths, dq);
+    return pair_rhs(q, cache.at(seg(t)), p.F, *p.material, p.paths, dq);
   }
 };
 
@@ -588,7 +585,7 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
   if (c.status != PairStatus::Ok) return c.status;
   const double Rmin = c.R_min0();
   const double atol = opts.atol_scale * opts.rtol * Rmin;
-  Rhs f{p, DiffCache{p.material, Diffusivities{}}, &c.rhs_evals};
+  Rhs f{p, DiffCache{p.material, Diffusivities{}}, &c.rhs_evals, {}};
   f.cache.d.T = -1.0;
   long steps = 0;
   auto fail = [&](PairStatus s) {
@@ -597,7 +594,8 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
   };
   while (c.t < t_end) {
     // one segment: up to the next temperature breakpoint (restart there: no FSAL across it)
-    const double seg_end = std::min(t_end, p.temperature->next_breakpoint(c.t));
+    f.seg = p.temperature->segment_at(c.t);
+    const double seg_end = std::min(t_end, f.seg.t1);
     ++c.restarts;
     State k1{};
     if (!f(c.t, c.q, k1)) return fail(check_state(c.q, Rmin, opts.x_over_R_max) == PairStatus::Ok

@@ -46,6 +46,7 @@ struct CallbackData {
   const PairProblem* p = nullptr;
   const SinterMaterial* m = nullptr;
   Diffusivities d{};
+  TemperatureProfile::Segment seg{};  // the piece of T(t) of the current segment
   long evals = 0;
 };
 
@@ -55,7 +56,7 @@ int rhs_callback(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
   const double* yy = N_VGetArrayPointer(y);
   double* dy = N_VGetArrayPointer(ydot);
   const State q{yy[0], yy[1], yy[2], yy[3], yy[4]};
-  const double T = (*cd->p->temperature)(t);
+  const double T = cd->seg(t);
   if (T != cd->d.T) cd->d = diffusivities(*cd->m, T);
   State r{};
   if (!pair_rhs(q, cd->d, cd->p->F, *cd->m, cd->p->paths, r)) return 1;  // recoverable: cut the step
@@ -140,7 +141,8 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
     return s;
   };
   while (c.t < t_end) {
-    const double seg_end = std::min(t_end, p.temperature->next_breakpoint(c.t));
+    I.cd.seg = p.temperature->segment_at(c.t);
+    const double seg_end = std::min(t_end, I.cd.seg.t1);
     ++c.restarts;
     if (I.cvode) {
       check(CVodeReInit(I.mem, c.t, I.y), "CVodeReInit");

@@ -24,6 +24,7 @@
 // written-out Dormand-Prince 5(4) and RK4 integrators) are part of netdem_contact, which stays
 // free of SUNDIALS. The SUNDIALS backends (CVODE BDF cross-check, ARKODE ERKStep) live in the
 // separate target netdem_contact_sundials (sintering_pair_sundials.hpp).
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -180,28 +181,38 @@ std::string describe(PairStatus s, double x_over_R_max);
 // ------------------------------------------------------------------------------------------------
 // Temperature against time (Eq 5 with T(t); note §6)
 
-/// Piecewise-linear T(t); constant before the first and after the last breakpoint.
+/// Piecewise-linear T(t) through breakpoints (t_i, T_i); constant before the first and after the
+/// last one. Two equal consecutive times make a jump (a step in T); T(t) is right-continuous there.
 class TemperatureProfile {
  public:
+  /// One linear piece [t0, t1) of the profile, T(t) = T0 + (t - t0)/(t1 - t0) (T1 - T0).
+  struct Segment {
+    double t0 = 0.0, t1 = 0.0, T0 = 0.0, T1 = 0.0;
+    double operator()(double t) const {
+      if (T1 == T0 || !(t1 - t0 < 1e300)) return T0;  // constant piece (exact, no rounding)
+      const double w = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+      return T0 + w * (T1 - T0);
+    }
+  };
   /// A constant temperature (no breakpoints).
   static TemperatureProfile constant(double T);
-  /// Breakpoints (t_i, T_i), t strictly increasing, T > 0; throws std::invalid_argument.
+  /// Breakpoints (t_i, T_i): t non-decreasing, at most two equal in a row (a jump), T > 0;
+  /// throws std::invalid_argument (one line).
   TemperatureProfile(std::vector<double> t, std::vector<double> T);
-  /// Parses a `time,T` CSV (header line required, SI: s and K; `#` comments allowed).
+  /// Parses a `time,T` CSV (header line `time,T` required; SI: s and K; `#` comment lines).
   static TemperatureProfile parse_csv(const std::string& text, const std::string& origin);
   static TemperatureProfile read_csv(const std::filesystem::path& file);
-  double operator()(double t) const;
-  /// The breakpoint times (the integrators stop and restart at each one inside a step).
+  /// The linear piece that contains t (t0 <= t < t1; t1 = +inf after the last breakpoint). The
+  /// integrators evaluate T through the piece of the current segment, so a step never sees the
+  /// other side of a breakpoint.
+  Segment segment_at(double t) const;
+  double operator()(double t) const { return segment_at(t)(t); }
   const std::vector<double>& times() const { return t_; }
   const std::vector<double>& temperatures() const { return T_; }
-  bool is_constant() const { return t_.size() <= 1; }
-  /// The first breakpoint strictly after t, or +inf.
-  double next_breakpoint(double t) const;
 
  private:
   TemperatureProfile() = default;
   std::vector<double> t_, T_;
-  mutable std::size_t last_ = 0;  // interval hint (monotone queries are O(1))
 };
 
 // ------------------------------------------------------------------------------------------------
