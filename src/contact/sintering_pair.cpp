@@ -661,7 +661,10 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
       if (ok) {
         for (int i = 0; i < 5; ++i) {
           const double e = hs * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
-          const double w = atol + opts.rtol * std::max(std::fabs(c.q[i]), std::fabs(y5[i]));
+          // weights: x relative to itself; R_k and h_k relative to their change since q0, so that
+          // rtol bounds the error of the shrinkage and coarsening, not of R (~100x looser)
+          const double ref = i == kX ? 0.0 : c.q0[i];
+          const double w = atol + opts.rtol * std::max(std::fabs(c.q[i] - ref), std::fabs(y5[i] - ref));
           err = std::max(err, std::fabs(e) / w);
         }
         ok = std::isfinite(err);

@@ -47,6 +47,7 @@ struct CallbackData {
   const SinterMaterial* m = nullptr;
   Diffusivities d{};
   TemperatureProfile::Segment seg{};  // the piece of T(t) of the current segment
+  const State* offset = nullptr;      // q0 of the contact with x zeroed: y = q - offset
   long evals = 0;
 };
 
@@ -55,7 +56,8 @@ int rhs_callback(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
   ++cd->evals;
   const double* yy = N_VGetArrayPointer(y);
   double* dy = N_VGetArrayPointer(ydot);
-  const State q{yy[0], yy[1], yy[2], yy[3], yy[4]};
+  const State& o = *cd->offset;  // SUNDIALS integrates y = q - (0, R_A0, h_A0, R_B0, h_B0)
+  const State q{yy[0], o[1] + yy[1], o[2] + yy[2], o[3] + yy[3], o[4] + yy[4]};
   const double T = cd->seg(t);
   if (T != cd->d.T) cd->d = diffusivities(*cd->m, T);
   State r{};
@@ -132,7 +134,21 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   I.cd.d = Diffusivities{};
   I.cd.d.T = -1.0;
   I.cd.evals = 0;
+  // The integrated variable is y = q - offset, offset = (0, R_A0, h_A0, R_B0, h_B0): rtol then bounds
+  // the error of the changes of R_k and h_k (the shrinkage), as the DP45 weights do. The contact's
+  // state is shifted in place for each segment (the no-copy view aliases it) and shifted back at the
+  // segment's end, so that stopping at a time costs the same round-off whichever call asked for it.
+  const State offset{0.0, c.q0[1], c.q0[2], c.q0[3], c.q0[4]};
+  I.cd.offset = &offset;
   N_VSetArrayPointer(c.q.data(), I.y);  // the view now aliases this contact's state
+  auto shift = [&](double sign) {
+    for (int i = 1; i < 5; ++i) c.q[i] += sign * offset[i];
+  };
+  auto state_now = [&] {
+    State q = c.q;
+    for (int i = 1; i < 5; ++i) q[i] += offset[i];
+    return q;
+  };
   auto finish = [&](PairStatus s) {
     c.rhs_evals += I.cd.evals;
     I.cd.evals = 0;
@@ -144,6 +160,7 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
     I.cd.seg = p.temperature->segment_at(c.t);
     const double seg_end = std::min(t_end, I.cd.seg.t1);
     ++c.restarts;
+    shift(-1.0);
     if (I.cvode) {
       check(CVodeReInit(I.mem, c.t, I.y), "CVodeReInit");
       check(CVodeSStolerances(I.mem, opts.rtol, atol), "CVodeSStolerances");
@@ -154,7 +171,9 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
       check(ERKStepReInit(I.mem, rhs_callback, c.t, I.y), "ERKStepReInit");
       check(ERKStepSStolerances(I.mem, opts.rtol, atol), "ERKStepSStolerances");
       check(ERKStepSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "ERKStepSetInitStep");
-      check(ERKStepSetStopTime(I.mem, seg_end), "ERKStepSetStopTime");
+      // no stop time: ARKODE clips its step proposal to a stop time ahead of the step, which
+      // hides the unclipped proposal from the step memory; it steps past seg_end instead and the
+      // state at seg_end is its interpolant (ERKStepGetDky), from which the next segment restarts
       check(ERKStepSetMaxNumSteps(I.mem, opts.max_steps), "ERKStepSetMaxNumSteps");
     }
     PairStatus s = PairStatus::Ok;
@@ -170,22 +189,36 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
                                              flag == ARK_REPTD_RHSFUNC_ERR || flag == ARK_RHSFUNC_FAIL ||
                                              flag == ARK_TOO_CLOSE);
         if (!step_failure) {
+          shift(+1.0);
           finish(PairStatus::StepFailure);
           throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
         }
         s = PairStatus::StepFailure;
         break;
       }
-      c.t = t;
       ++c.steps;
-      s = check_state(c.q, Rmin, opts.x_over_R_max);
+      if (!I.cvode && t > seg_end) {
+        check(ERKStepGetDky(I.mem, seg_end, 0, I.y), "ERKStepGetDky");
+        t = seg_end;
+      }
+      c.t = t;
+      // step memory as in the DP45: the controller's proposal, unless this step was clipped to land
+      // on the stop (then the proposal from before the clip is kept, or a larger one)
+      double h = 0.0, h_last = 0.0;
+      if (I.cvode) {
+        check(CVodeGetCurrentStep(I.mem, &h), "CVodeGetCurrentStep");
+        check(CVodeGetLastStep(I.mem, &h_last), "CVodeGetLastStep");
+      } else {
+        check(ERKStepGetCurrentStep(I.mem, &h), "ERKStepGetCurrentStep");
+        check(ERKStepGetLastStep(I.mem, &h_last), "ERKStepGetLastStep");
+      }
+      const bool clipped = t >= seg_end && c.h > 0.0 && h_last < c.h * (1.0 - 1e-9);
+      if (h > 0.0) c.h = clipped ? std::max(c.h, h) : h;
+      s = check_state(state_now(), Rmin, opts.x_over_R_max);
       if (s != PairStatus::Ok) break;
       if (t >= seg_end) break;
     }
-    double h = 0.0;
-    if (I.cvode) check(CVodeGetCurrentStep(I.mem, &h), "CVodeGetCurrentStep");
-    else check(ERKStepGetCurrentStep(I.mem, &h), "ERKStepGetCurrentStep");
-    if (h > 0.0) c.h = h;
+    shift(+1.0);
     if (s != PairStatus::Ok) return finish(s);
     c.t = seg_end;  // the tstop return lands on seg_end to round-off; make it exact
   }

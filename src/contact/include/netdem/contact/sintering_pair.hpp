@@ -225,7 +225,9 @@ IntegratorKind parse_integrator(const std::string& s);
 
 struct IntegratorOptions {
   IntegratorKind kind = IntegratorKind::DP45;
-  double rtol = 1e-6;        ///< relative tolerance (DP45, CVODE, ARKODE)
+  /// Relative tolerance (DP45, CVODE, ARKODE): of x itself, and of the changes R_k - R_k0 and
+  /// h_k - h_k0 (so that it bounds the relative error of the shrinkage, not of h ~ R).
+  double rtol = 1e-6;
   /// Absolute tolerance of every component = atol_scale * rtol * min(R_A0, R_B0) [m].
   double atol_scale = 1e-3;
   double rk4_c = 0.02;       ///< RK4 step dt = c x / |dx/dt| (the paper's integrator; note §4.6)
