@@ -4,10 +4,11 @@
 //
 //   netsolve sinter-pair [--material cu|ti|FILE] [--set KEY=VALUE]... [--radius R | --radii RA,RB]
 //                        [--temperature T | --profile FILE] [--time T_END] [--integrator dp45|rk4|cvode|arkode]
-//                        [--rtol RTOL] [--rk4-c C] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--force F] [--out DIR]
+//                        [--rtol RTOL] [--rk4-c C] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--force F] [--paths LIST]
+//                        [--per-decade N] [--t-first T] [--out DIR]
 //
 // SI units everywhere (m, s, K, N). Writes command.txt, pair.csv (one row per output time: a log
-// grid, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
+// grid from --t-first, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
 // range), pair.svg (x/R and Delta L/L0 against t, log-log) and summary.json (last). A contact that
 // leaves the validity limits (note section 4.6) stops there; summary.json says why. Bad input: one
 // line on stderr, exit 2 (command line) or 1, no output folder.
@@ -40,22 +41,22 @@ using nlohmann::json;
 using netdem::app::netsolve::parse_double;
 
 struct Args {
-  std::string material = "cu", radii, profile, integrator = "dp45", out = "results/sinter-pair";
+  std::string material = "cu", radii, profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
   std::vector<std::string> set;
   double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
-         force = 0.0;
+         force = 0.0, t_first = 1.0;
   int per_decade = 20;
   bool quiet = false;
 };
 
 struct Row {
-  double t, T, x_over_R, shrinkage, volume, energy, F_s;
+  double t, T, x_over_R, shrinkage, volume, energy, F_s, eta, eta_BM;
   sp::FullState y;
 };
 
-std::vector<double> output_times(double t_end, const sp::TemperatureProfile& prof, int per_decade) {
+std::vector<double> output_times(double t_end, double t_first_in, const sp::TemperatureProfile& prof, int per_decade) {
   std::vector<double> t = {0.0};
-  const double t_first = std::min(1.0, t_end);
+  const double t_first = std::min(t_first_in, t_end);
   for (int k = 0;; ++k) {
     const double v = t_first * std::pow(10.0, static_cast<double>(k) / per_decade);
     if (v >= t_end) break;
@@ -110,6 +111,23 @@ std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
   return s + "</svg>\n";
 }
 
+// --paths: "all" or a comma list of I, II, III, IV, V (the path types of note section 3)
+sp::PathSwitches parse_paths(const std::string& s) {
+  if (s == "all") return {};
+  sp::PathSwitches p{0, 0, 0, 0, 0};
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item == "I") p.I = 1;
+    else if (item == "II") p.II = 1;
+    else if (item == "III") p.III = 1;
+    else if (item == "IV") p.IV = 1;
+    else if (item == "V") p.V = 1;
+    else throw std::invalid_argument(fmt::format("--paths '{}': '{}' is not one of I, II, III, IV, V (or 'all')", s, item));
+  }
+  return p;
+}
+
 sp::SinterMaterial load_material(const Args& a, std::string& source) {
   std::string text;
   if (a.material == "cu" || a.material == "ti") {
@@ -158,28 +176,34 @@ int run(const Args& a, const std::string& command) {
   io.x_over_R_max = a.x_max;
   io.validate();
   sp::PairContact c = sp::make_contact(RA, RB, a.x0);
-  const auto times = output_times(a.t_end, prof, a.per_decade);
+  if (!(std::isfinite(a.t_first) && a.t_first > 0.0)) throw std::invalid_argument("--t-first must be positive [s]");
+  const auto times = output_times(a.t_end, a.t_first, prof, a.per_decade);
+  const sp::PathSwitches paths = parse_paths(a.paths);
 
   const fs::path out(a.out);
   netdem::app::start_run_dir(out);
   netdem::app::write_file_atomic(out / "command.txt", command + "\n");
 
-  const sp::PairProblem problem{&mat, &prof, {}, a.force};
+  const sp::PairProblem problem{&mat, &prof, paths, a.force};
   sp::PairIntegrator integ(io);
   const double V0 = sp::pair_volume(c.q);
   std::vector<Row> rows;
   double max_drift = 0.0;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
   auto make_row = [&](Row& r) {
     const double T = prof(c.t);
     const auto d = sp::diffusivities(mat, T);
-    r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, sp::full_state(c.q)};
+    r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
     try {
-      r.F_s = sp::effective_law(c.q, d, mat).F_s;
+      const auto law = sp::effective_law(c.q, d, mat, paths);
+      r.F_s = law.F_s;
+      r.eta = law.eta;
+      r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
     } catch (const std::domain_error&) {
       return false;
     }
     bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
-                  std::isfinite(r.energy) && std::isfinite(r.F_s);
+                  std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
     for (double v : r.y) finite = finite && std::isfinite(v);
     return finite;
   };
@@ -230,6 +254,7 @@ int run(const Args& a, const std::string& command) {
     j["temperature"] = {{"profile", a.profile}, {"breakpoints", prof.times().size()}};
   j["t_end_s"] = a.t_end;
   j["force_N"] = a.force;
+  j["paths"] = {{"I", paths.I}, {"II", paths.II}, {"III", paths.III}, {"IV", paths.IV}, {"V", paths.V}};
   j["integrator"] = {{"name", sp::to_string(io.kind)}, {"rtol", io.rtol}, {"atol_scale", io.atol_scale}, {"rk4_c", io.rk4_c}};
   j["status"] = sp::to_string(c.status);
   j["reason"] = sp::describe(c.status, io.x_over_R_max);
@@ -242,7 +267,9 @@ int run(const Args& a, const std::string& command) {
   json at = json::object();
   for (const auto& r : rows)
     for (double v : {60.0, 600.0, 3600.0, 14400.0, 57600.0})
-      if (r.t == v) at[fmt::format("{:g}", v)] = {{"x_over_R", r.x_over_R}, {"shrinkage", r.shrinkage}, {"sintering_force", r.F_s}};
+      if (r.t == v)
+        at[fmt::format("{:g}", v)] = {{"x_over_R", r.x_over_R}, {"shrinkage", r.shrinkage}, {"sintering_force", r.F_s},
+                                      {"viscosity", num(r.eta)}, {"viscosity_bouvard_mcmeeking", r.eta_BM}};
   j["at"] = at;
   if (!rows.empty()) {
     const Row& r = rows.back();
@@ -251,7 +278,9 @@ int run(const Args& a, const std::string& command) {
                   {"shrinkage", r.shrinkage},
                   {"R_A_over_R_A0", r.y[1] / RA},
                   {"R_B_over_R_B0", r.y[4] / RB},
-                  {"sintering_force", r.F_s}};
+                  {"sintering_force", r.F_s},
+                  {"viscosity", num(r.eta)},
+                  {"viscosity_bouvard_mcmeeking", r.eta_BM}};
     if (mat.youngs_modulus > 0.0)
       j["final"]["equivalent_bar_force"] = sp::equivalent_bar_force(mat.youngs_modulus, c.q0, c.q);  // Eq 17
   }
@@ -293,6 +322,9 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_option("--x-max", a.x_max, "stop when x / min(RA0, RB0) exceeds this (useful range, note section 4.6)")->capture_default_str();
   app.add_option("--force", a.force, "compressive normal force on the contact [N] (0: free sintering)")->capture_default_str();
   app.add_option("--per-decade", a.per_decade, "output rows per decade of time")->capture_default_str();
+  app.add_option("--t-first", a.t_first, "first time of the logarithmic output grid [s]")->capture_default_str();
+  app.add_option("--paths", a.paths, "transport paths on: all, or a list of I (GB), II (surface), III, IV, V (lattice); note section 3")
+      ->capture_default_str();
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_option("--out", a.out, "output folder")->capture_default_str();
   try {

@@ -336,6 +336,12 @@ EffectiveLaw effective_law(const State& q, const Diffusivities& d, const SinterM
     throw std::domain_error("effective_law: state outside the cap-cone domain");
   const double s0 = -(r0[kHA] + r0[kHB]), s1 = -(r1[kHA] + r1[kHB]);
   EffectiveLaw e;
+  if (s1 == s0) {  // no densifying path (I, III, V) active: a rigid contact, no sintering force
+    e.eta = std::numeric_limits<double>::infinity();
+    e.F_s = 0.0;
+    e.s_dot_free = s0;
+    return e;
+  }
   e.eta = F1 / (s1 - s0);   // eta_eff (note §4.7)
   e.F_s = e.eta * s0;       // F_s,eff = eta_eff s_dot(F = 0)
   e.s_dot_free = s0;
@@ -644,7 +650,7 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
         hs = remaining;
         last = true;
       }
-      if (!(hs > 1e-15 * std::max(1.0, std::fabs(c.t)))) return fail(PairStatus::StepFailure);
+      if (!(hs > 0.0) || c.t + hs == c.t) return fail(PairStatus::StepFailure);  // step size underflow
       State k2{}, k3{}, k4{}, k5{}, k6{}, k7{};
       const double t = c.t;
       bool ok = f(t + c2 * hs, axpy(c.q, hs, {{a21, &k1}}), k2) &&

@@ -21,6 +21,7 @@ check_bad sp_time "time" sinter-pair --time -5
 check_bad sp_set "unknown key" sinter-pair --set bogus=1
 check_bad sp_set_value "not a finite number" sinter-pair --set D_vol0=fast
 check_bad sp_unknown "bogus" sinter-pair --bogus
+check_bad sp_paths "paths" sinter-pair --paths I,VI
 printf 'time,T\n0,1273.15\n10,-4\n' >"$tmp/bad_profile.csv"
 check_bad sp_profile_bad "T must be positive" sinter-pair --profile "$tmp/bad_profile.csv"
 printf 'Omega = 1e-29\ngamma_s = 1\n' >"$tmp/bad_material.txt"

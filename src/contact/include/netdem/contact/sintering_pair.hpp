@@ -152,7 +152,8 @@ struct EffectiveLaw {
   double s_dot_free = 0.0;  ///< approach rate at F = 0 [m/s]
 };
 /// eta = F1 / (s_dot(F1) - s_dot(0)) and F_s = eta s_dot(0) from two right-hand-side evaluations
-/// (note §4.7). Throws std::domain_error outside the domain.
+/// (note §4.7). Without a densifying path (I, III, V all off or zero) eta = +inf and F_s = 0.
+/// Throws std::domain_error outside the domain.
 EffectiveLaw effective_law(const State& q, const Diffusivities& d, const SinterMaterial& m,
                            const PathSwitches& paths = {});
 /// Bouvard-McMeeking neck viscosity pi x^4 / (8 Delta_b), Delta_b = Omega deltaD_gb / (k_B T)
