@@ -447,6 +447,11 @@ TEST(SinteringPair, BouvardMcMeekingViscosityWithGbDiffusionOnly) {
       EXPECT_NEAR(ratio, 1.0, 1e-10) << "x/R = " << xr << ", R_B = " << RB;
     }
   }
+  // without a densifying path the contact is rigid: no sintering force
+  const sp::State q{0.1 * 50e-6, 50e-6, 50e-6, 50e-6, 50e-6};
+  const auto e = sp::effective_law(q, d, cu, {0, 1, 0, 1, 0});
+  EXPECT_TRUE(std::isinf(e.eta));
+  EXPECT_EQ(e.F_s, 0.0);
 }
 
 TEST(SinteringPair, EffectiveLawIsAffineAndMatchesTable74) {
