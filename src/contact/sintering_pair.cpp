@@ -604,9 +604,10 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
     const double seg_end = std::min(t_end, f.seg.t1);
     ++c.restarts;
     State k1{};
-    if (!f(c.t, c.q, k1)) return fail(check_state(c.q, Rmin, opts.x_over_R_max) == PairStatus::Ok
-                                          ? PairStatus::NonFinite
-                                          : check_state(c.q, Rmin, opts.x_over_R_max));
+    if (!f(c.t, c.q, k1)) {
+      const PairStatus s = check_state(c.q, Rmin, opts.x_over_R_max);
+      return fail(s == PairStatus::Ok ? PairStatus::NonFinite : s);
+    }
     if (opts.kind == IntegratorKind::RK4) {
       // the paper's RK4 (Ivannikov et al. section 2.2) with dt = c x / |dx/dt| (note §4.6)
       while (c.t < seg_end) {
@@ -614,7 +615,7 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
         double dt = opts.rk4_c * c.q[kX] / std::fabs(k1[kX]);
         if (!(dt > 0.0) || !std::isfinite(dt)) dt = seg_end - c.t;
         bool last = false;
-        if (c.t + dt >= seg_end || c.t + 1.000001 * dt >= seg_end) {
+        if (c.t + 1.000001 * dt >= seg_end) {  // land on the stop (no sliver of a step after it)
           dt = seg_end - c.t;
           last = true;
         }
