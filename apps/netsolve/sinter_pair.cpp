@@ -292,7 +292,7 @@ int run(const Args& a, const std::string& command) {
   if (c.status != sp::PairStatus::Ok)
     std::fprintf(stderr, "netsolve sinter-pair: stopped at t = %.6g s: %s\n", c.t, sp::describe(c.status, io.x_over_R_max).c_str());
   if (last != nullptr)
-    std::printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3f s -> %s\n", last->t, last->x_over_R, last->shrinkage,
+    std::printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3g s -> %s\n", last->t, last->x_over_R, last->shrinkage,
                 c.steps, wall, out.c_str());
   return 0;
 }

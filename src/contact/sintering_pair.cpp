@@ -369,6 +369,7 @@ PairStatus check_state(const State& q, double R_min0, double x_over_R_max) {
   if (!particle_geometry(q[kX], q[kRA], q[kHA], g) || !particle_geometry(q[kX], q[kRB], q[kHB], g))
     return PairStatus::ConeDegenerate;
   if (q[kX] / R_min0 > x_over_R_max) return PairStatus::NeckLimit;
+  if (q[kX] / R_min0 < 1e-4) return PairStatus::NeckVanished;
   return PairStatus::Ok;
 }
 
@@ -377,6 +378,7 @@ const char* to_string(PairStatus s) {
     case PairStatus::Ok: return "ok";
     case PairStatus::NeckLimit: return "neck_limit";
     case PairStatus::ConeDegenerate: return "cone_degenerate";
+    case PairStatus::NeckVanished: return "neck_vanished";
     case PairStatus::NonFinite: return "non_finite";
     case PairStatus::StepFailure: return "step_failure";
   }
@@ -393,6 +395,8 @@ std::string describe(PairStatus s, double xmax) {
       return o.str();
     case PairStatus::ConeDegenerate:
       return "the cap-cone geometry no longer exists (x^2 + h^2 <= R^2 or u_t <= 0; note section 4.6)";
+    case PairStatus::NeckVanished:
+      return "the neck shrank below x/R_min = 1e-4: a tensile force beyond the sintering force pulls the particles apart";
     case PairStatus::NonFinite: return "a state or rate became non-finite";
     case PairStatus::StepFailure: return "the integrator could not make a step (step size underflow or step cap)";
   }

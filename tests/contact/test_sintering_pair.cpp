@@ -500,6 +500,15 @@ TEST(SinteringPair, LeavesTheUsefulRangeWithAStatus) {
   EXPECT_LT(c.x_over_R(), 0.62);
   EXPECT_LT(c.t, 4 * 3600.0);
   EXPECT_EQ(integ.advance(c, p, 5 * 3600.0), sp::PairStatus::NeckLimit);  // stays stopped
+  // a tension well beyond F_s (~0.5 mN) closes the neck
+  {
+    const auto T2 = sp::TemperatureProfile::constant(1273.15);
+    sp::PairContact d = sp::make_contact(50e-6, 50e-6, 0.01);
+    const sp::PairProblem pt{&cu, &T2, {}, -1e-2};
+    EXPECT_EQ(integ.advance(d, pt, 3600.0), sp::PairStatus::NeckVanished);
+    EXPECT_LT(d.x_over_R(), 1e-4);
+    EXPECT_LT(sp::shrinkage(d.q, d.q0), 0.0);  // the centres moved apart
+  }
   // a cone that does not exist
   EXPECT_EQ(sp::check_state({0.1e-6, 10e-6, 9.9e-6, 10e-6, 10e-6}, 10e-6, 0.6), sp::PairStatus::ConeDegenerate);
   EXPECT_FALSE(sp::describe(sp::PairStatus::NeckLimit, 0.6).empty());

@@ -172,6 +172,7 @@ enum class PairStatus : std::uint8_t {
   Ok = 0,
   NeckLimit,       ///< x / min(R_A0, R_B0) passed the useful range (default 0.6)
   ConeDegenerate,  ///< x^2 + h^2 <= R^2 or u_t <= 0: the cap-cone geometry no longer exists
+  NeckVanished,    ///< x / min(R_A0, R_B0) < 1e-4: the neck closed (a tension beyond F_s pulls it apart)
   NonFinite,       ///< a non-finite state or rate
   StepFailure,     ///< the integrator could not make a step (step size underflow / step cap)
 };
