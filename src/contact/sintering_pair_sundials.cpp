@@ -29,7 +29,8 @@ std::string flag_text(const std::string& call, int flag) {
 }
 }  // namespace
 
-SundialsError::SundialsError(const std::string& call, int flag) : std::runtime_error(flag_text(call, flag)), flag_(flag) {}
+SundialsError::SundialsError(const std::string& call, int flag)
+    : std::runtime_error(flag_text(call, flag)), flag_(flag) {}
 
 namespace {
 void check(int flag, const char* call) {
@@ -82,8 +83,10 @@ struct SundialsPairIntegrator::Impl {
     if (LS != nullptr) SUNLinSolFree(LS);
     if (A != nullptr) SUNMatDestroy(A);
     if (mem != nullptr) {
-      if (cvode) CVodeFree(&mem);
-      else ERKStepFree(&mem);
+      if (cvode)
+        CVodeFree(&mem);
+      else
+        ERKStepFree(&mem);
     }
     if (y != nullptr) N_VDestroy(y);
     if (ctx != nullptr) SUNContext_Free(&ctx);
@@ -141,8 +144,10 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   const State offset{0.0, c.q0[1], c.q0[2], c.q0[3], c.q0[4]};
   I.cd.offset = &offset;
   N_VSetArrayPointer(c.q.data(), I.y);  // the view now aliases this contact's state
+  bool shifted = false;
   auto shift = [&](double sign) {
     for (int i = 1; i < 5; ++i) c.q[i] += sign * offset[i];
+    shifted = sign < 0.0;
   };
   auto state_now = [&] {
     State q = c.q;
@@ -156,71 +161,72 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
     c.status = s;
     return s;
   };
-  while (c.t < t_end) {
-    I.cd.seg = p.temperature->segment_at(c.t);
-    const double seg_end = std::min(t_end, I.cd.seg.t1);
-    ++c.restarts;
-    shift(-1.0);
-    if (I.cvode) {
-      check(CVodeReInit(I.mem, c.t, I.y), "CVodeReInit");
-      check(CVodeSStolerances(I.mem, opts.rtol, atol), "CVodeSStolerances");
-      check(CVodeSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "CVodeSetInitStep");
-      check(CVodeSetStopTime(I.mem, seg_end), "CVodeSetStopTime");
-      check(CVodeSetMaxNumSteps(I.mem, opts.max_steps), "CVodeSetMaxNumSteps");
-    } else {
-      check(ERKStepReInit(I.mem, rhs_callback, c.t, I.y), "ERKStepReInit");
-      check(ERKStepSStolerances(I.mem, opts.rtol, atol), "ERKStepSStolerances");
-      check(ERKStepSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "ERKStepSetInitStep");
-      // no stop time: ARKODE clips its step proposal to a stop time ahead of the step, which
-      // hides the unclipped proposal from the step memory; it steps past seg_end instead and the
-      // state at seg_end is its interpolant (ERKStepGetDky), from which the next segment restarts
-      check(ERKStepSetMaxNumSteps(I.mem, opts.max_steps), "ERKStepSetMaxNumSteps");
-    }
-    PairStatus s = PairStatus::Ok;
-    for (;;) {
-      double t = c.t;
-      const int flag = I.cvode ? CVode(I.mem, seg_end, I.y, &t, CV_ONE_STEP)
-                               : ERKStepEvolve(I.mem, seg_end, I.y, &t, ARK_ONE_STEP);
-      if (flag < 0) {
-        const bool step_failure = I.cvode ? (flag == CV_TOO_MUCH_WORK || flag == CV_ERR_FAILURE ||
-                                             flag == CV_CONV_FAILURE || flag == CV_REPTD_RHSFUNC_ERR ||
-                                             flag == CV_RHSFUNC_FAIL || flag == CV_TOO_CLOSE)
-                                          : (flag == ARK_TOO_MUCH_WORK || flag == ARK_ERR_FAILURE ||
-                                             flag == ARK_REPTD_RHSFUNC_ERR || flag == ARK_RHSFUNC_FAIL ||
-                                             flag == ARK_TOO_CLOSE);
-        if (!step_failure) {
-          shift(+1.0);
-          finish(PairStatus::StepFailure);
-          throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
-        }
-        s = PairStatus::StepFailure;
-        break;
-      }
-      ++c.steps;
-      if (!I.cvode && t > seg_end) {
-        check(ERKStepGetDky(I.mem, seg_end, 0, I.y), "ERKStepGetDky");
-        t = seg_end;
-      }
-      c.t = t;
-      // step memory as in the DP45: the controller's proposal, unless this step was clipped to land
-      // on the stop (then the proposal from before the clip is kept, or a larger one)
-      double h = 0.0, h_last = 0.0;
+  try {
+    while (c.t < t_end) {
+      I.cd.seg = p.temperature->segment_at(c.t);
+      const double seg_end = std::min(t_end, I.cd.seg.t1);
+      ++c.restarts;
+      shift(-1.0);
       if (I.cvode) {
-        check(CVodeGetCurrentStep(I.mem, &h), "CVodeGetCurrentStep");
-        check(CVodeGetLastStep(I.mem, &h_last), "CVodeGetLastStep");
+        check(CVodeReInit(I.mem, c.t, I.y), "CVodeReInit");
+        check(CVodeSStolerances(I.mem, opts.rtol, atol), "CVodeSStolerances");
+        check(CVodeSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "CVodeSetInitStep");
+        check(CVodeSetStopTime(I.mem, seg_end), "CVodeSetStopTime");
+        check(CVodeSetMaxNumSteps(I.mem, opts.max_steps), "CVodeSetMaxNumSteps");
       } else {
-        check(ERKStepGetCurrentStep(I.mem, &h), "ERKStepGetCurrentStep");
-        check(ERKStepGetLastStep(I.mem, &h_last), "ERKStepGetLastStep");
+        check(ERKStepReInit(I.mem, rhs_callback, c.t, I.y), "ERKStepReInit");
+        check(ERKStepSStolerances(I.mem, opts.rtol, atol), "ERKStepSStolerances");
+        check(ERKStepSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "ERKStepSetInitStep");
+        // no stop time: ARKODE clips its step proposal to a stop time ahead of the step, which
+        // hides the unclipped proposal from the step memory; it steps past seg_end instead and the
+        // state at seg_end is its interpolant (ERKStepGetDky), from which the next segment restarts
+        check(ERKStepSetMaxNumSteps(I.mem, opts.max_steps), "ERKStepSetMaxNumSteps");
       }
-      const bool clipped = t >= seg_end && c.h > 0.0 && h_last < c.h * (1.0 - 1e-9);
-      if (h > 0.0) c.h = clipped ? std::max(c.h, h) : h;
-      s = check_state(state_now(), Rmin, opts.x_over_R_max);
-      if (s != PairStatus::Ok) break;
-      if (t >= seg_end) break;
+      PairStatus s = PairStatus::Ok;
+      for (;;) {
+        double t = c.t;
+        const int flag = I.cvode ? CVode(I.mem, seg_end, I.y, &t, CV_ONE_STEP)
+                                 : ERKStepEvolve(I.mem, seg_end, I.y, &t, ARK_ONE_STEP);
+        if (flag < 0) {
+          const bool step_failure =
+              I.cvode ? (flag == CV_TOO_MUCH_WORK || flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE ||
+                         flag == CV_REPTD_RHSFUNC_ERR || flag == CV_RHSFUNC_FAIL || flag == CV_TOO_CLOSE)
+                      : (flag == ARK_TOO_MUCH_WORK || flag == ARK_ERR_FAILURE || flag == ARK_REPTD_RHSFUNC_ERR ||
+                         flag == ARK_RHSFUNC_FAIL || flag == ARK_TOO_CLOSE);
+          if (!step_failure) throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
+          s = PairStatus::StepFailure;
+          break;
+        }
+        ++c.steps;
+        if (!I.cvode && t > seg_end) {
+          check(ERKStepGetDky(I.mem, seg_end, 0, I.y), "ERKStepGetDky");
+          t = seg_end;
+        }
+        c.t = t;
+        // step memory as in the DP45: the controller's proposal, unless this step was clipped to land
+        // on the stop (then the proposal from before the clip is kept, or a larger one)
+        double h = 0.0, h_last = 0.0;
+        if (I.cvode) {
+          check(CVodeGetCurrentStep(I.mem, &h), "CVodeGetCurrentStep");
+          check(CVodeGetLastStep(I.mem, &h_last), "CVodeGetLastStep");
+        } else {
+          check(ERKStepGetCurrentStep(I.mem, &h), "ERKStepGetCurrentStep");
+          check(ERKStepGetLastStep(I.mem, &h_last), "ERKStepGetLastStep");
+        }
+        const bool clipped = t >= seg_end && c.h > 0.0 && h_last < c.h * (1.0 - 1e-9);
+        if (h > 0.0) c.h = clipped ? std::max(c.h, h) : h;
+        s = check_state(state_now(), Rmin, opts.x_over_R_max);
+        if (s != PairStatus::Ok) break;
+        if (t >= seg_end) break;
+      }
+      shift(+1.0);
+      if (s != PairStatus::Ok) return finish(s);
+      c.t = seg_end;  // the tstop return lands on seg_end to round-off; make it exact
     }
-    shift(+1.0);
-    if (s != PairStatus::Ok) return finish(s);
-    c.t = seg_end;  // the tstop return lands on seg_end to round-off; make it exact
+  } catch (...) {  // a SUNDIALS error: leave the contact unshifted, stopped, and the view detached
+    if (shifted) shift(+1.0);
+    finish(PairStatus::StepFailure);
+    throw;
   }
   return finish(PairStatus::Ok);
 }
@@ -229,7 +235,8 @@ PairIntegrator::PairIntegrator(IntegratorOptions opts) : opts_(opts) { opts_.val
 PairIntegrator::~PairIntegrator() { delete sundials_; }
 
 PairStatus PairIntegrator::advance(PairContact& c, const PairProblem& p, double t_end) {
-  if (opts_.kind == IntegratorKind::DP45 || opts_.kind == IntegratorKind::RK4) return sinter::advance(c, p, t_end, opts_);
+  if (opts_.kind == IntegratorKind::DP45 || opts_.kind == IntegratorKind::RK4)
+    return sinter::advance(c, p, t_end, opts_);
   if (sundials_ == nullptr) sundials_ = new SundialsPairIntegrator(opts_.kind);
   return sundials_->advance(c, p, t_end, opts_);
 }
