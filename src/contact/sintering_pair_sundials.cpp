@@ -145,6 +145,7 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   I.cd.offset = &offset;
   N_VSetArrayPointer(c.q.data(), I.y);  // the view now aliases this contact's state
   bool shifted = false;
+  long steps = 0;  // internal steps of this advance (the step cap)
   auto shift = [&](double sign) {
     for (int i = 1; i < 5; ++i) c.q[i] += sign * offset[i];
     shifted = sign < 0.0;
@@ -184,6 +185,10 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
       }
       PairStatus s = PairStatus::Ok;
       for (;;) {
+        if (++steps > opts.max_steps) {  // ONE_STEP mode: SUNDIALS' own mxstep counts per call
+          s = PairStatus::StepFailure;
+          break;
+        }
         double t = c.t;
         const int flag = I.cvode ? CVode(I.mem, seg_end, I.y, &t, CV_ONE_STEP)
                                  : ERKStepEvolve(I.mem, seg_end, I.y, &t, ARK_ONE_STEP);

@@ -381,6 +381,49 @@ TEST(SinteringPair, PerContactStepMemory) {
   EXPECT_GT(old_c.h, 10.0);           // and the old contact's memory is its proposal, not the clip
 }
 
+TEST(SinteringPair, InterleavedContactsDoNotDisturbEachOther) {
+  // one integrator object serving two contacts in turn gives each exactly what it gives alone:
+  // the memory is per contact and a restart of one never touches the other
+  const auto cu = sp::builtin_sinter_material("cu");
+  const auto T = sp::TemperatureProfile::constant(1293.0);
+  const sp::PairProblem p{&cu, &T, {}, 0.0};
+  for (auto kind : {sp::IntegratorKind::DP45, sp::IntegratorKind::RK4, sp::IntegratorKind::CVODE, sp::IntegratorKind::ARKODE}) {
+    const auto o = opts_of(kind, 1e-7);
+    sp::PairIntegrator shared(o), alone_a(o), alone_b(o);
+    sp::PairContact a = sp::make_contact(25e-6, 27e-6, 0.01), b = sp::make_contact(22e-6, 24e-6, 0.02);
+    sp::PairContact a1 = a, b1 = b;
+    for (double t = 10.0; t <= 100.0; t += 10.0) {
+      ASSERT_EQ(shared.advance(a, p, t), sp::PairStatus::Ok);
+      ASSERT_EQ(shared.advance(b, p, t), sp::PairStatus::Ok);
+      ASSERT_EQ(alone_a.advance(a1, p, t), sp::PairStatus::Ok);
+      ASSERT_EQ(alone_b.advance(b1, p, t), sp::PairStatus::Ok);
+    }
+    for (int i = 0; i < 5; ++i) {
+      EXPECT_EQ(a.q[i], a1.q[i]) << sp::to_string(kind);
+      EXPECT_EQ(b.q[i], b1.q[i]) << sp::to_string(kind);
+    }
+    EXPECT_EQ(a.steps, a1.steps) << sp::to_string(kind);
+  }
+}
+
+TEST(SinteringPair, StepCapGivesStepFailure) {
+  const auto cu = sp::builtin_sinter_material("cu");
+  const auto T = sp::TemperatureProfile::constant(1273.15);
+  const sp::PairProblem p{&cu, &T, {}, 0.0};
+  for (auto kind : {sp::IntegratorKind::DP45, sp::IntegratorKind::CVODE, sp::IntegratorKind::ARKODE}) {
+    auto o = opts_of(kind, 1e-8);
+    o.max_steps = 3;
+    sp::PairIntegrator integ(o);
+    sp::PairContact c = sp::make_contact(50e-6, 50e-6, 0.01);
+    EXPECT_EQ(integ.advance(c, p, 57600.0), sp::PairStatus::StepFailure) << sp::to_string(kind);
+    EXPECT_LT(c.t, 57600.0);
+    EXPECT_EQ(sp::check_state(c.q, c.R_min0(), 0.6), sp::PairStatus::Ok) << "the contact keeps a valid, unshifted state";
+    EXPECT_GT(c.q[kHA], 0.99 * c.q0[kHA]);  // (a shifted state would have h_A ~ 0)
+    EXPECT_LE(c.steps, 3);
+  }
+  EXPECT_THROW(sp::parse_integrator("euler"), std::invalid_argument);
+}
+
 // ---- temperature profiles ------------------------------------------------------------------------
 
 TEST(SinteringPair, ConstantProfileEqualsFixedTemperature) {
