@@ -7,7 +7,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
 status=0
-for case_dir in "$here"/redanz_fleck_compaction "$here"/redanz_fleck_yield "$here"/luding_sintering; do
+for case_dir in "$here"/redanz_fleck_compaction "$here"/redanz_fleck_yield "$here"/luding_sintering "$here"/sintering_pair; do
   echo "== $(basename "$case_dir")"
   "$py" "$case_dir/run.py" "$@" || status=1
 done

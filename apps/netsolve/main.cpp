@@ -33,6 +33,7 @@
 namespace fs = std::filesystem;
 using netdem::app::Field;
 int run_yield_command(int argc, char** argv);  // apps/netsolve/yield.cpp: netsolve yield | yield-merge
+int run_sinter_pair_command(int argc, char** argv);  // apps/netsolve/sinter_pair.cpp: netsolve sinter-pair
 
 namespace {
 
@@ -232,10 +233,12 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
 int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "sinter-pair") return run_sinter_pair_command(argc, argv);
   CLI::App app{"netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001)"};
   app.require_subcommand(1);
   app.add_subcommand("yield", "yield surface probes after precompaction (docs/yield.md; own --help)");
   app.add_subcommand("yield-merge", "assemble yield_points.csv from the probe files of several yield runs");
+  app.add_subcommand("sinter-pair", "one two-particle sintering contact against time (docs/sintering_pair.md; own --help)");
   PackArgs pa;
   CompactArgs ca;
   std::string out;

@@ -1,0 +1,345 @@
+// netsolve sinter-pair: one two-particle sintering contact against time (issue #14). The model is a
+// documented reconstruction (/work/shared/notes/sintering-pair-model.md), not the authors' model;
+// docs/sintering_pair.md describes it, its files and this command.
+//
+//   netsolve sinter-pair [--material cu|ti|FILE] [--set KEY=VALUE]... [--radius R | --radii RA,RB]
+//                        [--temperature T | --profile FILE] [--time T_END] [--integrator dp45|rk4|cvode|arkode]
+//                        [--rtol RTOL] [--rk4-c C] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--force F] [--paths LIST]
+//                        [--per-decade N] [--t-first T] [--out DIR]
+//
+// SI units everywhere (m, s, K, N). Writes command.txt, pair.csv (one row per output time: a log
+// grid from --t-first, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
+// range), pair.svg (x/R and Delta L/L0 against t, log-log) and summary.json (last). A contact that
+// leaves the validity limits (note section 4.6) stops there; summary.json says why. Bad input: one
+// line on stderr, exit 2 (command line) or 1, no output folder.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "netdem/contact/sintering_pair.hpp"
+#include "netdem/contact/sintering_pair_sundials.hpp"
+#include "output.hpp"
+#include "parse.hpp"
+
+int run_sinter_pair_command(int argc, char** argv);
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace sp = netdem::contact::sinter;
+using nlohmann::json;
+using netdem::app::netsolve::parse_double;
+
+struct Args {
+  std::string material = "cu", radii, profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
+  std::vector<std::string> set;
+  double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
+         force = 0.0, t_first = 1.0;
+  int per_decade = 20;
+  bool quiet = false;
+};
+
+struct Row {
+  double t, T, x_over_R, shrinkage, volume, energy, F_s, eta, eta_BM;
+  sp::FullState y;
+};
+
+std::vector<double> output_times(double t_end, double t_first_in, const sp::TemperatureProfile& prof, int per_decade) {
+  std::vector<double> t = {0.0};
+  const double t_first = std::min(t_first_in, t_end);
+  for (int k = 0;; ++k) {
+    const double v = t_first * std::pow(10.0, static_cast<double>(k) / per_decade);
+    if (v >= t_end) break;
+    t.push_back(v);
+  }
+  for (double v : {60.0, 600.0, 3600.0, 14400.0, 57600.0})
+    if (v <= t_end) t.push_back(v);
+  for (double v : prof.times())
+    if (v > 0.0 && v < t_end) t.push_back(v);
+  t.push_back(t_end);
+  std::sort(t.begin(), t.end());
+  std::vector<double> u;
+  for (double v : t)
+    if (u.empty() || v > u.back() * (1.0 + 1e-12)) u.push_back(v);
+  return u;
+}
+
+// log-log plot of x/R and Delta L/L0 against t (SVG, no dependencies)
+std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
+  std::vector<const Row*> pts;
+  for (const auto& r : rows)
+    if (r.t > 0.0 && r.x_over_R > 0.0 && r.shrinkage > 0.0) pts.push_back(&r);
+  const double W = 640, H = 440, L = 70, Rm = 20, T = 40, B = 50;
+  std::string s = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"12\">\n"
+      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\">{}</text>\n",
+      W, H, W / 2, title);
+  if (pts.size() < 2) return s + "<text x=\"100\" y=\"200\">fewer than two points to plot</text>\n</svg>\n";
+  double t0 = pts.front()->t, t1 = pts.back()->t, v0 = 1e300, v1 = 0;
+  for (const Row* r : pts) v0 = std::min({v0, r->x_over_R, r->shrinkage}), v1 = std::max({v1, r->x_over_R, r->shrinkage});
+  const double lt0 = std::floor(std::log10(t0)), lt1 = std::ceil(std::log10(t1));
+  const double lv0 = std::floor(std::log10(v0)), lv1 = std::ceil(std::log10(v1));
+  auto X = [&](double t) { return L + (std::log10(t) - lt0) / std::max(lt1 - lt0, 1.0) * (W - L - Rm); };
+  auto Y = [&](double v) { return H - B - (std::log10(v) - lv0) / std::max(lv1 - lv0, 1.0) * (H - T - B); };
+  s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", L, T, W - L - Rm, H - T - B);
+  for (double e = lt0; e <= lt1; e += 1.0)
+    s += fmt::format("<line x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">1e{4}</text>\n",
+                     X(std::pow(10.0, e)), T, H - B, H - B + 16, static_cast<int>(e));
+  for (double e = lv0; e <= lv1; e += 1.0)
+    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{3}\" y=\"{4}\" text-anchor=\"end\">1e{5}</text>\n",
+                     L, W - Rm, Y(std::pow(10.0, e)), L - 6, Y(std::pow(10.0, e)) + 4, static_cast<int>(e));
+  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">t [s]</text>\n", (L + W - Rm) / 2, H - 12);
+  auto line = [&](auto get, const char* colour, const char* label, int k) {
+    std::string p;
+    for (const Row* r : pts) p += fmt::format("{:.1f},{:.1f} ", X(r->t), Y(get(*r)));
+    s += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"2\" points=\"{}\"/>\n", colour, p);
+    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"/><text x=\"{4}\" y=\"{5}\">{6}</text>\n",
+                     L + 10, L + 40, T + 16 + 18 * k, colour, L + 46, T + 20 + 18 * k, label);
+  };
+  line([](const Row& r) { return r.x_over_R; }, "#1f77b4", "x / R_min", 0);
+  line([](const Row& r) { return r.shrinkage; }, "#d62728", "shrinkage Delta L / L0", 1);
+  return s + "</svg>\n";
+}
+
+// --paths: "all" or a comma list of I, II, III, IV, V (the path types of note section 3)
+sp::PathSwitches parse_paths(const std::string& s) {
+  if (s == "all") return {};
+  sp::PathSwitches p{0, 0, 0, 0, 0};
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item == "I") p.I = 1;
+    else if (item == "II") p.II = 1;
+    else if (item == "III") p.III = 1;
+    else if (item == "IV") p.IV = 1;
+    else if (item == "V") p.V = 1;
+    else throw std::invalid_argument(fmt::format("--paths '{}': '{}' is not one of I, II, III, IV, V (or 'all')", s, item));
+  }
+  return p;
+}
+
+sp::SinterMaterial load_material(const Args& a, std::string& source) {
+  std::string text;
+  if (a.material == "cu" || a.material == "ti") {
+    text = sp::builtin_sinter_material_text(a.material);
+    source = "built-in " + a.material + " (src/contact/materials/" + a.material + ".txt)";
+  } else {
+    if (!fs::is_regular_file(a.material))
+      throw std::invalid_argument(fmt::format("--material '{}' is not cu, ti or a readable file", a.material));
+    sp::read_sinter_material(a.material);  // reports file errors with the file's line numbers
+    std::ostringstream o;
+    o << std::ifstream(a.material).rdbuf();
+    text = o.str();
+    source = a.material;
+  }
+  for (const auto& kv : a.set) {
+    if (kv.find('=') == std::string::npos) throw std::invalid_argument(fmt::format("--set '{}' is not KEY=VALUE", kv));
+    text += "\n" + kv + "\n";
+  }
+  return sp::parse_sinter_material(text, a.set.empty() ? source : source + " with --set");
+}
+
+int run(const Args& a, const std::string& command) {
+  // ---- everything is checked before the output folder exists
+  std::string mat_source;
+  const sp::SinterMaterial mat = load_material(a, mat_source);
+  double RA = a.radius, RB = a.radius;
+  if (!a.radii.empty()) {
+    const auto c = a.radii.find(',');
+    if (c == std::string::npos || !parse_double(a.radii.substr(0, c), RA) || !parse_double(a.radii.substr(c + 1), RB))
+      throw std::invalid_argument(fmt::format("--radii '{}' is not RA,RB in metres", a.radii));
+  }
+  for (double r : {RA, RB})
+    if (!(std::isfinite(r) && r >= 1e-9 && r <= 0.1))
+      throw std::invalid_argument(fmt::format("radius {} m is outside [1e-9, 0.1] m (radii are in metres: 50 um is 50e-6)", r));
+  if (!(std::isfinite(a.t_end) && a.t_end > 0.0)) throw std::invalid_argument(fmt::format("--time must be positive [s], got {}", a.t_end));
+  if (!(std::isfinite(a.temperature) && a.temperature > 0.0 && a.temperature < 1e4))
+    throw std::invalid_argument(fmt::format("--temperature must be in (0, 1e4) K, got {}", a.temperature));
+  if (a.per_decade < 1 || a.per_decade > 1000) throw std::invalid_argument("--per-decade must be in [1, 1000]");
+  if (!std::isfinite(a.force)) throw std::invalid_argument("--force must be finite");
+  const sp::TemperatureProfile prof =
+      a.profile.empty() ? sp::TemperatureProfile::constant(a.temperature) : sp::TemperatureProfile::read_csv(a.profile);
+  sp::IntegratorOptions io;
+  io.kind = sp::parse_integrator(a.integrator);
+  io.rtol = a.rtol;
+  io.rk4_c = a.rk4_c;
+  io.x_over_R_max = a.x_max;
+  io.validate();
+  sp::PairContact c = sp::make_contact(RA, RB, a.x0);
+  if (!(std::isfinite(a.t_first) && a.t_first > 0.0)) throw std::invalid_argument("--t-first must be positive [s]");
+  const auto times = output_times(a.t_end, a.t_first, prof, a.per_decade);
+  const sp::PathSwitches paths = parse_paths(a.paths);
+
+  const fs::path out(a.out);
+  netdem::app::start_run_dir(out);
+  netdem::app::write_file_atomic(out / "command.txt", command + "\n");
+
+  const sp::PairProblem problem{&mat, &prof, paths, a.force};
+  sp::PairIntegrator integ(io);
+  const double V0 = sp::pair_volume(c.q);
+  std::vector<Row> rows;
+  double max_drift = 0.0;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
+  auto make_row = [&](Row& r) {
+    const double T = prof(c.t);
+    const auto d = sp::diffusivities(mat, T);
+    r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
+    try {
+      const auto law = sp::effective_law(c.q, d, mat, paths);
+      r.F_s = law.F_s;
+      r.eta = law.eta;
+      r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
+    } catch (const std::domain_error&) {
+      return false;
+    }
+    bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
+                  std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
+    for (double v : r.y) finite = finite && std::isfinite(v);
+    return finite;
+  };
+  const auto w0 = std::chrono::steady_clock::now();
+  netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
+  bool dropped_row = false;
+  for (double t : times) {
+    if (t > 0.0) integ.advance(c, problem, t);
+    Row r;
+    if (make_row(r)) {
+      rows.push_back(r);
+      max_drift = std::max(max_drift, std::fabs(r.volume / V0 - 1.0));
+    } else {
+      dropped_row = true;
+    }
+    progress.update(std::log10(1.0 + c.t));
+    if (c.status != sp::PairStatus::Ok) break;
+  }
+  progress.finish();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+
+  std::string csv = "t,T,x_over_R,shrinkage,volume,free_energy,sintering_force,y1,y2,y3,y4,y5,y6,y7\n";
+  for (const auto& r : rows) {
+    csv += fmt::format("{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g}", r.t, r.T, r.x_over_R, r.shrinkage, r.volume,
+                       r.energy, r.F_s);
+    for (double v : r.y) csv += fmt::format(",{:.12g}", v);
+    csv += "\n";
+  }
+  netdem::app::write_file_atomic(out / "pair.csv", csv);
+  const std::string title = fmt::format("sinter-pair {}: R = {:g}, {:g} m, {} (documented reconstruction)", mat.name, RA, RB,
+                                        a.profile.empty() ? fmt::format("T = {:g} K", a.temperature) : "T(t) profile");
+  netdem::app::write_file_atomic(out / "pair.svg", plot_svg(rows, title));
+
+  json j;
+  j["command"] = command;
+  j["model"] = "two-particle cap-cone sintering model: a documented reconstruction of "
+               "/work/shared/notes/sintering-pair-model.md, not the model of Thomsen et al. / Ivannikov et al.";
+  j["material"] = {{"name", mat.name},         {"source", mat_source},         {"Omega", mat.omega},
+                   {"gamma_s", mat.gamma_s},   {"gamma_gb", mat.gamma_gb},     {"D_vol0", mat.D_vol0},
+                   {"Q_vol", mat.Q_vol},       {"deltaD_gb0", mat.deltaD_gb0}, {"Q_gb", mat.Q_gb},
+                   {"deltaD_s0", mat.deltaD_s0}, {"Q_s", mat.Q_s},             {"c_III", mat.c_III},
+                   {"c_IV", mat.c_IV},         {"E", mat.youngs_modulus}};
+  j["radii_m"] = {RA, RB};
+  j["x0_over_R"] = a.x0;
+  if (a.profile.empty())
+    j["temperature"] = {{"constant_K", a.temperature}};
+  else
+    j["temperature"] = {{"profile", a.profile}, {"breakpoints", prof.times().size()}};
+  j["t_end_s"] = a.t_end;
+  j["force_N"] = a.force;
+  j["paths"] = {{"I", paths.I}, {"II", paths.II}, {"III", paths.III}, {"IV", paths.IV}, {"V", paths.V}};
+  j["integrator"] = {{"name", sp::to_string(io.kind)}, {"rtol", io.rtol}, {"atol_scale", io.atol_scale}, {"rk4_c", io.rk4_c}};
+  j["status"] = sp::to_string(c.status);
+  j["reason"] = sp::describe(c.status, io.x_over_R_max);
+  j["completed"] = c.status == sp::PairStatus::Ok && c.t >= a.t_end;
+  j["t_stop_s"] = c.t;
+  j["x_over_R_max"] = io.x_over_R_max;
+  j["rows"] = rows.size();
+  j["rows_dropped_non_finite"] = dropped_row;
+  j["max_volume_drift"] = max_drift;
+  json at = json::object();
+  for (const auto& r : rows)
+    for (double v : {60.0, 600.0, 3600.0, 14400.0, 57600.0})
+      if (r.t == v)
+        at[fmt::format("{:g}", v)] = {{"x_over_R", r.x_over_R}, {"shrinkage", r.shrinkage}, {"sintering_force", r.F_s},
+                                      {"viscosity", num(r.eta)}, {"viscosity_bouvard_mcmeeking", r.eta_BM}};
+  j["at"] = at;
+  if (!rows.empty()) {
+    const Row& r = rows.back();
+    j["final"] = {{"t", r.t},
+                  {"x_over_R", r.x_over_R},
+                  {"shrinkage", r.shrinkage},
+                  {"R_A_over_R_A0", r.y[1] / RA},
+                  {"R_B_over_R_B0", r.y[4] / RB},
+                  {"sintering_force", r.F_s},
+                  {"viscosity", num(r.eta)},
+                  {"viscosity_bouvard_mcmeeking", r.eta_BM}};
+    if (mat.youngs_modulus > 0.0)
+      j["final"]["equivalent_bar_force"] = sp::equivalent_bar_force(mat.youngs_modulus, c.q0, c.q);  // Eq 17
+  }
+  j["stats"] = {{"steps", c.steps}, {"rejected", c.rejected}, {"rhs_evals", c.rhs_evals}, {"restarts", c.restarts}};
+  j["wall_s"] = wall;
+  j["files"] = {{"csv", "pair.csv"}, {"plot", "pair.svg"}};
+  netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  const Row* last = rows.empty() ? nullptr : &rows.back();
+  if (c.status != sp::PairStatus::Ok)
+    std::fprintf(stderr, "netsolve sinter-pair: stopped at t = %.6g s: %s\n", c.t, sp::describe(c.status, io.x_over_R_max).c_str());
+  if (last != nullptr)
+    std::printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3g s -> %s\n", last->t, last->x_over_R, last->shrinkage,
+                c.steps, wall, out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int run_sinter_pair_command(int argc, char** argv) {
+  std::string command;
+  for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
+  Args a;
+  CLI::App app{"netsolve sinter-pair: one two-particle sintering contact against time (a documented reconstruction of "
+               "/work/shared/notes/sintering-pair-model.md; docs/sintering_pair.md). SI units."};
+  app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format)")->capture_default_str();
+  app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
+  auto* o_r = app.add_option("--radius", a.radius, "radius of both particles [m]")->capture_default_str();
+  auto* o_rr = app.add_option("--radii", a.radii, "RA,RB radii of the two particles [m]");
+  o_r->excludes(o_rr);
+  auto* o_T = app.add_option("--temperature", a.temperature, "constant temperature [K]")->capture_default_str();
+  auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows");
+  o_T->excludes(o_p);
+  app.add_option("--time", a.t_end, "end time [s]")->capture_default_str();
+  app.add_option("--integrator", a.integrator, "dp45 (default) | rk4 (dt = c x/|dx/dt|) | cvode (BDF) | arkode (ERKStep DP5(4))")
+      ->capture_default_str();
+  app.add_option("--rtol", a.rtol, "relative tolerance (dp45, cvode, arkode)")->capture_default_str();
+  app.add_option("--rk4-c", a.rk4_c, "rk4 step factor c in dt = c x / |dx/dt|")->capture_default_str();
+  app.add_option("--x0", a.x0, "initial neck x0 / min(RA, RB) (tangent-cone fillet)")->capture_default_str();
+  app.add_option("--x-max", a.x_max, "stop when x / min(RA0, RB0) exceeds this (useful range, note section 4.6)")->capture_default_str();
+  app.add_option("--force", a.force, "compressive normal force on the contact [N] (0: free sintering)")->capture_default_str();
+  app.add_option("--per-decade", a.per_decade, "output rows per decade of time")->capture_default_str();
+  app.add_option("--t-first", a.t_first, "first time of the logarithmic output grid [s]")->capture_default_str();
+  app.add_option("--paths", a.paths, "transport paths on: all, or a list of I (GB), II (surface), III, IV, V (lattice); note section 3")
+      ->capture_default_str();
+  app.add_flag("--quiet", a.quiet, "no progress on stderr");
+  app.add_option("--out", a.out, "output folder")->capture_default_str();
+  try {
+    app.parse(argc - 1, argv + 1);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "netsolve sinter-pair: error: %s (see --help)\n", e.what());
+    return 2;
+  }
+  try {
+    return run(a, command);
+  } catch (const std::exception& e) {
+    std::string msg = e.what();
+    std::replace(msg.begin(), msg.end(), '\n', ' ');
+    std::fprintf(stderr, "netsolve sinter-pair: error: %s\n", msg.c_str());
+    return 1;
+  }
+}
