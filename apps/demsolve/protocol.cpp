@@ -237,6 +237,8 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   opt.temperature = phases.front().T_start;
   std::unique_ptr<DynamicSolver> s;
   nlohmann::json summary;
+  if (!args.state_file.empty() && !sample.packing_file.empty())
+    throw std::invalid_argument("--state and --packing both give the sample: use one of them");
   if (!args.state_file.empty()) {
     SolverState st = load_state(args.state_file, args.param_overrides);
     if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;
