@@ -85,9 +85,7 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
       }
     }
   };
-  const double total =
-      std::ceil((test.max_strain / test.strain_rate + 0.5 * test.ramp_time) / s.dt());  // run_compression's steps
-  Writer writer(z0, p, t_start, out, total, a.quiet);
+  Writer writer(z0, p, t_start, out, static_cast<double>(test.steps(s.dt())), a.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   const CompressionRun run = run_compression(s, test, p, 2000, writer);
   writer.progress.finish();
@@ -158,7 +156,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
       if (k > 0) progress.update(static_cast<double>(k));
     }
   };
-  Writer writer(a.amplitude, w, t_start, out, std::ceil(a.time / s.dt()), a.quiet);
+  Writer writer(a.amplitude, w, t_start, out, static_cast<double>(test.steps(s.dt())), a.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   const std::int64_t steps = run_vibration(s, test, 1000, writer);
   writer.progress.finish();

@@ -210,10 +210,7 @@ class PhaseWriter final : public PhaseObserver {
 void run_and_write_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const RunArgs& a,
                           const fs::path& out, nlohmann::json& summary) {
   const double pressure = s.box().right.pressure > 0.0 ? s.box().right.pressure : a.pressure;
-  const double dt = s.dt();
-  const auto k0 = static_cast<std::int64_t>(std::llround(s.time() / dt));
-  const auto K = static_cast<std::int64_t>(std::ceil(phase_end(phases, phases.size() - 1) / dt - 1e-6));
-  PhaseWriter writer(s, phases, pressure, out, std::max<std::int64_t>(0, K - k0), a.quiet);
+  PhaseWriter writer(s, phases, pressure, out, steps_to_end(s, phases), a.quiet);
   const PhaseRun run = netdem::dem::run_phases(s, phases, {a.mu, a.mu_wall_prepare}, 3000, writer);
   writer.finish(s, run, summary);
 }
@@ -240,6 +237,8 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   opt.temperature = phases.front().T_start;
   std::unique_ptr<DynamicSolver> s;
   nlohmann::json summary;
+  if (!args.state_file.empty() && !sample.packing_file.empty())
+    throw std::invalid_argument("--state and --packing both give the sample: use one of them");
   if (!args.state_file.empty()) {
     SolverState st = load_state(args.state_file, args.param_overrides);
     if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;

@@ -26,6 +26,13 @@ void CompressionTest::validate() const {
     throw std::invalid_argument(fmt::format("--ramp-time must be a number of seconds >= 0, got {}", ramp_time));
 }
 
+std::int64_t CompressionTest::steps(double dt) const {
+  // eps(t) = rate (t - t_ramp / 2) after the ramp
+  return static_cast<std::int64_t>(std::ceil((max_strain / strain_rate + 0.5 * ramp_time) / dt));
+}
+
+std::int64_t VibrationTest::steps(double dt) const { return static_cast<std::int64_t>(std::ceil(time / dt)); }
+
 double vertical_strain(const DynamicSolver& s, double z0) { return 1.0 - (s.box().y_max - s.box().y_min) / z0; }
 
 CompressionRun run_compression(DynamicSolver& s, const CompressionTest& a, double pressure, std::int64_t samples,
@@ -41,8 +48,7 @@ CompressionRun run_compression(DynamicSolver& s, const CompressionTest& a, doubl
   top.velocity = a.ramp_time > 0.0 ? 0.0 : -a.strain_rate * z0;
   s.set_walls(right, top);
   const double T = s.thermal().T;
-  // eps(t) = rate (t - t_ramp / 2) after the ramp
-  run.steps = static_cast<std::int64_t>(std::ceil((a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt()));
+  run.steps = a.steps(s.dt());
   const std::int64_t every = std::max<std::int64_t>(1, run.steps / std::max<std::int64_t>(1, samples));
   auto sample = [&](std::int64_t k) {
     run.eps.push_back(vertical_strain(s, z0));
@@ -106,7 +112,7 @@ void open_box_for_vibration(SolverState& st) {
 std::int64_t run_vibration(DynamicSolver& s, const VibrationTest& a, std::int64_t samples, TestObserver& obs) {
   a.validate();
   const double T = s.thermal().T, w = 2.0 * std::numbers::pi * a.frequency;
-  const auto steps = static_cast<std::int64_t>(std::ceil(a.time / s.dt()));
+  const std::int64_t steps = a.steps(s.dt());
   const std::int64_t every = std::max<std::int64_t>(1, steps / std::max<std::int64_t>(1, samples));
   obs.sample(s, 0);
   for (std::int64_t k = 1; k <= steps; ++k) {

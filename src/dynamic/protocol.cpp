@@ -147,15 +147,24 @@ void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std
   for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
 }
 
+namespace {
+/// The step at whose end time t lies (t / dt rounded up, 1e-6 steps of slack for rounding).
+std::int64_t step_of(double t, double dt) { return static_cast<std::int64_t>(std::ceil(t / dt - 1e-6)); }
+std::int64_t first_step(const DynamicSolver& s) { return static_cast<std::int64_t>(std::llround(s.time() / s.dt())); }
+}  // namespace
+
+std::int64_t steps_to_end(const DynamicSolver& s, const std::vector<SinterPhase>& phases) {
+  return std::max<std::int64_t>(0, step_of(phase_end(phases, phases.size() - 1), s.dt()) - first_step(s));
+}
+
 PhaseRun run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const PhaseFriction& fr,
                     std::int64_t samples, PhaseObserver& obs) {
   const double dt = s.dt();
-  auto step_of = [dt](double t) { return static_cast<std::int64_t>(std::ceil(t / dt - 1e-6)); };
-  const std::int64_t k0 = static_cast<std::int64_t>(std::llround(s.time() / dt));
-  const std::int64_t K = step_of(phase_end(phases, phases.size() - 1));
+  const std::int64_t k0 = first_step(s);
+  const std::int64_t K = step_of(phase_end(phases, phases.size() - 1), dt);
   std::vector<std::int64_t> ends;
-  for (std::size_t p = 0; p < phases.size(); ++p) ends.push_back(step_of(phase_end(phases, p)));
-  const std::int64_t total = std::max<std::int64_t>(0, K - k0);
+  for (std::size_t p = 0; p < phases.size(); ++p) ends.push_back(step_of(phase_end(phases, p), dt));
+  const std::int64_t total = steps_to_end(s, phases);
   PhaseRun run;
   run.sample_every = std::max<std::int64_t>(1, total / std::max<std::int64_t>(1, samples));
   const LudingParams base = s.params();

@@ -82,6 +82,7 @@ check_bad packing_zero_radius "r <= 0" prepare --packing "$tmp/zero_radius.csv"
 check_bad packing_through_wall "side wall" prepare --packing "$tmp/through_wall.csv"
 check_bad packing_radius_range "length-unit" prepare --packing "$tmp/two.csv" --length-unit 1
 check_bad packing_bad_unit "length-unit" prepare --packing "$tmp/two.csv" --length-unit -1
+check_bad packing_and_state "use one of them" sinter --packing "$tmp/two.csv" --state "$tmp/two.csv"
 if [ -n "$ns" ]; then
   "$ns" pack --width 12 --seed 4 --out "$tmp/np" >/dev/null 2>"$tmp/stderr" &&
     "$ds" prepare --packing "$tmp/np/packing.csv" --length-unit 2e-4 --time 1e-9 --quiet --out "$tmp/dp" \

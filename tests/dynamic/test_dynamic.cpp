@@ -337,6 +337,47 @@ TEST(Dynamic, FreeSetConservesMomentum) {
 }
 
 // ---- neighbour search ---------------------------------------------------------------------------
+// The Verlet table (on the shared packing::CellGrid) holds exactly the pairs within
+// a_i + a_j + skin for radius ratios up to 100, in a free system and in a walled box.
+TEST(Dynamic, VerletTableExactForRadiusRatio100) {
+  LudingParams p;
+  for (unsigned seed : {1u, 2u}) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Particles P;
+    const double L = 60.0 * p.a0;
+    for (int i = 0; i < 400; ++i) {  // radii log-uniform in a0 [0.02, 2], overlaps allowed
+      const double r = i == 0 ? 2.0 * p.a0 : i == 1 ? 0.02 * p.a0 : 0.02 * p.a0 * std::exp(std::log(100.0) * u(rng));
+      P.add(r + (L - 2 * r) * u(rng), r + (L - 2 * r) * u(rng), r, p);
+    }
+    for (bool walls : {false, true}) {
+      Box box;
+      box.enabled = walls;
+      box.x_max = box.y_max = L;
+      DynamicOptions o;
+      o.model = ContactModel::Linear;
+      o.skin = 0.05 * p.a0;
+      o.min_steps_per_contact = 0.0;  // the radius ratio makes the lightest pair stiff
+      const DynamicSolver s(P, p, box, o);
+      std::size_t in_range = 0;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> touching, found;
+      for (std::uint32_t i = 0; i < P.size(); ++i)
+        for (std::uint32_t j = i + 1; j < P.size(); ++j) {
+          const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], r = P.radius[i] + P.radius[j];
+          if (dx * dx + dy * dy < (r + o.skin) * (r + o.skin)) {
+            ++in_range;
+            EXPECT_NE(s.history(i, j), nullptr) << i << " " << j;
+          }
+          if (dx * dx + dy * dy < r * r) touching.emplace_back(i, j);
+        }
+      EXPECT_EQ(s.table_size(), in_range);
+      s.touching_pairs(found);
+      EXPECT_EQ(found, touching);
+      EXPECT_GT(touching.size(), 50u);
+    }
+  }
+}
+
 TEST(Dynamic, VerletTableMatchesAllPairs) {
   LudingParams p;
   const int side = small_scale() ? 8 : 14;

@@ -6,12 +6,30 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <random>
 #include <utility>
 #include <vector>
 
 #include "netdem/packing/cell_grid.hpp"
+
+// Counts the allocations of this test program (the storage-reuse test below).
+namespace {
+std::size_t g_allocations = 0;
+}  // namespace
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+// GCC's -Wmismatched-new-delete cannot see that the replaced new above allocates with malloc
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#pragma GCC diagnostic pop
 
 namespace {
 
@@ -146,6 +164,26 @@ TEST(CellGrid, RebuildReusesStorageAndFollowsMovingPoints) {
   int visited = 0;
   g.for_each_near(0, 0, 1e9, [&](std::uint32_t) { ++visited; });
   EXPECT_EQ(visited, 0);
+}
+
+TEST(CellGrid, WarmRebuildAllocatesNothing) {
+  Disks d = random_disks(2000, 3.0, 0.7, 11);
+  CellGrid g;
+  g.rebuild(d.x, d.y, 2.0 * d.rmax + 0.3);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> step(-0.2, 0.2);
+  for (std::size_t i = 0; i < d.x.size(); ++i) {  // the points move
+    d.x[i] += step(rng);
+    d.y[i] += step(rng);
+  }
+  g.rebuild(d.x, d.y, 2.0 * d.rmax + 0.3);  // warm at the moved extent (the cell count may grow once)
+  const std::size_t before = g_allocations;
+  for (int k = 0; k < 5; ++k) g.rebuild(d.x, d.y, 2.0 * d.rmax + 0.3);
+  EXPECT_EQ(g_allocations, before);  // the DEM rebuilds its Verlet table's grid this way
+  std::size_t visited = 0;
+  g.for_each_near(d.x[7], d.y[7], 10.0, [&](std::uint32_t) { ++visited; });
+  EXPECT_EQ(g_allocations, before);
+  EXPECT_GT(visited, 0u);
 }
 
 TEST(CellGrid, SparseSetsAreCapped) {

@@ -36,6 +36,8 @@ struct CompressionTest {
   /// Throws std::invalid_argument (one line) for a non-positive rate, max_strain outside (0, 0.9),
   /// a negative ramp time.
   void validate() const;
+  /// Steps of the test: (max_strain / rate + ramp_time / 2) / dt rounded up.
+  std::int64_t steps(double dt) const;
 };
 
 struct CompressionRun {
@@ -66,6 +68,7 @@ struct VibrationTest {
   double time = 0.1;          ///< [s]
   double gravity = 9.81;      ///< [m/s^2]
   void validate() const;      ///< one-line std::invalid_argument for a bad value
+  std::int64_t steps(double dt) const;  ///< time / dt rounded up
 };
 
 /// Confining stress removed: left, right and top walls moved 1 m away and fixed, only the bottom

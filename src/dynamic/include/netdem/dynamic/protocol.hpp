@@ -102,6 +102,9 @@ struct PhaseRun {
   std::int64_t sample_every = 1;  ///< steps between samples
 };
 
+/// The steps run_phases() does from the solver's current time to the end of the last phase.
+std::int64_t steps_to_end(const DynamicSolver& s, const std::vector<SinterPhase>& phases);
+
 /// Steps `s` from its current time to the end of the last phase: per step the friction of the
 /// phase (set_params on a change, from the parameters `s` has at the call), the temperature ramp
 /// with the phase's t0 (advance_temperature), one step. The last step may end a fraction of dt
