@@ -403,9 +403,10 @@ class Findings:
         bad = []
         for n in names:
             r = self.R.get(n)
-            if r and r.ok and r.n_unconverged > 0:
+            if r and r.ok and (r.n_unconverged > 0 or r.summary.get("status", "ok") != "ok"):
                 bad.append(f"{n} {r.n_unconverged}/{r.n_increments} increments unconverged, max residual "
-                           f"{r.summary.get('solver', {}).get('max_residual', float('nan')):.2g}")
+                           f"{r.summary.get('solver', {}).get('max_residual', float('nan')):.2g}, "
+                           f"status {r.summary.get('status', 'n/a')}")
         return ("solver: " + "; ".join(bad)) if bad else ""
 
     def add(self, fid, finding, paper, band, measured, passed, cases, note=""):
@@ -741,13 +742,13 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
 
     L.append("## Cases\n")
     L.append("| case | D0 | final D | S11/sy | S22/sy | Z | wall time [s] | unconverged increments | "
-             "max residual | median residual | centres outside the box |")
-    L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+             "max residual | median residual | centres outside the box | status (exit) |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in CASES:
         r = R.get(name)
         if not (r and r.ok):
             L.append(f"| {name} | run missing or failed: {(r.meta.get('output', '') if r else '')[-200:]} "
-                     "| | | | | | | | |")
+                     "| | | | | | | | | |")
             continue
         f = r.summary.get("final", {})
         sv = r.summary.get("solver", {})
@@ -755,7 +756,8 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
         L.append(f"| {name} | {r.D0:.4f} | {f.get('D', float('nan')):.4f} | {f.get('S11', float('nan')):.4f} | "
                  f"{f.get('S22', float('nan')):.4f} | {f.get('Z', float('nan')):.3f} | {wall:.1f} | "
                  f"{r.n_unconverged} / {r.n_increments} | {sv.get('max_residual', float('nan')):.3g} | "
-                 f"{float(np.median(r.h['residual'][1:])):.3g} | {outside_box(r)} |")
+                 f"{float(np.median(r.h['residual'][1:])):.3g} | {outside_box(r)} | "
+                 f"{r.summary.get('status', 'n/a')} ({r.meta.get('returncode', '?')}) |")
     L.append("\nCentres outside the box: disks whose centre has left the deformed box at the end (die mode "
              "prescribes only the peripheral layer, and a frictionless packing can squeeze disks out between "
              "peripheral disks; docs/quasistatic.md).\n")
