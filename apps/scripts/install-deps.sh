@@ -6,6 +6,8 @@ pkgs=(
   libeigen3-dev libsuitesparse-dev libsundials-dev libgtest-dev libfmt-dev
   libcli11-dev nlohmann-json3-dev libbenchmark-dev
   libopenblas0-serial                # optimised serial BLAS for CHOLMOD's supernodal factorisation
+  clang libclang-rt-14-dev           # the fuzz build (tests/fuzz, .ci/run): libFuzzer + ASan/UBSan runtimes;
+                                     # libclang-rt-14-dev is only a Recommends of clang-14, hence listed
   python3 python3-numpy python3-matplotlib
 )
 missing=()

@@ -66,6 +66,28 @@ bool parse_int(std::string_view s, Int& v) {
   return ec == std::errc() && ptr == s.data() + s.size();
 }
 
+/// At most 80 printable ASCII characters of `s` for an error message: other bytes become '?',
+/// a longer text is cut and marked "...". Every piece of input quoted in a message goes through it.
+std::string quote(std::string_view s) {
+  constexpr std::size_t kMax = 80;
+  std::string out;
+  for (std::size_t i = 0; i < s.size() && i < kMax; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+  }
+  if (s.size() > kMax) out += "...";
+  return out;
+}
+
+/// Position of the first control character (bytes < 0x20 except tab, and 0x7f), or npos.
+std::size_t control_char(std::string_view s) {
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if ((c < 0x20 && c != '\t') || c == 0x7f) return i;
+  }
+  return std::string_view::npos;
+}
+
 /// First word of a comment: the reserved keywords "box" and "seed" are interpreted, not kept.
 std::string_view keyword(std::string_view comment) {
   const auto w = split_ws(comment);
@@ -79,9 +101,11 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
   for (const std::string& c : p.comments) {
     if (c.find_first_of("\r\n") != std::string::npos)
       throw std::invalid_argument("write_packing_csv: a comment contains a line break");
+    if (control_char(c) != std::string_view::npos)
+      throw std::invalid_argument("write_packing_csv: a comment contains a control character");
     const std::string_view k = keyword(c);
     if (k == "box" || k == "seed")
-      throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", c));
+      throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", quote(c)));
   }
   std::string text;
   text.reserve(64 * p.size() + 256);
@@ -115,12 +139,15 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
   }
 }
 
-Packing read_packing_csv(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", file));
+Packing read_packing_csv(std::istream& in, const std::string& file) {
   auto fail = [&](std::size_t line, const std::string& what) {
     throw std::runtime_error(fmt::format("{}:{}: {}", file, line, what));
+  };
+  // one field against its documented range (docs/packing.md, "Valid ranges")
+  auto coordinate = [&](std::size_t line, const char* what, double v) {
+    if (!(std::fabs(v) <= kMaxCoordinate))
+      fail(line, fmt::format("{} = {} is outside [-{:g}, {:g}] (file units; docs/packing.md)", what, v, kMaxCoordinate,
+                             kMaxCoordinate));
   };
 
   Packing p;
@@ -134,6 +161,9 @@ Packing read_packing_csv(const std::filesystem::path& path) {
     ++ln;
     const std::string_view line = trim(raw);
     if (line.empty()) continue;
+    if (const std::size_t c = control_char(line); c != std::string_view::npos)
+      fail(ln, fmt::format("control character (byte {}) in column {}: not a text packing file",
+                           static_cast<int>(static_cast<unsigned char>(line[c])), c + 1));
     if (line.front() == '#') {
       const std::string_view body = trim(line.substr(1));
       const std::string_view k = keyword(body);
@@ -143,11 +173,16 @@ Packing read_packing_csv(const std::filesystem::path& path) {
         if (w.size() != 5) fail(ln, "box line must be '# box x_min y_min x_max y_max'");
         for (int i = 0; i < 4; ++i)
           if (!parse_double(w[static_cast<std::size_t>(i) + 1], v[i]))
-            fail(ln, fmt::format("box line: non-numeric field '{}'", w[static_cast<std::size_t>(i) + 1]));
+            fail(ln, fmt::format("box line: non-numeric field '{}'", quote(w[static_cast<std::size_t>(i) + 1])));
         for (int i = 0; i < 4; ++i)
           if (!std::isfinite(v[i])) fail(ln, "box line: NaN or infinite bound");
         if (have_box) fail(ln, fmt::format("second box line (first on line {})", box_line));
         if (!(v[2] > v[0]) || !(v[3] > v[1])) fail(ln, "box line: box has non-positive size");
+        static constexpr const char* kBound[4] = {"box x_min", "box y_min", "box x_max", "box y_max"};
+        for (int i = 0; i < 4; ++i) coordinate(ln, kBound[i], v[i]);
+        if (!(v[2] - v[0] >= kMinBoxSize) || !(v[3] - v[1] >= kMinBoxSize))
+          fail(ln, fmt::format("box line: width {} or height {} is below {:g} (file units; docs/packing.md)", v[2] - v[0],
+                               v[3] - v[1], kMinBoxSize));
         p.box = {v[0], v[1], v[2], v[3]};
         have_box = true;
         box_line = ln;
@@ -164,27 +199,33 @@ Packing read_packing_csv(const std::filesystem::path& path) {
     const auto f = split(line, ',');
     if (!have_header) {
       if (f.size() != 4 || f[0] != "id" || f[1] != "x" || f[2] != "y" || f[3] != "r")
-        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", line));
+        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", quote(line)));
       have_header = true;
       continue;
     }
     if (f.size() != 4) fail(ln, fmt::format("expected 4 fields (id,x,y,r), got {}", f.size()));
     long long id = 0;
-    if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", f[0]));
+    if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", quote(f[0])));
     double v[3];
     static constexpr const char* kName[3] = {"x", "y", "r"};
     for (std::size_t i = 0; i < 3; ++i) {
-      if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], f[i + 1]));
-      if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], f[i + 1], id));
+      if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], quote(f[i + 1])));
+      if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], quote(f[i + 1]), id));
     }
     if (!(v[2] > 0)) fail(ln, fmt::format("r <= 0 (r = {}, disk id {})", v[2], id));
+    if (!(v[2] >= kMinRadius && v[2] <= kMaxRadius))
+      fail(ln, fmt::format("r = {} (disk id {}) is outside [{:g}, {:g}] (file units; docs/packing.md)", v[2], id,
+                           kMinRadius, kMaxRadius));
+    coordinate(ln, "x", v[0]);
+    coordinate(ln, "y", v[1]);
+    if (ids.size() >= kMaxDisks) fail(ln, fmt::format("more than {} disks", kMaxDisks));
     ids.push_back(id);
     lines.push_back(ln);
     p.x.push_back(v[0]);
     p.y.push_back(v[1]);
     p.r.push_back(v[2]);
   }
-  if (in.bad()) throw std::runtime_error(fmt::format("{}: read error", file));
+  if (in.bad()) throw std::runtime_error(fmt::format("{}: read error after line {}", file, ln));
   if (!have_box) fail(ln, "missing '# box x_min y_min x_max y_max' line");
   if (!have_header) fail(ln, "missing header 'id,x,y,r'");
   if (p.size() == 0) fail(ln, "no disks");
@@ -202,6 +243,28 @@ Packing read_packing_csv(const std::filesystem::path& path) {
   for (std::size_t k = 1; k < order.size(); ++k)
     if (ids[order[k]] == ids[order[k - 1]])
       fail(lines[order[k]], fmt::format("duplicate id {} (first on line {})", ids[order[k]], lines[order[k - 1]]));
+  // radius ratio: name the lines of the smallest and the largest disk
+  std::size_t lo = 0, hi = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    if (p.r[i] < p.r[lo]) lo = i;
+    if (p.r[i] > p.r[hi]) hi = i;
+  }
+  if (!(p.r[hi] <= kMaxRadiusRatio * p.r[lo]))
+    fail(lines[hi], fmt::format("r_max / r_min = {:.6g} / {:.6g} = {:.6g} exceeds {:g} (r_min on line {})", p.r[hi],
+                                p.r[lo], p.r[hi] / p.r[lo], kMaxRadiusRatio, lines[lo]));
+  // pairs too close (cell grid): name both lines; exact duplicates keep validate()'s wording
+  if (const auto c = find_close_pair(p)) {
+    if (c->duplicate) {  // numbered by id rank, as validate() numbers them
+      auto rank = [&](std::size_t i) { return static_cast<std::size_t>(std::find(order.begin(), order.end(), i) - order.begin()); };
+      const std::size_t a = rank(c->i), b = rank(c->j);
+      throw std::runtime_error(fmt::format("{}: invalid packing: disk {} duplicates disk {} (same centre; lines {} and {})",
+                                           file, std::max(a, b), std::min(a, b), lines[order[std::max(a, b)]],
+                                           lines[order[std::min(a, b)]]));
+    }
+    fail(lines[c->i], fmt::format("disk id {} and disk id {} (line {}) are too close: centre distance {:.6g} < max(r_i, "
+                                  "r_j) = {:.6g}",
+                                  ids[c->i], ids[c->j], lines[c->j], c->distance, std::max(p.r[c->i], p.r[c->j])));
+  }
   Packing q;
   q.box = p.box;
   q.seed = p.seed;
@@ -220,6 +283,15 @@ Packing read_packing_csv(const std::filesystem::path& path) {
     throw std::runtime_error(fmt::format("{}: {}", file, e.what()));
   }
   return q;
+}
+
+Packing read_packing_csv(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw std::runtime_error(fmt::format("{}: is a directory, not a packing file", file));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", file));
+  return read_packing_csv(in, file);
 }
 
 }  // namespace netdem::packing

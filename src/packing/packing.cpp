@@ -98,6 +98,7 @@ std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol) {
   }
   if (!(rmin > 0) || !std::isfinite(x1 - x0) || !std::isfinite(rmax)) return flag;  // invalid input
   double h = 0.5 * rmin;
+  if (!(h > 0)) h = rmin;  // r_min subnormal: 0.5 r_min may round to 0 (the doubling below would never end)
   const double max_bins = 8.0 * static_cast<double>(n) + 64.0;
   while ((x1 - x0) / h + 1.0 > max_bins) h *= 2.0;
   const auto nb = static_cast<long>((x1 - x0) / h) + 1;
@@ -189,23 +190,45 @@ void validate(const Packing& p) {
       fail(fmt::format("disk {} is outside the box (centre ({}, {}) not in [{}, {}] x [{}, {}])", i, x, y, b.x_min,
                        b.x_max, b.y_min, b.y_max));
   }
-  // Duplicates: centres closer than 1e-12 (r_i + r_j). Report the pair with the smallest later id.
-  const double rmax = max_radius(p);
-  const CellGrid grid(p.x, p.y, 2.0 * rmax);
-  std::size_t dup = p.size(), first = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    grid.for_each_near(p.x[i], p.y[i], 2e-12 * (p.r[i] + rmax), [&](int j) {
-      const auto ju = static_cast<std::size_t>(j);
-      if (ju >= i) return;
-      const double d = std::hypot(p.x[ju] - p.x[i], p.y[ju] - p.y[i]);
-      if (d <= 1e-12 * (p.r[i] + p.r[ju]) && (i < dup || (i == dup && ju < first))) {
-        dup = i;
-        first = ju;
-      }
-    });
-    if (dup < p.size()) break;
+  double rmin = p.r[0], rmax = p.r[0];
+  for (double r : p.r) rmin = std::min(rmin, r), rmax = std::max(rmax, r);
+  if (!(rmax <= kMaxRadiusRatio * rmin))
+    fail(fmt::format("r_max / r_min = {:.6g} / {:.6g} = {:.6g} exceeds {:g}", rmax, rmin, rmax / rmin, kMaxRadiusRatio));
+  if (const auto c = find_close_pair(p)) {
+    if (c->duplicate)
+      fail(fmt::format("disk {} duplicates disk {} (same centre)", std::max(c->i, c->j), std::min(c->i, c->j)));
+    fail(fmt::format("disks {} and {} are too close: centre distance {:.6g} < max(r_i, r_j) = {:.6g}",
+                     std::min(c->i, c->j), std::max(c->i, c->j), c->distance, p.r[c->i]));
   }
-  if (dup < p.size()) fail(fmt::format("disk {} duplicates disk {} (same centre)", dup, first));
+}
+
+std::optional<ClosePair> find_close_pair(const Packing& p) {
+  const std::size_t n = p.size();
+  if (n < 2) return std::nullopt;
+  double rmin = p.r[0];
+  for (double r : p.r) rmin = std::min(rmin, r);
+  // Cells of at least r_min: a disk of radius r_i visits ~(2 r_i / cell + 2)^2 cells, and in a
+  // packing without such pairs a cell holds O(1) centres; the grid caps the count at ~4 N cells.
+  const CellGrid grid(p.x, p.y, rmin);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ri = p.r[i];
+    std::size_t best = n;
+    grid.for_each_near(p.x[i], p.y[i], ri, [&](std::uint32_t jj) {
+      const std::size_t j = jj;
+      if (j == i || p.r[j] > ri || (p.r[j] == ri && j > i) || j >= best) return;
+      const double dx = p.x[j] - p.x[i], dy = p.y[j] - p.y[i];
+      if (dx * dx + dy * dy < ri * ri) best = j;
+    });
+    if (best < n) {
+      ClosePair c;
+      c.i = i;
+      c.j = best;
+      c.distance = std::hypot(p.x[best] - p.x[i], p.y[best] - p.y[i]);
+      c.duplicate = c.distance <= 1e-12 * (ri + p.r[best]);
+      return c;
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace netdem::packing

@@ -33,6 +33,17 @@ namespace {
 
 std::string hx(double v) { return fmt::format("{:a}", v); }
 
+/// At most 40 printable ASCII characters of a token for a message (other bytes become '?').
+std::string quote(const std::string& t) {
+  std::string out;
+  for (std::size_t i = 0; i < t.size() && i < 40; ++i) {
+    const auto c = static_cast<unsigned char>(t[i]);
+    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+  }
+  if (t.size() > 40) out += "...";
+  return out;
+}
+
 void put_matrix(std::string& out, const char* name, const Eigen::Matrix2d& m) {
   out += fmt::format("{} {} {} {} {}\n", name, hx(m(0, 0)), hx(m(0, 1)), hx(m(1, 0)), hx(m(1, 1)));
 }
@@ -40,15 +51,15 @@ void put_matrix(std::string& out, const char* name, const Eigen::Matrix2d& m) {
 /// Line reader with one-line errors naming the file and line.
 class Reader {
  public:
-  explicit Reader(const std::string& path) : path_(path), in_(path) {
-    if (std::filesystem::is_directory(path)) fail0("is a directory, not a state file");
-    if (!in_) fail0("cannot be opened");
-  }
+  static constexpr std::size_t kMaxLine = 4096;
+  Reader(std::istream& in, const std::string& path) : path_(path), in_(in) {}
   /// Next line split into tokens; the first must be `key` (if not empty) and `count` tokens follow.
   std::vector<std::string> next(const std::string& key, std::size_t count) {
     std::string line;
     if (!std::getline(in_, line)) fail(fmt::format("ends early, expected '{}'", key.empty() ? "a record" : key));
     ++line_no_;
+    // a record has at most 14 values: a longer line is not one (and is not split into a huge list)
+    if (line.size() > kMaxLine) fail(fmt::format("line longer than {} characters", kMaxLine));
     std::istringstream ls(line);
     std::vector<std::string> tok;
     for (std::string t; ls >> t;) tok.push_back(t);
@@ -64,7 +75,7 @@ class Reader {
     errno = 0;
     char* end = nullptr;
     const double v = std::strtod(t.c_str(), &end);
-    if (end == t.c_str() || *end != '\0' || errno == ERANGE) fail(fmt::format("'{}' is not a number", t.substr(0, 40)));
+    if (end == t.c_str() || *end != '\0' || errno == ERANGE) fail(fmt::format("'{}' is not a number", quote(t)));
     return v;
   }
   long integer(const std::string& t, long lo, long hi) {
@@ -72,7 +83,7 @@ class Reader {
     char* end = nullptr;
     const long v = std::strtol(t.c_str(), &end, 10);
     if (end == t.c_str() || *end != '\0' || errno == ERANGE || v < lo || v > hi)
-      fail(fmt::format("'{}' is not an integer in [{}, {}]", t.substr(0, 40), lo, hi));
+      fail(fmt::format("'{}' is not an integer in [{}, {}]", quote(t), lo, hi));
     return v;
   }
   Eigen::Matrix2d matrix(const std::string& key) {
@@ -86,9 +97,8 @@ class Reader {
   }
 
  private:
-  [[noreturn]] void fail0(const std::string& m) const { throw std::runtime_error(fmt::format("{}: {}", path_, m)); }
   std::string path_;
-  std::ifstream in_;
+  std::istream& in_;
   long line_no_ = 0;
 };
 
@@ -145,11 +155,13 @@ void read_particles(Reader& in, NetworkState& s) {
   constexpr long kMaxParticles = 100000000;
   const bool pred = in.integer(in.next("predictor", 1)[0], 0, 1) == 1;
   const auto n = static_cast<std::size_t>(in.integer(in.next("particles", 1)[0], 1, kMaxParticles));
-  for (auto* v : {&s.x, &s.y, &s.theta, &s.r, &s.x_build, &s.y_build}) v->resize(n);
-  s.peripheral.resize(n);
-  s.f_contact.resize(3 * n);
-  if (pred) s.du_prev.resize(3 * n);
+  // the arrays grow with the lines actually read: a count alone never allocates (a 20-byte file
+  // claiming 10^8 particles ends early instead of allocating gigabytes)
   for (std::size_t p = 0; p < n; ++p) {
+    for (auto* v : {&s.x, &s.y, &s.theta, &s.r, &s.x_build, &s.y_build}) v->resize(p + 1);
+    s.peripheral.resize(p + 1);
+    s.f_contact.resize(3 * (p + 1));
+    if (pred) s.du_prev.resize(3 * (p + 1));
     const auto t = in.next("", pred ? 13 : 10);
     s.x[p] = in.real(t[0]);
     s.y[p] = in.real(t[1]);
@@ -176,7 +188,7 @@ void read_globals(Reader& in, NetworkState& s) {
   char* end = nullptr;
   if (t.empty() || t[0] == '-') in.fail("seed must be a non-negative integer");
   s.seed = std::strtoull(t.c_str(), &end, 10);
-  if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", t.substr(0, 40)));
+  if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", quote(t)));
   s.box_deformation = in.matrix("box_deformation");
   s.strain = in.matrix("strain");
   s.box_deformation_build = in.matrix("box_deformation_build");
@@ -186,15 +198,15 @@ void read_globals(Reader& in, NetworkState& s) {
 void read_pairs(Reader& in, NetworkState& s) {
   constexpr long kMaxPairs = 1000000000;
   const auto np = static_cast<std::size_t>(in.integer(in.next("pairs", 1)[0], 0, kMaxPairs));
-  s.pair_i.resize(np);
-  s.pair_j.resize(np);
-  s.history.resize(np);
-  s.aux.resize(np);
-  s.f_n.resize(np);
-  s.f_t.resize(np);
-  s.sliding.resize(np);
   const long last = static_cast<long>(s.x.size()) - 1;
-  for (std::size_t k = 0; k < np; ++k) {
+  for (std::size_t k = 0; k < np; ++k) {  // grow with the lines read (see read_particles)
+    s.pair_i.resize(k + 1);
+    s.pair_j.resize(k + 1);
+    s.history.resize(k + 1);
+    s.aux.resize(k + 1);
+    s.f_n.resize(k + 1);
+    s.f_t.resize(k + 1);
+    s.sliding.resize(k + 1);
     const auto t = in.next("", 14);
     s.pair_i[k] = static_cast<int>(in.integer(t[0], 0, last));
     s.pair_j[k] = static_cast<int>(in.integer(t[1], 0, last));
@@ -229,7 +241,14 @@ void read_timings(Reader& in, SolverTimings& T) {
 }  // namespace
 
 NetworkState load_state(const std::string& path) {
-  Reader in(path);
+  if (std::filesystem::is_directory(path)) throw std::runtime_error(fmt::format("{}: is a directory, not a state file", path));
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot be opened", path));
+  return load_state(f, path);
+}
+
+NetworkState load_state(std::istream& stream, const std::string& path) {
+  Reader in(stream, path);
   NetworkState s;
   if (in.next("netdem-network-state", 1)[0] != "1") in.fail("unsupported state file version");
   read_particles(in, s);

@@ -8,6 +8,7 @@
 // the box). Lengths are in units of the reference radius R used to build the packing.
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -55,12 +56,32 @@ ContactStats contact_stats(const Packing& p, double tol = 1e-6);
 /// evaluated on the breakpoints where it may change owner, not sampled.
 std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol = 1e-6);
 
+/// Largest radius ratio r_max / r_min a packing may have (validate(), the reader).
+inline constexpr double kMaxRadiusRatio = 100.0;
+
+/// A pair of disks whose centres are closer than max(r_i, r_j): r_i >= r_j, `distance` = |x_i - x_j|,
+/// `duplicate` if distance <= 1e-12 (r_i + r_j) (the same centre up to rounding).
+struct ClosePair {
+  std::size_t i = 0, j = 0;
+  double distance = 0;
+  bool duplicate = false;
+};
+
+/// The first pair (scanning the disks i in order, each against the disks j no larger than it,
+/// ties by j < i, the smallest such j) whose centre distance is below max(r_i, r_j), or none.
+/// Cell grid (cells >= r_min), O(N) for packings whose disks do not overlap that much; a set of
+/// 10^5 near-duplicates is rejected after two scans of its cell. Needs finite coordinates and
+/// finite positive radii (validate() checks those first).
+std::optional<ClosePair> find_close_pair(const Packing& p);
+
 /// Throws std::invalid_argument with ONE line naming the first problem found: box with NaN/inf or
 /// non-positive size, x/y/r size mismatch, empty packing, then per disk in id order NaN/inf
 /// coordinate or radius, r <= 0, disk outside the box (its CENTRE outside the box by more than
-/// 1e-9 r), and finally duplicates (centres closer than 1e-12 (r_i + r_j)). Disks overlapping each
-/// other or poking through a wall by less than their radius are allowed: compacted packings
-/// (section 2.4, affine boundary motion) do both. Deposited packings lie entirely inside the box.
+/// 1e-9 r), then r_max / r_min > kMaxRadiusRatio, and finally pairs closer than max(r_i, r_j)
+/// (find_close_pair(); "disk j duplicates disk i" for centres closer than 1e-12 (r_i + r_j)).
+/// Disks overlapping each other by less than that, or poking through a wall by less than their
+/// radius, are allowed: compacted packings (section 2.4, affine boundary motion) do both.
+/// Deposited packings lie entirely inside the box.
 void validate(const Packing& p);
 
 }  // namespace netdem::packing

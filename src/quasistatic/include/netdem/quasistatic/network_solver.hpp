@@ -30,6 +30,7 @@
 //
 // Where the parts live: src/quasistatic/solver_impl.hpp.
 #include <cstdint>
+#include <istream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -132,6 +133,9 @@ void save_state(const NetworkState& state, const std::string& path);
 /// Reads and validates a state file written by save_state; throws std::runtime_error (one line,
 /// naming the file and line) on a missing, truncated or inconsistent file.
 NetworkState load_state(const std::string& path);
+/// The same reader on a stream (load_state(path) is a thin wrapper); `source` names the input in
+/// the messages.
+NetworkState load_state(std::istream& in, const std::string& source);
 
 class NetworkSolver {
  public:
