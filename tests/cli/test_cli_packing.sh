@@ -31,7 +31,7 @@ if [ $(( $(date +%s) - start )) -gt 10 ]; then
 fi
 # a directory (was: "read error")
 mkdir -p "$tmp/adir"
-check_bad packing_dir "is a directory, not a packing file" compact --packing "$tmp/adir"
+check_bad packing_dir "is a \\(directory\\|folder\\)" compact --packing "$tmp/adir"
 # a binary first line of 5 MB (was: echoed whole to stderr)
 { head -c 5000000 /dev/urandom | tr -d '\n'; printf '\n'; } >"$tmp/binary.csv"
 check_bad binary_first_line "control character" compact --packing "$tmp/binary.csv"
