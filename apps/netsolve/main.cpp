@@ -183,9 +183,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   growth.tol = so.residual_tol;
   int done = 0;
   std::string stopped;  // why the run stopped before the target, or ""
-  activity() = "compacting";
-  try {
-  qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
+  const auto on_row = [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
                        "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
@@ -212,7 +210,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
                                 "and more than 10 times its value before): the iteration diverges from increment {} on",
                                 growth.first_bad, row.increment, row.report.newton_residual, 10 * so.residual_tol,
                                 growth.first_bad)};
-  });
+    activity() = fmt::format("compacting (increment {} of {})", row.increment + 1, co.increments);
+  };
+  activity() = "compacting";
+  try {
+    qs::run_compaction(solver, co, on_row);
   } catch (const StopRun& s) {
     stopped = s.reason;
   } catch (const qs::DivergedError& e) {
