@@ -861,7 +861,8 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--seed", a.pack.seed, "random seed of the deposition, a whole number in [0, 2^64)")
         ->check(netdem::app::netsolve::seed_validator())
         ->capture_default_str();
-    app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition");
+    app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition")
+        ->check(CLI::Validator([](std::string& v) { return v.empty() ? std::string("is empty: give a packing CSV file") : std::string(); }, "FILE"));
     app.add_option("--from-state", a.from_state,
                    "start from a compacted state (state.txt of `netsolve compact --save-state`) instead of precompacting; "
                    "its strain must lie along --precompact");
