@@ -133,11 +133,6 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
   netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
 }
 
-/// Thrown from the row callback to stop the compaction (the growing-residual rule).
-struct StopRun {
-  std::string reason;
-};
-
 int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
   using namespace netdem;
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
@@ -206,16 +201,13 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
     progress.update(row.increment);
     last = m;
     if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
-      throw StopRun{fmt::format("the Newton residual grew in each of increments {}..{} to {:.3g} (above 10 x --tol = {:.3g} "
-                                "and more than 10 times its value before): the iteration diverges from increment {} on",
-                                growth.first_bad, row.increment, row.report.newton_residual, 10 * so.residual_tol,
-                                growth.first_bad)};
+      throw app::netsolve::StopRun{growth.message(row.increment, row.report.newton_residual)};
     activity() = fmt::format("compacting (increment {} of {})", row.increment + 1, co.increments);
   };
   activity() = "compacting";
   try {
     qs::run_compaction(solver, co, on_row);
-  } catch (const StopRun& s) {
+  } catch (const app::netsolve::StopRun& s) {
     stopped = s.reason;
   } catch (const qs::DivergedError& e) {
     stopped = fmt::format("increment {}: {}", done + 1, e.what());

@@ -116,6 +116,17 @@ struct ResidualGrowth {
     return true;
   }
   static constexpr double ResidualFactor() { return ConvergenceRecord::kResidualFactor; }
+  /// The reason of a stop after `increment` with residual `r` (one line, names the first bad increment).
+  std::string message(int increment, double r) const {
+    return fmt::format("the Newton residual grew in each of increments {}..{} to {:.3g} (above 10 x --tol = {:.3g} and more "
+                       "than 10 times its value before): the iteration diverges from increment {} on",
+                       first_bad, increment, r, ResidualFactor() * tol, first_bad);
+  }
+};
+
+/// Thrown from a compaction's row callback to stop it (the growing-residual rule).
+struct StopRun {
+  std::string reason;
 };
 
 /// What the program was doing, for "out of memory while ..." (set before each big step).

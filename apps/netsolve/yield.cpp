@@ -586,7 +586,11 @@ int run_yield(const YieldArgs& a, const std::string& command) {
     solver = std::make_unique<qs::NetworkSolver>(pk, so);
     std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged\n";
     app::Progress progress("precompact", co.increments, a.quiet);
-    qs::run_compaction(*solver, co, [&](const qs::CompactionRow& row) {
+    app::netsolve::ResidualGrowth growth;  // the stop rule of `compact` (docs/quasistatic.md "Run status")
+    growth.tol = so.residual_tol;
+    std::string stopped;
+    int done = 0;
+    const auto on_row = [&](const qs::CompactionRow& row) {
       const auto& m = row.state;
       hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{}\n", row.increment, m.E11,
                           m.E22, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.Z, m.contacts, row.report.residual,
@@ -595,11 +599,38 @@ int run_yield(const YieldArgs& a, const std::string& command) {
         unconverged += !row.report.converged;
         conv.add(row.increment, row.report.converged, row.report.newton_residual);
       }
+      done = row.increment;
       progress.update(row.increment);
       loaded = m;
-    });
+      if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
+        throw app::netsolve::StopRun{growth.message(row.increment, row.report.newton_residual)};
+    };
+    try {
+      qs::run_compaction(*solver, co, on_row);
+    } catch (const app::netsolve::StopRun& s) {
+      stopped = s.reason;
+    } catch (const qs::DivergedError& e) {
+      stopped = fmt::format("increment {}: {}", done + 1, e.what());
+    }
     progress.finish();
+    if (!stopped.empty()) hist += "# stopped: " + stopped + "\n";
     app::write_file_atomic(out / "history.csv", hist);
+    if (!stopped.empty()) {  // no unloading or probes from a diverged precompaction
+      app::netsolve::RunStatus st;
+      st.add("unstable", "precompaction stopped: " + stopped);
+      conv.judge(st, "precompaction");
+      json j;
+      j["command"] = command;
+      st.write(j);
+      j["allow_unconverged"] = a.allow_unconverged;
+      j["precompaction"] = {{"increments_done", done}, {"increments", co.increments}, {"unconverged_increments", unconverged},
+                            {"max_newton_residual", conv.max_newton_residual}, {"D", loaded.density}, {"Z", loaded.Z}};
+      app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+      app::close_run_dir(out);
+      std::fprintf(stderr, "netsolve yield: error: unstable: precompaction: %s (history.csv keeps increments 0..%d)\n",
+                   stopped.c_str(), done);
+      return app::exit_code::untrustworthy;
+    }
   } else {
     loaded = solver->measures();
   }
