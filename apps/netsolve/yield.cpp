@@ -740,7 +740,12 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   // ---- status: the precompaction's convergence, the unloading; a failed probe is its own record
   app::netsolve::RunStatus status;
   conv.judge(status, "precompaction");
-  if (!un.converged) status.add("unconverged", "unloading: " + un.message);
+  // an unloading that stops at its noise floor within 10 x --unload-tol is the documented
+  // behaviour (docs/yield.md; the default scene ends at 1.9e-3 against 1e-3): recorded in
+  // "unloading", not a failure; beyond that the probes start from a loaded state
+  if (!un.converged && !(un.stress_norm <= app::netsolve::ConvergenceRecord::kResidualFactor * a.unload_tol))
+    status.add("unconverged", fmt::format("unloading ended at |Sigma| = {:.3g} sigma_y, above 10 x --unload-tol = {:.3g}: {}",
+                                          un.stress_norm, 10 * a.unload_tol, un.message));
   const double total = seconds_since(t_start);
   json j;
   j["command"] = command;
