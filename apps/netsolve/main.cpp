@@ -133,11 +133,6 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
   netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
 }
 
-/// Thrown from the row callback to stop the compaction (the growing-residual rule).
-struct StopRun {
-  std::string reason;
-};
-
 int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
   using namespace netdem;
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
@@ -183,9 +178,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   growth.tol = so.residual_tol;
   int done = 0;
   std::string stopped;  // why the run stopped before the target, or ""
-  activity() = "compacting";
-  try {
-  qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
+  const auto on_row = [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
                        "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
@@ -208,12 +201,13 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
     progress.update(row.increment);
     last = m;
     if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
-      throw StopRun{fmt::format("the Newton residual grew in each of increments {}..{} to {:.3g} (above 10 x --tol = {:.3g} "
-                                "and more than 10 times its value before): the iteration diverges from increment {} on",
-                                growth.first_bad, row.increment, row.report.newton_residual, 10 * so.residual_tol,
-                                growth.first_bad)};
-  });
-  } catch (const StopRun& s) {
+      throw app::netsolve::StopRun{growth.message(row.increment, row.report.newton_residual)};
+    activity() = fmt::format("compacting (increment {} of {})", row.increment + 1, co.increments);
+  };
+  activity() = "compacting";
+  try {
+    qs::run_compaction(solver, co, on_row);
+  } catch (const app::netsolve::StopRun& s) {
     stopped = s.reason;
   } catch (const qs::DivergedError& e) {
     stopped = fmt::format("increment {}: {}", done + 1, e.what());

@@ -71,10 +71,13 @@ inline void check_deposition_size(const PackArgs& a, bool solve = false) {
   const double r2 = (r0 * r0 + r0 * r1 + r1 * r1) / 3.0;  // <r^2> of radii uniform in [r_min, r_max]
   const double disks = a.width * a.width * 0.85 / (std::numbers::pi * r2);
   const double bytes = disks * (kDepositionBytesPerDisk + (solve ? kSolverBytesPerDisk : 0.0));
-  if (disks > kMaxDisks)
-    throw UsageError(fmt::format("--width {} with radii in [{}, {}] R: about {:.3g} disks, above the limit of {:.0e} "
-                                 "(about {:.3g} GB and hours of deposition); use a smaller --width",
-                                 a.width, r0, r1, disks, kMaxDisks, bytes / 1e9));
+  if (disks > kMaxDisks) {
+    const std::string n = std::isfinite(disks) ? fmt::format("about {:.3g}", disks) : "more than 1e300";
+    const std::string gb = std::isfinite(bytes) ? fmt::format("about {:.3g} GB", bytes / 1e9) : "more memory than exists";
+    throw UsageError(fmt::format("--width {} with radii in [{}, {}] R: {} disks, above the limit of {:.0e} ({} and hours "
+                                 "of deposition); use a smaller --width",
+                                 a.width, r0, r1, n, kMaxDisks, gb));
+  }
   const double avail = mem_available_bytes();
   if (avail > 0.0 && bytes > avail)
     throw UsageError(fmt::format("--width {}: about {:.3g} disks need about {:.3g} GB, more than the {:.3g} GB available "

@@ -1,11 +1,7 @@
 #pragma once
-// Run status and exit codes of the netsolve subcommands (README.md "Exit status";
-// docs/quasistatic.md "Run status"): what makes a finished run untrustworthy (exit 3), the stop
-// rule of a growing residual, and the mapping of exceptions to exit codes.
-#include <cmath>
-#include <cstdio>
-#include <exception>
-#include <new>
+// The implicit solver's part of the run status (README.md "Exit status"; docs/quasistatic.md "Run
+// status"): what makes a finished compaction untrustworthy (exit 3) and the stop rule of a growing
+// residual. The status itself and the exit codes: apps/common/run_status.hpp.
 #include <string>
 #include <vector>
 
@@ -13,42 +9,13 @@
 #include <nlohmann/json.hpp>
 
 #include "output.hpp"
+#include "run_status.hpp"
 
 namespace netdem::app::netsolve {
 
-/// The status of a run, written to summary.json as "status" and "status_reason".
-///   ok           finished, every criterion met
-///   unconverged  finished, but the Newton iteration did not converge well enough (criteria below)
-///   unstable     the network failed (centres left the box, Z < 2) or the run was stopped (a
-///                residual that grows, non-finite forces, a failed unloading)
-///   incomplete   stopped early at a documented, expected limit; the rows written are valid
-struct RunStatus {
-  std::string status = "ok";
-  std::vector<std::string> reasons;
-
-  /// Adds a reason; `worse` replaces the status if it ranks higher (ok < incomplete < unconverged < unstable).
-  void add(const std::string& worse, const std::string& reason) {
-    auto rank = [](const std::string& s) { return s == "unstable" ? 3 : s == "unconverged" ? 2 : s == "incomplete" ? 1 : 0; };
-    if (rank(worse) > rank(status)) status = worse;
-    reasons.push_back(reason);
-  }
-  bool ok() const { return status == "ok"; }
-  std::string reason() const {
-    if (reasons.empty()) return "every criterion met";
-    std::string s;
-    for (const auto& r : reasons) s += (s.empty() ? "" : "; ") + r;
-    return s;
-  }
-  /// 0 for ok and incomplete, 3 otherwise, 0 again with --allow-unconverged.
-  int exit_code(bool allow_unconverged) const {
-    if (status == "ok" || status == "incomplete" || allow_unconverged) return exit_code::ok;
-    return exit_code::untrustworthy;
-  }
-  void write(nlohmann::json& j) const {
-    j["status"] = status;
-    j["status_reason"] = reason();
-  }
-};
+using netdem::app::activity;
+using netdem::app::guarded;
+using netdem::app::RunStatus;
 
 /// Convergence record of a sequence of increments (compact, the yield precompaction) and the
 /// criteria of exit 3. The residual is the RMS Newton residual `newton_residual` (contact force
@@ -116,37 +83,17 @@ struct ResidualGrowth {
     return true;
   }
   static constexpr double ResidualFactor() { return ConvergenceRecord::kResidualFactor; }
+  /// The reason of a stop after `increment` with residual `r` (one line, names the first bad increment).
+  std::string message(int increment, double r) const {
+    return fmt::format("the Newton residual grew in each of increments {}..{} to {:.3g} (above 10 x --tol = {:.3g} and more "
+                       "than 10 times its value before): the iteration diverges from increment {} on",
+                       first_bad, increment, r, ResidualFactor() * tol, first_bad);
+  }
 };
 
-/// What the program was doing, for "out of memory while ..." (set before each big step).
-inline std::string& activity() {
-  static std::string s = "starting";
-  return s;
-}
-
-/// Runs `body` and maps its exceptions to a one-line error and an exit code: a refused command
-/// line (UsageError, or any error before the output folder was opened) 2, out of memory and
-/// every other error 1. `prefix` starts the message ("netsolve", "netsolve yield").
-template <class F>
-int guarded(const std::string& prefix, F&& body) {
-  auto line = [&](const std::string& msg) {
-    std::string m = msg;
-    for (char& c : m)
-      if (c == '\n' || c == '\r') c = ' ';
-    std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), m.c_str());
-  };
-  try {
-    return body();
-  } catch (const std::bad_alloc&) {
-    line(fmt::format("out of memory while {}", activity()));
-    return exit_code::run_error;
-  } catch (const UsageError& e) {
-    line(e.what());
-    return exit_code::usage;
-  } catch (const std::exception& e) {
-    line(e.what());
-    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
-  }
-}
+/// Thrown from a compaction's row callback to stop it (the growing-residual rule).
+struct StopRun {
+  std::string reason;
+};
 
 }  // namespace netdem::app::netsolve

@@ -1,0 +1,85 @@
+#pragma once
+// The status of a run and the exit codes of the command-line tools (README.md "Exit status"):
+// RunStatus (summary.json "status", "status_reason", exit 0 or 3), and guarded(), which maps the
+// exceptions of a run to one line on stderr and exit 1 or 2. netsolve uses them; demsolve can.
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "output.hpp"
+
+namespace netdem::app {
+
+/// The status of a run, written to summary.json as "status" and "status_reason".
+///   ok           finished, every criterion met
+///   unconverged  finished, but an iteration did not converge well enough (netsolve's criteria:
+///                docs/quasistatic.md "Run status"; yield: also a failed unloading)
+///   unstable     the state failed (netsolve: centres left the box, Z < 2) or the run was stopped
+///                (non-finite values, a residual that grows); the rows written so far are kept
+///   incomplete   stopped early at a documented, expected limit; the rows written are valid
+/// Exit: 0 for ok and incomplete, 3 for unconverged and unstable (0 with --allow-unconverged).
+struct RunStatus {
+  std::string status = "ok";
+  std::vector<std::string> reasons;
+
+  /// Adds a reason; `worse` replaces the status if it ranks higher (ok < incomplete < unconverged < unstable).
+  void add(const std::string& worse, const std::string& reason) {
+    auto rank = [](const std::string& s) { return s == "unstable" ? 3 : s == "unconverged" ? 2 : s == "incomplete" ? 1 : 0; };
+    if (rank(worse) > rank(status)) status = worse;
+    reasons.push_back(reason);
+  }
+  bool ok() const { return status == "ok"; }
+  std::string reason() const {
+    if (reasons.empty()) return "every criterion met";
+    std::string s;
+    for (const auto& r : reasons) s += (s.empty() ? "" : "; ") + r;
+    return s;
+  }
+  /// 0 for ok and incomplete, 3 otherwise, 0 again with --allow-unconverged.
+  int exit_code(bool allow_unconverged) const {
+    if (status == "ok" || status == "incomplete" || allow_unconverged) return exit_code::ok;
+    return exit_code::untrustworthy;
+  }
+  void write(nlohmann::json& j) const {
+    j["status"] = status;
+    j["status_reason"] = reason();
+  }
+};
+
+/// What the program was doing, for "out of memory while ..." (set before each big step).
+inline std::string& activity() {
+  static std::string s = "starting";
+  return s;
+}
+
+/// Runs `body` and maps its exceptions to a one-line error and an exit code: a refused command
+/// line (UsageError, or any error before the output folder was opened) 2, out of memory and
+/// every other error 1. `prefix` starts the message ("netsolve", "netsolve yield").
+template <class F>
+int guarded(const std::string& prefix, F&& body) {
+  auto line = [&](const std::string& msg) {
+    std::string m = msg;
+    for (char& c : m)
+      if (c == '\n' || c == '\r') c = ' ';
+    std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), m.c_str());
+  };
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    line(fmt::format("out of memory while {}", activity()));
+    return exit_code::run_error;
+  } catch (const UsageError& e) {
+    line(e.what());
+    return exit_code::usage;
+  } catch (const std::exception& e) {
+    line(e.what());
+    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
+  }
+}
+
+}  // namespace netdem::app
