@@ -66,19 +66,6 @@ bool parse_int(std::string_view s, Int& v) {
   return ec == std::errc() && ptr == s.data() + s.size();
 }
 
-/// At most 80 printable ASCII characters of `s` for an error message: other bytes become '?',
-/// a longer text is cut and marked "...". Every piece of input quoted in a message goes through it.
-std::string quote(std::string_view s) {
-  constexpr std::size_t kMax = 80;
-  std::string out;
-  for (std::size_t i = 0; i < s.size() && i < kMax; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
-  }
-  if (s.size() > kMax) out += "...";
-  return out;
-}
-
 /// Position of the first control character (bytes < 0x20 except tab, and 0x7f), or npos.
 std::size_t control_char(std::string_view s) {
   for (std::size_t i = 0; i < s.size(); ++i) {
@@ -96,6 +83,16 @@ std::string_view keyword(std::string_view comment) {
 
 }  // namespace
 
+std::string quote_input(std::string_view s, std::size_t max_chars) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size() && i < max_chars; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+  }
+  if (s.size() > max_chars) out += "...";
+  return out;
+}
+
 void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
   validate(p);
   for (const std::string& c : p.comments) {
@@ -105,7 +102,7 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
       throw std::invalid_argument("write_packing_csv: a comment contains a control character");
     const std::string_view k = keyword(c);
     if (k == "box" || k == "seed")
-      throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", quote(c)));
+      throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", quote_input(c)));
   }
   std::string text;
   text.reserve(64 * p.size() + 256);
@@ -173,7 +170,7 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
         if (w.size() != 5) fail(ln, "box line must be '# box x_min y_min x_max y_max'");
         for (int i = 0; i < 4; ++i)
           if (!parse_double(w[static_cast<std::size_t>(i) + 1], v[i]))
-            fail(ln, fmt::format("box line: non-numeric field '{}'", quote(w[static_cast<std::size_t>(i) + 1])));
+            fail(ln, fmt::format("box line: non-numeric field '{}'", quote_input(w[static_cast<std::size_t>(i) + 1])));
         for (int i = 0; i < 4; ++i)
           if (!std::isfinite(v[i])) fail(ln, "box line: NaN or infinite bound");
         if (have_box) fail(ln, fmt::format("second box line (first on line {})", box_line));
@@ -199,18 +196,18 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
     const auto f = split(line, ',');
     if (!have_header) {
       if (f.size() != 4 || f[0] != "id" || f[1] != "x" || f[2] != "y" || f[3] != "r")
-        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", quote(line)));
+        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", quote_input(line)));
       have_header = true;
       continue;
     }
     if (f.size() != 4) fail(ln, fmt::format("expected 4 fields (id,x,y,r), got {}", f.size()));
     long long id = 0;
-    if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", quote(f[0])));
+    if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", quote_input(f[0])));
     double v[3];
     static constexpr const char* kName[3] = {"x", "y", "r"};
     for (std::size_t i = 0; i < 3; ++i) {
-      if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], quote(f[i + 1])));
-      if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], quote(f[i + 1]), id));
+      if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], quote_input(f[i + 1])));
+      if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], quote_input(f[i + 1]), id));
     }
     if (!(v[2] > 0)) fail(ln, fmt::format("r <= 0 (r = {}, disk id {})", v[2], id));
     if (!(v[2] >= kMinRadius && v[2] <= kMaxRadius))
@@ -255,7 +252,9 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
   // pairs too close (cell grid): name both lines; exact duplicates keep validate()'s wording
   if (const auto c = find_close_pair(p)) {
     if (c->duplicate) {  // numbered by id rank, as validate() numbers them
-      auto rank = [&](std::size_t i) { return static_cast<std::size_t>(std::find(order.begin(), order.end(), i) - order.begin()); };
+      auto rank = [&](std::size_t i) {
+        return static_cast<std::size_t>(std::find(order.begin(), order.end(), i) - order.begin());
+      };
       const std::size_t a = rank(c->i), b = rank(c->j);
       throw std::runtime_error(fmt::format("{}: invalid packing: disk {} duplicates disk {} (same centre; lines {} and {})",
                                            file, std::max(a, b), std::min(a, b), lines[order[std::max(a, b)]],
@@ -288,7 +287,8 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
 Packing read_packing_csv(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw std::runtime_error(fmt::format("{}: is a directory, not a packing file", file));
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error(fmt::format("{}: is a directory, not a packing file", file));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", file));
   return read_packing_csv(in, file);

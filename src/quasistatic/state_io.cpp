@@ -25,6 +25,7 @@
 
 #include <fmt/format.h>
 
+#include "netdem/packing/io.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 
 namespace netdem::qs {
@@ -33,16 +34,7 @@ namespace {
 
 std::string hx(double v) { return fmt::format("{:a}", v); }
 
-/// At most 40 printable ASCII characters of a token for a message (other bytes become '?').
-std::string quote(const std::string& t) {
-  std::string out;
-  for (std::size_t i = 0; i < t.size() && i < 40; ++i) {
-    const auto c = static_cast<unsigned char>(t[i]);
-    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
-  }
-  if (t.size() > 40) out += "...";
-  return out;
-}
+std::string quote(const std::string& t) { return packing::quote_input(t, 40); }
 
 void put_matrix(std::string& out, const char* name, const Eigen::Matrix2d& m) {
   out += fmt::format("{} {} {} {} {}\n", name, hx(m(0, 0)), hx(m(0, 1)), hx(m(1, 0)), hx(m(1, 1)));

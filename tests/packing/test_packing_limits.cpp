@@ -197,7 +197,11 @@ TEST(PackingLimits, HundredThousandNearDuplicatesAreRejectedQuickly) {
   expect_read_error(text, {"t.csv:4:", "disk id 1 and disk id 0 (line 3) are too close"});
   Packing p;
   p.box = {0, 0, 1, 1};
-  for (int i = 0; i < 100000; ++i) p.x.push_back(0.5 + (i % 317) * 3e-13), p.y.push_back(0.5 + (i / 317) * 3e-13), p.r.push_back(0.01);
+  for (int i = 0; i < 100000; ++i) {
+    p.x.push_back(0.5 + (i % 317) * 3e-13);
+    p.y.push_back(0.5 + (i / 317) * 3e-13);
+    p.r.push_back(0.01);
+  }
   EXPECT_THROW(netdem::packing::validate(p), std::invalid_argument);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(s, 5.0) << "near-duplicate rejection took " << s << " s";

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <istream>
 #include <string>
+#include <string_view>
 
 #include "netdem/packing/packing.hpp"
 
@@ -25,6 +26,11 @@ namespace netdem::packing {
 /// comment cannot be stored (contains a line break, or starts with the reserved words "box" or
 /// "seed"); std::runtime_error on an I/O failure.
 void write_packing_csv(const Packing& p, const std::filesystem::path& path);
+
+/// At most `max_chars` printable ASCII characters of `s` for an error message: other bytes become
+/// '?', a longer text is cut and marked "...". Every piece of input quoted in a reader's message
+/// goes through it (issue 13: a binary first line was echoed whole, 5 MB of control characters).
+std::string quote_input(std::string_view s, std::size_t max_chars = 80);
 
 /// Valid ranges of the reader, in the file's length unit (docs/packing.md, "Valid ranges"): absurd
 /// scales are refused at the door with a one-line error instead of reaching the solvers.
