@@ -43,9 +43,13 @@ def run_compact(netsolve, out, args, reuse, nice, label):
     """Runs `netsolve compact ARGS --out OUT` (unless reuse finds its summary) and returns
     (summary dict, process wall s, process CPU s), or None if netsolve failed."""
     summ = out / "summary.json"
-    if not (reuse and summ.exists()):
+    if not (reuse and summ.exists() and not (out / ".incomplete").exists()):
+        # a coarse run is unconverged on purpose (time vs error): --allow-unconverged keeps exit 0,
+        # summary.json keeps the status; a rerun replaces the old run's files (--overwrite)
+        held = any((out / f).exists() for f in ("command.txt", "summary.json", ".incomplete"))
         cmd = ([] if nice is None else ["nice", "-n", str(nice)]) + [
-            str(netsolve), "compact"] + args + ["--snapshots", "", "--quiet", "--out", str(out)]
+            str(netsolve), "compact"] + args + ["--snapshots", "", "--quiet", "--allow-unconverged"] + (
+            ["--overwrite"] if held else []) + ["--out", str(out)]
         print("  " + " ".join(cmd), flush=True)
         ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()

@@ -1,6 +1,13 @@
 #include "output.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <fstream>
 #include <random>
 #include <stdexcept>
@@ -47,6 +54,159 @@ void start_run_dir(const std::filesystem::path& dir) {
   std::filesystem::remove(dir / "summary.json", ec);
   if (ec) throw std::runtime_error(fmt::format("cannot remove the old '{}': {}", (dir / "summary.json").string(), ec.message()));
 }
+
+// ---- run folders ------------------------------------------------------------------------------
+namespace {
+namespace fs = std::filesystem;
+bool g_run_dir_opened = false;
+
+/// At most 80 printable characters of `s` (control characters as '?'), for messages.
+std::string quoted(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (o.size() >= 80) return o + "...";
+    o += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+  }
+  return o;
+}
+
+/// The first line of dir/command.txt (the run that wrote the folder), or "".
+std::string recorded_command(const fs::path& dir) {
+  std::ifstream in(dir / "command.txt");
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+/// The canonical form of p, or p made absolute and normal if it does not exist.
+fs::path canonical_or_absolute(const fs::path& p) {
+  std::error_code ec;
+  fs::path c = fs::weakly_canonical(p, ec);
+  if (ec) c = fs::absolute(p, ec).lexically_normal();
+  return c;
+}
+
+/// True if `inner` is `outer` or lies below it (both canonical).
+bool lies_in(const fs::path& inner, const fs::path& outer) {
+  auto i = inner.begin();
+  for (auto o = outer.begin(); o != outer.end(); ++o, ++i) {
+    if (o->empty()) continue;  // a trailing separator
+    if (i == inner.end() || *i != *o) return false;
+  }
+  return true;
+}
+
+/// Why `dir` (a folder that holds a run) must not be cleared, or "" if it may be. Conservative:
+/// never /, the home folder, the current folder or one of its parents; only top-level files and a
+/// probes/ folder of files (what netsolve and demsolve write); no input of this run inside.
+std::string why_not_clear(const fs::path& dir, const RunDirOptions& o) {
+  const fs::path c = canonical_or_absolute(dir);
+  if (c == c.root_path()) return "it is the root folder";
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0' && c == canonical_or_absolute(home))
+    return "it is the home folder";
+  std::error_code ec;
+  const fs::path cwd = fs::current_path(ec);
+  if (!ec && lies_in(canonical_or_absolute(cwd), c)) return "it is the current folder or one of its parents";
+  if (!fs::is_regular_file(dir / "command.txt") && !fs::exists(dir / kIncompleteMarker))
+    return "it has no command.txt or .incomplete, so it does not look like a netdem run folder";
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const auto st = e.symlink_status();
+    if (fs::is_regular_file(st) || fs::is_symlink(st)) continue;
+    if (fs::is_directory(st) && e.path().filename() == "probes") {
+      for (const auto& f : fs::directory_iterator(e.path(), ec))
+        if (!fs::is_regular_file(f.symlink_status()) && !fs::is_symlink(f.symlink_status()))
+          return fmt::format("its probes/ folder holds '{}', which no netdem run writes", quoted(f.path().filename().string()));
+      continue;
+    }
+    return fmt::format("it holds '{}', which is not a file a netdem run writes", quoted(e.path().filename().string()));
+  }
+  if (ec) return fmt::format("it cannot be listed: {}", ec.message());
+  for (const auto& in : o.inputs) {
+    if (in.empty()) continue;
+    if (lies_in(canonical_or_absolute(in), c)) return fmt::format("the input '{}' lies in it", quoted(in.string()));
+  }
+  return "";
+}
+}  // namespace
+
+bool holds_run(const std::filesystem::path& dir) {
+  std::error_code ec;
+  return fs::exists(dir / "command.txt", ec) || fs::exists(dir / "summary.json", ec) || fs::exists(dir / kIncompleteMarker, ec);
+}
+
+void check_run_dir(const std::filesystem::path& dir, const RunDirOptions& o) {
+  if (dir.empty()) throw UsageError("--out is empty: give an output folder");
+  const std::string name = quoted(dir.string());
+  std::error_code ec;
+  const auto st = fs::status(dir, ec);
+  if (fs::exists(st)) {
+    if (!fs::is_directory(st)) throw UsageError(fmt::format("--out '{}' exists and is not a folder", name));
+    if (::access(dir.c_str(), W_OK | X_OK) != 0)
+      throw UsageError(fmt::format("cannot write into the output folder '{}': {}", name, std::strerror(errno)));
+    if (!holds_run(dir)) return;  // empty, or only files no run wrote: nothing to mix with
+    const std::string cmd = recorded_command(dir);
+    const std::string which = cmd.empty() ? (fs::exists(dir / kIncompleteMarker) ? "an unfinished run" : "another run")
+                                          : fmt::format("the run '{}'", quoted(cmd));
+    if (!o.overwrite)
+      throw UsageError(fmt::format("--out '{}' holds the files of {}; pass {} to replace them, or choose another folder", name,
+                                   which, o.overwrite_flag));
+    const std::string why = why_not_clear(dir, o);
+    if (!why.empty()) throw UsageError(fmt::format("{} will not clear '{}': {}", o.overwrite_flag, name, why));
+    return;
+  }
+  // a new folder: its nearest existing parent must be a folder we can write into
+  fs::path p = canonical_or_absolute(dir).parent_path();
+  while (!p.empty() && !fs::exists(p, ec) && p != p.root_path()) p = p.parent_path();
+  if (!p.empty() && fs::exists(p, ec)) {
+    if (!fs::is_directory(p, ec))
+      throw UsageError(fmt::format("cannot create the output folder '{}': '{}' is not a folder", name, quoted(p.string())));
+    if (::access(p.c_str(), W_OK | X_OK) != 0)
+      throw UsageError(fmt::format("cannot create the output folder '{}': cannot write into '{}': {}", name, quoted(p.string()),
+                                   std::strerror(errno)));
+  }
+}
+
+void open_run_dir(const std::filesystem::path& dir, const std::string& command, const RunDirOptions& o) {
+  check_run_dir(dir, o);
+  const bool clear = o.overwrite && holds_run(dir);
+  make_output_dir(dir);
+  {  // the marker first: from here on the folder is an unfinished run until close_run_dir
+    const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    char when[32] = "";
+    std::tm tm{};
+    if (gmtime_r(&now, &tm) != nullptr) std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    std::ofstream m(dir / kIncompleteMarker, std::ios::trunc);
+    m << "unfinished netdem run (running, failed or killed): pid " << ::getpid() << ", started " << when << "\n"
+      << command << "\n";
+    m.flush();
+    if (!m) throw std::runtime_error(fmt::format("cannot write into the output folder '{}': {}", quoted(dir.string()),
+                                                 std::strerror(errno ? errno : EIO)));
+  }
+  if (clear) {  // why_not_clear allowed it: top-level files and probes/
+    std::error_code ec;
+    std::vector<fs::path> old;
+    for (const auto& e : fs::directory_iterator(dir)) old.push_back(e.path());
+    for (const auto& p : old) {
+      if (p.filename() == kIncompleteMarker) continue;
+      if (fs::is_directory(fs::symlink_status(p))) {
+        fs::remove_all(p, ec);
+      } else {
+        fs::remove(p, ec);
+      }
+      if (ec) throw std::runtime_error(fmt::format("cannot clear '{}': {}: {}", quoted(dir.string()), quoted(p.string()), ec.message()));
+    }
+  }
+  write_file_atomic(dir / "command.txt", command + "\n");
+  g_run_dir_opened = true;
+}
+
+void close_run_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  fs::remove(dir / kIncompleteMarker, ec);
+  if (ec) throw std::runtime_error(fmt::format("cannot remove '{}': {}", (dir / kIncompleteMarker).string(), ec.message()));
+}
+
+bool run_dir_opened() { return g_run_dir_opened; }
 
 namespace {
 void append_fields(std::string& s, const std::vector<Field>& fields) {

@@ -3,10 +3,27 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace netdem::app {
+
+/// Exit codes of the command-line tools (README.md "Exit status", docs/quasistatic.md):
+/// 0 ok, 1 run error, 2 command-line error (nothing written), 3 finished but untrustworthy
+/// (summary.json says why; --allow-unconverged turns it into 0 and keeps the status).
+namespace exit_code {
+constexpr int ok = 0;
+constexpr int run_error = 1;
+constexpr int usage = 2;
+constexpr int untrustworthy = 3;
+}  // namespace exit_code
+
+/// A refused command line (a bad value, a foreign output folder): exit 2, nothing written.
+class UsageError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
 
 /// Writes `text` to `path` through a temporary file in the same folder and a rename, so that a
 /// reader never sees a half-written file. Throws std::runtime_error (one line) on failure.
@@ -17,8 +34,40 @@ void make_output_dir(const std::filesystem::path& dir);
 
 /// make_output_dir, then removes the summary.json of an earlier run in that folder: summary.json is
 /// written last and marks a finished run, so a run that fails must not leave the old one behind
-/// next to its own first files.
+/// next to its own first files. (The old rule, kept for demsolve until it adopts open_run_dir.)
 void start_run_dir(const std::filesystem::path& dir);
+
+// ---- run folders: a folder never mixes two runs (README.md "Run folders") -----------------------
+//   check_run_dir   before any work: refuses (UsageError) a folder that holds another run's files
+//                   (command.txt, summary.json or .incomplete) unless overwrite, an --out that is a
+//                   file or cannot be written, and an input file inside a folder --overwrite clears;
+//                   touches nothing.
+//   open_run_dir    check_run_dir, then (overwrite) clears the old run's files, creates the folder,
+//                   writes the marker .incomplete first, then command.txt.
+//   close_run_dir   removes .incomplete: the last thing a run does. A run that fails or is killed
+//                   leaves it, so a folder with .incomplete never holds a finished run.
+
+/// The marker of an unfinished run.
+inline constexpr const char* kIncompleteMarker = ".incomplete";
+
+struct RunDirOptions {
+  bool overwrite = false;                          ///< --overwrite: clear an old run's folder first
+  std::vector<std::filesystem::path> inputs;       ///< input files/folders, which must not lie in a folder to clear
+  std::string overwrite_flag = "--overwrite";      ///< how the tool spells the option (messages)
+};
+
+/// True if `dir` holds a run's files: command.txt, summary.json or .incomplete.
+bool holds_run(const std::filesystem::path& dir);
+/// The checks of open_run_dir without touching anything; throws UsageError (one line).
+void check_run_dir(const std::filesystem::path& dir, const RunDirOptions& options);
+/// Checks, clears (overwrite), creates `dir`, writes .incomplete and command.txt (`command` + newline).
+/// Throws UsageError for a refused folder (nothing touched), std::runtime_error on a write failure.
+void open_run_dir(const std::filesystem::path& dir, const std::string& command, const RunDirOptions& options);
+/// Removes .incomplete (call after the last file, summary.json, is written).
+void close_run_dir(const std::filesystem::path& dir);
+/// True once open_run_dir succeeded in this process: an error after it is a run error (exit 1),
+/// one before it a refused command line (exit 2).
+bool run_dir_opened();
 
 /// A named point-data field for VTK output.
 struct Field {

@@ -4,8 +4,11 @@
 //   netsolve compact  [--affine] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
 //                     [--no-rotation] [--to-density 0.85] [--packing FILE] [--increments N] [--out DIR]
 //
-// Every run writes into its own folder: command.txt, the packing, history.csv, summary.json and
-// VTK PolyData snapshots. Errors are one line on stderr and a non-zero exit.
+// Every run writes into its own folder: .incomplete (first, removed last), command.txt, the packing,
+// history.csv, summary.json and VTK PolyData snapshots; a folder that holds another run is refused
+// unless --overwrite. Errors are one line on stderr. Exit status: 0 ok, 1 run error, 2 command-line
+// error (nothing written), 3 finished but untrustworthy (summary.json "status"; README.md).
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -29,6 +32,7 @@
 #include "output.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
+#include "status.hpp"
 
 namespace fs = std::filesystem;
 using netdem::app::Field;
@@ -41,8 +45,14 @@ using netdem::app::netsolve::parse_double;
 using netdem::app::netsolve::parse_friction;
 using netdem::app::netsolve::parse_int;
 using netdem::app::netsolve::PackArgs;
+using netdem::app::netsolve::activity;
 
 std::string g_command;
+
+/// Options of every run that writes a folder.
+struct RunArgs {
+  bool overwrite = false, allow_unconverged = false;
+};
 
 // The defaults of `compact` are the library preset qs::SolverOptions::compact()
 // (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
@@ -69,14 +79,20 @@ std::vector<double> parse_list(const std::string& s, const char* what) {
   return out;
 }
 
-void write_common(const fs::path& out) {
-  netdem::app::start_run_dir(out);
-  netdem::app::write_file_atomic(out / "command.txt", g_command + "\n");
+netdem::app::RunDirOptions run_dir_options(const RunArgs& r, const std::string& input = "") {
+  netdem::app::RunDirOptions o;
+  o.overwrite = r.overwrite;
+  if (!input.empty()) o.inputs.emplace_back(input);
+  return o;
 }
 
-int run_pack(const PackArgs& a, const fs::path& out) {
+int run_pack(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
+  netdem::app::check_run_dir(out, run_dir_options(ra));
+  netdem::app::netsolve::check_deposition_size(a);
+  activity() = fmt::format("building the ballistic deposition of width {} R", a.width);
   const auto pk = netdem::app::netsolve::make_packing(a);
-  write_common(out);
+  activity() = "writing the packing";
+  netdem::app::open_run_dir(out, g_command, run_dir_options(ra));
   netdem::packing::write_packing_csv(pk, out / "packing.csv");
   const auto st = netdem::packing::contact_stats(pk);
   nlohmann::json j;
@@ -87,7 +103,10 @@ int run_pack(const PackArgs& a, const fs::path& out) {
   j["wall_contacts"] = st.wall_contacts;
   j["density"] = st.density;
   j["coordination"] = st.coordination;
+  j["status"] = "ok";
+  j["status_reason"] = "a packing has no convergence criteria";
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  netdem::app::close_run_dir(out);
   std::printf("seed %llu: %zu particles, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
               static_cast<unsigned long long>(a.seed), st.particles, st.disk_contacts, st.wall_contacts, st.density,
               st.coordination, (out / "packing.csv").c_str());
@@ -114,7 +133,12 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
   netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
 }
 
-int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
+/// Thrown from the row callback to stop the compaction (the growing-residual rule).
+struct StopRun {
+  std::string reason;
+};
+
+int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
   using namespace netdem;
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
   so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
@@ -128,10 +152,14 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   co.increments = a.increments;
   const auto snaps = parse_list(a.snapshots, "--snapshots");
 
+  app::check_run_dir(out, run_dir_options(ra, a.packing_file));
   std::string source;
+  if (a.packing_file.empty()) app::netsolve::check_deposition_size(pa, true);
+  activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
   const packing::Packing pk = app::netsolve::input_packing(a.packing_file, pa, source);
   co.validate(pk.density());
-  write_common(out);
+  activity() = "setting up the network solver";
+  app::open_run_dir(out, g_command, run_dir_options(ra, a.packing_file));
   packing::write_packing_csv(pk, out / "packing.csv");
   if (!a.quiet) std::fprintf(stderr, "netsolve: %zu particles, D0 = %.4f, seed %llu (%s)\n", pk.size(), pk.density(),
                              static_cast<unsigned long long>(pk.seed), source.c_str());
@@ -149,6 +177,14 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   qs::StateMeasures last;
   app::Progress progress("compact", co.increments, a.quiet);
   const double sy = so.law.sigma_y;
+  app::netsolve::ConvergenceRecord conv;
+  conv.tol = so.residual_tol;
+  app::netsolve::ResidualGrowth growth;
+  growth.tol = so.residual_tol;
+  int done = 0;
+  std::string stopped;  // why the run stopped before the target, or ""
+  activity() = "compacting";
+  try {
   qs::run_compaction(solver, co, [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
@@ -161,7 +197,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
     if (row.increment > 0) {
       unconverged += !row.report.converged;
       max_residual = std::max(max_residual, row.report.residual);
+      conv.add(row.increment, row.report.converged, row.report.newton_residual);
     }
+    done = row.increment;
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
       write_snapshot(solver, out, fmt::format("D{:.3f}", snaps[next_snap]));
       ++next_snap;
@@ -169,12 +207,25 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
     if (row.increment % 20 == 0) app::write_file_atomic(out / "history.csv", csv);  // checkpoint
     progress.update(row.increment);
     last = m;
+    if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
+      throw StopRun{fmt::format("the Newton residual grew in each of increments {}..{} to {:.3g} (above 10 x --tol = {:.3g} "
+                                "and more than 10 times its value before): the iteration diverges from increment {} on",
+                                growth.first_bad, row.increment, row.report.newton_residual, 10 * so.residual_tol,
+                                growth.first_bad)};
   });
+  } catch (const StopRun& s) {
+    stopped = s.reason;
+  } catch (const qs::DivergedError& e) {
+    stopped = fmt::format("increment {}: {}", done + 1, e.what());
+  }
   progress.finish();
+  if (!stopped.empty()) csv += "# stopped: " + stopped + "\n";  // history readers skip '#' lines
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   app::write_file_atomic(out / "history.csv", csv);
-  write_snapshot(solver, out, "final");
-  if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
+  if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
+    write_snapshot(solver, out, "final");
+    if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
+  }
   const auto& tm = solver.timings();
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
@@ -189,8 +240,16 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
   if (outside > 0)
     std::fprintf(stderr, "netsolve: warning: %d disk centres left the box between the peripheral disks (die mode)\n",
                  outside);
+  app::netsolve::RunStatus status;
+  if (!stopped.empty()) status.add("unstable", "stopped: " + stopped);
+  conv.judge(status, "");
+  if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
+  if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
   nlohmann::json j;
   j["command"] = g_command;
+  status.write(j);
+  j["allow_unconverged"] = ra.allow_unconverged;
+  j["increments_done"] = done;
   j["centres_outside_box"] = outside;
   j["packing"] = source;
   j["seed"] = pk.seed;
@@ -219,13 +278,23 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const fs::path& out) {
     const bool inl = qs::cholmod_inline_openmp(&why);
     j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
   }
-  j["state"] = a.save_state ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  j["solver"]["max_newton_residual"] = conv.max_newton_residual;
+  j["solver"]["last_increment_converged"] = conv.last_converged;
+  j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  app::close_run_dir(out);
   std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
               last.density, last.S11 / sy, last.S22 / sy, last.Z, unconverged, max_residual, wall, out.c_str());
-  return 0;
+  if (!stopped.empty()) {
+    std::fprintf(stderr, "netsolve: error: unstable: %s (history.csv and summary.json keep increments 0..%d)\n",
+                 stopped.c_str(), done);
+  } else if (!status.ok()) {
+    std::fprintf(stderr, "netsolve: %s: %s: %s\n", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
+                 status.status.c_str(), status.reason().c_str());
+  }
+  return stopped.empty() ? status.exit_code(ra.allow_unconverged) : app::exit_code::untrustworthy;
 }
 
 }  // namespace
@@ -234,6 +303,13 @@ int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
   if (argc > 1 && std::string(argv[1]) == "sinter-pair") return run_sinter_pair_command(argc, argv);
+  if (argc > 1 && argv[1][0] != '-' && std::string(argv[1]) != "pack" && std::string(argv[1]) != "compact") {
+    std::string word;
+    for (const char* c = argv[1]; *c != '\0' && word.size() < 80; ++c) word += std::isprint(static_cast<unsigned char>(*c)) ? *c : '?';
+    std::fprintf(stderr, "netsolve: error: unknown subcommand '%s': use pack, compact, yield, yield-merge or sinter-pair (see --help)\n",
+                 word.c_str());
+    return netdem::app::exit_code::usage;
+  }
   CLI::App app{"netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001)"};
   app.require_subcommand(1);
   app.add_subcommand("yield", "yield surface probes after precompaction (docs/yield.md; own --help)");
@@ -241,13 +317,17 @@ int main(int argc, char** argv) {
   app.add_subcommand("sinter-pair", "one two-particle sintering contact against time (docs/sintering_pair.md; own --help)");
   PackArgs pa;
   CompactArgs ca;
+  RunArgs ra;
   std::string out;
   auto add_pack_opts = [&](CLI::App* c) {
     c->add_option("--width", pa.width, "box width W in units of the mean radius R")->capture_default_str();
     c->add_option("--r-min", pa.r_min, "smallest radius / R")->capture_default_str();
     c->add_option("--r-max", pa.r_max, "largest radius / R")->capture_default_str();
     c->add_flag("--mono", pa.mono, "monosized disks (r = R)");
-    c->add_option("--seed", pa.seed, "random seed of the deposition")->capture_default_str();
+    c->add_option("--seed", pa.seed, "random seed of the deposition, a whole number in [0, 2^64)")
+        ->check(netdem::app::netsolve::seed_validator())
+        ->capture_default_str();
+    c->add_flag("--overwrite", ra.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
     c->add_option("--lid", pa.lid, "stop rule: 'centre' keeps disks whose centre is below the lid (D0 near the paper's), 'inside' only whole disks")->capture_default_str();
   };
   auto* pack = app.add_subcommand("pack", "ballistic deposition packing (section 2.2)");
@@ -255,7 +335,7 @@ int main(int argc, char** argv) {
   pack->add_option("--out", out, "output folder")->default_val("results/pack");
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
-  comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
+  auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
   comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
   comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
   comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");
@@ -280,6 +360,9 @@ int main(int argc, char** argv) {
   comp->add_flag("--save-state", ca.save_state, "write the final solver state to state.txt (exact; netsolve yield --from-state continues from it)");
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
+  comp->add_flag("--allow-unconverged", ra.allow_unconverged,
+                 "exit 0 for a finished run that summary.json marks 'unconverged' or 'unstable' (the status is kept; a run "
+                 "stopped by a growing residual still exits 3)");
   comp->add_option("--out", out, "output folder")->default_val("results/compact");
   try {
     app.parse(argc, argv);
@@ -288,11 +371,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "netsolve: error: %s (see --help)\n", e.what());
     return 2;
   }
-  try {
-    if (*pack) return run_pack(pa, out);
-    return run_compact(pa, ca, out);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netsolve: error: %s\n", e.what());
-    return 1;
-  }
+  return netdem::app::netsolve::guarded("netsolve", [&]() {
+    if (*pack) return run_pack(pa, ra, out);
+    if (o_packing->count() > 0 && ca.packing_file.empty())
+      throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
+    return run_compact(pa, ca, ra, out);
+  });
 }

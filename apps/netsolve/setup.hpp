@@ -1,8 +1,12 @@
 #pragma once
 // Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield): the
 // packing, and the contact-law / Newton options both `compact` and `yield` take.
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +17,7 @@
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "output.hpp"
 #include "parse.hpp"
 
 namespace netdem::app::netsolve {
@@ -24,6 +29,58 @@ struct PackArgs {
   std::string lid = "centre";
   std::uint64_t seed = 1;
 };
+
+/// --seed: a whole number in [0, 2^64) written with digits only (CLI11 would wrap -1 to 2^64 - 1).
+inline CLI::Validator seed_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        bool digits = !s.empty() && s.size() <= 20;
+        for (char c : s) digits = digits && std::isdigit(static_cast<unsigned char>(c));
+        if (digits && (s.size() < 20 || s <= "18446744073709551615")) return "";
+        return fmt::format("'{}' is not a whole number in [0, 18446744073709551615]", s.substr(0, 80));
+      },
+      "UINT64");
+}
+
+/// Largest deposition accepted (the number of disks estimated before it starts).
+inline constexpr double kMaxDisks = 5e7;
+/// Memory of a deposition per disk, with margin (measured: 110 B per disk at W = 800, 165k disks),
+/// and of the network solver per disk (measured: 5 kB per disk in `compact` between W = 80 and 160, CHOLMOD included).
+inline constexpr double kDepositionBytesPerDisk = 250.0;
+inline constexpr double kSolverBytesPerDisk = 10000.0;
+
+/// MemAvailable of /proc/meminfo in bytes, or 0 if unknown.
+inline double mem_available_bytes() {
+  std::ifstream in("/proc/meminfo");
+  std::string key;
+  double kb = 0.0;
+  std::string unit;
+  while (in >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return 0.0;
+}
+
+/// Refuses (UsageError) a deposition whose estimated size cannot fit: N ~ W^2 D0 / (pi <r^2>) with
+/// D0 = 0.85 (ballistic packings reach 0.81), above kMaxDisks disks or, with the solver when
+/// `solve`, above MemAvailable. Also a width that is not finite and positive.
+inline void check_deposition_size(const PackArgs& a, bool solve = false) {
+  const double r0 = a.mono ? 1.0 : a.r_min, r1 = a.mono ? 1.0 : a.r_max;
+  if (!(std::isfinite(a.width) && a.width > 0.0))
+    throw UsageError(fmt::format("--width must be a positive finite number of radii, got {}", a.width));
+  if (!(std::isfinite(r0) && std::isfinite(r1) && r0 > 0.0 && r1 >= r0)) return;  // the deposition's own checks say why
+  const double r2 = (r0 * r0 + r0 * r1 + r1 * r1) / 3.0;  // <r^2> of radii uniform in [r_min, r_max]
+  const double disks = a.width * a.width * 0.85 / (std::numbers::pi * r2);
+  const double bytes = disks * (kDepositionBytesPerDisk + (solve ? kSolverBytesPerDisk : 0.0));
+  if (disks > kMaxDisks)
+    throw UsageError(fmt::format("--width {} with radii in [{}, {}] R: about {:.3g} disks, above the limit of {:.0e} "
+                                 "(about {:.3g} GB and hours of deposition); use a smaller --width",
+                                 a.width, r0, r1, disks, kMaxDisks, bytes / 1e9));
+  const double avail = mem_available_bytes();
+  if (avail > 0.0 && bytes > avail)
+    throw UsageError(fmt::format("--width {}: about {:.3g} disks need about {:.3g} GB, more than the {:.3g} GB available "
+                                 "(MemAvailable); use a smaller --width",
+                                 a.width, disks, bytes / 1e9, avail / 1e9));
+}
 
 /// The ballistic deposition of `a`; throws std::invalid_argument for an unknown --lid.
 inline packing::Packing make_packing(const PackArgs& a) {
@@ -45,6 +102,9 @@ inline packing::Packing make_packing(const PackArgs& a) {
 /// The packing file if one is given, else a new deposition; `source` describes which.
 inline packing::Packing input_packing(const std::string& packing_file, const PackArgs& a, std::string& source) {
   if (!packing_file.empty()) {
+    if (std::filesystem::is_directory(packing_file))
+      throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes DIR/packing.csv)",
+                                   packing_file.substr(0, 80)));
     source = packing_file;
     return packing::read_packing_csv(packing_file);
   }

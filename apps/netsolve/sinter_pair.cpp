@@ -10,8 +10,10 @@
 // SI units everywhere (m, s, K, N). Writes command.txt, pair.csv (one row per output time: a log
 // grid from --t-first, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
 // range), pair.svg (x/R and Delta L/L0 against t, log-log) and summary.json (last). A contact that
-// leaves the validity limits (note section 4.6) stops there; summary.json says why. Bad input: one
-// line on stderr, exit 2 (command line) or 1, no output folder.
+// leaves the validity limits (note section 4.6) stops there; summary.json says why ("status":
+// "incomplete", exit 0: the rows up to the limit are valid). A non-finite state or a failed step:
+// "unstable", exit 3. Bad input: one line on stderr, exit 2, no output folder; exit 1 for an
+// error during the run (README.md "Exit status").
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -30,6 +32,7 @@
 #include "netdem/contact/sintering_pair_sundials.hpp"
 #include "output.hpp"
 #include "parse.hpp"
+#include "status.hpp"
 
 int run_sinter_pair_command(int argc, char** argv);
 
@@ -46,7 +49,7 @@ struct Args {
   double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
          force = 0.0, t_first = 1.0;
   int per_decade = 20;
-  bool quiet = false;
+  bool quiet = false, overwrite = false, allow_unconverged = false;
 };
 
 struct Row {
@@ -151,6 +154,13 @@ sp::SinterMaterial load_material(const Args& a, std::string& source) {
 
 int run(const Args& a, const std::string& command) {
   // ---- everything is checked before the output folder exists
+  {
+    netdem::app::RunDirOptions rdo;
+    rdo.overwrite = a.overwrite;
+    netdem::app::check_run_dir(a.out, rdo);  // a refused folder: exit 2 before any work
+  }
+  if (!a.profile.empty() && fs::is_directory(a.profile))
+    throw netdem::app::UsageError(fmt::format("--profile '{}' is a folder, not a CSV file", a.profile.substr(0, 80)));
   std::string mat_source;
   const sp::SinterMaterial mat = load_material(a, mat_source);
   double RA = a.radius, RB = a.radius;
@@ -181,8 +191,11 @@ int run(const Args& a, const std::string& command) {
   const sp::PathSwitches paths = parse_paths(a.paths);
 
   const fs::path out(a.out);
-  netdem::app::start_run_dir(out);
-  netdem::app::write_file_atomic(out / "command.txt", command + "\n");
+  netdem::app::RunDirOptions rdo;
+  rdo.overwrite = a.overwrite;
+  if (!a.profile.empty()) rdo.inputs.emplace_back(a.profile);
+  if (a.material != "cu" && a.material != "ti") rdo.inputs.emplace_back(a.material);
+  netdem::app::open_run_dir(out, command, rdo);
 
   const sp::PairProblem problem{&mat, &prof, paths, a.force};
   sp::PairIntegrator integ(io);
@@ -256,7 +269,24 @@ int run(const Args& a, const std::string& command) {
   j["force_N"] = a.force;
   j["paths"] = {{"I", paths.I}, {"II", paths.II}, {"III", paths.III}, {"IV", paths.IV}, {"V", paths.V}};
   j["integrator"] = {{"name", sp::to_string(io.kind)}, {"rtol", io.rtol}, {"atol_scale", io.atol_scale}, {"rk4_c", io.rk4_c}};
-  j["status"] = sp::to_string(c.status);
+  // the run status of every netsolve command: a validity limit is a documented, expected end
+  // (incomplete, exit 0); a non-finite state, a failed step or a dropped row is unstable (exit 3)
+  netdem::app::netsolve::RunStatus status;
+  switch (c.status) {
+    case sp::PairStatus::Ok: break;
+    case sp::PairStatus::NeckLimit:
+    case sp::PairStatus::ConeDegenerate:
+    case sp::PairStatus::NeckVanished:
+      status.add("incomplete", fmt::format("stopped at t = {:.6g} s at a validity limit: {}", c.t, sp::describe(c.status, io.x_over_R_max)));
+      break;
+    case sp::PairStatus::NonFinite:
+    case sp::PairStatus::StepFailure:
+      status.add("unstable", fmt::format("stopped at t = {:.6g} s: {}", c.t, sp::describe(c.status, io.x_over_R_max)));
+      break;
+  }
+  if (dropped_row) status.add("unstable", "rows with non-finite values were dropped from pair.csv");
+  status.write(j);
+  j["stop"] = sp::to_string(c.status);
   j["reason"] = sp::describe(c.status, io.x_over_R_max);
   j["completed"] = c.status == sp::PairStatus::Ok && c.t >= a.t_end;
   j["t_stop_s"] = c.t;
@@ -288,13 +318,14 @@ int run(const Args& a, const std::string& command) {
   j["wall_s"] = wall;
   j["files"] = {{"csv", "pair.csv"}, {"plot", "pair.svg"}};
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  netdem::app::close_run_dir(out);
   const Row* last = rows.empty() ? nullptr : &rows.back();
   if (c.status != sp::PairStatus::Ok)
     std::fprintf(stderr, "netsolve sinter-pair: stopped at t = %.6g s: %s\n", c.t, sp::describe(c.status, io.x_over_R_max).c_str());
   if (last != nullptr)
     std::printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3g s -> %s\n", last->t, last->x_over_R, last->shrinkage,
                 c.steps, wall, out.c_str());
-  return 0;
+  return status.exit_code(a.allow_unconverged);
 }
 
 }  // namespace
@@ -326,6 +357,8 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_option("--paths", a.paths, "transport paths on: all, or a list of I (GB), II (surface), III, IV, V (lattice); note section 3")
       ->capture_default_str();
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
+  app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
+  app.add_flag("--allow-unconverged", a.allow_unconverged, "exit 0 for a run that summary.json marks 'unstable' (the status is kept)");
   app.add_option("--out", a.out, "output folder")->capture_default_str();
   try {
     app.parse(argc - 1, argv + 1);
@@ -334,12 +367,5 @@ int run_sinter_pair_command(int argc, char** argv) {
     std::fprintf(stderr, "netsolve sinter-pair: error: %s (see --help)\n", e.what());
     return 2;
   }
-  try {
-    return run(a, command);
-  } catch (const std::exception& e) {
-    std::string msg = e.what();
-    std::replace(msg.begin(), msg.end(), '\n', ' ');
-    std::fprintf(stderr, "netsolve sinter-pair: error: %s\n", msg.c_str());
-    return 1;
-  }
+  return netdem::app::netsolve::guarded("netsolve sinter-pair", [&]() { return run(a, command); });
 }

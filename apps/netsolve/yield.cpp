@@ -55,6 +55,7 @@
 #include "output.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
+#include "status.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -90,7 +91,7 @@ struct YieldArgs {
   int jobs = 0;
   double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
   int fine = 20;
-  bool quiet = false;
+  bool quiet = false, overwrite = false, allow_unconverged = false;
   std::string out = "results/yield";
   int probe_worker = -1;          ///< hidden: run probe k from out/probes/unloaded_state.txt (a worker process)
   std::vector<std::string> argv;  ///< the command line, to start the workers
@@ -532,10 +533,21 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
   if (!a.from_state.empty() && !a.packing_file.empty()) throw std::invalid_argument("--from-state and --packing exclude each other");
 
+  {
+    app::RunDirOptions rdo;
+    rdo.overwrite = a.overwrite;
+    rdo.inputs = {a.packing_file, a.from_state};
+    app::check_run_dir(a.out, rdo);  // before any work: a refused folder is exit 2, nothing touched
+  }
+  if (!a.from_state.empty() && fs::is_directory(a.from_state))
+    throw app::UsageError(fmt::format("--from-state '{}' is a folder, not a state file (netsolve compact --save-state writes "
+                                      "DIR/state.txt)", a.from_state.substr(0, 80)));
   std::string source;
   packing::Packing pk;
   std::unique_ptr<qs::NetworkSolver> solver;
   if (a.from_state.empty()) {
+    if (a.packing_file.empty()) app::netsolve::check_deposition_size(a.pack, true);
+    app::netsolve::activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
     pk = app::netsolve::input_packing(a.packing_file, a.pack, source);
     co.validate(pk.density());
   } else {
@@ -544,7 +556,10 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   }
 
   const fs::path out = a.out;
-  app::start_run_dir(out);
+  app::RunDirOptions rdo;
+  rdo.overwrite = a.overwrite;
+  rdo.inputs = {a.packing_file, a.from_state};
+  app::open_run_dir(out, command, rdo);
   app::make_output_dir(out / "probes");
   // probe files of an earlier run in this folder would mix into yield-merge: remove them
   for (const auto& e : fs::directory_iterator(out / "probes")) {
@@ -552,7 +567,6 @@ int run_yield(const YieldArgs& a, const std::string& command) {
     if (name.rfind("probe_", 0) == 0 && (e.path().extension() == ".csv" || e.path().extension() == ".json"))
       fs::remove(e.path());
   }
-  app::write_file_atomic(out / "command.txt", command + "\n");
   if (!solver) packing::write_packing_csv(pk, out / "packing.csv");
   const double sy = so.law.sigma_y;
   if (!a.quiet)
@@ -565,6 +579,9 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   auto t0 = Clock::now();
   int unconverged = 0;
   qs::StateMeasures loaded;
+  app::netsolve::ConvergenceRecord conv;
+  conv.tol = so.residual_tol;
+  app::netsolve::activity() = "precompacting";
   if (!solver) {
     solver = std::make_unique<qs::NetworkSolver>(pk, so);
     std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged\n";
@@ -574,7 +591,10 @@ int run_yield(const YieldArgs& a, const std::string& command) {
       hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{}\n", row.increment, m.E11,
                           m.E22, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.Z, m.contacts, row.report.residual,
                           row.report.newton_iterations, row.report.converged ? 1 : 0);
-      if (row.increment > 0) unconverged += !row.report.converged;
+      if (row.increment > 0) {
+        unconverged += !row.report.converged;
+        conv.add(row.increment, row.report.converged, row.report.newton_residual);
+      }
       progress.update(row.increment);
       loaded = m;
     });
@@ -686,20 +706,29 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   }
   write_assembly(out, recs, setup, setup_title(setup));
 
+  // ---- status: the precompaction's convergence, the unloading; a failed probe is its own record
+  app::netsolve::RunStatus status;
+  conv.judge(status, "precompaction");
+  if (!un.converged) status.add("unconverged", "unloading: " + un.message);
   const double total = seconds_since(t_start);
   json j;
   j["command"] = command;
+  status.write(j);
+  j["allow_unconverged"] = a.allow_unconverged;
   j["setup"] = setup;
   j["seed"] = solver->seed();
   j["initial_density"] = D0;
   j["precompaction"] = {{"D", loaded.density}, {"Z", loaded.Z},           {"S11", loaded.S11 / sy},
                         {"S22", loaded.S22 / sy}, {"S12", loaded.S12 / sy}, {"E11", loaded.E11},
                         {"E22", loaded.E22},   {"contacts", loaded.contacts}, {"unconverged_increments", unconverged},
-                        {"increments", co.increments}};
+                        {"increments", co.increments}, {"max_newton_residual", conv.max_newton_residual},
+                        {"last_increment_converged", conv.last_converged}};
   if (!a.from_state.empty()) {
     j["precompaction"]["from_state"] = a.from_state;
     j["precompaction"]["unconverged_increments"] = nullptr;  // not known from the state
     j["precompaction"]["increments"] = nullptr;
+    j["precompaction"]["max_newton_residual"] = nullptr;
+    j["precompaction"]["last_increment_converged"] = nullptr;
   }
   j["analytic"] = {{"ok", an.ok}, {"message", an.message}};
   if (an.ok) {
@@ -728,14 +757,18 @@ int run_yield(const YieldArgs& a, const std::string& command) {
                    {"probe_wall_sum", probe_wall_sum},
                    {"share", {{"compaction", t_compact / total}, {"unloading", t_unload / total}, {"probes", t_probes / total}}}};
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  app::close_run_dir(out);
   std::printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e in %d increments; "
               "%d/%zu probes ok; %.1f s (compaction %.1f, unloading %.1f, probes %.1f) -> %s\n",
               loaded.density, loaded.Z, loaded.S11 / sy, loaded.S22 / sy, un.stress_norm, static_cast<int>(un.path.size()) - 1,
               ok, selection.size(), total, t_compact, t_unload, t_probes, out.c_str());
-  return 0;
+  if (!status.ok())
+    std::fprintf(stderr, "netsolve yield: %s: %s: %s\n", a.allow_unconverged ? "warning (--allow-unconverged)" : "error",
+                 status.status.c_str(), status.reason().c_str());
+  return status.exit_code(a.allow_unconverged);
 }
 
-int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, const std::string& command) {
+int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, const std::string& command, bool overwrite) {
   if (dirs.empty()) throw std::invalid_argument("yield-merge: no run folder given");
   std::map<int, json> best;
   json setup = nullptr;
@@ -763,8 +796,10 @@ int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, 
   }
   if (best.empty()) throw std::invalid_argument("yield-merge: no probe files found");
   const fs::path out = out_dir;
-  netdem::app::start_run_dir(out);
-  netdem::app::write_file_atomic(out / "command.txt", command + "\n");
+  netdem::app::RunDirOptions rdo;
+  rdo.overwrite = overwrite;
+  for (const auto& d : dirs) rdo.inputs.emplace_back(d);
+  netdem::app::open_run_dir(out, command, rdo);
   std::vector<json> recs;
   std::vector<int> missing;
   for (int k = 0; k < directions; ++k) {
@@ -775,12 +810,28 @@ int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, 
     }
   }
   write_assembly(out, recs, setup, setup_title(setup) + " (merged)");
+  // the merge records each probe's status (yield_points.csv, "probes" below) and does not fail for
+  // a failed probe: "incomplete" says that probes are missing or not ok, exit 0 either way
+  std::vector<int> not_ok;
+  for (const auto& r : recs)
+    if (r.value("status", "") != "ok") not_ok.push_back(r.at("probe").get<int>());
+  std::vector<std::string> unfinished;
+  for (const auto& d : dirs)
+    if (fs::exists(fs::path(d) / netdem::app::kIncompleteMarker)) unfinished.push_back(d);
+  netdem::app::netsolve::RunStatus status;
+  if (!missing.empty()) status.add("incomplete", fmt::format("{} of {} probes missing", missing.size(), directions));
+  if (!not_ok.empty()) status.add("incomplete", fmt::format("{} probes not ok (their status is in yield_points.csv)", not_ok.size()));
+  if (!unfinished.empty())
+    status.add("incomplete", fmt::format("{} source folders hold an unfinished run (.incomplete)", unfinished.size()));
   json j;
   j["command"] = command;
+  status.write(j);
   j["setup"] = setup;
   j["sources"] = dirs;
-  j["probes"] = {{"found", recs.size()}, {"directions", directions}, {"missing", missing}};
+  j["sources_unfinished"] = unfinished;
+  j["probes"] = {{"found", recs.size()}, {"directions", directions}, {"missing", missing}, {"not_ok", not_ok}};
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  netdem::app::close_run_dir(out);
   std::printf("merged %zu of %d probes from %zu folders%s -> %s\n", recs.size(), directions, dirs.size(),
               missing.empty() ? "" : fmt::format(" ({} missing)", missing.size()).c_str(), out.c_str());
   return 0;
@@ -807,7 +858,9 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--r-min", a.pack.r_min, "smallest radius / R")->capture_default_str();
     app.add_option("--r-max", a.pack.r_max, "largest radius / R")->capture_default_str();
     app.add_flag("--mono", a.pack.mono, "monosized disks");
-    app.add_option("--seed", a.pack.seed, "random seed of the deposition")->capture_default_str();
+    app.add_option("--seed", a.pack.seed, "random seed of the deposition, a whole number in [0, 2^64)")
+        ->check(netdem::app::netsolve::seed_validator())
+        ->capture_default_str();
     app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition");
     app.add_option("--from-state", a.from_state,
                    "start from a compacted state (state.txt of `netsolve compact --save-state`) instead of precompacting; "
@@ -832,6 +885,9 @@ int run_yield_command(int argc, char** argv) {
         "normal law during the precompaction: 'reversible' (Eq 2 both ways, the paper's compaction) or "
         "'elastic' (section 3.4 branch throughout); unloading and probes always use the elastic branch");
     app.add_flag("--quiet", a.quiet, "no progress on stderr");
+    app.add_flag("--allow-unconverged", a.allow_unconverged,
+                 "exit 0 for a run that summary.json marks 'unconverged' (precompaction or unloading; the status is kept)");
+    app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
     app.add_option("--out", a.out, "output folder")->capture_default_str();
     app.add_option("--probe-worker", a.probe_worker, "internal: run one probe from the run folder's unloaded state")
         ->group("");
@@ -839,6 +895,7 @@ int run_yield_command(int argc, char** argv) {
     app.description("netsolve yield-merge: assemble yield_points.csv and surface.svg from the probe files of several yield runs");
     app.add_option("dirs", dirs, "run folders (each with probes/)")->required();
     app.add_option("--out", merge_out, "output folder")->capture_default_str();
+    app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier merge in --out (README.md 'Run folders')");
   }
   try {
     app.parse(argc - 1, argv + 1);
@@ -847,11 +904,8 @@ int run_yield_command(int argc, char** argv) {
     std::fprintf(stderr, "netsolve %s: error: %s (see --help)\n", sub.c_str(), e.what());
     return 2;
   }
-  try {
+  return netdem::app::netsolve::guarded("netsolve " + sub, [&]() {
     if (sub == "yield") return run_yield(a, command);
-    return run_merge(dirs, merge_out, command);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netsolve %s: error: %s\n", sub.c_str(), e.what());
-    return 1;
-  }
+    return run_merge(dirs, merge_out, command, a.overwrite);
+  });
 }

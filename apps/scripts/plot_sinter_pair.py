@@ -31,7 +31,7 @@ def main():
         try:
             with open(os.path.join(d, "summary.json")) as f:
                 s = json.load(f)
-            label += f" ({s['material']['name']}, status {s['status']})"
+            label += f" ({s['material']['name']}, status {s['status']}{', ' + s['stop'] if s.get('stop', 'ok') != 'ok' else ''})"
         except (OSError, ValueError, KeyError):
             pass
         pos = (c["t"] > 0) & (c["shrinkage"] > 0)

@@ -8,6 +8,7 @@ out="${1:-$root/results/default}"
 bash "$root/apps/scripts/install-deps.sh"
 cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$root/build" -j "$(nproc)" --target netsolve
-"$root/build/apps/netsolve" compact --out "$out"
+# --overwrite: a second quickstart replaces the first one's results (README.md "Run folders")
+"$root/build/apps/netsolve" compact --overwrite --out "$out"
 /usr/bin/python3 "$root/apps/scripts/plot_run.py" "$out"
 echo "results and report: $out/report.md"

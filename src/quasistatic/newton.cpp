@@ -52,7 +52,7 @@ IncrementReport NetworkSolver::Impl::attempt(const Eigen::Matrix2d& dE) {
     const double newton_res = nfree > 0 ? residual(fbar, true, &newton_max) : 0.0;  // RMS
     rep.newton_residual = newton_res;
     if (!std::isfinite(newton_res))
-      throw std::runtime_error("increment: non-finite contact forces (diverged Newton iteration)");
+      throw DivergedError("increment: non-finite contact forces (diverged Newton iteration)");
     if (opt.verbose) print_iteration(it, newton_res, newton_max, fbar);
     if ((newton_res <= opt.residual_tol && newton_max <= opt.max_residual_tol) || nfree == 0) {
       rep.converged = true;

@@ -53,7 +53,7 @@ if awk -F, '$1 == 3600 { d = $3 - 0.183640; if (d < 0) d = -d; exit !(d < 2e-5) 
 # a small hot pair leaves the useful range: the run stops there and says why
 small="$tmp/spsmall"
 if "$tool" sinter-pair --quiet --radius 5e-6 --temperature 1323.15 --time 57600 --out "$small" >/dev/null 2>"$tmp/stderr" &&
-   grep -q '"status": "neck_limit"' "$small/summary.json" && grep -q '"completed": false' "$small/summary.json" &&
+   grep -q '"status": "incomplete"' "$small/summary.json" && grep -q '"stop": "neck_limit"' "$small/summary.json" && grep -q '"completed": false' "$small/summary.json" &&
    grep -q "stopped" "$tmp/stderr" && ! grep -qi "nan" "$small/pair.csv"; then
   ok
 else

@@ -27,7 +27,9 @@ has_columns() {  # FILE COLUMN...: the CSV header names every COLUMN
   shift
   for c in "$@"; do head -1 "$f" | tr ',' '\n' | grep -qx "$c" || return 1; done
 }
-args=(yield --width 12 --directions 4 --increments 10 --to-density 0.83 --quiet)
+# W = 12 with 10 increments does not converge (exit 3): these checks are about the files and
+# reproducibility, so they accept the status (summary.json keeps it)
+args=(yield --width 12 --directions 4 --increments 10 --to-density 0.83 --quiet --allow-unconverged)
 good="$tmp/ygood"
 if "$ns" "${args[@]}" --out "$good" >/dev/null 2>"$tmp/stderr" &&
    head -1 "$good/yield_points.csv" | grep -q "theta" &&
@@ -61,7 +63,7 @@ else
 fi
 # restart: `compact --save-state` then `yield --from-state` gives the points of the uninterrupted
 # yield run (same preset, same increments), byte for byte; a state along another path is refused
-cargs=(compact --width 12 --increments 10 --to-density 0.83 --quiet)
+cargs=(compact --width 12 --increments 10 --to-density 0.83 --quiet --allow-unconverged)
 if "$ns" "${cargs[@]}" --save-state --out "$tmp/cstate" >/dev/null 2>"$tmp/stderr" &&
    [ -s "$tmp/cstate/state.txt" ] &&
    "$ns" yield --from-state "$tmp/cstate/state.txt" --directions 4 --quiet --out "$tmp/yfs" >/dev/null 2>"$tmp/stderr" &&

@@ -62,26 +62,39 @@ STYLE = {
 
 def case_args(name, scale, jobs):
     _, pre, cbc, pbc, mu = CASES[name]
-    return ["yield", "--width", str(scale["width"]), "--increments", str(scale["increments"]),
-            "--directions", str(scale["directions"]), "--precompact", pre, "--compact-bc", cbc,
-            "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--normal-unloading", "reversible",
-            "--jobs", str(jobs), "--quiet"]
+    a = ["yield", "--width", str(scale["width"]), "--increments", str(scale["increments"]),
+         "--directions", str(scale["directions"]), "--precompact", pre, "--compact-bc", cbc,
+         "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--normal-unloading", "reversible",
+         "--jobs", str(jobs), "--quiet"]
+    if mu == "0":
+        # frictionless precompactions are studied unconverged on purpose (exit 3 otherwise); the
+        # status stays in summary.json
+        a.append("--allow-unconverged")
+    return a
+
+
+def holds_run(out):
+    return any(os.path.exists(os.path.join(out, f)) for f in ("command.txt", "summary.json", ".incomplete"))
 
 
 def run_case(binary, name, scale, runs, jobs, force):
     out = os.path.join(runs, name)
     args = case_args(name, scale, jobs)
     cmd_file = os.path.join(out, "command.txt")
-    if not force and os.path.exists(os.path.join(out, "summary.json")) and os.path.exists(cmd_file):
-        old = open(cmd_file).read().split()[1:]
+    finished = os.path.exists(os.path.join(out, "summary.json")) and not os.path.exists(os.path.join(out, ".incomplete"))
+    if not force and finished and os.path.exists(cmd_file):
+        old = [w for w in open(cmd_file).read().split()[1:] if w != "--overwrite"]
         if old[:-2] == args:  # the output folder may have moved
             print(f"  {name}: up to date")
             return
     t0 = time.time()
-    cmd = ["nice", "-n", "10", binary] + args + ["--out", out]
+    rerun = ["--overwrite"] if holds_run(out) else []  # a rerun replaces the old run's files
+    cmd = ["nice", "-n", "10", binary] + args + rerun + ["--out", out]
     print("  " + " ".join(shlex.quote(c) for c in cmd), flush=True)
     r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
+    if r.returncode == 3:  # finished but untrustworthy: the report shows summary.json's status
+        print(f"    {name}: exit 3 (finished, untrustworthy): {r.stderr.strip()[-300:]}", flush=True)
+    elif r.returncode != 0:
         sys.exit(f"{name} failed: {r.stderr.strip()}")
     print(f"    {r.stdout.strip()} ({time.time() - t0:.0f} s)", flush=True)
 

@@ -77,13 +77,17 @@ def run_all(netsolve, runs_dir, quick, force):
         d = os.path.join(runs_dir, name)
         cmd = [netsolve, "sinter-pair"] + args + ["--quiet", "--out", d]
         cmd_text = " ".join(cmd)
-        done = os.path.isfile(os.path.join(d, "summary.json")) and os.path.isfile(os.path.join(d, "command.txt"))
+        # finished: summary.json and command.txt, and no .incomplete marker (a failed or killed run)
+        done = (os.path.isfile(os.path.join(d, "summary.json")) and os.path.isfile(os.path.join(d, "command.txt"))
+                and not os.path.exists(os.path.join(d, ".incomplete")))
         if done and not force:
             with open(os.path.join(d, "command.txt")) as f:
-                done = f.read().strip() == cmd_text
+                done = f.read().strip().replace(" --overwrite", "") == cmd_text
         if not done or force:
             print("run:", " ".join(shlex.quote(c) for c in cmd[1:]), flush=True)
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+            held = any(os.path.exists(os.path.join(d, f)) for f in ("command.txt", "summary.json", ".incomplete"))
+            run = cmd[:-2] + (["--overwrite"] if held else []) + cmd[-2:]  # a rerun replaces the old files
+            subprocess.run(run, check=True, stdout=subprocess.DEVNULL)
         out[name] = load(d)
     return out
 

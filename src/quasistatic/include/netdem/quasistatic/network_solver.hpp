@@ -31,6 +31,7 @@
 // Where the parts live: src/quasistatic/solver_impl.hpp.
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,12 @@
 #include "netdem/quasistatic/solver_options.hpp"
 
 namespace netdem::qs {
+
+/// Thrown by NetworkSolver::increment when the Newton iteration produces non-finite contact forces
+/// (a diverged iteration; the increment is not committed). Apps report it as an unstable run.
+struct DivergedError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 /// What one increment did.
 struct IncrementReport {

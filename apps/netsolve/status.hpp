@@ -1,0 +1,152 @@
+#pragma once
+// Run status and exit codes of the netsolve subcommands (README.md "Exit status";
+// docs/quasistatic.md "Run status"): what makes a finished run untrustworthy (exit 3), the stop
+// rule of a growing residual, and the mapping of exceptions to exit codes.
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "output.hpp"
+
+namespace netdem::app::netsolve {
+
+/// The status of a run, written to summary.json as "status" and "status_reason".
+///   ok           finished, every criterion met
+///   unconverged  finished, but the Newton iteration did not converge well enough (criteria below)
+///   unstable     the network failed (centres left the box, Z < 2) or the run was stopped (a
+///                residual that grows, non-finite forces, a failed unloading)
+///   incomplete   stopped early at a documented, expected limit; the rows written are valid
+struct RunStatus {
+  std::string status = "ok";
+  std::vector<std::string> reasons;
+
+  /// Adds a reason; `worse` replaces the status if it ranks higher (ok < incomplete < unconverged < unstable).
+  void add(const std::string& worse, const std::string& reason) {
+    auto rank = [](const std::string& s) { return s == "unstable" ? 3 : s == "unconverged" ? 2 : s == "incomplete" ? 1 : 0; };
+    if (rank(worse) > rank(status)) status = worse;
+    reasons.push_back(reason);
+  }
+  bool ok() const { return status == "ok"; }
+  std::string reason() const {
+    if (reasons.empty()) return "every criterion met";
+    std::string s;
+    for (const auto& r : reasons) s += (s.empty() ? "" : "; ") + r;
+    return s;
+  }
+  /// 0 for ok and incomplete, 3 otherwise, 0 again with --allow-unconverged.
+  int exit_code(bool allow_unconverged) const {
+    if (status == "ok" || status == "incomplete" || allow_unconverged) return exit_code::ok;
+    return exit_code::untrustworthy;
+  }
+  void write(nlohmann::json& j) const {
+    j["status"] = status;
+    j["status_reason"] = reason();
+  }
+};
+
+/// Convergence record of a sequence of increments (compact, the yield precompaction) and the
+/// criteria of exit 3. The residual is the RMS Newton residual `newton_residual` (contact force
+/// minus viscous drag, / mean contact force): the quantity the convergence test compares with
+/// --tol. The `residual` column (max out-of-balance contact force) includes the force the drag
+/// holds, which is legitimately far above --tol in converged increments (0.16 in the default run).
+struct ConvergenceRecord {
+  double tol = 0.0;
+  int increments = 0, unconverged = 0, first_unconverged = 0, worst_increment = 0, last_increment = 0;
+  double max_newton_residual = 0.0;
+  bool last_converged = true;
+
+  // thresholds (documented in docs/quasistatic.md "Run status")
+  static constexpr double kMaxUnconvergedFraction = 0.05;  ///< more than 5 % of the increments
+  static constexpr double kResidualFactor = 10.0;          ///< any residual above 10 x --tol
+
+  void add(int increment, bool converged, double newton_residual) {
+    ++increments;
+    last_increment = increment;
+    last_converged = converged;
+    if (!converged) {
+      ++unconverged;
+      if (first_unconverged == 0) first_unconverged = increment;
+    }
+    if (!(newton_residual <= max_newton_residual)) {  // also a NaN
+      max_newton_residual = newton_residual;
+      worst_increment = increment;
+    }
+  }
+  /// Adds the failed criteria to `st` (status "unconverged"); `what` names the phase.
+  void judge(RunStatus& st, const std::string& what) const {
+    if (increments == 0) return;
+    const std::string pre = what.empty() ? "" : what + ": ";
+    if (unconverged > kMaxUnconvergedFraction * increments)
+      st.add("unconverged", fmt::format("{}{} of {} increments unconverged (more than 5 %), the first at increment {}", pre,
+                                        unconverged, increments, first_unconverged));
+    if (!(max_newton_residual <= kResidualFactor * tol))
+      st.add("unconverged", fmt::format("{}Newton residual {:.3g} at increment {} is above 10 x --tol = {:.3g}", pre,
+                                        max_newton_residual, worst_increment, kResidualFactor * tol));
+    if (!last_converged) st.add("unconverged", fmt::format("{}the last increment ({}) is unconverged", pre, last_increment));
+  }
+};
+
+/// The stop rule of a growing residual: the run stops after the increment at which the RMS Newton
+/// residual has been above 10 x --tol and has grown in each of 5 consecutive increments, to more
+/// than 10 times its value before them (a growth of at least 1.58 per increment). A frictionless
+/// run that never converges climbs to a level and stays there (W = 40: x 6 over its steepest 5
+/// increments, then flat) and does not stop; a diverging iteration grows geometrically.
+struct ResidualGrowth {
+  double tol = 0.0;
+  static constexpr int kIncrements = 5;
+  static constexpr double kGrowth = 10.0;
+  std::vector<double> history;  ///< residual of each increment so far
+  int first_bad = 0;            ///< the first increment of the growing run of the stop
+
+  /// Records the residual of `increment`; true if the run must stop here.
+  bool add(int increment, double r) {
+    history.push_back(r);
+    const int n = static_cast<int>(history.size());
+    if (n < kIncrements + 1) return false;
+    for (int k = n - kIncrements; k < n; ++k)
+      if (!(history[k] > ResidualFactor() * tol && history[k] > history[k - 1])) return false;
+    if (!(history[n - 1] > kGrowth * history[n - 1 - kIncrements])) return false;
+    first_bad = increment - kIncrements + 1;
+    return true;
+  }
+  static constexpr double ResidualFactor() { return ConvergenceRecord::kResidualFactor; }
+};
+
+/// What the program was doing, for "out of memory while ..." (set before each big step).
+inline std::string& activity() {
+  static std::string s = "starting";
+  return s;
+}
+
+/// Runs `body` and maps its exceptions to a one-line error and an exit code: a refused command
+/// line (UsageError, or any error before the output folder was opened) 2, out of memory and
+/// every other error 1. `prefix` starts the message ("netsolve", "netsolve yield").
+template <class F>
+int guarded(const std::string& prefix, F&& body) {
+  auto line = [&](const std::string& msg) {
+    std::string m = msg;
+    for (char& c : m)
+      if (c == '\n' || c == '\r') c = ' ';
+    std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), m.c_str());
+  };
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    line(fmt::format("out of memory while {}", activity()));
+    return exit_code::run_error;
+  } catch (const UsageError& e) {
+    line(e.what());
+    return exit_code::usage;
+  } catch (const std::exception& e) {
+    line(e.what());
+    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
+  }
+}
+
+}  // namespace netdem::app::netsolve
