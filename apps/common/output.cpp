@@ -48,13 +48,6 @@ void make_output_dir(const std::filesystem::path& dir) {
                                          ec ? ec.message() : "not a directory"));
 }
 
-void start_run_dir(const std::filesystem::path& dir) {
-  make_output_dir(dir);
-  std::error_code ec;
-  std::filesystem::remove(dir / "summary.json", ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot remove the old '{}': {}", (dir / "summary.json").string(), ec.message()));
-}
-
 // ---- run folders ------------------------------------------------------------------------------
 namespace {
 namespace fs = std::filesystem;
