@@ -693,33 +693,27 @@ void DynamicSolver::check_health_with(double vmax2) const {
         breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
                kCauseLoad);
   }
-  // overlaps: the pairs of the table (complete for the touching pairs) and the walls
-  double omax = 0.0;
-  std::size_t oi = 0, oj = 0;
+  // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
+  // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
   for (std::uint64_t key : pair_key_) {
     const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i], s = P_.radius[i] + P_.radius[j];
     const double L2 = dx * dx + dy * dy;
     if (!(L2 < s * s)) continue;
-    const double d = s - std::sqrt(L2);
-    if (d > omax) {
-      omax = d;
-      oi = i;
-      oj = j;
-    }
+    const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
+    if (!(d < lim))
+      breach("overlap", fmt::format("the overlap {:.3g} m of particles {} and {} is not below half the smaller radius, "
+                                    "{:.3g} m", d, i, j, lim),
+             kCauseLoad);
   }
-  if (!(omax < HealthLimits::kMaxOverlap * rmin))
-    breach("overlap", fmt::format("the overlap {:.3g} m of particles {} and {} is not below 0.5 r_min = {:.3g} m", omax,
-                                  oi, oj, HealthLimits::kMaxOverlap * rmin),
-           kCauseLoad);
   if (box_.enabled) {
     for (std::size_t i = 0; i < n; ++i) {
       const double r = P_.radius[i];
       const double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
                                 std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
-      if (!(d < HealthLimits::kMaxOverlap * rmin))
-        breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below 0.5 r_min = {:.3g} m", i, d,
-                                      HealthLimits::kMaxOverlap * rmin),
+      if (!(d < HealthLimits::kMaxOverlap * r))
+        breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below half its radius, {:.3g} m", i, d,
+                                      HealthLimits::kMaxOverlap * r),
                kCauseLoad);
     }
     const double nu = std::numbers::pi * area / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));

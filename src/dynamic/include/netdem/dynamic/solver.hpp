@@ -170,7 +170,8 @@ class InstabilityError : public std::runtime_error {
 
 /// The limits of the instability checks (docs/dynamic.md "Instability detection").
 struct HealthLimits {
-  static constexpr double kMaxOverlap = 0.5;   ///< max overlap (pairs and walls) < 0.5 r_min
+  /// overlap < 0.5 x the smaller radius of the contact (a wall contact: the particle's), >= 0.5 r_min
+  static constexpr double kMaxOverlap = 0.5;
   static constexpr double kMaxDensity = 1.25;  ///< nu <= 1.25 (nu counts overlapping areas twice)
   static constexpr double kMaxTravel = 0.1;    ///< max|v| dt < 0.1 r_min
   static constexpr std::int64_t kLastGoodEvery = 1000;  ///< steps between refreshes of last_good()
@@ -193,7 +194,7 @@ class DynamicSolver {
   /// on a breach, leaving the state of that step.
   void step();
   /// The instability checks on the current state: finite, box extents positive, centres inside
-  /// the box, max overlap < 0.5 r_min, nu <= 1.25, max|v| dt < 0.1 r_min. Throws
+  /// the box, every overlap < 0.5 min(a_i, a_j) (>= 0.5 r_min), nu <= 1.25, max|v| dt < 0.1 r_min. Throws
   /// InstabilityError (one line: quantity, step, likely cause). O(N + pairs).
   void check_health() const;
   /// The last state that passed check_health() in step(), refreshed at most every
