@@ -320,6 +320,7 @@ class Reader {
     throw std::invalid_argument(quote_input(name_) + ":" + std::to_string(line) + ": " + msg);
   }
   std::size_t line_no() const { return no_; }
+  void count_line() { ++no_; }  ///< a line read by the caller (the first)
   /// A finite real number (strtod: also reads nan and inf, which are refused by name).
   double real(std::istringstream& ls, const char* what) {
     std::string tok;
@@ -363,9 +364,10 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   SolverState st;
   {
     std::string first;
-    if (!std::getline(in, first)) r.error("empty file");
+    if (!std::getline(in, first)) r.error_at(1, "empty file");
+    r.count_line();
     if (first.rfind("# demsolve state v2", 0) != 0)
-      r.error("not a demsolve state file v2 (first line '" + quote_input(first.substr(0, 40)) + "')");
+      r.error_at(1, "not a demsolve state file v2 (first line '" + quote_input(first.substr(0, 40)) + "')");
   }
   auto one = [&](const char* key) {
     auto ls = r.keyed(key);
