@@ -48,6 +48,15 @@ void make_output_dir(const std::filesystem::path& dir) {
                                          ec ? ec.message() : "not a directory"));
 }
 
+double mem_available() {
+  std::ifstream in("/proc/meminfo");
+  std::string key, unit;
+  double kb = 0.0;
+  while (in >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return 0.0;
+}
+
 // ---- run folders ------------------------------------------------------------------------------
 namespace {
 namespace fs = std::filesystem;

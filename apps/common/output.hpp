@@ -64,6 +64,10 @@ void close_run_dir(const std::filesystem::path& dir);
 /// one before it a refused command line (exit 2).
 bool run_dir_opened();
 
+/// MemAvailable of /proc/meminfo in bytes, or 0 if unknown (demsolve's memory estimate;
+/// apps/netsolve/setup.hpp has its own copy, mem_available_bytes, to be replaced by this one).
+double mem_available();
+
 /// A named point-data field for VTK output.
 struct Field {
   std::string name;

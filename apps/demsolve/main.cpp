@@ -28,9 +28,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include "netdem/dynamic/state.hpp"
 #include "protocol.hpp"
 
 using namespace netdem::app::dem;
+using netdem::dem::quote_input;
 
 int main(int argc, char** argv) {
   std::string command;
@@ -129,8 +131,14 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::string m = e.what();  // CLI11 quotes the input: at most 80 printable characters of it
-    if (m.size() > 200) m = m.substr(0, 200) + "...";
+    // CLI11 quotes the input: at most 80 printable characters of each argument
+    std::string m = e.what();
+    for (int k = 1; k < argc; ++k) {
+      const std::string a = argv[k];
+      if (a.size() <= 80) continue;
+      for (auto at = m.find(a); at != std::string::npos; at = m.find(a, at + 1)) m.replace(at, a.size(), quote_input(a));
+    }
+    if (m.size() > 300) m = quote_input(m.substr(0, 80)) + " ...";
     std::fprintf(stderr, "demsolve: error: %s (see --help)\n", one_line(m).c_str());
     return netdem::app::exit_code::usage;
   }

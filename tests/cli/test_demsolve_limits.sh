@@ -15,53 +15,45 @@ source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 no_nan() {  # folder: no file holds nan or inf as a value
   ! grep -qiwE -- '-?nan|-?inf|infinity|null' "$1"/* 2>/dev/null
 }
+# launch NAME ARGS...: runs demsolve ARGS --quiet --out $tmp/NAME; sets rc and out
+launch() {
+  out="$tmp/$1"
+  shift
+  timeout 60 "$ds" "$@" --quiet --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
+  rc=$?
+}
+verdict() {  # name ok?: counts, and shows stderr on a failure
+  if [ "$2" -eq 0 ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $1: rc=$rc stderr: $(head -c 600 "$tmp/stderr")"; fi
+}
 # usage NAME WORD ARGS...: exit 2, one line with WORD, no output folder
 usage() {
   local name="$1" word="$2"
   shift 2
-  local out="$tmp/$name"
-  timeout 60 "$ds" "$@" --quiet --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
-  local rc=$?
-  if [ "$rc" -eq 2 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -qi -- "$word" "$tmp/stderr" && [ ! -e "$out" ]; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL $name: rc=$rc stderr: $(head -c 600 "$tmp/stderr")"
-  fi
+  launch "$name" "$@"
+  [ "$rc" -eq 2 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -qi -- "$word" "$tmp/stderr" && [ ! -e "$out" ]
+  verdict "$name" $?
 }
 # unstable NAME WORD ARGS...: exit 3, the last stderr line names the step and WORD, status unstable,
-# state_last_good.txt readable by demsolve (a restart of it is accepted at the door), no NaN
+# state_last_good.txt accepted by demsolve at the door, no NaN
 unstable() {
   local name="$1" word="$2"
   shift 2
-  local out="$tmp/$name"
-  timeout 60 "$ds" "$@" --quiet --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
-  local rc=$?
-  if [ "$rc" -eq 3 ] && tail -1 "$tmp/stderr" | grep -q "unstable at step" && tail -1 "$tmp/stderr" | grep -qi -- "$word" &&
+  launch "$name" "$@"
+  [ "$rc" -eq 3 ] && tail -1 "$tmp/stderr" | grep -q "unstable at step" && tail -1 "$tmp/stderr" | grep -qi -- "$word" &&
     grep -q '"status": "unstable"' "$out/summary.json" && [ -s "$out/state_last_good.txt" ] && [ ! -e "$out/.incomplete" ] &&
     no_nan "$out" &&
     { timeout 60 "$ds" compress --state "$out/state_last_good.txt" --max-strain 1e-4 --quiet --out "$tmp/$name.restart" \
-      >/dev/null 2>&1; [ $? -ne 2 ]; }; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL $name: rc=$rc stderr: $(head -c 600 "$tmp/stderr")"
-  fi
+      >/dev/null 2>&1; [ $? -ne 2 ]; }
+  verdict "$name" $?
 }
 # good NAME PYTHON-CHECK ARGS...: exit 0, status ok, no NaN, and the check on summary.json (j) holds
 good() {
   local name="$1" check="$2"
   shift 2
-  local out="$tmp/$name"
-  timeout 60 "$ds" "$@" --quiet --out "$out" >"$tmp/stdout" 2>"$tmp/stderr"
-  local rc=$?
-  if [ "$rc" -eq 0 ] && grep -q '"status": "ok"' "$out/summary.json" && [ ! -e "$out/.incomplete" ] && no_nan "$out" &&
-    /usr/bin/env python3 -c "import json,sys; j=json.load(open('$out/summary.json')); sys.exit(0 if ($check) else 1)"; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL $name: rc=$rc stderr: $(head -c 600 "$tmp/stderr")"
-  fi
+  launch "$name" "$@"
+  [ "$rc" -eq 0 ] && grep -q '"status": "ok"' "$out/summary.json" && [ ! -e "$out/.incomplete" ] && no_nan "$out" &&
+    /usr/bin/env python3 -c "import json,sys; j=json.load(open('$out/summary.json')); sys.exit(0 if ($check) else 1)"
+  verdict "$name" $?
 }
 small=(--n 50 --time 0.02)
 

@@ -66,6 +66,21 @@ std::string run(DynamicSolver& s, int steps) {
   return "ok";
 }
 
+/// 6 x 6 disks (velocities v) under stress walls at `pressure`, 20000 steps: "ok" with
+/// 0 < nu <= 1.25, or the breached quantity. `what` = `value` names the case in the log.
+std::string pressed(const LudingParams& p, double v, unsigned seed, double pressure, const char* what, double value) {
+  DynamicOptions o;
+  o.check_every = 100;
+  DynamicSolver s(lattice(p, 6, v, seed), p, stress_box(p, 6, pressure), o);
+  const std::string got = run(s, 20000);
+  std::printf("%s = %g: %s, nu = %.4g\n", what, value, got.c_str(), s.density());
+  if (got == "ok") {
+    EXPECT_GT(s.density(), 0.0) << what << " = " << value;
+    EXPECT_LE(s.density(), HealthLimits::kMaxDensity) << what << " = " << value;
+  }
+  return got;
+}
+
 LudingParams elastic() {
   LudingParams p;
   p.k1_ratio = 1.0;
@@ -110,15 +125,7 @@ TEST(Stability, StiffnessRatioUpTo1000) {
   for (double k1r : {0.5, 0.1, 0.01, 0.001}) {
     LudingParams p;
     p.k1_ratio = k1r;
-    DynamicOptions o;
-    o.check_every = 100;
-    DynamicSolver s(lattice(p, 6, 0.01, 5), p, stress_box(p, 6, 100.0), o);
-    const std::string got = run(s, 20000);
-    std::printf("k2/k1 = %g: %s, nu = %.4g\n", 1.0 / k1r, got.c_str(), s.density());
-    if (got == "ok") {
-      EXPECT_GT(s.density(), 0.0) << k1r;
-      EXPECT_LE(s.density(), HealthLimits::kMaxDensity) << k1r;
-    }
+    const std::string got = pressed(p, 0.01, 5, 100.0, "k2/k1", 1.0 / k1r);
     if (k1r >= 0.1) {
       EXPECT_EQ(got, "ok") << k1r;
     }
@@ -131,14 +138,7 @@ TEST(Stability, StrongCohesion) {
   for (double kc : {0.5, 5.0, 100.0}) {
     LudingParams p;
     p.kc_ratio = kc;
-    DynamicOptions o;
-    o.check_every = 100;
-    DynamicSolver s(lattice(p, 6, 0.05, 7), p, stress_box(p, 6, 100.0), o);
-    const std::string got = run(s, 20000);
-    std::printf("k_c/k2 = %g: %s, nu = %.4g\n", kc, got.c_str(), s.density());
-    if (got == "ok") {
-      EXPECT_LE(s.density(), HealthLimits::kMaxDensity) << kc;
-    }
+    const std::string got = pressed(p, 0.05, 7, 100.0, "k_c/k2", kc);
     if (kc <= 0.5) {
       EXPECT_EQ(got, "ok");
     }
@@ -150,11 +150,7 @@ TEST(Stability, StrongCohesion) {
 TEST(Stability, VeryHighPressure) {
   for (double ratio : {1e-3, 0.1, 1.0, 10.0}) {
     LudingParams p;
-    DynamicOptions o;
-    o.check_every = 100;
-    DynamicSolver s(lattice(p, 6, 0.0, 9), p, stress_box(p, 6, 0.5 * ratio * p.k2), o);
-    const std::string got = run(s, 20000);
-    std::printf("2p/k2 = %g: %s, nu = %.4g\n", ratio, got.c_str(), s.density());
+    const std::string got = pressed(p, 0.0, 9, 0.5 * ratio * p.k2, "2p/k2", ratio);
     if (ratio <= 1e-3) {
       EXPECT_EQ(got, "ok");
     }
@@ -162,4 +158,31 @@ TEST(Stability, VeryHighPressure) {
       EXPECT_NE(got, "ok") << "2p/k2 = " << ratio;
     }
   }
+}
+
+// The checks only read: a run with them is bit-identical to one without (check_every = 0), and
+// last_good() is a state that passed a check, at most 1000 + 500 steps old.
+TEST(Stability, ChecksDoNotChangeTheRun) {
+  LudingParams p;
+  DynamicOptions on, off;
+  on.check_every = 500;
+  off.check_every = 0;
+  DynamicSolver a(lattice(p, 6, 0.01, 11), p, stress_box(p, 6, 100.0), on);
+  DynamicSolver b(lattice(p, 6, 0.01, 11), p, stress_box(p, 6, 100.0), off);
+  for (int k = 0; k < 3700; ++k) {
+    a.step();
+    b.step();
+  }
+  const auto& A = a.particles();
+  const auto& B = b.particles();
+  for (std::size_t i = 0; i < A.size(); ++i) {
+    ASSERT_EQ(A.x[i], B.x[i]);
+    ASSERT_EQ(A.vy[i], B.vy[i]);
+  }
+  EXPECT_EQ(a.box().x_max, b.box().x_max);
+  ASSERT_NE(a.last_good(), nullptr);
+  EXPECT_EQ(b.last_good(), nullptr);
+  const double age = (a.time() - a.last_good()->time) / a.dt();
+  EXPECT_GT(age, 0.0);
+  EXPECT_LE(age, 1500.5);
 }
