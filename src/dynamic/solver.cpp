@@ -128,6 +128,7 @@ void DynamicOptions::validate() const {
   if (!(min_steps_per_contact >= 0.0)) fail("DynamicOptions: min_steps_per_contact must be >= 0");
   if (!(dt >= 0.0)) fail("DynamicOptions: dt must be >= 0 (0 = from the rule)");
   if (!(skin >= 0.0)) fail("DynamicOptions: skin must be >= 0 (0 = 0.3 mean radius)");
+  if (check_every < 0) fail("DynamicOptions: check_every must be >= 0 (0 = no instability checks)");
 }
 
 double contact_duration(double k2, double gamma0, double m12) {
