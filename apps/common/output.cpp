@@ -48,11 +48,13 @@ void make_output_dir(const std::filesystem::path& dir) {
                                          ec ? ec.message() : "not a directory"));
 }
 
-void start_run_dir(const std::filesystem::path& dir) {
-  make_output_dir(dir);
-  std::error_code ec;
-  std::filesystem::remove(dir / "summary.json", ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot remove the old '{}': {}", (dir / "summary.json").string(), ec.message()));
+double mem_available() {
+  std::ifstream in("/proc/meminfo");
+  std::string key, unit;
+  double kb = 0.0;
+  while (in >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return 0.0;
 }
 
 // ---- run folders ------------------------------------------------------------------------------

@@ -32,11 +32,6 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& tex
 /// Creates the output folder (and parents). Throws std::runtime_error (one line) on failure.
 void make_output_dir(const std::filesystem::path& dir);
 
-/// make_output_dir, then removes the summary.json of an earlier run in that folder: summary.json is
-/// written last and marks a finished run, so a run that fails must not leave the old one behind
-/// next to its own first files. (The old rule, kept for demsolve until it adopts open_run_dir.)
-void start_run_dir(const std::filesystem::path& dir);
-
 // ---- run folders: a folder never mixes two runs (README.md "Run folders") -----------------------
 //   check_run_dir   before any work: refuses (UsageError) a folder that holds another run's files
 //                   (command.txt, summary.json or .incomplete) unless overwrite, an --out that is a
@@ -68,6 +63,10 @@ void close_run_dir(const std::filesystem::path& dir);
 /// True once open_run_dir succeeded in this process: an error after it is a run error (exit 1),
 /// one before it a refused command line (exit 2).
 bool run_dir_opened();
+
+/// MemAvailable of /proc/meminfo in bytes, or 0 if unknown (demsolve's memory estimate;
+/// apps/netsolve/setup.hpp has its own copy, mem_available_bytes, to be replaced by this one).
+double mem_available();
 
 /// A named point-data field for VTK output.
 struct Field {

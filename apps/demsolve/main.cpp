@@ -14,17 +14,25 @@
 // sinter: the whole protocol of section 4.1 (prepare, heat, sinter, cool, relax; Fig 7).
 // Both write command.txt, parameters.json, timeseries.csv, summary.json, particles_*.vtp,
 // contacts_*.vtp/.csv and state_<phase>.txt after every phase (state.txt at the end).
-// Errors are one line on stderr and a non-zero exit. See docs/dynamic.md and docs/sintering.md.
+// Every value is checked at the door against its documented range (docs/dynamic.md "Limits"),
+// including the memory and step estimates (--max-steps); a run that breaches an instability check
+// stops (docs/dynamic.md "Instability detection"). A run folder holding another run is refused
+// unless --overwrite (README.md "Run folders"). Errors are one line on stderr. Exit status: 0 ok,
+// 1 run error, 2 command-line error (nothing written), 3 unstable (summary.json "status",
+// state_last_good.txt). See docs/dynamic.md and docs/sintering.md.
 #include <cmath>
 #include <cstdio>
+#include <new>
 #include <vector>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "netdem/dynamic/state.hpp"
 #include "protocol.hpp"
 
 using namespace netdem::app::dem;
+using netdem::dem::quote_input;
 
 int main(int argc, char** argv) {
   std::string command;
@@ -36,18 +44,32 @@ int main(int argc, char** argv) {
   netdem::dem::SinterProtocol prot;
   std::string out_prepare, out_sinter;
 
-  std::vector<CLI::Option*> pressure_opts;
+  std::vector<CLI::Option*> pressure_opts, sample_opts, packing_opts;
+  // CLI11 turns "-1" into 2^64 - 1 for an unsigned option: refuse a sign
+  auto unsigned_only = [](const std::string& v) -> std::string {
+    return v.find_first_not_of("0123456789") == std::string::npos && !v.empty() ? ""
+                                                                                  : "must be an integer >= 0";
+  };
+  double max_steps = 1e9;
+  auto limits = [&](CLI::App* c) {
+    c->add_option("--max-steps", max_steps, "refuse a run of more time steps than this (the estimate is in the message)")
+        ->capture_default_str();
+    c->add_flag("--overwrite", run.overwrite, "clear an output folder that holds another run's files first");
+  };
   auto common = [&](CLI::App* c) {
-    c->add_option("--n", sample.n, "number of disks")->capture_default_str();
+    sample_opts.push_back(c->add_option("--n", sample.n, "number of disks")->capture_default_str());
     pressure_opts.push_back(
         c->add_option("--pressure", run.pressure, "wall pressure p [N/m] (Eq 1); with --state default the state's")
             ->capture_default_str());
-    c->add_option("--seed", sample.seed, "random seed of placement and velocities")->capture_default_str();
-    c->add_option("--arrangement", sample.arrangement, "random, or the three-particle control: triangle | line (--n 3)")
-        ->capture_default_str();
-    c->add_option("--packing", sample.packing_file,
+    sample_opts.push_back(c->add_option("--seed", sample.seed, "random seed of placement and velocities")
+                              ->check(unsigned_only)
+                              ->capture_default_str());
+    sample_opts.push_back(
+        c->add_option("--arrangement", sample.arrangement, "random, or the three-particle control: triangle | line (--n 3)")
+            ->capture_default_str());
+    packing_opts.push_back(c->add_option("--packing", sample.packing_file,
                   "start from the disks of this packing CSV (e.g. netsolve pack's packing.csv), at rest; --n, --seed and "
-                  "--arrangement are then unused");
+                  "--arrangement are then unused"));
     c->add_option("--length-unit", sample.length_unit,
                   "metres per length unit of the --packing file; 0: the file's mean radius becomes Luding's a0 "
                   "(Table 1, 1 mm), i.e. a0 / mean r (docs/sintering.md)")
@@ -59,6 +81,7 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     c->add_option("--param", run.param_overrides, "contact parameter NAME=VALUE (Table 1 names, e.g. k2=2e5, da_T=0)");
     c->add_flag("--quiet", run.quiet, "no progress on stderr");
+    limits(c);
   };
   auto* prep = app.add_subcommand("prepare", "random disks compressed by stress-controlled walls, frictionless, 80 deg C (section 4.1)");
   common(prep);
@@ -88,6 +111,8 @@ int main(int argc, char** argv) {
   comp->add_option("--pressure", ca.pressure, "sigma_xx held by the right wall [N/m]; 0: the state's");
   comp->add_option("--param", ca.param_overrides, "contact parameter NAME=VALUE");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
+  comp->add_option("--max-steps", ca.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  comp->add_flag("--overwrite", ca.overwrite, "clear an output folder that holds another run's files first");
   comp->add_option("--out", out_compress, "output folder")->default_val("results/compress");
   VibrateArgs va;
   std::string out_vibrate;
@@ -99,22 +124,32 @@ int main(int argc, char** argv) {
   vib->add_option("--gravity", va.gravity, "[m/s^2]")->capture_default_str();
   vib->add_option("--param", va.param_overrides, "contact parameter NAME=VALUE");
   vib->add_flag("--quiet", va.quiet, "no progress on stderr");
+  vib->add_option("--max-steps", va.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  vib->add_flag("--overwrite", va.overwrite, "clear an output folder that holds another run's files first");
   vib->add_option("--out", out_vibrate, "output folder")->default_val("results/vibrate");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "demsolve: error: %s (see --help)\n", e.what());
-    return 2;
+    // CLI11 quotes the input: at most 80 printable characters of each argument
+    std::string m = e.what();
+    for (int k = 1; k < argc; ++k) {
+      const std::string a = argv[k];
+      if (a.size() <= 80) continue;
+      for (auto at = m.find(a); at != std::string::npos; at = m.find(a, at + 1)) m.replace(at, a.size(), quote_input(a));
+    }
+    if (m.size() > 300) m = quote_input(m.substr(0, 80)) + " ...";
+    std::fprintf(stderr, "demsolve: error: %s (see --help)\n", one_line(m).c_str());
+    return netdem::app::exit_code::usage;
   }
   for (auto* o : pressure_opts) run.pressure_given = run.pressure_given || o->count() > 0;
-  try {
+  for (auto* o : sample_opts) run.sample_given = run.sample_given || o->count() > 0;
+  for (auto* o : packing_opts) run.packing_given = run.packing_given || o->count() > 0;
+  run.max_steps = max_steps;
+  return guarded([&] {
     if (prep->parsed()) return run_protocol(command, sample, run, prot, true, out_prepare);
     if (comp->parsed()) return run_compress(command, ca, out_compress);
     if (vib->parsed()) return run_vibrate(command, va, out_vibrate);
     return run_protocol(command, sample, run, prot, false, out_sinter);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "demsolve: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -22,9 +22,12 @@ namespace netdem::app::dem {
 
 namespace {
 
-void write_common(const std::string& command, const SolverState& st, const fs::path& out, nlohmann::json extra) {
-  start_run_dir(out);
-  write_file_atomic(out / "command.txt", command + "\n");
+void write_common(const std::string& command, const SolverState& st, const fs::path& out, nlohmann::json extra,
+                  bool overwrite, const std::string& input) {
+  RunDirOptions rdo;
+  rdo.overwrite = overwrite;
+  rdo.inputs = {input};
+  open_run_dir(out, command, rdo);
   nlohmann::json params;
   for (const auto& name : luding_param_names()) params[name] = get_luding_param(st.params, name);
   extra["command"] = command;
@@ -49,13 +52,28 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   SolverState st = load_state(a.state_file, a.param_overrides);
   const double p = a.pressure > 0.0 ? a.pressure : st.box.right.pressure;
   if (!(p > 0.0)) throw std::invalid_argument("the state has no wall pressure: give --pressure");
+  const std::string warning = check_loading(p, st.params, a.pressure > 0.0 ? "--pressure" : "the state's wall pressure");
+  check_temperature(st.thermal.T, st.params, "the state's temperature");
+  check_memory(st.particles.size());
   DynamicOptions opt;
   opt.model = ContactModel::Full;
   DynamicSolver s(st, opt);
   const double z0 = s.box().y_max - s.box().y_min, t_start = s.time();
+  check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps);
+  {  // the top wall's travel per contact duration (Eq 6, mean pair) below 0.1 r_min
+    double rmin = s.particles().radius[0];
+    for (double r : s.particles().radius) rmin = std::min(rmin, r);
+    const double v = a.strain_rate * z0, tc = s.time_step().tc_mean, vmax = 0.1 * rmin / tc;
+    if (!(v <= vmax))
+      throw UsageError(fmt::format("--strain-rate {:g} 1/s moves the top wall at {:.3g} m/s, {:.3g} m per contact "
+                                   "duration (t_c = {:.3g} s), above 0.1 r_min = {:.3g} m: the test is no longer "
+                                   "quasi-static (at most {:.3g} 1/s)",
+                                   a.strain_rate, v, v * tc, tc, 0.1 * rmin, vmax / z0));
+  }
   write_common(command, st, out,
                {{"test", "compress"}, {"state_file", a.state_file}, {"strain_rate_per_s", a.strain_rate},
-                {"max_strain", a.max_strain}, {"ramp_time_s", a.ramp_time}, {"pressure_N_per_m", p}, {"top_wall_velocity_m_per_s", -a.strain_rate * z0}});
+                {"max_strain", a.max_strain}, {"ramp_time_s", a.ramp_time}, {"pressure_N_per_m", p}, {"top_wall_velocity_m_per_s", -a.strain_rate * z0}},
+               a.overwrite, a.state_file);
   const double nu0 = s.density();
 
   /// compress.csv rows, and snapshots at the times of LMM05 Fig 20 (default rate: eps_zz = t)
@@ -71,7 +89,10 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
     Writer(double z0_, double p_, double t_start_, const fs::path& out_, double steps, bool quiet)
         : z0(z0_), p(p_), t_start(t_start_), out(out_), progress("compress", steps, quiet) {}
     void sample(const DynamicSolver& s, std::int64_t k) override {
-      if (k == 0) write_snapshot(s, out, "eps0", cs);
+      if (k == 0) {
+        s.check_health();
+        write_snapshot(s, out, "eps0", cs);
+      }
       const auto ws = s.wall_stress();
       const double C = count_contacts(s, pairs).coordination(s.particles().size());
       csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}\n", s.time() - t_start,
@@ -80,6 +101,7 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
     }
     void stepped(const DynamicSolver& s, std::int64_t) override {
       if (next_snap < std::size(snap_t) && s.time() - t_start >= snap_t[next_snap] - 0.5 * s.dt()) {
+        s.check_health();
         write_snapshot(s, out, fmt::format("t{}", snap_t[next_snap]), cs);
         ++next_snap;
       }
@@ -87,7 +109,15 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   };
   Writer writer(z0, p, t_start, out, static_cast<double>(test.steps(s.dt())), a.quiet);
   const auto t0 = std::chrono::steady_clock::now();
-  const CompressionRun run = run_compression(s, test, p, 2000, writer);
+  nlohmann::json fail{{"command", command}, {"state_file", a.state_file}, {"test", "compress"}};
+  CompressionRun run;
+  try {
+    run = run_compression(s, test, p, 2000, writer);
+    s.check_health();
+  } catch (const InstabilityError& e) {
+    writer.progress.finish();
+    return report_unstable(e, s, out, fail);
+  }
   writer.progress.finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_file_atomic(out / "compress.csv", writer.csv);
@@ -109,8 +139,12 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
                    {"nu_initial", nu0},
                    {"nu_final", s.density()},
                    {"steps", run.steps},
-                   {"wall_time_s", wall}};
+                   {"wall_time_s", wall},
+                   {"status", "ok"},
+                   {"status_reason", warning.empty() ? "every instability check passed"
+                                                     : "every instability check passed; warning: " + warning}};
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  close_run_dir(out);
   std::printf("compress: peak szz = %.4g N/m (%.3f p) at eps_zz = %.4f, stiffness %.4g N/m over eps in [0, 0.005], "
               "%.1f s -> %s\n",
               run.szz[ipk], run.szz[ipk] / p, run.eps[ipk], fig.stiffness, wall, out.c_str());
@@ -124,15 +158,34 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   test.time = a.time;
   test.gravity = a.gravity;
   test.validate();
+  if (!(a.amplitude <= 0.1)) throw UsageError(fmt::format("--amplitude must be at most 0.1 m, got {:g}", a.amplitude));
+  if (!(a.gravity <= 1e4)) throw UsageError(fmt::format("--gravity must be at most 1e4 m/s^2, got {:g}", a.gravity));
   SolverState st = load_state(a.state_file, a.param_overrides);
+  check_temperature(st.thermal.T, st.params, "the state's temperature");
+  check_memory(st.particles.size());
   open_box_for_vibration(st);
   DynamicOptions opt;
   opt.model = ContactModel::Full;
   DynamicSolver s(st, opt);
+  const double w = 2.0 * std::numbers::pi * a.frequency, t_start = s.time();
+  check_run_limits(s, a.time / s.dt(), a.max_steps);
+  {  // the floor's period resolved (>= 20 steps) and its peak speed A w below 0.1 r_min per step
+    double rmin = s.particles().radius[0];
+    for (double r : s.particles().radius) rmin = std::min(rmin, r);
+    if (!(a.frequency * s.dt() <= 0.05))
+      throw UsageError(fmt::format("--frequency {:g} Hz gives {:.3g} time steps of {:.3g} s per period, fewer than 20 "
+                                   "(peak floor acceleration {:.3g} g)",
+                                   a.frequency, 1.0 / (a.frequency * s.dt()), s.dt(), a.amplitude * w * w / 9.81));
+    if (!(a.amplitude * w * s.dt() < 0.1 * rmin))
+      throw UsageError(fmt::format("--amplitude {:g} m at {:g} Hz moves the floor {:.3g} m per step, not below 0.1 "
+                                   "r_min = {:.3g} m (peak floor acceleration {:.3g} g)",
+                                   a.amplitude, a.frequency, a.amplitude * w * s.dt(), 0.1 * rmin,
+                                   a.amplitude * w * w / 9.81));
+  }
   write_common(command, st, out,
                {{"test", "vibrate"}, {"state_file", a.state_file}, {"frequency_Hz", a.frequency},
-                {"amplitude_m", a.amplitude}, {"time_s", a.time}, {"gravity_m_per_s2", a.gravity}});
-  const double w = 2.0 * std::numbers::pi * a.frequency, t_start = s.time();
+                {"amplitude_m", a.amplitude}, {"time_s", a.time}, {"gravity_m_per_s2", a.gravity}},
+               a.overwrite, a.state_file);
   const std::size_t n = s.particles().size();
 
   /// timeseries.csv rows: floor position, kinetic energy, centre height, clusters
@@ -146,7 +199,10 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
     Writer(double amplitude_, double w_, double t_start_, const fs::path& out_, double steps, bool quiet)
         : amplitude(amplitude_), w(w_), t_start(t_start_), out(out_), progress("vibrate", steps, quiet) {}
     void sample(const DynamicSolver& s, std::int64_t k) override {
-      if (k == 0) write_snapshot(s, out, "initial", cs);
+      if (k == 0) {
+        s.check_health();
+        write_snapshot(s, out, "initial", cs);
+      }
       clusters.update(s);
       double yc = 0.0;
       for (double y : s.particles().y) yc += y;
@@ -158,7 +214,14 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   };
   Writer writer(a.amplitude, w, t_start, out, static_cast<double>(test.steps(s.dt())), a.quiet);
   const auto t0 = std::chrono::steady_clock::now();
-  const std::int64_t steps = run_vibration(s, test, 1000, writer);
+  std::int64_t steps = 0;
+  try {
+    steps = run_vibration(s, test, 1000, writer);
+    s.check_health();
+  } catch (const InstabilityError& e) {
+    writer.progress.finish();
+    return report_unstable(e, s, out, {{"command", command}, {"state_file", a.state_file}, {"test", "vibrate"}});
+  }
   writer.progress.finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Clusters& clusters = writer.clusters;
@@ -180,8 +243,11 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
                    {"single_grain_fraction", static_cast<double>(singles) / static_cast<double>(n)},
                    {"peak_floor_acceleration_over_g", a.gravity > 0 ? a.amplitude * w * w / a.gravity : 0.0},
                    {"steps", steps},
-                   {"wall_time_s", wall}};
+                   {"wall_time_s", wall},
+                   {"status", "ok"},
+                   {"status_reason", "every instability check passed"}};
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  close_run_dir(out);
   std::printf("vibrate: %zu clusters, largest %u of %zu disks (%.3f), single grains %.3f, %.1f s -> %s\n", sizes.size(),
               sizes.front(), n, static_cast<double>(sizes.front()) / static_cast<double>(n),
               static_cast<double>(singles) / static_cast<double>(n), wall, out.c_str());

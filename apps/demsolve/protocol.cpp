@@ -7,7 +7,11 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <fstream>
+#include <limits>
+#include <new>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -49,13 +53,14 @@ std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs)
 }
 
 /// Particle-particle contacts for the distributions of LMM05 Figs 11-19: overlap over a_i + a_j,
-/// normal and tangential force, f_min and the activated friction mu_t = |f_t| / (f_n - f_min).
+/// normal and tangential force, f_min and the activated friction mu_t = |f_t| / (f_n - f_min);
+/// mu_t = 0 where f_n <= f_min (no friction capacity, f_t = 0; docs/sintering.md).
 std::string contacts_csv(const Particles& P, const std::vector<ContactInfo>& cs) {
   std::string s = "i,j,overlap_rel,f_n,f_t,f_min,mu,mu_t,sliding\n";
   for (const auto& c : cs) {
     if (c.wall >= 0) continue;
     const double den = c.f_n - c.f_min;
-    const double mut = den > 0.0 ? std::fabs(c.f_t) / den : std::nan("");
+    const double mut = den > 0.0 ? std::fabs(c.f_t) / den : 0.0;
     s += fmt::format("{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{}\n", c.i, c.j,
                      c.overlap / (P.radius[c.i] + P.radius[c.j]), c.f_n, c.f_t, c.f_min, c.mu, mut,
                      c.sliding ? 1 : 0);
@@ -88,15 +93,124 @@ void apply_overrides(LudingParams& p, const std::vector<std::string>& items) {
   for (const auto& it : items) {
     const auto eq = it.find('=');
     if (eq == std::string::npos || eq == 0)
-      throw std::invalid_argument("--param expects NAME=VALUE, got '" + it + "'");
+      throw std::invalid_argument("--param expects NAME=VALUE, got '" + quote_input(it) + "'");
     const std::string name = it.substr(0, eq), val = it.substr(eq + 1);
     char* end = nullptr;
     const double v = std::strtod(val.c_str(), &end);
     if (val.empty() || *end != '\0')
-      throw std::invalid_argument("--param " + name + ": '" + val + "' is not a number");
+      throw std::invalid_argument("--param " + quote_input(name) + ": '" + quote_input(val) + "' is not a number");
     set_luding_param(p, name, v);
   }
   p.validate();
+}
+
+std::string one_line(const std::string& m) {
+  std::string o = m;
+  for (char& c : o)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  return o;
+}
+
+int guarded(const std::function<int()>& body) {
+  auto line = [](const std::string& msg) { std::fprintf(stderr, "demsolve: error: %s\n", one_line(msg).c_str()); };
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    line("out of memory");
+    return exit_code::run_error;
+  } catch (const UsageError& e) {
+    line(e.what());
+    return exit_code::usage;
+  } catch (const std::invalid_argument& e) {
+    line(e.what());
+    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
+  } catch (const std::exception& e) {
+    line(e.what());
+    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
+  }
+}
+
+void check_memory(std::size_t n) {
+  // particles, histories, Verlet table (~4 pairs each, double-buffered), the last good state,
+  // a state's text and the snapshots: about 4 kB a particle (docs/dynamic.md "Limits")
+  const double need = 64e6 + 4096.0 * static_cast<double>(n), have = mem_available();
+  if (have > 0.0 && !(need <= have))  // (0: unknown)
+    throw UsageError(fmt::format("the run needs about {:.3g} GB of memory for {} particles, MemAvailable is {:.3g} GB",
+                                 need / 1e9, n, have / 1e9));
+}
+
+std::string check_loading(double pressure, const LudingParams& p, const std::string& what) {
+  const double r = 2.0 * pressure / p.k2;
+  if (!(r <= 0.1))
+    throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, above 0.1, beyond the range of "
+                                 "Luding's model (section 4); lower the pressure or raise k2 (= {:g} N/m)",
+                                 what, pressure, r, p.k2));
+  if (r > 0.02) {
+    std::string w = fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, above 0.02 (Luding section 4: "
+                                "overlaps beyond small deformations)", what, pressure, r);
+    std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+    return w;
+  }
+  return "";
+}
+
+void check_temperature(double T, const LudingParams& p, const std::string& what) {
+  if (!(std::isfinite(T) && T > -273.15))
+    throw UsageError(fmt::format("{} = {:g} deg C is not above absolute zero (-273.15 deg C)", what, T));
+  const double e = p.da_T * (T - p.T_radius_ref);
+  if (!(std::fabs(e) <= 0.05))
+    throw UsageError(fmt::format("{} = {:g} deg C gives the thermal radius change |da_T (T - T_radius_ref)| = {:.3g}, "
+                                 "above 0.05 (Eq 9 is a small-strain law)", what, T, std::fabs(e)));
+}
+
+void check_run_limits(const DynamicSolver& s, double steps, double max_steps) {
+  const double dt = s.dt();
+  if (!(std::isfinite(dt) && dt > 0.0))
+    throw UsageError(fmt::format("the time step is {:g} s: check --steps-per-contact, k2 and rho_p", dt));
+  if (!(std::isfinite(max_steps) && max_steps >= 1.0)) throw UsageError("--max-steps must be a number >= 1");
+  if (!(steps <= max_steps))
+    throw UsageError(fmt::format("the run needs about {:.3g} time steps of {:.3g} s, more than --max-steps = {:.3g}",
+                                 steps, dt, max_steps));
+  const Particles& P = s.particles();
+  const LudingParams& lp = s.params();
+  double m_lo = std::numeric_limits<double>::infinity();
+  for (double m : P.mass) m_lo = std::min(m_lo, m);
+  // explicit damping: gamma dt / m12 of the lightest pair (stable below 2; refused above 1)
+  const double damp = lp.gamma_n * dt / (0.5 * m_lo);
+  if (!(damp <= 1.0))
+    throw UsageError(fmt::format("normal damping gamma_n = {:g} kg/s with dt = {:.3g} s gives gamma_n dt / m12 = {:.3g} "
+                                 "for the lightest pair, above 1: the explicit step is unstable (lower gamma_n or "
+                                 "raise --steps-per-contact)", lp.gamma_n, dt, damp));
+  for (const MovingWall* w : {&s.box().right, &s.box().top}) {
+    if (!s.box().enabled || w->mode != WallMode::Stress) continue;
+    const double wd = w->damping * dt / w->mass;
+    if (!(wd <= 1.0))
+      throw UsageError(fmt::format("wall damping {:g} kg/s with wall mass {:g} kg and dt = {:.3g} s gives "
+                                   "gamma_wall dt / m_wall = {:.3g}, above 1: the wall is unstable", w->damping, w->mass,
+                                   dt, wd));
+    // the wall on the disks along it (about sqrt(N) contacts of stiffness k2): >= 10 steps per period
+    const double k = lp.k2 * std::ceil(std::sqrt(static_cast<double>(P.size())));
+    const double tc = std::numbers::pi * std::sqrt(w->mass / k);
+    if (!(tc >= 10.0 * dt))
+      throw UsageError(fmt::format("wall mass {:g} kg gives the wall a contact time of {:.3g} s, fewer than 10 time "
+                                   "steps of {:.3g} s: the wall is unstable (raise m_wall)", w->mass, tc, dt));
+  }
+}
+
+int report_unstable(const InstabilityError& e, const DynamicSolver& s, const fs::path& out, nlohmann::json summary) {
+  if (const SolverState* good = s.last_good()) {
+    write_file_atomic(out / "state_last_good.txt", format_state(*good));
+    summary["last_good_time_s"] = good->time;
+  }
+  summary["status"] = "unstable";
+  summary["status_reason"] = e.what();
+  summary["unstable_quantity"] = e.quantity();
+  summary["unstable_step"] = e.step();
+  summary["unstable_time_s"] = e.time();
+  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
+  std::fprintf(stderr, "demsolve: error: %s\n", one_line(e.what()).c_str());
+  return exit_code::untrustworthy;
 }
 
 SolverState load_state(const std::string& file, const std::vector<std::string>& overrides) {
@@ -127,7 +241,10 @@ class PhaseWriter final : public PhaseObserver {
   }
 
   void sample(const DynamicSolver& s, std::size_t phase, std::int64_t steps) override {
-    if (steps == 0) write_snapshot(s, out_, "initial", cs_);
+    if (steps == 0) {
+      s.check_health();
+      write_snapshot(s, out_, "initial", cs_);
+    }
     const ContactCounts c = count_contacts(s, buf_);
     const auto ws = s.wall_stress();
     const auto cst = s.contact_stress();
@@ -141,6 +258,7 @@ class PhaseWriter final : public PhaseObserver {
   }
 
   void phase_end(const DynamicSolver& s, std::size_t p) override {
+    s.check_health();  // nothing unchecked reaches a file
     const auto now = std::chrono::steady_clock::now();
     const std::string& name = phases_[p].name;
     write_file_atomic(out_ / fmt::format("state_{}.txt", name), format_state(s.state()));
@@ -153,6 +271,7 @@ class PhaseWriter final : public PhaseObserver {
 
   /// timeseries.csv, state.txt, the final snapshot and the summary entries.
   void finish(const DynamicSolver& s, const PhaseRun& run, nlohmann::json& summary) {
+    s.check_health();
     progress_.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
     write_file_atomic(out_ / "timeseries.csv", csv_);
@@ -221,9 +340,15 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
                  const SinterProtocol& protocol, bool prepare_only, const fs::path& out) {
   if (!(std::isfinite(args.pressure) && args.pressure > 0.0))
     throw std::invalid_argument(fmt::format("--pressure must be a positive number of N/m, got {}", args.pressure));
-  if (!(std::isfinite(args.mu) && args.mu >= 0.0)) throw std::invalid_argument("--mu must be >= 0");
-  if (!(std::isfinite(args.mu_wall_prepare) && args.mu_wall_prepare >= 0.0))
-    throw std::invalid_argument("--mu-wall must be >= 0");
+  if (!(std::isfinite(args.mu) && args.mu >= 0.0 && args.mu <= 10.0)) throw UsageError("--mu must be in [0, 10]");
+  if (!(std::isfinite(args.mu_wall_prepare) && args.mu_wall_prepare >= 0.0 && args.mu_wall_prepare <= 10.0))
+    throw UsageError("--mu-wall must be in [0, 10]");
+  if (!(std::isfinite(args.steps_per_contact) && args.steps_per_contact > 0.0 && args.steps_per_contact <= 1e4))
+    throw UsageError(fmt::format("--steps-per-contact must be in (0, 1e4], got {}", args.steps_per_contact));
+  if (!args.state_file.empty() && args.sample_given)
+    throw UsageError("--n, --seed and --arrangement describe a new sample and cannot be used with --state");
+  if (args.packing_given && sample.packing_file.empty())
+    throw UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a random sample");
   auto phases = protocol.phases();
   if (prepare_only) {
     phases.resize(1);
@@ -237,11 +362,24 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   opt.temperature = phases.front().T_start;
   std::unique_ptr<DynamicSolver> s;
   nlohmann::json summary;
+  std::string warning;
+  auto check_protocol_T = [&](const LudingParams& lp) {
+    for (const auto& ph : phases) {
+      check_temperature(ph.T_start, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
+      check_temperature(ph.T_end, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
+    }
+  };
   if (!args.state_file.empty() && !sample.packing_file.empty())
     throw std::invalid_argument("--state and --packing both give the sample: use one of them");
   if (!args.state_file.empty()) {
     SolverState st = load_state(args.state_file, args.param_overrides);
     if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;
+    check_protocol_T(st.params);
+    check_temperature(st.thermal.T, st.params, "the state's temperature");
+    if (st.box.right.mode == WallMode::Stress || st.box.top.mode == WallMode::Stress)
+      warning = check_loading(std::max(st.box.right.pressure, st.box.top.pressure), st.params,
+                              args.pressure_given ? "--pressure" : "the state's wall pressure");
+    check_memory(st.particles.size());
     s = std::make_unique<DynamicSolver>(st, opt);
     summary["state_file"] = args.state_file;
     if (s->time() >= phase_end(phases, phases.size() - 1) - 0.5 * s->dt())
@@ -250,9 +388,13 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   } else {
     LudingParams lp;
     apply_overrides(lp, args.param_overrides);
+    check_protocol_T(lp);
+    warning = check_loading(args.pressure, lp, "--pressure");
+    if (sample.packing_file.empty()) check_memory(static_cast<std::size_t>(std::max(sample.n, 1)));
     Box box;
     double length_unit = 0.0;
     Particles P = make_sample(sample, lp, box, &length_unit);
+    check_memory(P.size());
     set_stress_walls(box, args.pressure, lp);
     s = std::make_unique<DynamicSolver>(std::move(P), lp, box, opt);
     summary["seed"] = sample.seed;
@@ -262,8 +404,11 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
       summary["length_unit_m"] = length_unit;
     }
   }
-  start_run_dir(out);
-  write_file_atomic(out / "command.txt", command + "\n");
+  check_run_limits(*s, (phase_end(phases, phases.size() - 1) - s->time()) / s->dt(), args.max_steps);
+  RunDirOptions rdo;
+  rdo.overwrite = args.overwrite;
+  rdo.inputs = {args.state_file, sample.packing_file};
+  open_run_dir(out, command, rdo);
   nlohmann::json params;
   for (const auto& name : luding_param_names()) params[name] = get_luding_param(s->params(), name);
   nlohmann::json prot = nlohmann::json::array();
@@ -285,11 +430,18 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   summary["particles"] = s->particles().size();
   summary["pressure_N_per_m"] = pressure;
   summary["steps_per_contact_lightest_pair"] = s->time_step().steps_per_contact_lightest;
-  run_and_write_phases(*s, phases, args, out, summary);
+  try {
+    run_and_write_phases(*s, phases, args, out, summary);
+  } catch (const InstabilityError& e) {
+    return report_unstable(e, *s, out, summary);
+  }
+  summary["status"] = "ok";
+  summary["status_reason"] = warning.empty() ? "every instability check passed" : "every instability check passed; warning: " + warning;
   // densification nu(t_f) / nu(t_heat) - 1 (LMM05 section 4.1.3)
   for (const auto& ph : summary["phases"])
     if (!prepare_only && ph["phase"] == "prepare") summary["densification"] = summary["final"]["nu"].get<double>() / ph["nu"].get<double>() - 1.0;
   write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
   const auto& f = summary["final"];
   std::printf("t = %.4f s: nu = %.4f, C = %.3f (%.3f without walls), sxx/p = %.4f, szz/p = %.4f, k1(T,t)/k1 = %.4f, "
               "Ekin = %.3e J, %.1f s -> %s\n",

@@ -5,6 +5,7 @@
 // under one output folder.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,39 @@ struct RunArgs {
   bool quiet = false;
   std::string state_file;  ///< start from this state (its time decides the phase)
   std::vector<std::string> param_overrides;  ///< NAME=VALUE for LudingParams
+  bool sample_given = false;   ///< --n, --seed or --arrangement on the command line (refused with --state)
+  bool packing_given = false;  ///< --packing on the command line (refused if empty)
+  double max_steps = 1e9;      ///< --max-steps
+  bool overwrite = false;      ///< --overwrite
 };
+
+/// `m` with control characters as spaces (one line on stderr).
+std::string one_line(const std::string& m);
+
+/// Runs `body` (a command) and maps its exceptions to one line on stderr and the exit code:
+/// UsageError, or any std::invalid_argument before the run folder was opened: 2; out of memory
+/// and every other error: 1. (A detected instability is handled inside the command: exit 3.)
+int guarded(const std::function<int()>& body);
+
+/// Door checks shared by every command, on the solver before it runs (docs/dynamic.md "Limits"):
+/// the step count `steps` (a double, so that an absurd count is not an overflow) against
+/// max_steps, the normal and wall damping and the wall mass against the time step. Throws
+/// UsageError with the estimate.
+void check_run_limits(const netdem::dem::DynamicSolver& s, double steps, double max_steps);
+/// The memory estimate of a run of n particles against MemAvailable (/proc/meminfo); throws
+/// UsageError with the estimate. Call it before building the solver.
+void check_memory(std::size_t n);
+/// 2p/k2 (Luding section 4): UsageError above 0.1, a warning line on stderr above 0.02 (returned,
+/// "" if none). `what` names the option.
+std::string check_loading(double pressure, const netdem::dem::LudingParams& p, const std::string& what);
+/// T above absolute zero and |da_T (T - T_radius_ref)| <= 0.05; UsageError naming `what`.
+void check_temperature(double T, const netdem::dem::LudingParams& p, const std::string& what);
+
+/// A run stopped by an instability check: writes state_last_good.txt (the solver's last checked
+/// state) and summary.json (`summary` + "status": "unstable", the reason, step and quantity),
+/// closes the run folder, prints the one-line error; returns 3.
+int report_unstable(const netdem::dem::InstabilityError& e, const netdem::dem::DynamicSolver& s,
+                    const std::filesystem::path& out, nlohmann::json summary);
 
 /// Applies NAME=VALUE overrides; throws std::invalid_argument naming the bad item.
 void apply_overrides(netdem::dem::LudingParams& p, const std::vector<std::string>& items);
@@ -50,6 +83,8 @@ struct CompressArgs {
   double pressure = 0.0;     ///< sigma_xx held by the right wall; 0: the state's
   bool quiet = false;
   std::vector<std::string> param_overrides;
+  double max_steps = 1e9;
+  bool overwrite = false;
 };
 int run_compress(const std::string& command, const CompressArgs& a, const std::filesystem::path& out);
 
@@ -62,6 +97,8 @@ struct VibrateArgs {
   double gravity = 9.81;      ///< [m/s^2]
   bool quiet = false;
   std::vector<std::string> param_overrides;
+  double max_steps = 1e9;
+  bool overwrite = false;
 };
 int run_vibrate(const std::string& command, const VibrateArgs& a, const std::filesystem::path& out);
 

@@ -3,9 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace netdem::dem {
 
@@ -125,6 +128,7 @@ void DynamicOptions::validate() const {
   if (!(min_steps_per_contact >= 0.0)) fail("DynamicOptions: min_steps_per_contact must be >= 0");
   if (!(dt >= 0.0)) fail("DynamicOptions: dt must be >= 0 (0 = from the rule)");
   if (!(skin >= 0.0)) fail("DynamicOptions: skin must be >= 0 (0 = 0.3 mean radius)");
+  if (check_every < 0) fail("DynamicOptions: check_every must be >= 0 (0 = no instability checks)");
 }
 
 double contact_duration(double k2, double gamma0, double m12) {
@@ -496,15 +500,24 @@ void DynamicSolver::compute_forces() {
 namespace {
 // Half kick v += h f / m, omega += h tau / I (with the inverses), on distinct arrays (restrict:
 // the loops vectorise without alias checks).
-void kick_pass(std::size_t n, double h, double* __restrict vx, double* __restrict vy,
-               double* __restrict om, const double* __restrict fx, const double* __restrict fy,
-               const double* __restrict tq, const double* __restrict im,
-               const double* __restrict iI) {
+// Track (the steps of an instability check only): also returns max vx^2 + vy^2 after the kick
+// (NaN if a velocity is NaN), so that the check needs no pass of its own over the velocities.
+template <bool Track>
+double kick_pass(std::size_t n, double h, double* __restrict vx, double* __restrict vy,
+                 double* __restrict om, const double* __restrict fx, const double* __restrict fy,
+                 const double* __restrict tq, const double* __restrict im,
+                 const double* __restrict iI) {
+  double vmax2 = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     vx[i] += h * fx[i] * im[i];
     vy[i] += h * fy[i] * im[i];
     om[i] += h * tq[i] * iI[i];
+    if constexpr (Track) {
+      const double v2 = vx[i] * vx[i] + vy[i] * vy[i];
+      vmax2 = v2 <= vmax2 ? vmax2 : v2;  // a NaN replaces the maximum and stays
+    }
   }
+  return vmax2;
 }
 // First half kick and drift in one pass; also the table check (displacement since the build
 // beyond sqrt(lim2): returns 1) and the reset of the force accumulators to m g for the coming
@@ -546,6 +559,11 @@ int kick_drift_pass(std::size_t n, double h, double dt, double lim2, Particles& 
 
 void DynamicSolver::step() {
   const std::size_t n = P_.size();
+  const bool checking = opt_.check_every > 0;
+  if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
+  const bool check = checking && ++since_check_ >= opt_.check_every;
+  ++since_good_;
+  double vmax2 = 0.0;
   const double dt = ts_.dt, h = 0.5 * dt;
   // Eq 1 total wall forces at the current state: F_w - p z - gamma_w x'
   auto wall_accel = [&](int which) {
@@ -583,9 +601,12 @@ void DynamicSolver::step() {
                                            0.0, 0.0);
       far = far || moved != 0;
       forces_initialised_ = true;
+    } else if (check) {
+      vmax2 = kick_pass<true>(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(),
+                              P_.fy.data(), P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
     } else {
-      kick_pass(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(), P_.fy.data(),
-                P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
+      kick_pass<false>(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(),
+                       P_.fy.data(), P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
     }
     if (box_.enabled) {
       const double a0 = wall_accel(0), a1 = wall_accel(1);
@@ -602,6 +623,106 @@ void DynamicSolver::step() {
   if (far || walls_moved()) build_table();
   compute_forces_dispatch();  // forces use the half-step velocities for the damping terms
   kick(false);
+  if (check) {
+    since_check_ = 0;
+    check_health_with(vmax2);
+    if (since_good_ >= HealthLimits::kLastGoodEvery) {
+      last_good_ = std::make_shared<const SolverState>(state());
+      since_good_ = 0;
+    }
+  }
+}
+
+// ---- instability checks (docs/dynamic.md "Instability detection") -------------------------------
+namespace {
+const char* const kCauseStep =
+    "the time step is too large for the stiffness, the damping or the masses (--steps-per-contact, k2, "
+    "gamma_n, rho_p, m_wall, gamma_wall)";
+const char* const kCauseWall =
+    "a stress-controlled wall is unstable or driven too hard (m_wall, gamma_wall, --pressure, --strain-rate)";
+const char* const kCauseLoad =
+    "the load is too high for the stiffness (2p/k2, k1_ratio, k2, --strain-rate) or the time step too large "
+    "(--steps-per-contact)";
+}  // namespace
+
+void DynamicSolver::breach(const std::string& quantity, const std::string& what, const std::string& cause) const {
+  const std::int64_t step = ts_.dt > 0.0 ? static_cast<std::int64_t>(std::llround(time_ / ts_.dt)) : 0;
+  throw InstabilityError(fmt::format("unstable at step {} (t = {:.6g} s): {}; likely cause: {}", step, time_, what,
+                                     cause),
+                         quantity, step, time_);
+}
+
+void DynamicSolver::check_health() const { check_health_with(-1.0); }
+
+void DynamicSolver::check_health_with(double vmax2) const {
+  const std::size_t n = P_.size();
+  const bool track = vmax2 < 0.0;  // (NaN: not negative, the pass below reports it)
+  if (track) vmax2 = 0.0;
+  double rmin = std::numeric_limits<double>::infinity(), area = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v[7] = {P_.x[i], P_.y[i], P_.vx[i], P_.vy[i], P_.omega[i], P_.fx[i], P_.fy[i]};
+    bool fin = std::isfinite(P_.radius[i]) && std::isfinite(P_.torque[i]);
+    for (double q : v) fin = fin && std::isfinite(q);
+    if (!fin)
+      breach("finite", fmt::format("particle {} has a non-finite position, velocity or force", i), kCauseStep);
+    rmin = std::min(rmin, P_.radius[i]);
+    area += P_.radius[i] * P_.radius[i];
+    if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]);
+  }
+  if (!(std::isfinite(vmax2))) breach("finite", "a particle velocity is not finite", kCauseStep);
+  if (!(std::isfinite(wall_v_[0]) && std::isfinite(wall_v_[1]) && std::isfinite(wall_force_[1]) &&
+        std::isfinite(wall_force_[3])))
+    breach("finite", "a wall velocity or force is not finite", kCauseWall);
+  const double dt = ts_.dt, travel = HealthLimits::kMaxTravel * rmin;
+  if (!(std::sqrt(vmax2) * dt < travel))
+    breach("velocity", fmt::format("max|v| dt = {:.3g} m is not below 0.1 r_min = {:.3g} m", std::sqrt(vmax2) * dt, travel),
+           kCauseStep);
+  if (box_.enabled) {
+    const double b[4] = {box_.x_min, box_.x_max, box_.y_min, box_.y_max};
+    for (double q : b)
+      if (!std::isfinite(q)) breach("finite", "the box is not finite", kCauseWall);
+    if (!(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
+      breach("box", fmt::format("the box extents {:.3g} x {:.3g} m are not positive", box_.x_max - box_.x_min,
+                                box_.y_max - box_.y_min),
+             kCauseWall);
+    const double wv = std::max(std::fabs(wall_v_[0]), std::fabs(wall_v_[1]));
+    if (!(wv * dt < travel))
+      breach("velocity", fmt::format("a wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m", wv * dt, travel),
+             kCauseWall);
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max))
+        breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
+               kCauseLoad);
+  }
+  // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
+  // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
+  for (std::uint64_t key : pair_key_) {
+    const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
+    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i], s = P_.radius[i] + P_.radius[j];
+    const double L2 = dx * dx + dy * dy;
+    if (!(L2 < s * s)) continue;
+    const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
+    if (!(d < lim))
+      breach("overlap", fmt::format("the overlap {:.3g} m of particles {} and {} is not below half the smaller radius, "
+                                    "{:.3g} m", d, i, j, lim),
+             kCauseLoad);
+  }
+  if (box_.enabled) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double r = P_.radius[i];
+      const double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
+                                std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
+      if (!(d < HealthLimits::kMaxOverlap * r))
+        breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below half its radius, {:.3g} m", i, d,
+                                      HealthLimits::kMaxOverlap * r),
+               kCauseLoad);
+    }
+    const double nu = std::numbers::pi * area / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
+    if (!(nu <= HealthLimits::kMaxDensity))
+      breach("density", fmt::format("nu = {:.4g} is above 1.25", nu),
+             "overlaps beyond the model's range: the pressure is too high for the stiffness (2p/k2, k1_ratio) or a "
+             "wall is unstable (m_wall, gamma_wall)");
+  }
 }
 
 void DynamicSolver::run(std::size_t n_steps) {

@@ -4,19 +4,32 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/dynamic/state.hpp"
+#include "netdem/packing/cell_grid.hpp"
 
 namespace netdem::dem {
 
 namespace {
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 }  // namespace
+
+std::string quote_input(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (o.size() >= 80) return o + "...";
+    o += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+  }
+  return o;
+}
 
 DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& options)
     : P_(st.particles), params_(st.params), box_(st.box), opt_(options) {
@@ -216,7 +229,7 @@ void set_luding_param(LudingParams& p, const std::string& name, double value) {
       else p.*f.b = value != 0.0;
       return;
     }
-  fail("unknown contact parameter '" + name + "'");
+  fail("unknown contact parameter '" + quote_input(name) + "'");
 }
 
 double get_luding_param(const LudingParams& p, const std::string& name) {
@@ -293,7 +306,7 @@ class Reader {
     std::istringstream ls(line());
     std::string k;
     ls >> k;
-    if (k != key) error("expected '" + key + "', found '" + k + "'");
+    if (k != key) error("expected '" + key + "', found '" + quote_input(k) + "'");
     return ls;
   }
   template <class T>
@@ -302,17 +315,20 @@ class Reader {
     if (!(ls >> v)) error(std::string("cannot read ") + what);
     return v;
   }
-  [[noreturn]] void error(const std::string& msg) const {
-    throw std::invalid_argument(name_ + ":" + std::to_string(no_) + ": " + msg);
+  [[noreturn]] void error(const std::string& msg) const { error_at(no_, msg); }
+  [[noreturn]] void error_at(std::size_t line, const std::string& msg) const {
+    throw std::invalid_argument(quote_input(name_) + ":" + std::to_string(line) + ": " + msg);
   }
+  std::size_t line_no() const { return no_; }
+  void count_line() { ++no_; }  ///< a line read by the caller (the first)
   /// A finite real number (strtod: also reads nan and inf, which are refused by name).
   double real(std::istringstream& ls, const char* what) {
     std::string tok;
     if (!(ls >> tok)) error(std::string("missing ") + what);
     char* end = nullptr;
     const double v = std::strtod(tok.c_str(), &end);
-    if (end == tok.c_str() || *end != '\0') error(std::string("cannot read ") + what + " '" + tok + "'");
-    if (!std::isfinite(v)) error(std::string(what) + " is not a finite number ('" + tok + "')");
+    if (end == tok.c_str() || *end != '\0') error(std::string("cannot read ") + what + " '" + quote_input(tok) + "'");
+    if (!std::isfinite(v)) error(std::string(what) + " is not a finite number ('" + quote_input(tok) + "')");
     return v;
   }
 
@@ -326,7 +342,7 @@ WallMode parse_mode(Reader& r, const std::string& s) {
   if (s == "fixed") return WallMode::Fixed;
   if (s == "strain") return WallMode::Strain;
   if (s == "stress") return WallMode::Stress;
-  r.error("unknown wall mode '" + s + "'");
+  r.error("unknown wall mode '" + quote_input(s) + "'");
 }
 
 LudingHistory get_history(Reader& r, std::istringstream& ls) {
@@ -348,18 +364,23 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   SolverState st;
   {
     std::string first;
-    if (!std::getline(in, first)) r.error("empty file");
+    if (!std::getline(in, first)) r.error_at(1, "empty file");
+    r.count_line();
     if (first.rfind("# demsolve state v2", 0) != 0)
-      r.error("not a demsolve state file v2 (first line '" + first.substr(0, 40) + "')");
+      r.error_at(1, "not a demsolve state file v2 (first line '" + quote_input(first.substr(0, 40)) + "')");
   }
   auto one = [&](const char* key) {
     auto ls = r.keyed(key);
     return r.real(ls, key);
   };
   st.time = one("time");
+  if (!(st.time >= 0.0 && st.time <= StateLimits::kMaxTime)) r.error(fmt::format("time must be in [0, {:g}] s", StateLimits::kMaxTime));
   st.dt = one("dt");
+  if (!(st.dt > 0.0 && st.dt <= StateLimits::kMaxDt)) r.error(fmt::format("dt must be in (0, {:g}] s", StateLimits::kMaxDt));
+  std::size_t box_line = 0, wall_line[2] = {0, 0}, thermal_line = 0;
   {
     auto ls = r.keyed("box");
+    box_line = r.line_no();
     st.box.enabled = r.num<int>(ls, "box enabled") != 0;
     st.box.x_min = r.real(ls, "x_min");
     st.box.y_min = r.real(ls, "y_min");
@@ -370,12 +391,15 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   const char* wn[2] = {"wall_right", "wall_top"};
   for (int k = 0; k < 2; ++k) {
     auto ls = r.keyed(wn[k]);
+    wall_line[k] = r.line_no();
     w[k]->mode = parse_mode(r, r.num<std::string>(ls, "wall mode"));
     w[k]->velocity = r.real(ls, "wall velocity");
     w[k]->pressure = r.real(ls, "wall pressure");
     w[k]->mass = r.real(ls, "wall mass");
     w[k]->damping = r.real(ls, "wall damping");
     st.wall_velocity[k] = r.real(ls, "wall velocity");
+    if (w[k]->mode == WallMode::Stress && !(w[k]->mass > 0.0 && w[k]->damping >= 0.0 && w[k]->pressure >= 0.0))
+      r.error("a stress-controlled wall needs mass > 0, damping >= 0 and pressure >= 0");
   }
   {
     auto ls = r.keyed("wall_force");
@@ -388,6 +412,7 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   }
   {
     auto ls = r.keyed("thermal");
+    thermal_line = r.line_no();
     st.thermal.T = r.real(ls, "T");
     st.thermal.k1_Tt = r.real(ls, "k1_Tt");
   }
@@ -406,17 +431,40 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   } catch (const std::invalid_argument& e) {
     r.error(e.what());
   }
+  const LudingParams& lp = st.params;
+  // what needs the parameters: the box, the walls' loading ratio, the temperature
+  if (st.box.enabled) {
+    const double L = StateLimits::kMaxBox * lp.a0;
+    const double b[4] = {st.box.x_min, st.box.y_min, st.box.x_max, st.box.y_max};
+    for (double q : b)
+      if (!(std::fabs(q) <= L)) r.error_at(box_line, fmt::format("box coordinates must be within +-{:g} a0 = {:g} m", StateLimits::kMaxBox, L));
+    if (!(st.box.x_max > st.box.x_min && st.box.y_max > st.box.y_min))
+      r.error_at(box_line, "box must have x_max > x_min and y_max > y_min");
+  }
+  for (int k = 0; k < 2; ++k)
+    if (w[k]->mode == WallMode::Stress && !(2.0 * w[k]->pressure / lp.k2 <= StateLimits::kMaxLoading))
+      r.error_at(wall_line[k], fmt::format("loading ratio 2p/k2 = {:.3g} is above {} (Luding section 4)",
+                                           2.0 * w[k]->pressure / lp.k2, StateLimits::kMaxLoading));
+  if (!(st.thermal.T > StateLimits::kAbsoluteZero))
+    r.error_at(thermal_line, fmt::format("T = {:g} deg C is not above absolute zero", st.thermal.T));
+  if (!(std::fabs(lp.da_T * (st.thermal.T - lp.T_radius_ref)) <= StateLimits::kMaxThermalStrain))
+    r.error_at(thermal_line, fmt::format("|da_T (T - T_radius_ref)| = {:.3g} is above {}",
+                                         std::fabs(lp.da_T * (st.thermal.T - lp.T_radius_ref)), StateLimits::kMaxThermalStrain));
+  if (!(st.thermal.k1_Tt >= 0.0 && st.thermal.k1_Tt <= lp.k1() * (1.0 + 1e-9)))
+    r.error_at(thermal_line, "k1_Tt must be in [0, k1]");
   std::size_t n = 0;
   {
     auto ls = r.keyed("particles");
     n = r.num<std::size_t>(ls, "particle count");
-    if (n == 0 || n > (std::size_t{1} << 31)) r.error("bad particle count");
+    if (n == 0 || n > StateLimits::kMaxParticles) r.error(fmt::format("particle count must be in [1, {}]", StateLimits::kMaxParticles));
   }
   if (r.line().rfind("id,x,y", 0) != 0) r.error("expected the particle header line");
   Particles& P = st.particles;
-  st.radius_ref.resize(n);
+  std::vector<std::size_t> pline;
+  const double rlo = lp.a0 / StateLimits::kRadiusRange, rhi = lp.a0 * StateLimits::kRadiusRange;
   for (std::size_t i = 0; i < n; ++i) {
     std::string s = r.line();
+    pline.push_back(r.line_no());
     std::replace(s.begin(), s.end(), ',', ' ');
     std::istringstream ls(s);
     const auto id = r.num<std::size_t>(ls, "particle id");
@@ -425,6 +473,13 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     for (double& x : v) x = r.real(ls, "particle value");
     if (!(v[6] > 0.0 && v[7] > 0.0 && v[8] > 0.0 && v[9] > 0.0))
       r.error("particle " + std::to_string(i) + ": radius, mass and inertia must be positive");
+    if (!(v[6] >= rlo && v[6] <= rhi && v[7] >= rlo && v[7] <= rhi))
+      r.error(fmt::format("particle {}: radius and radius_ref must be within [a0 / 100, 100 a0] = [{:g}, {:g}] m", i, rlo, rhi));
+    const double m_ref = contact::luding_mass(lp, v[7]);
+    if (!(v[8] >= 1e-3 * m_ref && v[8] <= 1e3 * m_ref && v[9] >= 0.5e-3 * v[8] * v[6] * v[6] &&
+          v[9] <= 0.5e3 * v[8] * v[6] * v[6]))
+      r.error(fmt::format("particle {}: mass and inertia must be within a factor 1000 of rho_p pi a^2 h and m a^2 / 2", i));
+    st.radius_ref.push_back(v[7]);
     P.x.push_back(v[0]);
     P.y.push_back(v[1]);
     P.vx.push_back(v[2]);
@@ -432,12 +487,48 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     P.omega.push_back(v[4]);
     P.theta.push_back(v[5]);
     P.radius.push_back(v[6]);
-    st.radius_ref[i] = v[7];
     P.mass.push_back(v[8]);
     P.inertia.push_back(v[9]);
     P.fx.push_back(v[10]);
     P.fy.push_back(v[11]);
     P.torque.push_back(v[12]);
+  }
+  // geometry and speeds, with the line of the particle (docs/dynamic.md "State file limits")
+  double rmin = P.radius[0];
+  for (double a : P.radius) rmin = std::min(rmin, a);
+  const double travel = StateLimits::kMaxTravel * rmin, dt = st.dt;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (st.box.enabled && !(P.x[i] >= st.box.x_min && P.x[i] <= st.box.x_max && P.y[i] >= st.box.y_min &&
+                            P.y[i] <= st.box.y_max))
+      r.error_at(pline[i], fmt::format("particle {}: the centre ({:g}, {:g}) is outside the box", i, P.x[i], P.y[i]));
+    if (!st.box.enabled && !(std::fabs(P.x[i]) <= StateLimits::kMaxBox * lp.a0 && std::fabs(P.y[i]) <= StateLimits::kMaxBox * lp.a0))
+      r.error_at(pline[i], fmt::format("particle {}: the centre must be within +-{:g} a0", i, StateLimits::kMaxBox));
+    const double v = std::hypot(P.vx[i], P.vy[i]) + std::fabs(P.omega[i]) * P.radius[i];
+    if (!(v * dt < travel))
+      r.error_at(pline[i], fmt::format("particle {}: speed {:.3g} m/s moves it {:.3g} m per step, not below 0.1 r_min = {:.3g} m",
+                                       i, v, v * dt, travel));
+    const double dv = 0.5 * dt * std::hypot(P.fx[i], P.fy[i]) / P.mass[i];
+    if (!(dv * dt < travel))
+      r.error_at(pline[i], fmt::format("particle {}: force {:.3g} N would move it {:.3g} m in the next step, not below 0.1 r_min",
+                                       i, std::hypot(P.fx[i], P.fy[i]), dv * dt));
+  }
+  for (int k = 0; k < 2; ++k)
+    if (!(std::fabs(st.wall_velocity[k]) * dt < travel && std::fabs(w[k]->velocity) * dt < travel))
+      r.error_at(wall_line[k], fmt::format("the wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m",
+                                           std::max(std::fabs(st.wall_velocity[k]), std::fabs(w[k]->velocity)) * dt, travel));
+  {  // pairs closer than the larger radius, on the shared cell grid
+    double rmax = 0.0;
+    for (double a : P.radius) rmax = std::max(rmax, a);
+    const packing::CellGrid grid(P.x, P.y, rmax);
+    for (std::size_t i = 0; i < n; ++i)
+      grid.for_each_near(P.x[i], P.y[i], rmax, [&](std::uint32_t j) {
+        if (j <= i) return;
+        const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], lim = std::max(P.radius[i], P.radius[j]);
+        if (dx * dx + dy * dy < lim * lim)
+          r.error_at(pline[j], fmt::format("particles {} (line {}) and {}: centre distance {:.3g} m is below the larger "
+                                           "radius {:.3g} m (a duplicate?)",
+                                           i, pline[i], j, std::sqrt(dx * dx + dy * dy), lim));
+      });
   }
   std::size_t m = 0;
   {
@@ -467,9 +558,14 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   return st;
 }
 
+SolverState read_state(std::istream& in) { return parse_state(in, "state"); }
+
 SolverState read_state_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw std::invalid_argument("state file '" + quote_input(path) + "' is a folder");
   std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot open state file '" + path + "'");
+  if (!in) throw std::invalid_argument("cannot open state file '" + quote_input(path) + "'");
   return parse_state(in, path);
 }
 

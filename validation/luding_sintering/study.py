@@ -202,12 +202,19 @@ def recorded_args(run_dir):
     if not os.path.isfile(p):
         return None
     with open(p) as f:
-        return shlex.split(f.read().strip())[1:]
+        return [w for w in shlex.split(f.read().strip())[1:] if w != "--overwrite"]
+
+
+def holds_run(run_dir):
+    """True if run_dir holds a demsolve run's files (README.md, docs/dynamic.md 'Exit status')."""
+    return any(os.path.exists(os.path.join(run_dir, f)) for f in ("command.txt", "summary.json", ".incomplete"))
 
 
 def up_to_date(run, by_name):
     summ = os.path.join(run.dir, "summary.json")
     if not os.path.isfile(summ) or recorded_args(run.dir) != run.args:
+        return False
+    if os.path.exists(os.path.join(run.dir, ".incomplete")):  # a failed or killed run keeps it
         return False
     for dname in run.deps:
         if dname not in by_name:
@@ -219,14 +226,14 @@ def up_to_date(run, by_name):
 
 
 def run_one(run, binary, timeout):
-    os.makedirs(run.dir, exist_ok=True)
-    for stale in ("summary.json", "meta.json"):
-        p = os.path.join(run.dir, stale)
-        if os.path.exists(p):
-            os.remove(p)
-    cmd = ["nice", "-n", "10", binary] + run.args
+    # a rerun replaces the old run's files: demsolve refuses a folder that holds another run unless
+    # --overwrite, and then clears it first (so the log is written beside the folder until the end)
+    rerun = ["--overwrite"] if holds_run(run.dir) else []
+    os.makedirs(os.path.dirname(run.dir) or ".", exist_ok=True)
+    cmd = ["nice", "-n", "10", binary] + run.args + rerun
     t0 = time.time()
-    with open(os.path.join(run.dir, "run.log"), "w") as log:
+    tmp_log = run.dir.rstrip("/") + ".run.log.tmp"
+    with open(tmp_log, "w") as log:
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
         killer = threading.Timer(timeout, proc.kill)
         killer.start()
@@ -235,6 +242,8 @@ def run_one(run, binary, timeout):
         proc.returncode = os.waitstatus_to_exitcode(status)
     wall = time.time() - t0
     rc = proc.returncode
+    os.makedirs(run.dir, exist_ok=True)
+    os.replace(tmp_log, os.path.join(run.dir, "run.log"))
     with open(os.path.join(run.dir, "run.log")) as f:
         out = f.read().strip()
     if rc == 0 and not os.path.isfile(os.path.join(run.dir, "command.txt")):

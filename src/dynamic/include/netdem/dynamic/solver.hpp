@@ -13,6 +13,9 @@
 // See docs/dynamic.md.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -84,6 +87,8 @@ struct DynamicOptions {
   double skin = 0.0;                    ///< Verlet skin [m]; 0: 0.3 x mean radius
   double gravity_x = 0.0, gravity_y = 0.0;  ///< [m/s^2]
   double temperature = 80.0;  ///< [deg C] initial T of the thermal state (ContactModel::Full)
+  /// Steps between the instability checks of step() (DynamicSolver::check_health; 0: never).
+  std::int64_t check_every = 500;
   /// Throws std::invalid_argument with one line for an invalid value.
   void validate() const;
 };
@@ -147,6 +152,31 @@ struct ContactInfo {
   bool sliding = false;        ///< the committed step slid
 };
 
+/// A breached instability check (docs/dynamic.md "Instability detection"): the quantity, the step
+/// at which the check saw it and a one-line message that names the likely cause.
+class InstabilityError : public std::runtime_error {
+ public:
+  InstabilityError(const std::string& message, std::string quantity, std::int64_t step, double time)
+      : std::runtime_error(message), quantity_(std::move(quantity)), step_(step), time_(time) {}
+  const std::string& quantity() const { return quantity_; }
+  std::int64_t step() const { return step_; }  ///< time / dt rounded
+  double time() const { return time_; }
+
+ private:
+  std::string quantity_;
+  std::int64_t step_;
+  double time_;
+};
+
+/// The limits of the instability checks (docs/dynamic.md "Instability detection").
+struct HealthLimits {
+  /// overlap < 0.5 x the smaller radius of the contact (a wall contact: the particle's), >= 0.5 r_min
+  static constexpr double kMaxOverlap = 0.5;
+  static constexpr double kMaxDensity = 1.25;  ///< nu <= 1.25 (nu counts overlapping areas twice)
+  static constexpr double kMaxTravel = 0.1;    ///< max|v| dt < 0.1 r_min
+  static constexpr std::int64_t kLastGoodEvery = 1000;  ///< steps between refreshes of last_good()
+};
+
 class DynamicSolver {
  public:
   /// Restart: continues exactly (bit for bit) where the solver that produced `state` stopped.
@@ -159,7 +189,18 @@ class DynamicSolver {
   DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
                 const DynamicOptions& options);
 
-  void step();                    ///< one velocity-Verlet step (Eq 2, Eq 1)
+  /// One velocity-Verlet step (Eq 2, Eq 1). Every options.check_every steps it runs
+  /// check_health() (the closing kick of that step also takes max|v|); throws InstabilityError
+  /// on a breach, leaving the state of that step.
+  void step();
+  /// The instability checks on the current state: finite, box extents positive, centres inside
+  /// the box, every overlap < 0.5 min(a_i, a_j) (>= 0.5 r_min), nu <= 1.25, max|v| dt < 0.1 r_min. Throws
+  /// InstabilityError (one line: quantity, step, likely cause). O(N + pairs).
+  void check_health() const;
+  /// The last state that passed check_health() in step(), refreshed at most every
+  /// HealthLimits::kLastGoodEvery steps and held in memory (the state at the first step before
+  /// any check); nullptr before the first step.
+  const SolverState* last_good() const { return last_good_.get(); }
   void run(std::size_t n_steps);  ///< n_steps steps
 
   const Particles& particles() const { return P_; }
@@ -221,6 +262,8 @@ class DynamicSolver {
   void build_wall_list();
   bool walls_moved() const;
   bool needs_rebuild() const;
+  [[noreturn]] void breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
+  void check_health_with(double vmax2) const;
 
   Particles P_;
   LudingParams params_, wall_params_;
@@ -262,6 +305,9 @@ class DynamicSolver {
   double wall_force_[4] = {0, 0, 0, 0};
   double wall_v_[2] = {0, 0};  ///< right, top velocities
   double sxx_ = 0, sxy_ = 0, syx_ = 0, syy_ = 0, elastic_ = 0;
+  // instability checks
+  std::int64_t since_check_ = 0, since_good_ = 0;
+  std::shared_ptr<const SolverState> last_good_;
 };
 
 }  // namespace netdem::dem

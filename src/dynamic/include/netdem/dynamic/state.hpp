@@ -3,6 +3,7 @@
 // double printed with 17 significant digits, so reading it back gives the same bits). Format in
 // docs/dynamic.md. Also the by-name access to every LudingParams field used by state files and by
 // the apps' --param NAME=VALUE.
+#include <cstddef>
 #include <istream>
 #include <string>
 #include <vector>
@@ -11,11 +12,32 @@
 
 namespace netdem::dem {
 
+/// Limits of the state-file reader (docs/dynamic.md "State file limits"); parse_state refuses a
+/// value outside them with "name:line: problem".
+struct StateLimits {
+  static constexpr double kMaxTime = 1.0e6;       ///< time in [0, 1e6] s
+  static constexpr double kMaxDt = 1.0;           ///< dt in (0, 1] s
+  static constexpr double kMaxBox = 1.0e6;        ///< box corners and free centres within +-1e6 a0
+  static constexpr double kMaxLoading = 0.1;      ///< stress-wall loading ratio 2p/k2 <= 0.1
+  static constexpr double kAbsoluteZero = -273.15;  ///< T > -273.15 deg C
+  static constexpr double kMaxThermalStrain = 0.05;  ///< |da_T (T - T_radius_ref)| <= 0.05
+  static constexpr std::size_t kMaxParticles = 10000000;  ///< 1 .. 1e7 particles
+  static constexpr double kRadiusRange = 100.0;   ///< radii within [a0 / 100, 100 a0]
+  static constexpr double kMaxTravel = 0.1;       ///< |v| dt, |w| a dt, wall speed dt < 0.1 r_min
+};
+
+/// At most 80 printable characters of `s` (control characters as '?', "..." if cut), for messages
+/// that quote an input.
+std::string quote_input(const std::string& s);
+
 /// The text of a state file.
 std::string format_state(const SolverState& state);
 /// Parses a state file; throws std::invalid_argument "name:line: problem" on bad input.
 SolverState parse_state(std::istream& in, const std::string& name);
-/// Opens and parses `path`; a missing file is a one-line std::invalid_argument.
+/// parse_state under the name "state" (the entry point of a fuzz target: every input either
+/// parses or throws std::invalid_argument).
+SolverState read_state(std::istream& in);
+/// Opens and parses `path`; a missing file or a folder is a one-line std::invalid_argument.
 SolverState read_state_file(const std::string& path);
 
 /// Names of all LudingParams fields (Table 1 and the switches).
