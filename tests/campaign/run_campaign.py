@@ -23,9 +23,9 @@ and exits 1 if any crash, hang or NaN-with-exit-0 occurred (0 otherwise; 2 for a
 
 usage:
   /usr/bin/python3 tests/campaign/run_campaign.py --netsolve build/apps/netsolve --demsolve build/apps/demsolve \
-      --out /tmp/campaign --jobs 2 [--timeout 20] [--only netsolve|demsolve] [--filter REGEX] [--limit N]
+      --out /tmp/campaign --jobs 2 [--timeout 20] [--filter REGEX] [--limit N] [--list]
 
-Python standard library only. Runs are small (W = 20 packings, 50-disk DEM samples, short times)
+Python standard library only. Runs are small (W = 20 packings, 20-disk DEM samples, short times)
 so that the whole campaign takes about 10-15 minutes on 2 cores. Nothing outside --out is written.
 """
 import argparse
@@ -335,6 +335,21 @@ def split_fields(line):
     return " ", line.split(" ")
 
 
+def field_mutations(name, lines, li, limit, values):
+    """Copies of `lines` with each of the first `limit` (None: all) numeric fields of line li set to each value."""
+    sep, f = split_fields(lines[li])
+    idx = [k for k in range(len(f)) if re.fullmatch(r"[-+0-9.eE]+", f[k].strip())][:limit]
+    out = []
+    for k in idx:
+        for v in values:
+            g = list(f)
+            g[k] = v
+            m = list(lines)
+            m[li] = sep.join(g)
+            out.append((f"{name}: line {li + 1} field {k + 1} = '{v}'", ("\n".join(m) + "\n").encode()))
+    return out
+
+
 def mutate_text(text, name, lines_to_vary, fields_per_line, values, rng):
     """Mutated copies of `text`: [(label, bytes)]."""
     lines = text.split("\n")
@@ -349,15 +364,7 @@ def mutate_text(text, name, lines_to_vary, fields_per_line, values, rng):
     for li in lines_to_vary:
         if li >= len(lines):
             continue
-        sep, f = split_fields(lines[li])
-        idx = [k for k in range(len(f)) if re.fullmatch(r"[-+0-9.eE]+", f[k].strip())][:fields_per_line]
-        for k in idx:
-            for v in values:
-                g = list(f)
-                g[k] = v
-                m = list(lines)
-                m[li] = sep.join(g)
-                muts.append((f"{name}: line {li + 1} field {k + 1} = '{v}'", ("\n".join(m) + "\n").encode()))
+        muts += field_mutations(name, lines, li, fields_per_line, values)
     data = [k for k, ln in enumerate(lines) if ln and ln[0].isdigit()]
     first = data[0] if data else 1
     pairs = [(0, 1), (0, first), (first, first + 1), (first, len(lines) - 1)]
@@ -504,17 +511,7 @@ def build_tasks(a, work, bases):
         vary = [k for k, ln in enumerate(plines) if ln.startswith("# box")] + [first, len(plines) - 1]
         muts = mutate_text(ptext, "packing", [], 0, FIELD_VALUES, rng)
         for li in vary:  # '# box a b c d' and two data lines: every numeric field x every value
-            sep = " " if plines[li].startswith("#") else ","
-            f = plines[li].split(sep)
-            for k in range(len(f)):
-                if not re.fullmatch(r"[-+0-9.eE]+", f[k]):
-                    continue
-                for v in BAD_VALUES:
-                    g = list(f)
-                    g[k] = v
-                    m = list(plines)
-                    m[li] = sep.join(g)
-                    muts.append((f"packing: line {li + 1} field {k + 1} = '{v}'", ("\n".join(m) + "\n").encode()))
+            muts += field_mutations("packing", plines, li, None, BAD_VALUES)
         muts += packing_reproducers(ptext)
         cbase = ["compact", "--increments", "20", "--to-density", "0.84", "--quiet", "--packing"]
         for label, data in muts:
