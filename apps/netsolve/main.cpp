@@ -2,7 +2,7 @@
 //
 //   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--out DIR]
 //   netsolve compact  [--affine] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
-//                     [--no-rotation] [--to-density 0.85] [--packing FILE] [--increments N] [--out DIR]
+//                     [--no-rotation] [--to-density 0.85 | --to-strain S] [--packing FILE] [--increments N] [--out DIR]
 //
 // Every run writes into its own folder: .incomplete (first, removed last), command.txt, the packing,
 // history.csv, summary.json and VTK PolyData snapshots; a folder that holds another run is refused
@@ -59,7 +59,7 @@ struct RunArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
   std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
-  double to_density = 0.85;
+  double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
   int increments = 100;
   netdem::qs::SolverOptions solver = netdem::qs::SolverOptions::compact();  // bound directly by the command line
   netdem::app::netsolve::LawArgs law = netdem::app::netsolve::law_args(solver);
@@ -144,6 +144,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   qs::CompactionOptions co;
   co.path = qs::StrainPath::parse(a.path);
   co.target_density = a.to_density;
+  co.target_strain = a.to_strain;
   co.increments = a.increments;
   const auto snaps = parse_list(a.snapshots, "--snapshots");
 
@@ -174,6 +175,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const double sy = so.law.sigma_y;
   app::netsolve::ConvergenceRecord conv;
   conv.tol = so.residual_tol;
+  app::netsolve::EquilibriumRecord equilibrium;
   app::netsolve::ResidualGrowth growth;
   growth.tol = so.residual_tol;
   int done = 0;
@@ -191,6 +193,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
       unconverged += !row.report.converged;
       max_residual = std::max(max_residual, row.report.residual);
       conv.add(row.increment, row.report.converged, row.report.newton_residual);
+      equilibrium.add(row.increment, m.S11, m.S22, m.S11_contacts, m.S22_contacts);
     }
     done = row.increment;
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
@@ -237,6 +240,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   app::netsolve::RunStatus status;
   if (!stopped.empty()) status.add("unstable", "stopped: " + stopped);
   conv.judge(status, "");
+  if (stopped.empty()) equilibrium.judge(status);
   if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
   if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
   nlohmann::json j;
@@ -255,6 +259,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
   j["increments"] = co.increments;
+  if (co.target_strain > 0.0) j["to_strain"] = co.target_strain;
   j["k_t"] = so.law.k_t;
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
@@ -274,6 +279,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   }
   j["solver"]["max_newton_residual"] = conv.max_newton_residual;
   j["solver"]["last_increment_converged"] = conv.last_converged;
+  j["solver"]["eq13_vs_contacts"] = equilibrium.last;
   j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
@@ -333,7 +339,11 @@ int main(int argc, char** argv) {
   comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
   comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
   comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");
-  comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();
+  auto* o_density = comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();
+  auto* o_strain = comp->add_option("--to-strain", ca.to_strain,
+                                    "run to this equivalent strain |E| = sqrt(E11^2 + E22^2 + 2 E12^2) along --path instead "
+                                    "of to a density, in [1e-9, 1]; any direction, e.g. pure shear --path 1,-1,0 at constant volume");
+  o_strain->excludes(o_density);
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
   comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
   comp->add_option("--slide-fraction", ca.solver.slide_stiffness_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
@@ -369,6 +379,10 @@ int main(int argc, char** argv) {
     if (*pack) return run_pack(pa, ra, out);
     if (o_packing->count() > 0 && ca.packing_file.empty())
       throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
+    using CO = netdem::qs::CompactionOptions;
+    if (o_strain->count() > 0 && !(ca.to_strain >= CO::kMinTargetStrain && ca.to_strain <= CO::kMaxTargetStrain))
+      throw netdem::app::UsageError(fmt::format("--to-strain must be in [{:g}, {:g}], got {}", CO::kMinTargetStrain,
+                                                CO::kMaxTargetStrain, ca.to_strain));
     return run_compact(pa, ca, ra, out);
   });
 }

@@ -59,6 +59,39 @@ struct ConvergenceRecord {
   }
 };
 
+/// Equilibrium check of a compaction: at equilibrium the Eq 13 stress (reactions of the prescribed
+/// particles) equals the Love-Weber contact stress; the viscous drag of a "converged" increment can
+/// hold the network away from it. The run is "unconverged" if the two differ by more than 2 %
+/// (Frobenius norm of (S11, S22), relative to the contact stress) at the end; the reason names the
+/// increment from which on they have differed by more than that.
+struct EquilibriumRecord {
+  static constexpr double kMaxDeviation = 0.02;
+  double last = 0.0;   ///< deviation of the last increment
+  int first_bad = 0;   ///< first increment of the final run of increments above kMaxDeviation
+  int last_increment = 0;
+
+  static double deviation(double s11, double s22, double c11, double c22) {
+    const double d = std::hypot(s11 - c11, s22 - c22), n = std::hypot(c11, c22);
+    return n > 0.0 ? d / n : (d > 0.0 ? 1.0 : 0.0);
+  }
+  void add(int increment, double s11, double s22, double c11, double c22) {
+    last = deviation(s11, s22, c11, c22);
+    last_increment = increment;
+    if (!(last <= kMaxDeviation)) {
+      if (first_bad == 0) first_bad = increment;
+    } else {
+      first_bad = 0;
+    }
+  }
+  void judge(RunStatus& st) const {
+    if (last_increment == 0 || last <= kMaxDeviation) return;
+    st.add("unconverged", fmt::format("the Eq 13 stress differs from the contact (Love-Weber) stress by {:.3g} % at the "
+                                      "end (increment {}), above 2 % from increment {} on: the drag holds the network "
+                                      "out of equilibrium",
+                                      100 * last, last_increment, first_bad));
+  }
+};
+
 /// The stop rule of a growing residual: the run stops after the increment at which the RMS Newton
 /// residual has been above 10 x --tol and has grown in each of 5 consecutive increments, to more
 /// than 10 times its value before them (a growth of at least 1.58 per increment). A frictionless

@@ -526,9 +526,11 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   co.increments = a.increments;
   const auto selection = select_probes(a);
   if (!(a.offset > 0.0) || !(a.max_strain > a.offset) || !(a.window > 0.0) || !(a.unload_tol > 0.0) || !(a.growth >= 1.0) ||
-      a.fine < 5)
+      a.fine < 5 || !std::isfinite(a.max_strain) || !std::isfinite(a.window) || !std::isfinite(a.unload_tol) ||
+      !std::isfinite(a.growth))
     throw std::invalid_argument(
-        "probe options: need --offset > 0, --max-strain > --offset, --window > 0, --unload-tol > 0, --growth >= 1, --fine >= 5");
+        "probe options: need finite --offset > 0, --max-strain > --offset, --window > 0, --unload-tol > 0, --growth >= 1, "
+        "and --fine >= 5");
   const int jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
   if (!a.from_state.empty() && !a.packing_file.empty()) throw std::invalid_argument("--from-state and --packing exclude each other");

@@ -146,7 +146,7 @@ double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairGeo
   if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
   last_sliding[k] = e.law.sliding ? 1 : 0;
   const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
-  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * opt.law.k_t * e.law.area * bt * bt.transpose();
+  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * opt.law.shear_stiffness() * e.law.area * bt * bt.transpose();
   return e.law.k_n + kn_extra;
 }
 
@@ -154,7 +154,7 @@ double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairGeo
 void NetworkSolver::Impl::scatter(std::size_t k, const ct::PairElement& e, const ct::PairVec& bn, const ct::PairVec& bt,
                                   double kn_sym) {
   const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
-  const double kt = opt.law.frictional() ? opt.law.k_t * e.law.area * (e.law.sliding ? frac : 1.0) : 0.0;
+  const double kt = opt.law.frictional() ? opt.law.shear_stiffness() * e.law.area * (e.law.sliding ? frac : 1.0) : 0.0;
   double* Kv = K.valuePtr();
   double* Mv = M.valuePtr();
   const int* pk = &pos[36 * k];

@@ -32,6 +32,19 @@ StrainPath StrainPath::parse(const std::string& text) {
 }
 
 void CompactionOptions::validate(double initial_density) const {
+  if (increments < 1 || increments > 10000000)
+    throw std::invalid_argument(fmt::format("number of increments must be in [1, 1e7], got {}", increments));
+  if (target_strain != 0.0) {
+    if (!(target_strain >= kMinTargetStrain && target_strain <= kMaxTargetStrain))
+      throw std::invalid_argument(
+          fmt::format("target strain |E| must be in [{:g}, {:g}], got {}", kMinTargetStrain, kMaxTargetStrain, target_strain));
+    const Eigen::Matrix2d r = path.rate();
+    const double final_density = initial_density * std::exp(-target_strain * r.trace() / r.norm());
+    if (!(final_density < 1.0))
+      throw std::invalid_argument(fmt::format("impossible target: strain |E| = {} along {} ends at density {:.4g} >= 1",
+                                              target_strain, path.name, final_density));
+    return;
+  }
   if (!(std::isfinite(target_density) && target_density > 0.0 && target_density < 1.0))
     throw std::invalid_argument(fmt::format("target density must be in (0, 1), got {}", target_density));
   if (!(target_density > initial_density))
@@ -41,8 +54,14 @@ void CompactionOptions::validate(double initial_density) const {
     throw std::invalid_argument(fmt::format(
         "impossible target: strain path {} (E11+E22 = {}) does not compact, so density {} is never reached", path.name,
         path.E11 + path.E22, target_density));
-  if (increments < 1 || increments > 10000000)
-    throw std::invalid_argument(fmt::format("number of increments must be in [1, 1e7], got {}", increments));
+}
+
+Eigen::Matrix2d CompactionOptions::increment_strain(double initial_density) const {
+  const Eigen::Matrix2d rate = path.rate();
+  if (target_strain != 0.0) return rate * (target_strain / rate.norm()) / increments;  // |E| = Frobenius norm
+  // D = D0 exp(-(E11 + E22)): the volumetric strain still needed, split into equal increments
+  const double trE = std::log(initial_density / target_density);
+  return rate * (trE / rate.trace()) / increments;
 }
 
 void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
@@ -51,10 +70,7 @@ void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
   row.state = solver.measures();
   options.validate(row.state.density);
   on_row(row);
-  // D = D0 exp(-(E11 + E22)): the volumetric strain still needed, split into equal increments
-  const double trE = std::log(row.state.density / options.target_density);
-  const Eigen::Matrix2d rate = options.path.rate();
-  const Eigen::Matrix2d dE = rate * (trE / rate.trace()) / options.increments;
+  const Eigen::Matrix2d dE = options.increment_strain(row.state.density);
   for (int k = 1; k <= options.increments; ++k) {
     row.increment = k;
     row.report = solver.increment(dE);

@@ -38,7 +38,7 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
       if (e.law.branch == ct::NormalBranch::Open) continue;
       if (e.law.sliding && opt.slide_stiffness_fraction > 0.0) {
         const ct::PairVec bt = ct::slip_gradient(g1);
-        e.stiffness.noalias() += opt.slide_stiffness_fraction * opt.law.k_t * e.law.area * bt * bt.transpose();
+        e.stiffness.noalias() += opt.slide_stiffness_fraction * opt.law.shear_stiffness() * e.law.area * bt * bt.transpose();
       }
       for (int A = 0; A < 2; ++A)
         for (int B = 0; B < 2; ++B)

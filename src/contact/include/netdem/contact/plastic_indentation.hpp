@@ -41,6 +41,9 @@ struct PlasticIndentationParams {
   /// min(mu, 1/(3 sqrt 3)): the Coulomb limit and the shear cap tau_y = sigma_y/sqrt(3) combined.
   double mu_eff() const { return std::fmin(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
   bool frictional() const { return mu > 0.0; }
+  /// The shear stress per unit slip in absolute units, k_t sigma_y (k_t is given in sigma_y / R,
+  /// lengths in R): so that every force, and S / sigma_y unchanged, scales with sigma_y.
+  double shear_stiffness() const { return k_t * sigma_y; }
   /// Throws std::invalid_argument with a one-line message for an invalid value.
   void validate() const;
 };
@@ -135,13 +138,13 @@ inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
     return r;
   }
   // Eq 6 in rate form: elastic predictor on the shear spring
-  const double kt_force = p.k_t * r.area;
+  const double kt_force = p.shear_stiffness() * r.area;
   const double trial = h.f_t - kt_force * dslip;
   const double limit = p.mu_eff() * r.f_n;  // min(mu F_N, A_c tau_y)
   if (std::fabs(trial) <= limit) {
     r.f_t = trial;
     r.dft_dslip = -kt_force;
-    r.dft_dun = -p.k_t * (r.k_n / (3.0 * p.sigma_y)) * dslip;
+    r.dft_dun = -p.shear_stiffness() * (r.k_n / (3.0 * p.sigma_y)) * dslip;
     r.sliding = false;
   } else {  // gross slip, Eq 7: F_T = sgn * mu_eff F_N (return mapping onto the limit)
     const double s = trial > 0.0 ? 1.0 : -1.0;

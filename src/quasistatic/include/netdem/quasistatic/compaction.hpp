@@ -1,5 +1,5 @@
 #pragma once
-// Compaction driver: strain paths and the increment loop to a target density
+// Compaction driver: strain paths and the increment loop to a target density or strain
 // (Redanz & Fleck 2001 section 2.4: hydrostatic E11 = E22, E12 = 0; closed die E22 < 0, E11 = E12 = 0).
 #include <functional>
 #include <string>
@@ -24,8 +24,16 @@ struct StrainPath {
 struct CompactionOptions {
   StrainPath path;
   double target_density = 0.85;
-  int increments = 100;  ///< increments from the initial to the target density (equal strain steps)
+  /// If > 0: run to this equivalent strain |E| = sqrt(E:E) = sqrt(E11^2 + E22^2 + 2 E12^2) along
+  /// `path` instead of to target_density (which is then ignored). Any direction, also one that
+  /// keeps the volume (pure shear 1,-1,0) or dilates; in [kMinTargetStrain, kMaxTargetStrain], and
+  /// a compacting path must end below density 1.
+  double target_strain = 0.0;
+  static constexpr double kMinTargetStrain = 1e-9, kMaxTargetStrain = 1.0;
+  int increments = 100;  ///< increments from the initial state to the target (equal strain steps)
   void validate(double initial_density) const;  ///< throws std::invalid_argument (one line)
+  /// The strain of each increment from a state of density `initial_density`.
+  Eigen::Matrix2d increment_strain(double initial_density) const;
 };
 
 struct CompactionRow {
