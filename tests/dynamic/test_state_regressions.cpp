@@ -7,7 +7,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -58,7 +57,15 @@ TEST(StateRegressions, EveryFileParsesOrIsRefusedOnOneLine) {
   const fs::path dir = NETDEM_STATE_REGRESSIONS;
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
   int files = 0, refused = 0;
-  const std::regex line_no("^state:[0-9]+: ");
+  // "state:<digits>: " at the start (no std::regex: GCC 12's -Wmaybe-uninitialized false positive
+  // in <regex> under ASan + -O2 -Werror)
+  auto names_line = [](const std::string& m) {
+    const std::string head = "state:";
+    if (m.rfind(head, 0) != 0) return false;
+    std::size_t k = head.size(), digits = 0;
+    while (k < m.size() && m[k] >= '0' && m[k] <= '9') ++k, ++digits;
+    return digits > 0 && m.compare(k, 2, ": ") == 0;
+  };
   for (const auto& e : fs::directory_iterator(dir)) {
     if (!e.is_regular_file()) continue;
     ++files;
@@ -68,7 +75,7 @@ TEST(StateRegressions, EveryFileParsesOrIsRefusedOnOneLine) {
     if (got == "refused") {
       ++refused;
       EXPECT_EQ(msg.find('\n'), std::string::npos) << name << ": " << msg;
-      EXPECT_TRUE(std::regex_search(msg, line_no)) << name << ": the message names no line: " << msg;
+      EXPECT_TRUE(names_line(msg)) << name << ": the message names no line: " << msg;
       EXPECT_EQ(msg.find("state:0:"), std::string::npos) << name << ": " << msg;
       EXPECT_LT(msg.size(), 400u) << name;
     }
