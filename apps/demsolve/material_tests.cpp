@@ -160,6 +160,8 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   test.validate();
   if (!(a.amplitude <= 0.1)) throw UsageError(fmt::format("--amplitude must be at most 0.1 m, got {:g}", a.amplitude));
   if (!(a.gravity <= 1e4)) throw UsageError(fmt::format("--gravity must be at most 1e4 m/s^2, got {:g}", a.gravity));
+  if (a.gravity > 0.0 && a.gravity < 1e-6)  // accelerations are reported in units of g
+    throw UsageError(fmt::format("--gravity must be 0 or at least 1e-6 m/s^2, got {:g}", a.gravity));
   SolverState st = load_state(a.state_file, a.param_overrides);
   check_temperature(st.thermal.T, st.params, "the state's temperature");
   check_memory(st.particles.size());

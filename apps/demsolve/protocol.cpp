@@ -141,6 +141,9 @@ void check_memory(std::size_t n) {
 
 std::string check_loading(double pressure, const LudingParams& p, const std::string& what) {
   const double r = 2.0 * pressure / p.k2;
+  if (!(r >= 1e-9))  // a pressure that cannot hold the sample; stresses over p would overflow
+    throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, below 1e-9: the walls would not "
+                                 "hold the sample (raise the pressure)", what, pressure, r));
   if (!(r <= 0.1))
     throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, above 0.1, beyond the range of "
                                  "Luding's model (section 4); lower the pressure or raise k2 (= {:g} N/m)",

@@ -69,7 +69,11 @@ usage gamma_wall_1e6 "gamma_wall dt / m_wall" prepare "${small[@]}" --param gamm
 usage T_hot_1e6 "thermal radius change" sinter --state "$S" --T-hot 1e6
 usage steps_per_contact_inf "steps-per-contact" prepare "${small[@]}" --steps-per-contact inf
 usage rho_p_1e-300 "time step" prepare "${small[@]}" --param rho_p=1e-300
-usage k2_1e300 "max-steps" prepare "${small[@]}" --param k2=1e300
+# (k2 = 1e300 would also need 7e152 steps, beyond --max-steps; the loading-ratio floor refuses it first)
+usage k2_1e300 "loading ratio 2p/k2 = 2e-298, below 1e-9" prepare "${small[@]}" --param k2=1e300
+# found by the campaign (tests/campaign/run_campaign.py): a subnormal pressure or gravity gave inf
+usage pressure_subnormal "below 1e-9" compress --state "$S" --pressure 4.9e-324
+usage gravity_subnormal "at least 1e-6" vibrate --state "$S" --gravity 4.9e-324
 # impossible results before
 usage pressure_1e5 "loading ratio 2p/k2 = 1," prepare "${small[@]}" --pressure 1e5
 usage k2_1e2 "loading ratio 2p/k2 = 2," prepare "${small[@]}" --param k2=1e2
