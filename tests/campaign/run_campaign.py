@@ -416,10 +416,10 @@ def packing_reproducers(text):
     out.append(("packing: box 2e300, coordinates x 1e299 (issue: SIGSEGV)",
                 build(h, [[r[0], repr(float(r[1]) * 1e299), repr(float(r[2]) * 1e299), r[3]] for r in data])))
     out.append(("packing: 99 unit disks stacked 1e-9 apart",
-                build(["# box 0 0 10 200"], [[str(k), "5", repr(1.0 + k * 1e-9), "1"] for k in range(99)])))
+                build(["# box 0 0 10 200", "id,x,y,r"], [[str(k), "5", repr(1.0 + k * 1e-9), "1"] for k in range(99)])))
     rng = random.Random(7)
     near = [[str(k), repr(10 + rng.uniform(0, 1e-10)), repr(10 + rng.uniform(0, 1e-10)), "1"] for k in range(100000)]
-    out.append(("packing: 1e5 disks within 1e-10 of each other (issue: hang)", build(["# box 0 0 20 20"], near)))
+    out.append(("packing: 1e5 disks within 1e-10 of each other (issue: hang)", build(["# box 0 0 20 20", "id,x,y,r"], near)))
     out.append(("packing: one disk far outside the box", build(hdr, data[:-1] + [[data[-1][0], "1e6", "1e6", data[-1][3]]])))
     out.append(("packing: r_max/r_min = 1e6", build(hdr, [data[0][:3] + ["1e-6"]] + data[1:])))
     out.append(("packing: box of zero size", build(["# box 0 0 0 0"], data)))
