@@ -382,8 +382,13 @@ def slope_curve(d, y, half=0.0025, step=0.0005):
 
 def upturn_density(r):
     d, y = r.h["D"], r.mag("S22")
+    nan = float("nan")
+    if len(d) < 3 or d[-1] - d[0] < 0.006:  # a run stopped early (residual growth): no curve to read
+        return nan, nan, nan
     grid, s = slope_curve(d, y)
     m = d >= d[-1] - 0.005
+    if len(grid) == 0 or m.sum() < 3:
+        return nan, nan, nan
     final = np.polyfit(d[m], y[m], 1)[0]
     idx = np.where(s >= 0.5 * final)[0]
     return (float(grid[idx[0]]) if len(idx) else float("nan")), float(final), float(grid[0])
