@@ -1,5 +1,7 @@
 #include "output.hpp"
 
+#include "netdem/packing/io.hpp"
+
 #include <unistd.h>
 
 #include <cerrno>
@@ -62,15 +64,8 @@ namespace {
 namespace fs = std::filesystem;
 bool g_run_dir_opened = false;
 
-/// At most 80 printable characters of `s` (control characters as '?'), for messages.
-std::string quoted(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (o.size() >= 80) return o + "...";
-    o += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
-  }
-  return o;
-}
+/// At most 80 printable characters of `s`, for messages (the readers' quoting rule).
+std::string quoted(const std::string& s) { return netdem::packing::quote_input(s, 80); }
 
 /// The first line of dir/command.txt (the run that wrote the folder), or "".
 std::string recorded_command(const fs::path& dir) {

@@ -64,8 +64,8 @@ template <class F>
 int guarded(const std::string& prefix, F&& body) {
   auto line = [&](const std::string& msg) {
     std::string m = msg;
-    for (char& c : m)
-      if (c == '\n' || c == '\r') c = ' ';
+    for (char& c : m)  // one line: every control character becomes a space
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
     std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), m.c_str());
   };
   try {

@@ -18,6 +18,7 @@
 
 #include "netdem/dynamic/state.hpp"
 #include "output.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 using namespace netdem::dem;
@@ -111,24 +112,7 @@ std::string one_line(const std::string& m) {
   return o;
 }
 
-int guarded(const std::function<int()>& body) {
-  auto line = [](const std::string& msg) { std::fprintf(stderr, "demsolve: error: %s\n", one_line(msg).c_str()); };
-  try {
-    return body();
-  } catch (const std::bad_alloc&) {
-    line("out of memory");
-    return exit_code::run_error;
-  } catch (const UsageError& e) {
-    line(e.what());
-    return exit_code::usage;
-  } catch (const std::invalid_argument& e) {
-    line(e.what());
-    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
-  } catch (const std::exception& e) {
-    line(e.what());
-    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
-  }
-}
+int guarded(const std::function<int()>& body) { return netdem::app::guarded("demsolve", body); }
 
 void check_memory(std::size_t n) {
   // particles, histories, Verlet table (~4 pairs each, double-buffered), the last good state,

@@ -12,6 +12,8 @@
 
 #include <fmt/format.h>
 
+#include "netdem/packing/io.hpp"
+
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/dynamic/state.hpp"
 #include "netdem/packing/cell_grid.hpp"
@@ -22,14 +24,7 @@ namespace {
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 }  // namespace
 
-std::string quote_input(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (o.size() >= 80) return o + "...";
-    o += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
-  }
-  return o;
-}
+std::string quote_input(const std::string& s) { return packing::quote_input(s, 80); }
 
 DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& options)
     : P_(st.particles), params_(st.params), box_(st.box), opt_(options) {

@@ -42,7 +42,7 @@ LinearSolver::Impl::~Impl() {
   cholmod_finish(&cm);
 }
 
-cholmod_sparse LinearSolver::Impl::lower_view(int n, std::size_t nz, int* p, int* i, double* x) {
+cholmod_sparse lower_view(int n, std::size_t nz, int* p, int* i, double* x) {
   cholmod_sparse A{};
   A.nrow = A.ncol = static_cast<size_t>(n);
   A.nzmax = nz;

@@ -24,6 +24,7 @@
 //  * NETDEM_CHOLMOD_INLINE_OMP=0 in the environment turns it off without a warning; the CMake
 //    option of the same name (default ON) leaves the definitions out of the build.
 #include "cholmod_omp.hpp"
+#include "linear_solver_impl.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 
 #include <dlfcn.h>
@@ -103,18 +104,7 @@ bool test_solve(int g, std::vector<double>& x, std::string& why) {
   cholmod_common cm;
   cholmod_start(&cm);
   cm.supernodal = CHOLMOD_SUPERNODAL;
-  cholmod_sparse A{};
-  A.nrow = A.ncol = static_cast<std::size_t>(n);
-  A.nzmax = i.size();
-  A.p = p.data();
-  A.i = i.data();
-  A.x = v.data();
-  A.stype = -1;
-  A.itype = CHOLMOD_INT;
-  A.xtype = CHOLMOD_REAL;
-  A.dtype = CHOLMOD_DOUBLE;
-  A.sorted = 1;
-  A.packed = 1;
+  cholmod_sparse A = lower_view(n, i.size(), p.data(), i.data(), v.data());
   bool ok = false;
   cholmod_factor* L = cholmod_analyze(&A, &cm);
   if (L != nullptr) {

@@ -89,6 +89,10 @@ inline bool same_pattern(const SpMat& a, const SpMat& b) {  // both compressed
 
 // ------------------------------------------------------------------------------------------------
 // Impl: owns the cholmod_common, the factor and the solve workspace.
+/// A CHOLMOD view (no copy) of the lower triangle of an n x n CSC matrix with sorted rows (values
+/// may be null for a pattern). Used by the factorisation and by the OpenMP self-test.
+cholmod_sparse lower_view(int n, std::size_t nz, int* p, int* i, double* x);
+
 struct LinearSolver::Impl {
   LinearSolverOptions opt;
   LinearSolverStats stats;
@@ -119,7 +123,6 @@ struct LinearSolver::Impl {
 
   /// Non-owning CHOLMOD view of a square compressed-column matrix whose lower triangle is used
   /// (stype = -1, sorted and packed).
-  static cholmod_sparse lower_view(int n, std::size_t nz, int* p, int* i, double* x);
   /// Non-owning CHOLMOD view of M.
   cholmod_sparse view();
   void set_ordering();
