@@ -7,7 +7,8 @@
 //   20 % elastic unloading + stick, 10 % elastic unloading + slip, 20 % open (separated).
 // Benchmarks:
 //   BM_evaluate           contact-frame law netdem::contact::evaluate (scalars only)
-//   BM_element_force      netdem::contact::element without tangent (6-vector force)
+//   BM_element_force      netdem::contact::pair_element (through the law interface) without
+//                         tangent (6-vector force)
 //   BM_element_tangent    element with the 6x6 material tangent (solver default)
 //   BM_element_tangent_geometric  element with material + geometric tangent
 //   BM_element_from_positions     pair_geometry() of the end configuration + element with tangent
@@ -19,6 +20,7 @@
 #include <random>
 #include <vector>
 
+#include "netdem/contact/element.hpp"
 #include "netdem/contact/kinematics.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 
@@ -171,16 +173,17 @@ void BM_element(benchmark::State& state) {
   const auto& p = params();
   nc::TangentOptions topt;
   topt.geometric = Mode == 2;
-  nc::PairElement e;
+  const nc::PlasticIndentationLaw law(p);
+  nc::PairElement<nc::PlasticIndentationLaw> e;
   long sliding = 0, open = 0;
   for (auto _ : state) {
     double acc = 0.0;
     for (const auto& st : s) {
-      nc::element(p, st.h, st.g0, st.g1, st.dth_i, st.dth_j, e, Mode == 0 ? nullptr : &topt);
+      nc::pair_element(law, st.h, st.g0, st.g1, st.dth_i, st.dth_j, e, Mode == 0 ? nullptr : &topt);
       acc += e.force(0) + e.force(5);
       if constexpr (Mode != 0) acc += e.stiffness(0, 0) + e.stiffness(2, 5);
       sliding += e.law.sliding;
-      open += e.law.branch == nc::NormalBranch::Open;
+      open += !e.law.loaded;
     }
     benchmark::DoNotOptimize(acc);
   }
@@ -194,12 +197,13 @@ void BM_element_from_positions(benchmark::State& state) {
   const auto& s = pair_states();
   const auto& p = params();
   nc::TangentOptions topt;
-  nc::PairElement e;
+  const nc::PlasticIndentationLaw law(p);
+  nc::PairElement<nc::PlasticIndentationLaw> e;
   for (auto _ : state) {
     double acc = 0.0;
     for (const auto& st : s) {
       const nc::PairGeometry g1 = nc::pair_geometry(st.xi1, st.xj1, st.ri, st.rj);
-      nc::element(p, st.h, st.g0, g1, st.dth_i, st.dth_j, e, &topt);
+      nc::pair_element(law, st.h, st.g0, g1, st.dth_i, st.dth_j, e, &topt);
       acc += e.force(0) + e.stiffness(0, 0);
     }
     benchmark::DoNotOptimize(acc);

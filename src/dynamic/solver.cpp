@@ -10,12 +10,12 @@
 
 #include <fmt/format.h>
 
+#include "netdem/contact/luding_law.hpp"
+
 namespace netdem::dem {
 
 namespace {
 using contact::LudingFeatures;
-using contact::LudingInput;
-using contact::LudingResult;
 constexpr LudingFeatures kHysteretic{true, false, false, true};
 constexpr LudingFeatures kLinearFrictionless{false, false, false, false};
 constexpr LudingFeatures kHystereticFrictionless{true, false, false, false};
@@ -23,71 +23,6 @@ constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 
-// Field-by-field copy of a history (GCC expanded the struct assignment of the law's result into
-// overlapping 16-byte moves through the stack, which stall on store forwarding).
-inline void store_history(LudingHistory& dst, const LudingHistory& src) {
-  dst.delta_max = src.delta_max;
-  dst.delta0 = src.delta0;
-  dst.k2_line = src.k2_line;
-  dst.k1_seen = src.k1_seen;
-  dst.xi = src.xi;
-  dst.fluid = src.fluid;
-  dst.sliding = src.sliding;
-}
-
-// One contact: normal and tangential force on j and the committed history, in place.
-// For the linear feature sets (no hysteresis, cohesion or temperature) this is
-// contact::luding_evaluate<F> written out for the linear spring-dashpot with the Cundall-Strack
-// spring, operation for operation (same results to the last bit, same history), without the
-// tangent and the result struct the solver does not use. Otherwise it calls the law.
-template <LudingFeatures F>
-inline void contact_forces(const LudingParams& p, LudingHistory& h, const LudingInput& in,
-                           double& f_n, double& f_t) {
-  if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
-    const double delta = in.delta;
-    if (!(delta > 0.0)) {  // open (rounding at L = a_i + a_j): no force, history reset
-      h = LudingHistory{};
-      f_n = f_t = 0.0;
-      return;
-    }
-    h.k1_seen = p.k1();
-    h.delta_max = h.delta_max < delta ? delta : h.delta_max;  // fmax (both finite, >= 0)
-    h.k2_line = p.k2;
-    double fn = p.k2 * delta + p.gamma_n * in.delta_dot;  // LMM05 Eq 4 (k1 = k2) and Eq 5
-    double ft = 0.0;
-    std::uint8_t sliding = 0;
-    if constexpr (F.friction) {
-      const double fc = p.mu * (fn - 0.0);  // LMM05 Eq 14 with f_min = 0
-      if (fc > 0.0) {
-        const double kt = p.alpha * p.k2;  // LMM05 Eq 23
-        const double xi_trial = h.xi + in.dxi;                      // LMM05 Eq 20
-        const double ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
-        if (std::fabs(ft0) <= fc) {
-          ft = ft0;
-          h.xi = xi_trial;
-        } else {
-          const double sg = ft0 > 0.0 ? 1.0 : -1.0;
-          ft = sg * fc;                                    // LMM05 Eq 22
-          h.xi = -(fc * sg + p.gamma_t * in.xi_dot) / kt;  // LMM05 Eq 21
-          sliding = 1;
-          if (p.sliding_breaks_cohesion && fn < 0.0) fn = 0.0;
-        }
-      } else {
-        h.xi = 0.0;
-      }
-    } else {
-      h.xi = 0.0;
-    }
-    h.sliding = sliding;
-    f_n = fn;
-    f_t = ft;
-  } else {
-    const LudingResult r = contact::luding_evaluate<F>(p, h, in);
-    store_history(h, r.history);
-    f_n = r.f_n;
-    f_t = r.f_t;
-  }
-}
 }  // namespace
 
 std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx,
@@ -349,35 +284,45 @@ const LudingHistory* DynamicSolver::history(std::uint32_t i, std::uint32_t j) co
 }
 
 // ---- forces ------------------------------------------------------------------------------------
+template <LudingFeatures F>
+void DynamicSolver::compute_forces_with() {
+  if (opt_.reference_contact_path)
+    compute_forces<contact::LudingLaw<F>, false>();
+  else
+    compute_forces<contact::LudingLaw<F>, true>();
+}
+
 void DynamicSolver::compute_forces_dispatch() {
-  // once per step: the contact loop below is straight-line code for one feature set
+  // once per step: the contact loop below is straight-line code for one law and feature set
   switch (opt_.model) {
     case ContactModel::Linear:
       if (friction_)
-        compute_forces<contact::kLudingLinear>();
+        compute_forces_with<contact::kLudingLinear>();
       else
-        compute_forces<kLinearFrictionless>();
+        compute_forces_with<kLinearFrictionless>();
       break;
     case ContactModel::Hysteretic:
       if (friction_)
-        compute_forces<kHysteretic>();
+        compute_forces_with<kHysteretic>();
       else
-        compute_forces<kHystereticFrictionless>();
+        compute_forces_with<kHystereticFrictionless>();
       break;
     case ContactModel::Full:
       if (friction_)
-        compute_forces<contact::kLudingFull>();
+        compute_forces_with<contact::kLudingFull>();
       else
-        compute_forces<kFullFrictionless>();
+        compute_forces_with<kFullFrictionless>();
       break;
   }
 }
 
-template <LudingFeatures F>
+// The force loop of one contact law (law.hpp), chosen at compile time; InPlace = false evaluates
+// the law instead of its in-place update (the same results to the last bit, tested).
+template <class Law, bool InPlace>
 void DynamicSolver::compute_forces() {
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  const double k1Tt = thermal_.k1_Tt;
+  const Law pair_law(params_, thermal_.k1_Tt), wall_law(wall_params_, thermal_.k1_Tt);
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0;
   if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
     for (std::size_t i = 0; i < n; ++i) {
@@ -412,14 +357,16 @@ void DynamicSolver::compute_forces() {
     const double rvx = P_.vx[j] - P_.vx[i], rvy = P_.vy[j] - P_.vy[i];
     const double vn = rvx * nx + rvy * ny;
     const double vt = rvx * tx + rvy * ty - P_.omega[i] * di - P_.omega[j] * dj;
-    LudingInput in;
-    in.delta = s - L;
-    in.delta_dot = -vn;
-    in.xi_dot = vt;
-    in.dxi = vt * dt;
-    in.k1_Tt = k1Tt;
+    contact::ContactKinematics in;
+    in.overlap = s - L;
+    in.v_n = -vn;
+    in.v_t = vt;
+    in.dslip = vt * dt;
+    in.overlap_start = in.overlap - in.v_n * dt;
+    in.r_eff = ri * rj / s;
+    in.dt = dt;
     double f_n, f_t;
-    contact_forces<F>(params_, pair_hist_[k], in, f_n, f_t);
+    contact::update_contact<InPlace>(pair_law, pair_hist_[k], in, f_n, f_t);
     const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
     P_.fx[j] += fx;
     P_.fy[j] += fy;
@@ -431,7 +378,7 @@ void DynamicSolver::compute_forces() {
     sxy += fx * dy;
     syx += fy * dx;
     syy += fy * dy;
-    el += 0.5 * params_.k2 * in.delta * in.delta;
+    el += 0.5 * params_.k2 * in.overlap * in.overlap;
   }
   // walls: the pair (wall, particle), n from the wall into the box
   double wf[4] = {0, 0, 0, 0};
@@ -466,14 +413,16 @@ void DynamicSolver::compute_forces() {
         const double rvx = P_.vx[i] - wvx[w], rvy = P_.vy[i] - wvy[w];
         const double vn = rvx * nx + rvy * ny;
         const double vt = rvx * tx + rvy * ty - P_.omega[i] * dist;
-        LudingInput in;
-        in.delta = delta;
-        in.delta_dot = -vn;
-        in.xi_dot = vt;
-        in.dxi = vt * dt;
-        in.k1_Tt = k1Tt;
+        contact::ContactKinematics in;
+        in.overlap = delta;
+        in.v_n = -vn;
+        in.v_t = vt;
+        in.dslip = vt * dt;
+        in.overlap_start = delta - in.v_n * dt;
+        in.r_eff = ai;
+        in.dt = dt;
         double f_n, f_t;
-        contact_forces<F>(wall_params_, h, in, f_n, f_t);
+        contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
         const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // on particle
         P_.fx[i] += fx;
         P_.fy[i] += fy;

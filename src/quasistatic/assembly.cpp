@@ -85,19 +85,19 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
   std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
   any_nonsymmetric = false;
   const ct::TangentOptions topt;
-  ct::PairElement e;
+  Element e;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const int i = pi[k], j = pj[k];
     const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
                                                   ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
     // pairs that are apart and have never touched cost only the geometry
-    if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+    if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
       set_apart(k);
       open_contact_stiffness(k, g1);
       continue;
     }
     apart[k] = 0;
-    ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+    ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
     trial[k] = e.law;
     trial_slip[k] = e.dslip;
     for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
@@ -105,7 +105,7 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
       f[3 * i + a] += e.force(a);
       f[3 * j + a] += e.force(3 + a);
     }
-    if (e.law.branch == ct::NormalBranch::Open) {
+    if (!e.law.loaded) {
       open_contact_stiffness(k, g1);
       continue;
     }
@@ -113,31 +113,22 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
     last_open[k] = 0;
     if (e.law.sliding) any_nonsymmetric = true;
     const ct::PairVec bn = ct::normal_gradient(g1), bt = ct::slip_gradient(g1);
-    const double kn_sym = iteration_stiffness(k, g1, bn, bt, e);
+    double k_t = 0.0;
+    const double kn_sym = iteration_stiffness(k, bn, bt, e, k_t);
     last_kn[k] = kn_sym;
-    scatter(k, e, bn, bt, kn_sym);
+    scatter(k, e, bn, bt, kn_sym, k_t);
   }
   // stick tangents differ slightly from M too
   if (opt.law.frictional()) any_nonsymmetric = true;
 }
 
-// Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix;
-// returns the normal stiffness of the symmetric matrix M.
-double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairGeometry& g1, const ct::PairVec& bn,
-                                                const ct::PairVec& bt, ct::PairElement& e) {
-  const ct::PairGeometry& g = g0[k];
-  // Eq 2 is concave with a tangent that is singular at first touch, and Newton on the tangent
-  // overshoots into separation: on the plastic branch the iteration matrix uses the secant of
-  // Eq 2 over the increment (from the start overlap, or from touch) when it is stiffer.
-  double kn_extra = 0.0;
-  const double u_sep = ct::separation_overlap(opt.law, g1.r_eff, hist[k].u_max);
-  if (e.law.branch == ct::NormalBranch::Plastic) {
-    const double u_from = std::max(g.overlap, u_sep);
-    if (g1.overlap > u_from) {
-      const double ksec = ct::normal_secant(opt.law, g1.r_eff, hist[k].u_max, u_from, g1.overlap);
-      kn_extra = std::max(0.0, ksec - e.law.k_n);
-    }
-  }
+// Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix, from
+// the law's iteration stiffness (law.hpp); returns the normal stiffness of the symmetric matrix M
+// and its tangential stiffness in k_t.
+double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairVec& bn, const ct::PairVec& bt,
+                                                Element& e, double& k_t) {
+  const ct::IterationStiffness is = law.iteration_stiffness(hist[k], e.kin, e.law);
+  const double kn_extra = is.k_n_add;
   if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
   // Sliding contacts keep a fraction slide_stiffness_fraction of their tangential spring: the
   // consistent tangent has none, which leaves the rotation of a particle whose contacts all slide
@@ -146,15 +137,15 @@ double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairGeo
   if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
   last_sliding[k] = e.law.sliding ? 1 : 0;
   const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
-  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * opt.law.shear_stiffness() * e.law.area * bt * bt.transpose();
-  return e.law.k_n + kn_extra;
+  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * is.k_t * bt * bt.transpose();
+  k_t = is.k_t * (e.law.sliding ? frac : 1.0);
+  return e.tangent.dfn_dun + kn_extra;
 }
 
 // Adds pair k's iteration matrix to K and its symmetric slip-status tangent to M.
-void NetworkSolver::Impl::scatter(std::size_t k, const ct::PairElement& e, const ct::PairVec& bn, const ct::PairVec& bt,
-                                  double kn_sym) {
-  const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
-  const double kt = opt.law.frictional() ? opt.law.shear_stiffness() * e.law.area * (e.law.sliding ? frac : 1.0) : 0.0;
+void NetworkSolver::Impl::scatter(std::size_t k, const Element& e, const ct::PairVec& bn, const ct::PairVec& bt,
+                                  double kn_sym, double k_t) {
+  const double kt = k_t;
   double* Kv = K.valuePtr();
   double* Mv = M.valuePtr();
   const int* pk = &pos[36 * k];
@@ -169,7 +160,7 @@ void NetworkSolver::Impl::scatter(std::size_t k, const ct::PairElement& e, const
 
 /// Pair k has never touched and is apart: zero trial state and force.
 void NetworkSolver::Impl::set_apart(std::size_t k) {
-  trial[k] = ct::PlasticIndentationResult{};
+  trial[k] = Response{};
   trial_slip[k] = 0.0;
   std::fill_n(&pf[6 * k], 6, 0.0);
   apart[k] = 1;
@@ -178,9 +169,9 @@ void NetworkSolver::Impl::set_apart(std::size_t k) {
 /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
 /// that has never touched and is clearly apart costs a squared distance (its zero trial state
 /// and force are written once, then flagged in `apart`).
-void NetworkSolver::Impl::pair_forces(std::size_t k, ct::PairElement& e) {
+void NetworkSolver::Impl::pair_forces(std::size_t k, Element& e) {
   const int i = pi[k], j = pj[k];
-  if (hist[k].u_max <= 0.0) {
+  if (!law.has_history(hist[k])) {
     const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
     const double rs = r[i] + r[j];
     if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
@@ -191,11 +182,11 @@ void NetworkSolver::Impl::pair_forces(std::size_t k, ct::PairElement& e) {
   apart[k] = 0;
   const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
                                                 ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
-  if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) {
+  if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
     set_apart(k);
     return;
   }
-  ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+  ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
   trial[k] = e.law;
   trial_slip[k] = e.dslip;
   for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
@@ -212,7 +203,7 @@ void NetworkSolver::Impl::evaluate_forces() {
   omp_set_max_active_levels(1);  // LinearSolver sets 0 to keep CHOLMOD serial
 #pragma omp parallel num_threads(opt.threads)
   {
-    ct::PairElement e;
+    Element e;
 #pragma omp for schedule(static)
     for (std::ptrdiff_t kk = 0; kk < np; ++kk) {
       pair_forces(static_cast<std::size_t>(kk), e);
@@ -258,7 +249,7 @@ void NetworkSolver::Impl::open_contact_stiffness(std::size_t k, const ct::PairGe
 /// Re-evaluates (forces only) the pairs of the given particles after their du changed, keeping
 /// f, pf and the trial state consistent with du without a full evaluation.
 void NetworkSolver::Impl::refresh_particles(const std::vector<int>& ps) {
-  ct::PairElement e;
+  Element e;
   for (const int p : ps)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
       const auto k = static_cast<std::size_t>(adj_pair[q]);

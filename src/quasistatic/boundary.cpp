@@ -53,14 +53,12 @@ void NetworkSolver::set_reversible_normal(bool reversible) {
       const int i = s.pi[k], j = s.pj[k];
       const double u =
           ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]).overlap;
-      s.hist[k].u_max = std::max(u, 0.0);
-      if (u <= 0.0) {
-        s.hist[k].f_t = 0.0;
-        s.hist[k].sliding = 0;
-      }
+      s.hist[k] = Law::start_unloading_branch(s.hist[k], u);
     }
   }
-  s.opt.law.reversible = reversible;
+  SolverOptions o = s.opt;
+  o.law.reversible = reversible;
+  s.set_options(o);
 }
 
 }  // namespace netdem::qs

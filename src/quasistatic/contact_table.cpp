@@ -27,7 +27,7 @@ void ContactTable::rebuild(const std::vector<double>& x, const std::vector<doubl
   std::sort(found.begin(), found.end());
   // merge the committed history (both lists sorted); pairs farther apart than the skin lose it
   std::vector<int> npi(found.size()), npj(found.size());
-  std::vector<ct::PlasticIndentationHistory> nh(found.size());
+  std::vector<Law::History> nh(found.size());
   std::vector<PairAux> na(found.size());
   std::vector<double> nfn(found.size(), 0.0), nft(found.size(), 0.0);
   std::vector<std::uint8_t> nsl(found.size(), 0);

@@ -156,7 +156,7 @@ void NetworkSolver::Impl::print_worst(double fbar) const {
   std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(nw), worst.end(), std::greater<>());
   std::vector<int> closed(n, 0), slid(n, 0);
   for (std::size_t k = 0; k < pi.size(); ++k)
-    if (trial[k].branch != ct::NormalBranch::Open) {
+    if (trial[k].loaded) {
       ++closed[pi[k]];
       ++closed[pj[k]];
       if (trial[k].sliding) {
@@ -171,9 +171,9 @@ void NetworkSolver::Impl::print_worst(double fbar) const {
                  std::hypot(du[3 * p] - du_aff[3 * p], du[3 * p + 1] - du_aff[3 * p + 1]) / r_mean);
     if (w >= 2) continue;
     for (std::size_t k = 0; k < pi.size(); ++k)
-      if ((pi[k] == p || pj[k] == p) && trial[k].branch != ct::NormalBranch::Open)
-        std::fprintf(stderr, "      pair %d-%d f_n %.4e k_n %.4e (iteration matrix %.4e) branch %d u_max %.3e\n", pi[k],
-                     pj[k], trial[k].f_n, trial[k].k_n, last_kn[k], static_cast<int>(trial[k].branch), hist[k].u_max);
+      if ((pi[k] == p || pj[k] == p) && trial[k].loaded)
+        std::fprintf(stderr, "      pair %d-%d f_n %.4e (iteration matrix k_n %.4e) branch %d\n", pi[k], pj[k],
+                     trial[k].f_n, last_kn[k], static_cast<int>(trial[k].branch));
   }
 }
 

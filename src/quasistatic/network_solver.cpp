@@ -30,11 +30,16 @@ void NetworkSolver::Impl::init_linear_solver() {
   f.assign(3 * n, 0.0);
 }
 
+void NetworkSolver::Impl::set_options(const SolverOptions& o) {
+  opt = o;
+  law = Law(o.law);
+}
+
 NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
   options.validate();
   packing::validate(pk);
   auto& s = *impl_;
-  s.opt = options;
+  s.set_options(options);
   s.n = static_cast<int>(pk.size());
   s.x = pk.x;
   s.y = pk.y;
@@ -55,7 +60,7 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   options.validate();
   st.validate();
   auto& s = *impl_;
-  s.opt = options;
+  s.set_options(options);
   s.n = static_cast<int>(st.x.size());
   s.x = st.x;
   s.y = st.y;

@@ -188,14 +188,14 @@ void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const auto& t = trial[k];
     const bool was_loaded = fn_c[k] > 0.0;
-    const bool loaded = t.branch != ct::NormalBranch::Open;
-    if (loaded && hist[k].u_max <= 0.0) {  // first touch: start the affine-deviation bookkeeping
+    const bool loaded = t.loaded;
+    if (loaded && !law.has_history(hist[k])) {  // first touch: start the affine-deviation bookkeeping
       aux[k] = PairAux{};
       aux[k].E_form = E_old;
     }
     if (loaded && !was_loaded) ++rep.new_contacts;
     if (!loaded && was_loaded) ++rep.lost_contacts;
-    if (loaded || hist[k].u_max > 0.0) {
+    if (loaded || law.has_history(hist[k])) {
       hist[k] = t.history;
       aux[k].slip += trial_slip[k];
       // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
@@ -234,7 +234,7 @@ double NetworkSolver::Impl::mean_normal_force() const {
   double s = 0.0;
   int c = 0;
   for (const auto& t : trial)
-    if (t.branch != ct::NormalBranch::Open) {
+    if (t.loaded) {
       s += t.f_n;
       ++c;
     }

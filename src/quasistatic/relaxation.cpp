@@ -17,7 +17,7 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
   res.setZero(3 * m);
   Kl.setZero(3 * m, 3 * m);
   const ct::TangentOptions topt;
-  ct::PairElement e;
+  Element e;
   auto slot = [&](int p) {
     for (int t = 0; t < m; ++t)
       if (ps[t] == p) return t;
@@ -30,15 +30,16 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
       if ((si >= 0 && si < sp) || (sj >= 0 && sj < sp)) continue;  // pair inside the set: once
       const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
                                                     ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
-      if (g1.overlap <= 0.0 && hist[k].u_max <= 0.0) continue;
-      ct::element(opt.law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+      if (g1.overlap <= 0.0 && !law.has_history(hist[k])) continue;
+      ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
       const int sl[2] = {si, sj};
       for (int A = 0; A < 2; ++A)
         if (sl[A] >= 0) res.segment<3>(3 * sl[A]) += e.force.segment<3>(3 * A);
-      if (e.law.branch == ct::NormalBranch::Open) continue;
+      if (!e.law.loaded) continue;
       if (e.law.sliding && opt.slide_stiffness_fraction > 0.0) {
         const ct::PairVec bt = ct::slip_gradient(g1);
-        e.stiffness.noalias() += opt.slide_stiffness_fraction * opt.law.shear_stiffness() * e.law.area * bt * bt.transpose();
+        const double k_t = law.iteration_stiffness(hist[k], e.kin, e.law).k_t;
+        e.stiffness.noalias() += opt.slide_stiffness_fraction * k_t * bt * bt.transpose();
       }
       for (int A = 0; A < 2; ++A)
         for (int B = 0; B < 2; ++B)

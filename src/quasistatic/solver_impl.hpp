@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/LU>
 
+#include "netdem/contact/element.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
@@ -25,6 +26,12 @@
 namespace netdem::qs {
 
 namespace ct = netdem::contact;
+
+/// The network solver's contact law, chosen at compile time. The solver reaches it only through
+/// the contact-law interface (netdem/contact/law.hpp): evaluate, iteration_stiffness, has_history.
+using Law = ct::PlasticIndentationLaw;
+using Element = ct::PairElement<Law>;
+using Response = Law::Response;
 
 /// The contact table: one row per neighbour pair (i < j, sorted by (i, j)), i.e. every pair with
 /// a gap below the skin at the last rebuild, touching or not. Per row it holds the committed
@@ -36,7 +43,7 @@ namespace ct = netdem::contact;
 /// rebuild). The adjacency (pairs of each particle, CSR) follows every rebuild.
 struct ContactTable {
   std::vector<int> pi, pj;
-  std::vector<ct::PlasticIndentationHistory> hist;
+  std::vector<Law::History> hist;
   std::vector<PairAux> aux;
   std::vector<double> fn_c, ft_c;   ///< committed normal and tangential forces
   std::vector<std::uint8_t> slide_c;  ///< committed sliding flag
@@ -68,6 +75,7 @@ struct DofMap {
 
 struct NetworkSolver::Impl : ContactTable, DofMap {
   SolverOptions opt;
+  Law law;  ///< the law of opt.law (set_options keeps both together)
   int n = 0;
   std::vector<double> x, y, th, r;
   std::vector<std::uint8_t> periph;
@@ -96,7 +104,7 @@ struct NetworkSolver::Impl : ContactTable, DofMap {
   std::vector<int> relax_moved;
   std::vector<std::pair<double, int>> relax_bad;
   std::vector<ct::PairGeometry> g0;
-  std::vector<ct::PlasticIndentationResult> trial;
+  std::vector<Response> trial;
   std::vector<double> trial_slip;
   std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
   std::vector<std::uint8_t> last_open, open_flips;
@@ -113,6 +121,7 @@ struct NetworkSolver::Impl : ContactTable, DofMap {
   SolverTimings lin_base;  ///< linear-solver counters of the solver(s) this one was restored from
 
   // construction (network_solver.cpp)
+  void set_options(const SolverOptions& o);
   void init_linear_solver();
   // contact_table.cpp
   void build_neighbours();
@@ -121,11 +130,11 @@ struct NetworkSolver::Impl : ContactTable, DofMap {
   // assembly.cpp
   void build_pattern();
   void assemble(bool& any_nonsymmetric);
-  double iteration_stiffness(std::size_t k, const ct::PairGeometry& g1, const ct::PairVec& bn, const ct::PairVec& bt,
-                             ct::PairElement& e);
-  void scatter(std::size_t k, const ct::PairElement& e, const ct::PairVec& bn, const ct::PairVec& bt, double kn_sym);
+  double iteration_stiffness(std::size_t k, const ct::PairVec& bn, const ct::PairVec& bt, Element& e, double& k_t);
+  void scatter(std::size_t k, const Element& e, const ct::PairVec& bn, const ct::PairVec& bt, double kn_sym,
+               double k_t);
   void set_apart(std::size_t k);
-  void pair_forces(std::size_t k, ct::PairElement& e);
+  void pair_forces(std::size_t k, Element& e);
   void evaluate_forces();
   void open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1);
   void refresh_particles(const std::vector<int>& ps);

@@ -536,3 +536,57 @@ TEST(Dynamic, Table1LawCompactionSettles) {
   EXPECT_NEAR(sc.xx / pressure, 1.0, 2e-2);
   EXPECT_NEAR(sc.yy / pressure, 1.0, 2e-2);
 }
+
+// ---- the in-place update of the force loop equals the law's evaluate() ---------------------------
+// The force loop calls the law's in-place update() (for the linear sets: luding_evaluate written
+// out); reference_contact_path calls evaluate() instead. A few thousand steps with friction,
+// cohesion, damping and stress-controlled walls give the same state to the last bit.
+TEST(Dynamic, InPlaceUpdateIsBitIdentical) {
+  for (ContactModel model : {ContactModel::Linear, ContactModel::Hysteretic, ContactModel::Full}) {
+    LudingParams p;  // Table 1: friction, cohesion, damping
+    p.mu_wall = 0.3;  // wall friction too
+    const int side = small_scale() ? 5 : 8;
+    const double pitch = 2.05 * p.a0;
+    Box box;
+    box.x_max = side * pitch;
+    box.y_max = side * pitch;
+    for (MovingWall* w : {&box.right, &box.top}) {
+      w->mode = WallMode::Stress;
+      w->pressure = 100.0;
+      w->damping = 20.0;
+    }
+    SolverState out[2];
+    for (int ref = 0; ref < 2; ++ref) {
+      DynamicOptions o;
+      o.model = model;
+      o.reference_contact_path = ref == 1;
+      o.gravity_y = -9.81;
+      DynamicSolver s(lattice(p, side, side, pitch, 0.3, 0.05, 21), p, box, o);
+      s.run(small_scale() ? 6000 : 20000);
+      out[ref] = s.state();
+    }
+    const auto& a = out[0].particles;
+    const auto& b = out[1].particles;
+    ASSERT_EQ(a.size(), b.size());
+    std::size_t touching = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(std::memcmp(&a.x[i], &b.x[i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.vy[i], &b.vy[i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.omega[i], &b.omega[i], sizeof(double)), 0);
+    }
+    ASSERT_EQ(out[0].pair_history.size(), out[1].pair_history.size());
+    for (std::size_t k = 0; k < out[0].pair_history.size(); ++k) {
+      const auto &h0 = out[0].pair_history[k], &h1 = out[1].pair_history[k];
+      touching += h0.fresh() ? 0 : 1;
+      EXPECT_EQ(std::memcmp(&h0.xi, &h1.xi, sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&h0.delta_max, &h1.delta_max, sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&h0.delta0, &h1.delta0, sizeof(double)), 0);
+      EXPECT_EQ(h0.sliding, h1.sliding);
+    }
+    for (std::size_t k = 0; k < out[0].wall_history.size(); ++k)
+      EXPECT_EQ(std::memcmp(&out[0].wall_history[k].xi, &out[1].wall_history[k].xi, sizeof(double)), 0);
+    std::printf("  model %d: %zu particles, %zu contacts with a history\n", static_cast<int>(model), a.size(),
+                touching);
+    EXPECT_GT(touching, 5u);  // contacts were tested
+  }
+}

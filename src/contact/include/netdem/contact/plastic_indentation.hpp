@@ -26,6 +26,7 @@
 #include <limits>
 
 #include "netdem/contact/kinematics.hpp"
+#include "netdem/contact/law.hpp"
 
 namespace netdem::contact {
 
@@ -158,50 +159,90 @@ inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
   return r;
 }
 
-/// Which parts of the element tangent to assemble.
-struct TangentOptions {
-  bool geometric = false;   ///< add the geometric (rotation-of-the-normal) stiffness
-};
+/// The plastic-indentation law behind the contact-law interface (law.hpp). Holds its parameters
+/// by value; a solver builds it once per run (or per parameter change).
+class PlasticIndentationLaw {
+ public:
+  using Params = PlasticIndentationParams;
+  using History = PlasticIndentationHistory;
+  using Response = ContactResponse<History>;
+  /// u_max outlives separation: a separated contact reloads elastically from its flattening.
+  static constexpr bool kHistoryOutlivesSeparation = true;
 
-/// Contact element: forces on both nodes and the consistent 6x6 tangent K = -d f / d q_end.
-struct PairElement {
-  PlasticIndentationResult law;
-  double dslip = 0.0;
-  PairVec force = PairVec::Zero();  ///< generalized forces ON the particles (f_i, M_i, f_j, M_j)
-  PairMat stiffness = PairMat::Zero();
-};
+  PlasticIndentationLaw() = default;
+  explicit PlasticIndentationLaw(const Params& p) : p_(p) {}
+  const Params& params() const { return p_; }
+  bool has_history(const History& h) const { return h.u_max > 0.0; }
 
-/// Evaluates the increment from configuration g0 (start, committed) to g1 (trial end) with
-/// rotation increments dth_i, dth_j. If `tangent` is non-null the consistent tangent with respect
-/// to the end configuration is written there (material part always, geometric part on request).
-inline void element(const PlasticIndentationParams& p, const PlasticIndentationHistory& h,
-                    const PairGeometry& g0, const PairGeometry& g1, double dth_i, double dth_j,
-                    PairElement& e, const TangentOptions* tangent = nullptr) {
-  e.dslip = slip_increment(g0, g1, dth_i, dth_j);
-  e.law = evaluate(p, h, g1.r_eff, g1.overlap, e.dslip);
-  const PairVec bn = normal_gradient(g1);
-  const PairVec bt = slip_gradient(g1);
-  e.force = -e.law.f_n * bn + e.law.f_t * bt;
-  if (!tangent) return;
-  // d(slip increment)/d q_end for the objective form of Eq 5 (slip_increment()).
-  PairVec btt;  // translational part of b_t (no lever arms)
-  btt << -g1.t.x(), -g1.t.y(), 0.0, g1.t.x(), g1.t.y(), 0.0;
-  const double dphi = std::atan2(cross(g0.n, g1.n), g0.n.dot(g1.n));
-  const double Lm = 0.5 * (g0.L + g1.L);
-  PairVec ds = (Lm / g1.L) * btt + (0.5 * (g1.a_i * dth_i + g1.a_j * dth_j) - 0.5 * dphi) * bn;
-  ds(2) -= 0.5 * (g0.d_i + g1.d_i);
-  ds(5) -= 0.5 * (g0.d_j + g1.d_j);
-  e.stiffness.noalias() = e.law.k_n * bn * bn.transpose();
-  if (e.law.dft_dun != 0.0 || e.law.dft_dslip != 0.0)
-    e.stiffness.noalias() -= bt * (e.law.dft_dun * bn + e.law.dft_dslip * ds).transpose();
-  if (tangent->geometric && e.law.branch != NormalBranch::Open) {
-    PairVec c = PairVec::Zero();
-    c(2) = g1.a_i;
-    c(5) = g1.a_j;
-    e.stiffness.noalias() -= (e.law.f_n / g1.L) * btt * btt.transpose();
-    e.stiffness.noalias() -= (e.law.f_t / g1.L) * bn * btt.transpose();
-    e.stiffness.noalias() -= e.law.f_t * c * bn.transpose();
+  Response evaluate(const History& h, const ContactKinematics& k, ContactTangent* t) const {
+    const PlasticIndentationResult r = contact::evaluate(p_, h, k.r_eff, k.overlap, k.dslip);
+    Response out;
+    out.f_n = r.f_n;
+    out.f_t = r.f_t;
+    out.loaded = r.branch != NormalBranch::Open;
+    out.sliding = r.sliding;
+    out.branch = static_cast<std::uint8_t>(r.branch);
+    out.history = r.history;
+    if (t) {
+      t->dfn_dun = r.k_n;
+      t->dfn_dslip = 0.0;
+      t->dft_dun = r.dft_dun;
+      t->dft_dslip = r.dft_dslip;
+    }
+    return out;
   }
-}
+
+  /// Normal: the tangent of the active branch at the end of the step, or the elastic
+  /// un/reloading stiffness of the history when that is larger (it is the stiffest branch the
+  /// contact can reach in a step). Tangential: k_t A_c at the end force.
+  StiffnessBound stiffness_bound(const History& h, const ContactKinematics& k) const {
+    double f, kn;
+    NormalBranch b;
+    normal_force(p_, k.r_eff, h.u_max, k.overlap, f, kn, b);
+    const double u_max = p_.reversible ? 0.0 : std::fmax(h.u_max, k.overlap);
+    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * plastic_tangent(p_, k.r_eff, u_max));
+    StiffnessBound s;
+    s.k_n = kn;
+    s.k_t = p_.frictional() ? p_.shear_stiffness() * f / (3.0 * p_.sigma_y) : 0.0;
+    return s;
+  }
+
+  /// Eq 2 is concave with a tangent that is singular at first touch, and Newton on the tangent
+  /// overshoots into separation: on the plastic branch the normal stiffness is raised to the secant
+  /// of Eq 2 over the step (from the start overlap, or from the force-free overlap) when that is
+  /// stiffer. The tangential stiffness is the shear spring k_t A_c, also while sliding.
+  IterationStiffness iteration_stiffness(const History& h, const ContactKinematics& k,
+                                         const Response& r) const {
+    IterationStiffness s;
+    if (r.branch == static_cast<std::uint8_t>(NormalBranch::Plastic)) {
+      const double u_sep = separation_overlap(p_, k.r_eff, h.u_max);
+      const double u_from = std::fmax(k.overlap_start, u_sep);
+      if (k.overlap > u_from) {
+        const double ksec = normal_secant(p_, k.r_eff, h.u_max, u_from, k.overlap);
+        const double kn = plastic_tangent(p_, k.r_eff, k.overlap);
+        s.k_n_add = std::fmax(0.0, ksec - kn);
+      }
+    }
+    s.k_t = p_.frictional() ? p_.shear_stiffness() * (r.f_n / (3.0 * p_.sigma_y)) : 0.0;
+    return s;
+  }
+
+  /// The history with which a contact continues when the elastic unloading branch is switched on
+  /// (reversible -> elastic, section 3.4) at overlap u: u_max := u (no force jump); a separated
+  /// contact loses its tangential force.
+  static History start_unloading_branch(const History& h, double u) {
+    History r = h;
+    r.u_max = std::fmax(u, 0.0);
+    if (u <= 0.0) {
+      r.f_t = 0.0;
+      r.sliding = 0;
+    }
+    return r;
+  }
+
+ private:
+  Params p_;
+};
+static_assert(ContactLaw<PlasticIndentationLaw>);
 
 }  // namespace netdem::contact

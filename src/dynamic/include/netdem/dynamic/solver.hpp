@@ -89,6 +89,9 @@ struct DynamicOptions {
   double temperature = 80.0;  ///< [deg C] initial T of the thermal state (ContactModel::Full)
   /// Steps between the instability checks of step() (DynamicSolver::check_health; 0: never).
   std::int64_t check_every = 500;
+  /// Test and diagnosis: the force loop calls the law's evaluate() instead of its in-place
+  /// update() (law.hpp update_contact); the results are the same to the last bit.
+  bool reference_contact_path = false;
   /// Throws std::invalid_argument with one line for an invalid value.
   void validate() const;
 };
@@ -254,6 +257,8 @@ class DynamicSolver {
 
  private:
   template <contact::LudingFeatures F>
+  void compute_forces_with();
+  template <class L, bool InPlace>
   void compute_forces();
   void compute_forces_dispatch();
   void choose_friction();

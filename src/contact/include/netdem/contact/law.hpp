@@ -1,0 +1,111 @@
+#pragma once
+// The contact-law interface: what a solver needs from a law, and nothing else (docs/contact.md
+// "The law interface").
+//
+// A law is three things:
+//  * a parameter type `L::Params` (per run, held by the law object);
+//  * a per-contact history `L::History` (plain struct, value-initialised = a pair that has never
+//    touched);
+//  * one const evaluation `law.evaluate(history, kinematics, tangent)`, which returns the normal
+//    and tangential forces and the history to commit, and writes the consistent tangent only when
+//    `tangent` is non-null. The moments on the particles are the lever-arm moments -d F_T of the
+//    contact geometry (kinematics.hpp; pair_element() returns them); none of the toolkit's laws
+//    has a rolling moment of its own (a rolling law would add one to the response). Nothing is stored: a rejected Newton iteration or a repeated step costs nothing.
+//
+// The interface states what the solvers need from a law, so that no solver reads a law's internals:
+//  * `law.stiffness_bound(history, kinematics)`: the largest normal and tangential stiffnesses the
+//    contact can show over the step, for an explicit time step;
+//  * `law.iteration_stiffness(history, kinematics, response)`: symmetric, non-negative normal and
+//    tangential stiffnesses for Newton's iteration matrix (the law's answer to a tangent that is
+//    singular, negative or zero where the solver needs a positive one);
+//  * `L::kHistoryOutlivesSeparation`: whether a separated pair keeps its history (a solver must
+//    then keep the pair in its table and evaluate it while it is apart);
+//  * `law.has_history(history)`: false for the history of a pair that has never touched (or has
+//    lost its history); such a pair that is apart costs a solver nothing.
+//
+// Solvers are written against this interface with the law chosen at compile time (templates; no
+// virtual call per contact). `ContactLaw` checks a law type against it.
+//
+// Kinematics come from a solver in the contact frame of kinematics.hpp: overlap > 0 touching,
+// the slip is j's contact point relative to i's along t = perp(n), forces are on j.
+#include <concepts>
+#include <cstdint>
+
+namespace netdem::contact {
+
+/// One contact over one step (explicit) or one increment (quasi-static), in the contact frame.
+struct ContactKinematics {
+  double overlap = 0.0;    ///< u_N at the end of the step (> 0: touching)
+  double overlap_start = 0.0;  ///< u_N at the start of the step
+  double dslip = 0.0;      ///< slip increment over the step (kinematics.hpp, Redanz & Fleck Eq 5)
+  double v_n = 0.0;        ///< d overlap / dt (> 0 approaching); 0 in a quasi-static increment
+  double v_t = 0.0;        ///< slip rate; 0 in a quasi-static increment
+  double r_eff = 0.0;      ///< R* = r_i r_j / (r_i + r_j) (r_i for a flat wall)
+  double m_eff = 0.0;      ///< m_i m_j / (m_i + m_j) (m_i for a wall); 0 when unknown
+  double dt = 0.0;         ///< the step; 0 in a quasi-static increment
+};
+
+/// Consistent tangent in the contact frame: derivatives of the end forces with respect to the end
+/// overlap and the slip increment, the rates v_n, v_t held fixed.
+struct ContactTangent {
+  double dfn_dun = 0.0, dfn_dslip = 0.0;
+  double dft_dun = 0.0, dft_dslip = 0.0;
+};
+
+/// What one evaluation returns.
+template <class History>
+struct ContactResponse {
+  double f_n = 0.0;   ///< normal force on j along n (> 0 repulsive)
+  double f_t = 0.0;   ///< tangential force on j along t
+  bool loaded = false;   ///< the contact is closed (not on its open branch): it carries the forces
+  bool sliding = false;  ///< the tangential force is on its limit
+  std::uint8_t branch = 0;  ///< the law's branch code, for diagnostics; 0 = open for every law
+  History history;          ///< the history to commit if the step is accepted
+};
+
+/// Stiffness bounds for an explicit time step: normal and tangential, force per length.
+struct StiffnessBound {
+  double k_n = 0.0, k_t = 0.0;
+};
+
+/// What an implicit solver's iteration matrix takes from the law beyond the consistent tangent.
+struct IterationStiffness {
+  /// Normal stiffness (>= 0) added to the consistent normal tangent where Newton needs a stiffer
+  /// one (the secant of a concave law); the symmetric iteration matrix uses tangent + k_n_add.
+  double k_n_add = 0.0;
+  double k_t = 0.0;  ///< the tangential spring (also while sliding, where the tangent has none)
+};
+
+template <class L>
+concept ContactLaw = requires(const L& law, const typename L::History& h,
+                              const ContactKinematics& k, ContactTangent* t,
+                              const ContactResponse<typename L::History>& r) {
+  typename L::Params;
+  typename L::History;
+  { law.params() } -> std::convertible_to<const typename L::Params&>;
+  { law.evaluate(h, k, t) } -> std::same_as<ContactResponse<typename L::History>>;
+  { law.stiffness_bound(h, k) } -> std::same_as<StiffnessBound>;
+  { law.iteration_stiffness(h, k, r) } -> std::same_as<IterationStiffness>;
+  { law.has_history(h) } -> std::same_as<bool>;
+  { L::kHistoryOutlivesSeparation } -> std::convertible_to<bool>;
+};
+
+/// The step of a solver's hot loop: evaluates the law and commits its history in place, returning
+/// the forces. A law may provide `update(History&, const ContactKinematics&, double& f_n,
+/// double& f_t)`, an in-place form of `evaluate` for a hot loop; it must give the same forces and
+/// history to the last bit (the conformance suite checks every law that has one, and
+/// Dynamic.InPlaceUpdateIsBitIdentical a whole run). InPlace = false: always `evaluate`.
+template <bool InPlace = true, ContactLaw L>
+inline void update_contact(const L& law, typename L::History& h, const ContactKinematics& k,
+                           double& f_n, double& f_t) {
+  if constexpr (InPlace && requires { law.update(h, k, f_n, f_t); }) {
+    law.update(h, k, f_n, f_t);
+  } else {
+    const ContactResponse<typename L::History> r = law.evaluate(h, k, nullptr);
+    h = r.history;
+    f_n = r.f_n;
+    f_t = r.f_t;
+  }
+}
+
+}  // namespace netdem::contact

@@ -1,0 +1,152 @@
+#pragma once
+// The sintering law of Luding, Manetsberger & Muellers (luding.hpp) behind the contact-law
+// interface (law.hpp). `LudingLaw<F>` is one compile-time feature set of the law (LudingFeatures)
+// with its parameters and the material state k1(T, t) of the current step.
+#include <cmath>
+#include <cstdint>
+
+#include "netdem/contact/law.hpp"
+#include "netdem/contact/luding.hpp"
+
+namespace netdem::contact {
+
+/// Field-by-field copy of a history (GCC expanded the struct assignment of the law's result into
+/// overlapping 16-byte moves through the stack, which stall on store forwarding).
+inline void store_luding_history(LudingHistory& dst, const LudingHistory& src) {
+  dst.delta_max = src.delta_max;
+  dst.delta0 = src.delta0;
+  dst.k2_line = src.k2_line;
+  dst.k1_seen = src.k1_seen;
+  dst.xi = src.xi;
+  dst.fluid = src.fluid;
+  dst.sliding = src.sliding;
+}
+
+template <LudingFeatures F = kLudingFull>
+class LudingLaw {
+ public:
+  using Params = LudingParams;
+  using History = LudingHistory;
+  using Response = ContactResponse<History>;
+  /// The history is reset on separation (docs/luding.md).
+  static constexpr bool kHistoryOutlivesSeparation = false;
+  static constexpr LudingFeatures kFeatures = F;
+
+  /// The law with parameters p (held by reference: p must outlive the law) at the material state
+  /// k1(T, t) = k1_Tt (ignored without F.thermal).
+  LudingLaw(const Params& p, double k1_Tt) : p_(&p), k1_Tt_(k1_Tt) {}
+  const Params& params() const { return *p_; }
+  double k1_Tt() const { return k1_Tt_; }
+  bool has_history(const History& h) const { return !h.fresh(); }
+
+  LudingInput input(const ContactKinematics& k) const {
+    LudingInput in;
+    in.delta = k.overlap;
+    in.delta_dot = k.v_n;
+    in.dxi = k.dslip;
+    in.xi_dot = k.v_t;
+    in.k1_Tt = k1_Tt_;
+    return in;
+  }
+
+  Response evaluate(const History& h, const ContactKinematics& k, ContactTangent* t) const {
+    const LudingResult r = luding_evaluate<F>(*p_, h, input(k));
+    Response out;
+    out.f_n = r.f_n;
+    out.f_t = r.f_t;
+    out.loaded = r.branch != LudingBranch::Open;
+    out.sliding = r.sliding;
+    out.branch = static_cast<std::uint8_t>(r.branch);
+    out.history = r.history;
+    if (t) {
+      t->dfn_dun = r.dfn_ddelta;
+      t->dfn_dslip = r.dfn_dxi;
+      t->dft_dun = r.dft_ddelta;
+      t->dft_dslip = r.dft_dxi;
+    }
+    return out;
+  }
+
+  /// The un/reloading line k2(delta_max) <= k2 (Eq 7) bounds every branch; k_t = alpha k2 (Eq 23).
+  StiffnessBound stiffness_bound(const History&, const ContactKinematics&) const {
+    StiffnessBound s;
+    s.k_n = p_->k2;
+    s.k_t = F.friction ? p_->alpha * p_->k2 : 0.0;
+    return s;
+  }
+
+  /// Newton needs a non-negative normal stiffness: on the attractive branch (tangent -k_c, Eq 4)
+  /// the iteration matrix gets k_c added (zero normal stiffness). The tangential spring is k_t of
+  /// Eq 23. (No solver runs this law implicitly yet; this re-evaluates the law for its tangent.)
+  IterationStiffness iteration_stiffness(const History& h, const ContactKinematics& k,
+                                         const Response& r) const {
+    IterationStiffness s;
+    if (!r.loaded) return s;
+    ContactTangent t;
+    (void)evaluate(h, k, &t);
+    s.k_n_add = t.dfn_dun < 0.0 ? -t.dfn_dun : 0.0;
+    s.k_t = F.friction ? p_->alpha * r.history.k2_line : 0.0;
+    return s;
+  }
+
+  /// In-place form of evaluate() for a hot loop (law.hpp update_contact): the same forces and
+  /// history to the last bit (tests/contact/test_law_conformance.cpp). For the linear feature sets
+  /// (no hysteresis, cohesion or temperature) it is luding_evaluate<F> written out for the linear
+  /// spring-dashpot with the Cundall-Strack spring, operation for operation, without the tangent
+  /// and the result struct.
+  void update(History& h, const ContactKinematics& k, double& f_n, double& f_t) const {
+    const Params& p = *p_;
+    if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
+      const double delta = k.overlap;
+      if (!(delta > 0.0)) {  // open (rounding at L = a_i + a_j): no force, history reset
+        h = LudingHistory{};
+        f_n = f_t = 0.0;
+        return;
+      }
+      h.k1_seen = p.k1();
+      h.delta_max = h.delta_max < delta ? delta : h.delta_max;  // fmax (both finite, >= 0)
+      h.k2_line = p.k2;
+      double fn = p.k2 * delta + p.gamma_n * k.v_n;  // LMM05 Eq 4 (k1 = k2) and Eq 5
+      double ft = 0.0;
+      std::uint8_t sliding = 0;
+      if constexpr (F.friction) {
+        const double fc = p.mu * (fn - 0.0);  // LMM05 Eq 14 with f_min = 0
+        if (fc > 0.0) {
+          const double kt = p.alpha * p.k2;                         // LMM05 Eq 23
+          const double xi_trial = h.xi + k.dslip;                   // LMM05 Eq 20
+          const double ft0 = -kt * xi_trial - p.gamma_t * k.v_t;    // LMM05 Eq 19
+          if (std::fabs(ft0) <= fc) {
+            ft = ft0;
+            h.xi = xi_trial;
+          } else {
+            const double sg = ft0 > 0.0 ? 1.0 : -1.0;
+            ft = sg * fc;                                  // LMM05 Eq 22
+            h.xi = -(fc * sg + p.gamma_t * k.v_t) / kt;    // LMM05 Eq 21
+            sliding = 1;
+            if (p.sliding_breaks_cohesion && fn < 0.0) fn = 0.0;
+          }
+        } else {
+          h.xi = 0.0;
+        }
+      } else {
+        h.xi = 0.0;
+      }
+      h.sliding = sliding;
+      f_n = fn;
+      f_t = ft;
+    } else {
+      const LudingResult r = luding_evaluate<F>(p, h, input(k));
+      store_luding_history(h, r.history);
+      f_n = r.f_n;
+      f_t = r.f_t;
+    }
+  }
+
+ private:
+  const Params* p_;
+  double k1_Tt_;
+};
+static_assert(ContactLaw<LudingLaw<kLudingFull>>);
+static_assert(ContactLaw<LudingLaw<kLudingLinear>>);
+
+}  // namespace netdem::contact
