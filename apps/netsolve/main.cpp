@@ -261,6 +261,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   j["increments"] = co.increments;
   if (co.target_strain > 0.0) j["to_strain"] = co.target_strain;
   j["k_t"] = so.law.k_t;
+  j["first_touch"] = so.law.first_touch;
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},

@@ -119,7 +119,7 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
 /// Contact law and Newton options common to `compact` and `yield`.
 struct LawArgs {
   std::string friction = "inf", normal_unloading = "reversible";
-  double k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01;
+  double k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, first_touch = 1e-5;
   int max_newton = 10;
 };
 
@@ -130,6 +130,7 @@ inline LawArgs law_args(const qs::SolverOptions& o) {
   a.normal_unloading = o.law.reversible ? "reversible" : "elastic";
   a.k_t = o.law.k_t;
   a.sigma_y = o.law.sigma_y;
+  a.first_touch = o.law.first_touch;
   a.tol = o.residual_tol;
   a.viscosity = o.viscosity;
   a.max_newton = o.max_newton;
@@ -141,6 +142,10 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
   app.add_option("--friction", a.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
   app.add_option("--k-t", a.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
   app.add_option("--sigma-y", a.sigma_y, "yield stress of the solid")->capture_default_str();
+  app.add_option("--first-touch", a.first_touch,
+                 "first-touch overlap u_c/(2R*): below u_c the loading force is the chord F_2(u_c) u/u_c "
+                 "(bounded stiffness; the same law as demsolve); 0: Eq 2 down to u = 0")
+      ->capture_default_str();
   app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
   app.add_option("--max-newton", a.max_newton, "Newton iterations per increment")->capture_default_str();
   app.add_option("--viscosity", a.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")
@@ -155,6 +160,7 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   so.law.mu = parse_friction(a.friction);
   so.law.k_t = a.k_t;
   so.law.sigma_y = a.sigma_y;
+  so.law.first_touch = a.first_touch;
   so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
   so.max_newton = a.max_newton;

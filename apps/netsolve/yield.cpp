@@ -644,6 +644,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   setup["to_density"] = a.from_state.empty() ? a.to_density : loaded.density;
   setup["friction"] = a.law.friction;
   setup["normal_unloading"] = a.law.normal_unloading;
+  setup["first_touch"] = a.law.first_touch;
   setup["compact_bc"] = bc_name(compact_mode);
   setup["probe_bc"] = bc_name(probe_mode);
   setup["directions"] = a.directions;

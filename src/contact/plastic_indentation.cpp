@@ -20,6 +20,8 @@ void PlasticIndentationParams::validate() const {
           "contact law: tangential stiffness k_t must be positive and finite, got " + std::to_string(k_t));
   require(std::isfinite(unload_ratio) && unload_ratio >= 1.0,
           "contact law: unloading stiffness ratio must be >= 1 and finite, got " + std::to_string(unload_ratio));
+  require(std::isfinite(first_touch) && first_touch >= 0.0 && first_touch <= 1e-2,
+          "contact law: first-touch overlap u_c/(2R*) must be in [0, 0.01], got " + std::to_string(first_touch));
 }
 
 }  // namespace netdem::contact

@@ -57,7 +57,7 @@ EOF
 # the default options: the loose ballistic packing sheared to |E| = 0.2 does not converge (exit 3)
 check_shear shear_default --to-strain 0.2 --increments 100
 # a stronger drag and more Newton iterations: every increment converges
-check_shear shear_converged --to-strain 0.2 --increments 100 --max-newton 200 --viscosity 0.05
+check_shear shear_converged --to-strain 0.2 --increments 100 --max-newton 200 --viscosity 0.07
 
 # --to-strain limits: one line, exit 2, nothing written
 for v in 0 -1 1e-300 2 inf nan abc ''; do

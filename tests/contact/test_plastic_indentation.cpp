@@ -349,6 +349,7 @@ TEST(PlasticIndentation, StickingElementSymmetricWithRigidModesAsNullSpace) {
 // (secant) does not change that order, the secant over every increment is exact.
 TEST(PlasticIndentation, IncrementalIntegrationConvergesToEq2) {
   PlasticIndentationParams p;
+  p.first_touch = 0.0;  // Eq 2 itself, down to u = 0
   const double reff = 0.5, u_end = 0.02;
   const double exact = plastic_force(p, reff, u_end);
   std::vector<double> err_euler, err_secant, du_list;
@@ -391,3 +392,43 @@ TEST(PlasticIndentation, ValidateRejectsBadParameters) {
   bad([](auto& q) { q.unload_ratio = 0.5; });
 }
 
+
+// First touch (docs/contact.md): below u_c = first_touch 2R* the loading force is the chord of
+// Eq 2 through (u_c, F_2(u_c)): continuous at u_c, linear with the bounded stiffness
+// 6 sigma_y / sqrt(first_touch) whatever R*, and Eq 2 above u_c; the unloading line of a contact
+// whose u_max < u_c starts from the chord's stiffness.
+TEST(PlasticIndentation, FirstTouchChordBelowUc) {
+  for (double reff : {0.05, 0.5, 3.0}) {
+    PlasticIndentationParams p;
+    p.sigma_y = 2.0;
+    p.first_touch = 1e-5;
+    const double uc = 2.0 * reff * p.first_touch;
+    const double k_chord = 6.0 * p.sigma_y / std::sqrt(p.first_touch);
+    double f, k;
+    NormalBranch b;
+    for (double u : {1e-3 * uc, 0.5 * uc, 0.999999 * uc}) {
+      normal_force(p, reff, 0.0, u, f, k, b);
+      EXPECT_EQ(b, NormalBranch::Plastic);
+      EXPECT_NEAR(k, k_chord, 1e-12 * k_chord) << reff;
+      EXPECT_NEAR(f, k_chord * u, 1e-12 * k_chord * uc) << reff;
+    }
+    double f_below, f_above;
+    normal_force(p, reff, 0.0, uc * (1.0 - 1e-12), f_below, k, b);
+    normal_force(p, reff, 0.0, uc * (1.0 + 1e-12), f_above, k, b);
+    EXPECT_NEAR(f_below, f_above, 1e-9 * f_above);  // continuous at u_c
+    EXPECT_NEAR(f_above, plastic_force(p, reff, uc), 1e-9 * f_above);
+    normal_force(p, reff, 0.0, 10.0 * uc, f, k, b);
+    EXPECT_DOUBLE_EQ(f, plastic_force(p, reff, 10.0 * uc));  // Eq 2 above u_c
+    EXPECT_DOUBLE_EQ(k, plastic_tangent(p, reff, 10.0 * uc));
+    // elastic unloading from u_max = u_c / 2: slope unload_ratio x the chord stiffness
+    p.reversible = false;
+    normal_force(p, reff, 0.5 * uc, 0.49995 * uc, f, k, b);
+    EXPECT_EQ(b, NormalBranch::Elastic);
+    EXPECT_NEAR(k, p.unload_ratio * k_chord, 1e-9 * k);
+    // first_touch = 0: Eq 2 down to u = 0
+    p.first_touch = 0.0;
+    p.reversible = true;
+    normal_force(p, reff, 0.0, 1e-3 * uc, f, k, b);
+    EXPECT_DOUBLE_EQ(f, plastic_force(p, reff, 1e-3 * uc));
+  }
+}

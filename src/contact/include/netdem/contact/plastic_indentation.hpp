@@ -12,6 +12,11 @@
 // reloads elastically (section 3.4) with k_u = unload_ratio * dF_N/du_N(u_max) and separates when
 // the force reaches zero; reloading rejoins the plastic branch at u_max.
 //
+// First touch: Eq 2 has an infinite stiffness at u_N = 0. Below u_c = first_touch * 2R* (= first_touch
+// R for equal radii R) the loading branch is the chord F = F_2(u_c) u_N / u_c: the force is
+// continuous, the stiffness bounded (by 6 sigma_y / sqrt(first_touch), whatever R*), so that an
+// explicit solver has a time step; first_touch = 0 is Eq 2 down to u_N = 0.
+//
 // Contact width: A_c := F_N / (3 sigma_y). On the plastic branch this IS Eq 2; on the elastic
 // branch it shrinks with the force (our choice: the load-bearing width), so that the tangential
 // force vanishes continuously at separation.
@@ -38,6 +43,8 @@ struct PlasticIndentationParams {
   /// true: no elastic unloading branch, unloading follows Eq 2 back (nonlinear elastic normal law,
   /// the incremental Eq 3 read literally); false: the section 3.4 unloading branch
   bool reversible = false;
+  /// First-touch overlap u_c / (2 R*): below u_c the loading branch is linear (see above); 0: none
+  double first_touch = 1.0e-5;
 
   /// min(mu, 1/(3 sqrt 3)): the Coulomb limit and the shear cap tau_y = sigma_y/sqrt(3) combined.
   double mu_eff() const { return std::fmin(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
@@ -78,19 +85,34 @@ inline double plastic_tangent(const PlasticIndentationParams& p, double r_eff, d
   return 3.0 * p.sigma_y * std::sqrt(2.0 * r_eff / u);
 }
 
+/// The loading branch with the first-touch rule: Eq 2 above u_c, the chord F_2(u_c) u/u_c below.
+inline double first_touch_overlap(const PlasticIndentationParams& p, double r_eff) {
+  return p.first_touch * 2.0 * r_eff;
+}
+inline double loading_force(const PlasticIndentationParams& p, double r_eff, double u) {
+  const double uc = first_touch_overlap(p, r_eff);
+  if (u < uc) return u > 0.0 ? plastic_force(p, r_eff, uc) * (u / uc) : 0.0;
+  return plastic_force(p, r_eff, u);
+}
+inline double loading_tangent(const PlasticIndentationParams& p, double r_eff, double u) {
+  const double uc = first_touch_overlap(p, r_eff);
+  if (u < uc) return plastic_force(p, r_eff, uc) / uc;
+  return plastic_tangent(p, r_eff, u);
+}
+
 /// Normal force on the branch selected by the committed u_max (no history change).
 inline void normal_force(const PlasticIndentationParams& p, double r_eff, double u_max, double u,
                          double& f, double& k, NormalBranch& branch) {
   if (p.reversible) u_max = 0.0;
   if (u >= u_max && u > 0.0) {  // loading: Eq 2
-    f = plastic_force(p, r_eff, u);
-    k = plastic_tangent(p, r_eff, u);
+    f = loading_force(p, r_eff, u);
+    k = loading_tangent(p, r_eff, u);
     branch = NormalBranch::Plastic;
     return;
   }
   if (u_max > 0.0) {  // elastic un/reloading line through (u_max, F_max), section 3.4
-    const double ku = p.unload_ratio * plastic_tangent(p, r_eff, u_max);
-    const double fe = plastic_force(p, r_eff, u_max) - ku * (u_max - u);
+    const double ku = p.unload_ratio * loading_tangent(p, r_eff, u_max);
+    const double fe = loading_force(p, r_eff, u_max) - ku * (u_max - u);
     if (fe > 0.0) {
       f = fe;
       k = ku;
@@ -106,7 +128,7 @@ inline void normal_force(const PlasticIndentationParams& p, double r_eff, double
 /// Overlap at which a contact with history u_max carries no force (u_max for a fresh contact).
 inline double separation_overlap(const PlasticIndentationParams& p, double r_eff, double u_max) {
   if (u_max <= 0.0 || p.reversible) return 0.0;
-  return u_max - plastic_force(p, r_eff, u_max) / (p.unload_ratio * plastic_tangent(p, r_eff, u_max));
+  return u_max - loading_force(p, r_eff, u_max) / (p.unload_ratio * loading_tangent(p, r_eff, u_max));
 }
 
 /// Secant normal stiffness over a predicted overlap change u0 -> u1 (exact integral of Eq 2 over
@@ -200,7 +222,7 @@ class PlasticIndentationLaw {
     NormalBranch b;
     normal_force(p_, k.r_eff, h.u_max, k.overlap, f, kn, b);
     const double u_max = p_.reversible ? 0.0 : std::fmax(h.u_max, k.overlap);
-    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * plastic_tangent(p_, k.r_eff, u_max));
+    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * loading_tangent(p_, k.r_eff, u_max));
     StiffnessBound s;
     s.k_n = kn;
     s.k_t = p_.frictional() ? p_.shear_stiffness() * f / (3.0 * p_.sigma_y) : 0.0;
@@ -219,7 +241,7 @@ class PlasticIndentationLaw {
       const double u_from = std::fmax(k.overlap_start, u_sep);
       if (k.overlap > u_from) {
         const double ksec = normal_secant(p_, k.r_eff, h.u_max, u_from, k.overlap);
-        const double kn = plastic_tangent(p_, k.r_eff, k.overlap);
+        const double kn = loading_tangent(p_, k.r_eff, k.overlap);
         s.k_n_add = std::fmax(0.0, ksec - kn);
       }
     }
