@@ -592,7 +592,9 @@ packing::Packing transformed(const packing::Packing& pk, double sx, double dx, d
   return q;
 }
 
-/// The packing of `netsolve compact --width W` (seed 1, lid rule "centre").
+/// The packing of `netsolve compact --width W` (seed 1, lid rule "centre"). W = 20 at every test
+/// scale (0.1 s): with W = 12 8 of the 100 increments are unconverged and a shift of 1e-9 R already
+/// changes the final Z, so there is no single network to compare.
 packing::Packing netsolve_packing(double width) {
   packing::DepositionOptions d;
   d.width = width;
@@ -659,7 +661,7 @@ void expect_same_state(const InvarianceRun& a, const InvarianceRun& b, double si
 // Hydrostatic: shift and mirror. The shifted Eq 13 within 1 % of the unshifted one is the check
 // the origin-dependent formula failed (S22 -0.532 against -0.839).
 TEST(NetworkSolverInvariance, ShiftAndMirrorOfPackingAndBox) {
-  const auto pk = netsolve_packing(small_scale() ? 12.0 : 20.0);
+  const auto pk = netsolve_packing(20.0);  // also at small scale: W = 12 does not converge
   const auto path = qs::StrainPath::hydrostatic();
   const auto orig = invariance_run(pk, path);
   const auto shifted = invariance_run(transformed(pk, 1.0, 1e3, 1e3), path);
@@ -683,7 +685,7 @@ TEST(NetworkSolverInvariance, ShiftAndMirrorOfPackingAndBox) {
 // A path with shear (E12 != 0), mirrored with E12 -> -E12: S12 is a sizeable part of the stress,
 // so the sign flip of S12 under the mirror is tested, not the noise of a hydrostatic S12.
 TEST(NetworkSolverInvariance, MirrorFlipsShearStress) {
-  const auto pk = netsolve_packing(small_scale() ? 12.0 : 20.0);
+  const auto pk = netsolve_packing(20.0);  // also at small scale: W = 12 does not converge
   qs::StrainPath p = qs::StrainPath::parse("-1,-1,0.5"), pm = qs::StrainPath::parse("-1,-1,-0.5");
   const auto orig = invariance_run(pk, p);
   const auto mirrored = invariance_run(transformed(pk, -1.0, 0.0, 0.0), pm);
