@@ -166,7 +166,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
       "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
-      "linear_iterations,converged\n";
+      "linear_iterations,converged,net_force_ratio,eq13_vs_contacts\n";
   std::size_t next_snap = 0;
   int unconverged = 0;
   double max_residual = 0.0;
@@ -183,17 +183,18 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const auto on_row = [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
-                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0);
+                       row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0,
+                       m.net_force_ratio, m.eq13_vs_contacts);
     if (row.increment > 0) {
       unconverged += !row.report.converged;
       max_residual = std::max(max_residual, row.report.residual);
       conv.add(row.increment, row.report.converged, row.report.newton_residual);
-      equilibrium.add(row.increment, m.S11, m.S22, m.S11_contacts, m.S22_contacts);
+      equilibrium.add(row.increment, m.eq13_vs_contacts, m.net_force_ratio);
     }
     done = row.increment;
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
@@ -280,7 +281,10 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   }
   j["solver"]["max_newton_residual"] = conv.max_newton_residual;
   j["solver"]["last_increment_converged"] = conv.last_converged;
-  j["solver"]["eq13_vs_contacts"] = equilibrium.last;
+  j["solver"]["eq13_vs_contacts"] = equilibrium.last;  // the check above (origin-free Eq 13)
+  j["solver"]["max_eq13_vs_contacts"] = equilibrium.max;
+  j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
+  j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
   j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};

@@ -60,22 +60,25 @@ struct ConvergenceRecord {
 };
 
 /// Equilibrium check of a compaction: at equilibrium the Eq 13 stress (reactions of the prescribed
-/// particles) equals the Love-Weber contact stress; the viscous drag of a "converged" increment can
-/// hold the network away from it. The run is "unconverged" if the two differ by more than 2 %
-/// (Frobenius norm of (S11, S22), relative to the contact stress) at the end; the reason names the
-/// increment from which on they have differed by more than that.
+/// particles, lever arms from the box centre: origin-free) equals the Love-Weber contact stress;
+/// the viscous drag of a "converged" increment can hold the network away from it. The run is
+/// "unconverged" if the two differ by more than 2 % (StateMeasures::eq13_vs_contacts: Frobenius
+/// norm of the symmetric difference relative to the contact stress) at the end; the reason names
+/// the increment from which on they have differed by more than that. It also keeps the net applied
+/// force (StateMeasures::net_force_ratio) for summary.json.
 struct EquilibriumRecord {
   static constexpr double kMaxDeviation = 0.02;
   double last = 0.0;   ///< deviation of the last increment
+  double max = 0.0;    ///< largest deviation over the increments
+  double last_net_force = 0.0, max_net_force = 0.0;  ///< net applied force ratio: last, largest
   int first_bad = 0;   ///< first increment of the final run of increments above kMaxDeviation
   int last_increment = 0;
 
-  static double deviation(double s11, double s22, double c11, double c22) {
-    const double d = std::hypot(s11 - c11, s22 - c22), n = std::hypot(c11, c22);
-    return n > 0.0 ? d / n : (d > 0.0 ? 1.0 : 0.0);
-  }
-  void add(int increment, double s11, double s22, double c11, double c22) {
-    last = deviation(s11, s22, c11, c22);
+  void add(int increment, double deviation, double net_force) {
+    last = deviation;
+    last_net_force = net_force;
+    if (!(deviation <= max)) max = deviation;  // also a NaN
+    if (!(net_force <= max_net_force)) max_net_force = net_force;
     last_increment = increment;
     if (!(last <= kMaxDeviation)) {
       if (first_bad == 0) first_bad = increment;

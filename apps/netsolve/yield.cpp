@@ -586,7 +586,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   app::netsolve::activity() = "precompacting";
   if (!solver) {
     solver = std::make_unique<qs::NetworkSolver>(pk, so);
-    std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged\n";
+    std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged,net_force_ratio,eq13_vs_contacts\n";
     app::Progress progress("precompact", co.increments, a.quiet);
     app::netsolve::ResidualGrowth growth;  // the stop rule of `compact` (docs/quasistatic.md "Run status")
     growth.tol = so.residual_tol;
@@ -594,9 +594,10 @@ int run_yield(const YieldArgs& a, const std::string& command) {
     int done = 0;
     const auto on_row = [&](const qs::CompactionRow& row) {
       const auto& m = row.state;
-      hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{}\n", row.increment, m.E11,
+      hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{:.3e},{},{},{:.3e},{:.3e}\n", row.increment, m.E11,
                           m.E22, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.Z, m.contacts, row.report.residual,
-                          row.report.newton_iterations, row.report.converged ? 1 : 0);
+                          row.report.newton_iterations, row.report.converged ? 1 : 0, m.net_force_ratio,
+                          m.eq13_vs_contacts);
       if (row.increment > 0) {
         unconverged += !row.report.converged;
         conv.add(row.increment, row.report.converged, row.report.newton_residual);

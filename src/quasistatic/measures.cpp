@@ -22,14 +22,25 @@ StateMeasures NetworkSolver::measures() const {
   m.E12 = s.E(0, 1);
   const double V = s.box_area0 * s.Fbox.determinant();
   m.density = s.solid_area / V;
-  // Eq 13: reactions of the prescribed particles (translational DOFs prescribed)
+  // Eq 13: reactions of the prescribed particles (translational DOFs prescribed), with the lever
+  // arms from the centre of the current box. The reactions sum to the force that the drag and the
+  // residual hold on the free particles, not to zero; about the centroid of V that net force, as
+  // a uniform body force, has no first moment, and the stress does not depend on the origin
+  // (docs/quasistatic.md "Stress, Eq 13").
+  const Eigen::Vector2d xc =
+      s.Fbox * Eigen::Vector2d(0.5 * (s.box0.x_min + s.box0.x_max), 0.5 * (s.box0.y_min + s.box0.y_max));
+  Eigen::Vector2d Fnet = Eigen::Vector2d::Zero();
+  double Fabs = 0.0;
   Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
   for (int p = 0; p < s.n; ++p) {
     if (s.dof[3 * p] >= 0) continue;
     const Eigen::Vector2d Fapp(-s.f_c[3 * p], -s.f_c[3 * p + 1]);
-    S += Fapp * Eigen::Vector2d(s.x[p], s.y[p]).transpose();
+    S += Fapp * (Eigen::Vector2d(s.x[p], s.y[p]) - xc).transpose();
+    Fnet += Fapp;
+    Fabs += Fapp.norm();
   }
   S /= V;
+  m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
   m.S11 = S(0, 0);
   m.S22 = S(1, 1);
   m.S12 = 0.5 * (S(0, 1) + S(1, 0));
@@ -68,6 +79,13 @@ StateMeasures NetworkSolver::measures() const {
   m.S11_contacts = SC(0, 0);
   m.S22_contacts = SC(1, 1);
   m.S12_contacts = 0.5 * (SC(0, 1) + SC(1, 0));
+  {  // the equilibrium gap: symmetric parts, Frobenius norms (the off-diagonal counted twice)
+    const double d11 = m.S11 - m.S11_contacts, d22 = m.S22 - m.S22_contacts, d12 = m.S12 - m.S12_contacts;
+    const double d = std::sqrt(d11 * d11 + d22 * d22 + 2 * d12 * d12);
+    const double c = std::sqrt(m.S11_contacts * m.S11_contacts + m.S22_contacts * m.S22_contacts +
+                               2 * m.S12_contacts * m.S12_contacts);
+    m.eq13_vs_contacts = c > 0.0 ? d / c : (d > 0.0 ? 1.0 : 0.0);
+  }
   if (loaded == 0) {  // initial state: count geometric contacts
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];

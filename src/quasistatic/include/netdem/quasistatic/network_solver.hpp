@@ -66,9 +66,16 @@ struct IncrementReport {
 struct StateMeasures {
   double E11 = 0, E22 = 0, E12 = 0;  ///< accumulated strain E = integral of Edot
   double density = 0;                ///< D = solid area / current box area
-  double S11 = 0, S22 = 0, S12 = 0;  ///< symmetric part of Eq 13 (tension positive)
+  /// Symmetric part of Eq 13 (tension positive), lever arms from the centre of the current box:
+  /// origin-free although the reactions need not sum to zero (docs/quasistatic.md)
+  double S11 = 0, S22 = 0, S12 = 0;
   double S_asym = 0;                 ///< (S12 - S21)/2
   double S11_contacts = 0, S22_contacts = 0, S12_contacts = 0;  ///< Love-Weber average over contacts
+  /// |sum of the reactions| / sum of |reaction| over the prescribed particles (0 without forces):
+  /// the net force the drag and the residual hold on the free particles
+  double net_force_ratio = 0;
+  /// |S - S_contacts| / |S_contacts| (symmetric parts, Frobenius norms): how far from equilibrium
+  double eq13_vs_contacts = 0;
   double Z = 0;                      ///< 2 x load-bearing contacts / N
   int contacts = 0, sliding = 0;
   double mean_normal_force = 0;
