@@ -22,6 +22,10 @@ void PlasticIndentationParams::validate() const {
           "contact law: unloading stiffness ratio must be >= 1 and finite, got " + std::to_string(unload_ratio));
   require(std::isfinite(first_touch) && first_touch >= 0.0 && first_touch <= 1e-2,
           "contact law: first-touch overlap u_c/(2R*) must be in [0, 0.01], got " + std::to_string(first_touch));
+  require(std::isfinite(damping_n) && damping_n >= 0.0 && std::isfinite(damping_t) && damping_t >= 0.0,
+          "contact law: damping ratios must be >= 0 and finite, got " + std::to_string(damping_n) + ", " +
+              std::to_string(damping_t));
+  require(!damped() || first_touch > 0.0, "contact law: the dashpots need a first-touch overlap > 0");
 }
 
 }  // namespace netdem::contact

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -43,9 +44,34 @@ std::size_t Particles::add(double px, double py, double r, const LudingParams& p
   return x.size() - 1;
 }
 
+std::size_t Particles::add_disk(double px, double py, double r, double rho, double pvx, double pvy,
+                                double pomega) {
+  const double m = rho * std::numbers::pi * r * r;
+  x.push_back(px);
+  y.push_back(py);
+  vx.push_back(pvx);
+  vy.push_back(pvy);
+  omega.push_back(pomega);
+  theta.push_back(0.0);
+  radius.push_back(r);
+  mass.push_back(m);
+  inertia.push_back(0.5 * m * r * r);
+  fx.push_back(0.0);
+  fy.push_back(0.0);
+  torque.push_back(0.0);
+  return x.size() - 1;
+}
+
 Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
   Particles P;
   for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
+  return P;
+}
+
+Particles particles_from(const packing::Packing& pk, double rho) {
+  if (!(rho > 0.0) || !std::isfinite(rho)) fail("particles_from: the density must be positive and finite");
+  Particles P;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add_disk(pk.x[i], pk.y[i], pk.r[i], rho);
   return P;
 }
 
@@ -114,6 +140,55 @@ TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const D
   return ts;
 }
 
+namespace {
+// The two lightest masses (m_lo <= m_lo2) of the particles.
+void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
+  m_lo = m_lo2 = P.mass[0];
+  if (P.size() < 2) return;
+  m_lo = std::min(P.mass[0], P.mass[1]);
+  m_lo2 = std::max(P.mass[0], P.mass[1]);
+  for (std::size_t i = 2; i < P.size(); ++i) {
+    const double m = P.mass[i];
+    if (m < m_lo) {
+      m_lo2 = m_lo;
+      m_lo = m;
+    } else if (m < m_lo2) {
+      m_lo2 = m;
+    }
+  }
+}
+}  // namespace
+
+TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
+                               const DynamicOptions& o, double area_max) {
+  o.validate();
+  law.validate();
+  if (P.size() == 0) fail("plastic_time_step: no particles");
+  if (!(law.first_touch > 0.0))
+    fail("the explicit solver needs the plastic law's first-touch overlap > 0 (Eq 2 has an infinite stiffness "
+         "at first touch)");
+  double m_lo, m_lo2, mean = 0.0;
+  lightest_pair(P, m_lo, m_lo2);
+  for (double m : P.mass) mean += m;
+  mean /= static_cast<double>(P.size());
+  const double m12 = m_lo * m_lo2 / (m_lo + m_lo2);
+  // the stiffest normal branch: the first-touch chord, times unload_ratio on the elastic branch
+  const double kn = law.chord_stiffness() * (law.reversible ? 1.0 : law.unload_ratio);
+  TimeStepInfo ts;
+  ts.tc_mean = std::numbers::pi * std::sqrt(0.5 * mean / kn);
+  ts.tc_lightest = std::numbers::pi * std::sqrt(m12 / kn);
+  const double kt = law.frictional() ? law.shear_stiffness() * area_max : 0.0;
+  ts.tc_tangential = kt > 0.0 ? std::numbers::pi * std::sqrt(m12 / 3.0 / kt) : 0.0;
+  const double tc = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
+  ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;
+  ts.steps_per_contact_lightest = tc / ts.dt;
+  if (ts.steps_per_contact_lightest < o.min_steps_per_contact)
+    fail(fmt::format("time step {:.6g} gives the stiffest contact {:.3g} steps per period (t_c = {:.6g}), fewer "
+                     "than {:g}",
+                     ts.dt, ts.steps_per_contact_lightest, tc, o.min_steps_per_contact));
+  return ts;
+}
+
 DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
                              const DynamicOptions& options)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
@@ -129,7 +204,7 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
   for (const MovingWall* w : {&box_.right, &box_.top})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
-  ts_ = choose_time_step(P_, params_, opt_);
+  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, opt_, 0.0) : choose_time_step(P_, params_, opt_);
   thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
   // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
   radius_ref_ = P_.radius;
@@ -142,7 +217,10 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
   }
   wall_v_[0] = box_.right.mode == WallMode::Strain ? box_.right.velocity : 0.0;
   wall_v_[1] = box_.top.mode == WallMode::Strain ? box_.top.velocity : 0.0;
-  wall_hist_.assign(4 * n, LudingHistory{});
+  if (plastic())
+    pl_wall_hist_.assign(4 * n, contact::PlasticIndentationHistory{});
+  else
+    wall_hist_.assign(4 * n, LudingHistory{});
   finish_setup();
   build_table();
   compute_forces_dispatch();
@@ -151,6 +229,13 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
 void DynamicSolver::finish_setup() {
   const std::size_t n = P_.size();
   wall_params_ = params_.wall_params();
+  pl_wall_params_ = opt_.plastic;
+  pl_wall_params_.mu = opt_.plastic_wall_mu;
+  if (plastic() && n > 0) {
+    double m_lo = 0.0, m_lo2 = 0.0;
+    lightest_pair(P_, m_lo, m_lo2);
+    pl_m12_ = m_lo * m_lo2 / (m_lo + m_lo2);
+  }
   choose_friction();
   double rmean = 0.0;
   radius_ref_max_ = 0.0;
@@ -164,7 +249,46 @@ void DynamicSolver::finish_setup() {
 }
 
 void DynamicSolver::choose_friction() {
-  friction_ = params_.mu > 0.0 || (box_.enabled && params_.mu_wall > 0.0);
+  if (plastic())
+    friction_ = opt_.plastic.mu > 0.0 || (box_.enabled && opt_.plastic_wall_mu > 0.0);
+  else
+    friction_ = params_.mu > 0.0 || (box_.enabled && params_.mu_wall > 0.0);
+}
+
+// ---- the history stores: one per law family; the model's is used, the other stays empty --------
+namespace {
+using PlasticHistory = contact::PlasticIndentationHistory;
+inline bool is_fresh(const LudingHistory& h) { return h.fresh(); }
+inline bool is_fresh(const PlasticHistory& h) { return h.u_max == 0.0 && h.f_t == 0.0 && h.sliding == 0; }
+}  // namespace
+template <>
+std::vector<LudingHistory>& DynamicSolver::pair_histories<LudingHistory>() { return pair_hist_; }
+template <>
+std::vector<PlasticHistory>& DynamicSolver::pair_histories<PlasticHistory>() { return pl_pair_hist_; }
+template <>
+std::vector<LudingHistory>& DynamicSolver::new_histories<LudingHistory>() { return new_hist_; }
+template <>
+std::vector<PlasticHistory>& DynamicSolver::new_histories<PlasticHistory>() { return pl_new_hist_; }
+template <>
+std::vector<LudingHistory>& DynamicSolver::wall_histories<LudingHistory>() { return wall_hist_; }
+template <>
+std::vector<PlasticHistory>& DynamicSolver::wall_histories<PlasticHistory>() { return pl_wall_hist_; }
+
+// The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted).
+template <class H>
+void DynamicSolver::carry_histories(std::size_t n_new) {
+  std::vector<H>& old_h = pair_histories<H>();
+  std::vector<H>& new_h = new_histories<H>();
+  new_h.assign(n_new, H{});
+  std::size_t a = 0;
+  for (std::size_t b = 0; b < n_new; ++b) {
+    while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
+    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
+      new_h[b] = old_h[a];
+      pair_live_[b] = is_fresh(new_h[b]) ? 0 : 1;
+    }
+  }
+  old_h.swap(new_h);
 }
 
 // ---- neighbour search: cell list + Verlet table ------------------------------------------------
@@ -210,7 +334,10 @@ void DynamicSolver::build_wall_list() {
       wall_list_.push_back(static_cast<std::uint32_t>(i));
       wall_touch_[i] = 0xF;  // the next evaluation visits its four wall histories
     } else if (wall_touch_[i] != 0) {
-      for (std::size_t w = 0; w < 4; ++w) wall_hist_[4 * i + w] = LudingHistory{};
+      if (plastic())
+        for (std::size_t w = 0; w < 4; ++w) pl_wall_hist_[4 * i + w] = PlasticHistory{};
+      else
+        for (std::size_t w = 0; w < 4; ++w) wall_hist_[4 * i + w] = LudingHistory{};
       wall_touch_[i] = 0;
     }
   }
@@ -250,18 +377,12 @@ void DynamicSolver::build_table() {
     std::sort(new_key_.begin(), new_key_.end());
   }
   // carry the committed histories of the pairs that stay in the table (both lists sorted)
-  new_hist_.assign(new_key_.size(), LudingHistory{});
   pair_live_.assign(new_key_.size(), 0);
-  std::size_t a = 0;
-  for (std::size_t b = 0; b < new_key_.size(); ++b) {
-    while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
-    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
-      new_hist_[b] = pair_hist_[a];
-      pair_live_[b] = new_hist_[b].fresh() ? 0 : 1;
-    }
-  }
+  if (plastic())
+    carry_histories<PlasticHistory>(new_key_.size());
+  else
+    carry_histories<LudingHistory>(new_key_.size());
   pair_key_.swap(new_key_);
-  pair_hist_.swap(new_hist_);
 }
 
 void DynamicSolver::touching_pairs(
@@ -279,8 +400,15 @@ void DynamicSolver::touching_pairs(
 const LudingHistory* DynamicSolver::history(std::uint32_t i, std::uint32_t j) const {
   const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
   auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
-  if (it == pair_key_.end() || *it != key) return nullptr;
+  if (plastic() || it == pair_key_.end() || *it != key) return nullptr;
   return &pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
+}
+
+const contact::PlasticIndentationHistory* DynamicSolver::plastic_history(std::uint32_t i, std::uint32_t j) const {
+  const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
+  auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
+  if (!plastic() || it == pair_key_.end() || *it != key) return nullptr;
+  return &pl_pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
 }
 
 // ---- forces ------------------------------------------------------------------------------------
@@ -313,17 +441,40 @@ void DynamicSolver::compute_forces_dispatch() {
       else
         compute_forces_with<kFullFrictionless>();
       break;
+    case ContactModel::PlasticIndentation:
+      compute_forces<contact::PlasticIndentationLaw, true>();
+      break;
   }
 }
 
+namespace {
+template <class Law>
+constexpr bool kPlasticLaw = std::is_same_v<Law, contact::PlasticIndentationLaw>;
+// The law object of a step: the plastic law from its parameters, the Luding law from its
+// parameters and the material state k1(T, t).
+template <class Law>
+Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndentationParams& pp) {
+  if constexpr (kPlasticLaw<Law>)
+    return Law(pp);
+  else
+    return Law(lp, k1_Tt);
+}
+}  // namespace
+
 // The force loop of one contact law (law.hpp), chosen at compile time; InPlace = false evaluates
-// the law instead of its in-place update (the same results to the last bit, tested).
+// the law instead of its in-place update (the same results to the last bit, tested). A law whose
+// history outlives separation (plastic flattening) is evaluated for a separated pair that has a
+// history; otherwise a separated pair's history is reset without calling the law.
 template <class Law, bool InPlace>
 void DynamicSolver::compute_forces() {
+  using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  const Law pair_law(params_, thermal_.k1_Tt), wall_law(wall_params_, thermal_.k1_Tt);
-  double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0;
+  const Law pair_law = make_law<Law>(params_, thermal_.k1_Tt, opt_.plastic);
+  const Law wall_law = make_law<Law>(wall_params_, thermal_.k1_Tt, pl_wall_params_);
+  std::vector<H>& pair_hist = pair_histories<H>();
+  std::vector<H>& wall_hist = wall_histories<H>();
+  double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
   if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
     for (std::size_t i = 0; i < n; ++i) {
       P_.fx[i] = P_.mass[i] * opt_.gravity_x;
@@ -341,12 +492,16 @@ void DynamicSolver::compute_forces() {
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
     const double ri = P_.radius[i], rj = P_.radius[j];
     const double L2 = dx * dx + dy * dy, s = ri + rj;
-    if (!(L2 < s * s)) {  // separated: the law clears the history (docs/luding.md)
-      if (pair_live_[k]) {
-        pair_hist_[k] = LudingHistory{};
-        pair_live_[k] = 0;
+    if (!(L2 < s * s)) {
+      if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
+        if (pair_live_[k]) {
+          pair_hist[k] = H{};
+          pair_live_[k] = 0;
+        }
+        continue;
+      } else if (!pair_live_[k]) {
+        continue;  // apart and no history: no force, nothing to keep
       }
-      continue;
     }
     pair_live_[k] = 1;
     const double L = std::sqrt(L2), iL = 1.0 / L;
@@ -365,8 +520,11 @@ void DynamicSolver::compute_forces() {
     in.overlap_start = in.overlap - in.v_n * dt;
     in.r_eff = ri * rj / s;
     in.dt = dt;
+    if constexpr (kPlasticLaw<Law>) in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
     double f_n, f_t;
-    contact::update_contact<InPlace>(pair_law, pair_hist_[k], in, f_n, f_t);
+    contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
+    if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
+    if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
     const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
     P_.fx[j] += fx;
     P_.fy[j] += fy;
@@ -378,7 +536,7 @@ void DynamicSolver::compute_forces() {
     sxy += fx * dy;
     syx += fy * dx;
     syy += fy * dy;
-    el += 0.5 * params_.k2 * in.overlap * in.overlap;
+    if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
   }
   // walls: the pair (wall, particle), n from the wall into the box
   double wf[4] = {0, 0, 0, 0};
@@ -402,12 +560,16 @@ void DynamicSolver::compute_forces() {
       if (todo == 0) continue;
       for (int w = 0; w < 4; ++w) {
         if (!((todo >> w) & 1u)) continue;
-        LudingHistory& h = wall_hist_[4 * i + static_cast<std::size_t>(w)];
+        H& h = wall_hist[4 * i + static_cast<std::size_t>(w)];
         const double dist = d4[w];
         const double delta = ai - dist;
         if (!(delta > 0.0)) {
-          h = LudingHistory{};
-          continue;
+          if constexpr (!Law::kHistoryOutlivesSeparation) {
+            h = H{};
+            continue;
+          } else if (!wall_law.has_history(h)) {
+            continue;
+          }
         }
         const double nx = wnx[w], ny = wny[w], tx = -ny, ty = nx;
         const double rvx = P_.vx[i] - wvx[w], rvy = P_.vy[i] - wvy[w];
@@ -421,8 +583,10 @@ void DynamicSolver::compute_forces() {
         in.overlap_start = delta - in.v_n * dt;
         in.r_eff = ai;
         in.dt = dt;
+        if constexpr (kPlasticLaw<Law>) in.m_eff = P_.mass[i];
         double f_n, f_t;
         contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
+        if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
         const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // on particle
         P_.fx[i] += fx;
         P_.fy[i] += fy;
@@ -433,11 +597,12 @@ void DynamicSolver::compute_forces() {
         sxy += fx * ly;
         syx += fy * lx;
         syy += fy * ly;
-        el += 0.5 * wall_params_.k2 * delta * delta;
+        if constexpr (!kPlasticLaw<Law>) el += 0.5 * wall_params_.k2 * delta * delta;
       }
     }
   }
   for (int w = 0; w < 4; ++w) wall_force_[w] = wf[w];
+  if constexpr (kPlasticLaw<Law>) area_max_ = fn_max / (3.0 * opt_.plastic.sigma_y);
   sxx_ = sxx;
   sxy_ = sxy;
   syx_ = syx;
@@ -506,8 +671,32 @@ int kick_drift_pass(std::size_t n, double h, double dt, double lim2, Particles& 
 }
 }  // namespace
 
+// ContactModel::PlasticIndentation: the tangential bound k_t sigma_y A_c grows with the contact
+// width; the step follows it (with 10 % margin for the growth within a step).
+void DynamicSolver::update_plastic_time_step() {
+  const contact::PlasticIndentationParams& law = opt_.plastic;
+  const double kt = law.frictional() ? law.shear_stiffness() * 1.1 * area_max_ : 0.0;
+  if (kt <= 0.0) return;
+  const double m12 = pl_m12_;
+  ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 / 3.0 / kt);
+  const double tc = std::min(ts_.tc_lightest, ts_.tc_tangential);
+  if (opt_.dt > 0.0) {
+    ts_.steps_per_contact_lightest = tc / ts_.dt;
+    if (ts_.steps_per_contact_lightest < opt_.min_steps_per_contact)
+      breach("time step",
+             fmt::format("the fixed time step {:.4g} gives the stiffest tangential spring {:.3g} steps per period, "
+                         "fewer than {:g}",
+                         ts_.dt, ts_.steps_per_contact_lightest, opt_.min_steps_per_contact),
+             "the contacts grew stiffer than the fixed time step allows (--dt; let the rule choose it)");
+    return;
+  }
+  ts_.dt = tc / opt_.steps_per_contact;
+  ts_.steps_per_contact_lightest = opt_.steps_per_contact;
+}
+
 void DynamicSolver::step() {
   const std::size_t n = P_.size();
+  if (plastic()) update_plastic_time_step();
   const bool checking = opt_.check_every > 0;
   if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
   const bool check = checking && ++since_check_ >= opt_.check_every;

@@ -36,7 +36,10 @@ DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& option
         same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
         same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) &&
         same(P_.torque.size()) && same(st.radius_ref.size()) && same(st.wall_history.size() / 4) &&
-        st.wall_history.size() == 4 * n && st.pair_key.size() == st.pair_history.size()))
+        st.wall_history.size() == 4 * n && st.pair_key.size() == st.pair_history.size()) &&
+      !(options.model == ContactModel::PlasticIndentation && st.plastic_wall_history.size() == 4 * n &&
+        st.plastic_pair_history.size() == st.pair_key.size() && st.wall_history.empty() &&
+        st.pair_history.empty()))
     fail("state: inconsistent array sizes");
   if (n == 0) fail("state: no particles");
   for (std::size_t i = 0; i < n; ++i)
@@ -52,7 +55,8 @@ DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& option
   }
   DynamicOptions o = opt_;
   o.dt = st.dt;
-  ts_ = choose_time_step(P_, params_, o);  // checks the stored dt against the stability rule
+  // checks the stored dt against the stability rule
+  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, o, 0.0) : choose_time_step(P_, params_, o);
   thermal_ = st.thermal;
   time_ = st.time;
   radius_ref_ = st.radius_ref;
@@ -66,11 +70,13 @@ DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& option
   syy_ = st.stress_sum[3];
   elastic_ = st.elastic;
   wall_hist_ = st.wall_history;
+  pl_wall_hist_ = st.plastic_wall_history;
   finish_setup();
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).
   pair_key_ = st.pair_key;
   pair_hist_ = st.pair_history;
+  pl_pair_hist_ = st.plastic_pair_history;
   build_table();
   rebuilds_ = 0;
 }
@@ -94,6 +100,14 @@ SolverState DynamicSolver::state() const {
   st.params = params_;
   // only the pairs with a live history (touching); the others are rebuilt from positions
   for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+    if (plastic()) {
+      const contact::PlasticIndentationHistory& h = pl_pair_hist_[k];
+      if (h.u_max != 0.0 || h.f_t != 0.0 || h.sliding != 0) {
+        st.pair_key.push_back(pair_key_[k]);
+        st.plastic_pair_history.push_back(h);
+      }
+      continue;
+    }
     const LudingHistory& h = pair_hist_[k];
     if (!h.fresh()) {
       st.pair_key.push_back(pair_key_[k]);
@@ -101,6 +115,7 @@ SolverState DynamicSolver::state() const {
     }
   }
   st.wall_history = wall_hist_;
+  st.plastic_wall_history = pl_wall_hist_;
   return st;
 }
 
@@ -234,6 +249,8 @@ double get_luding_param(const LudingParams& p, const std::string& name) {
 }
 
 std::string format_state(const SolverState& st) {
+  if (!st.plastic_wall_history.empty())
+    throw std::invalid_argument("state files hold the Luding models only (not the plastic-indentation law)");
   std::ostringstream o;
   const Particles& P = st.particles;
   o << "# demsolve state v2 (docs/dynamic.md); lengths m, masses kg, times s, forces N\n";
@@ -635,6 +652,76 @@ void contacts_impl(const Particles& P, const Box& box, const LudingParams& pp,
     }
 }
 constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
+
+// The same for the plastic-indentation law: the committed histories with a zero slip increment
+// and the current normal rate (dashpot); the contacts on their loaded branch.
+void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
+                      const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
+                      const std::vector<contact::PlasticIndentationHistory>& hist,
+                      const std::vector<contact::PlasticIndentationHistory>& whist, std::vector<ContactInfo>& out) {
+  out.clear();
+  const contact::PlasticIndentationLaw lp(pp), lw(pw);
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
+    const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
+    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i];
+    const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
+    const double L2 = dx * dx + dy * dy;
+    if (!(L2 < s * s)) continue;
+    const double L = std::sqrt(L2), nx = dx / L, ny = dy / L;
+    const double q = (ri * ri - rj * rj) / (2.0 * L);
+    contact::ContactKinematics in;
+    in.overlap = in.overlap_start = s - L;
+    in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
+    in.r_eff = ri * rj / s;
+    in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
+    const auto r = lp.evaluate(hist[k], in, nullptr);
+    if (!r.loaded) continue;
+    ContactInfo c;
+    c.i = i;
+    c.j = j;
+    c.overlap = in.overlap;
+    c.d_i = 0.5 * L + q;
+    c.d_j = 0.5 * L - q;
+    c.nx = nx;
+    c.ny = ny;
+    c.f_n = r.f_n;
+    c.f_t = r.f_t;
+    c.mu = pp.mu_eff();
+    c.sliding = hist[k].sliding != 0;
+    out.push_back(c);
+  }
+  if (!box.enabled) return;
+  const double pos[4] = {box.x_min, box.x_max, box.y_min, box.y_max};
+  const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
+  for (std::size_t i = 0; i < P.size(); ++i)
+    for (int w = 0; w < 4; ++w) {
+      const double dist = w < 2 ? wnx[w] * (P.x[i] - pos[w]) : wny[w] * (P.y[i] - pos[w]);
+      const double delta = P.radius[i] - dist;
+      if (!(delta > 0.0)) continue;
+      contact::ContactKinematics in;
+      in.overlap = in.overlap_start = delta;
+      in.v_n = -(P.vx[i] * wnx[w] + P.vy[i] * wny[w]);
+      in.r_eff = P.radius[i];
+      in.m_eff = P.mass[i];
+      const auto& h = whist[4 * i + static_cast<std::size_t>(w)];
+      const auto r = lw.evaluate(h, in, nullptr);
+      if (!r.loaded) continue;
+      ContactInfo c;
+      c.i = static_cast<std::uint32_t>(i);
+      c.j = static_cast<std::uint32_t>(w);
+      c.wall = w;
+      c.overlap = delta;
+      c.d_i = dist;
+      c.nx = wnx[w];
+      c.ny = wny[w];
+      c.f_n = r.f_n;
+      c.f_t = r.f_t;
+      c.mu = pw.mu_eff();
+      c.sliding = h.sliding != 0;
+      out.push_back(c);
+    }
+}
 }  // namespace
 
 void DynamicSolver::contacts(std::vector<ContactInfo>& out) const {
@@ -650,6 +737,9 @@ void DynamicSolver::contacts(std::vector<ContactInfo>& out) const {
     case ContactModel::Full:
       contacts_impl<contact::kLudingFull>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
                                           pair_key_, pair_hist_, wall_hist_, out);
+      break;
+    case ContactModel::PlasticIndentation:
+      plastic_contacts(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
       break;
   }
 }

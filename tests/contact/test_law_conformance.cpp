@@ -102,6 +102,31 @@ struct PlasticFrictionless : FixtureBase<PlasticIndentationLaw> {
   }
 };
 
+struct PlasticDamped : FixtureBase<PlasticIndentationLaw> {  // the explicit solver's law: dashpots
+  static constexpr const char* kName = "plastic, elastic unloading, mu = 0.3, dashpots";
+  static Law make() {
+    PlasticIndentationParams p;
+    p.reversible = false;
+    p.mu = 0.3;
+    p.unload_ratio = 10.0;
+    p.damping_n = 0.5;
+    p.damping_t = 0.5;
+    return Law(p);
+  }
+  static double scale() { return 1e-2; }
+  static double r_eff() { return 0.5; }
+  static double v_scale() { return 0.3; }  // dashpot forces comparable to the spring forces
+  static double limit(const Law& l, const History& h, const ContactKinematics& k, const Response& r) {
+    // min(mu F_N, A_c tau_y) with A_c from the spring force (the undamped law)
+    const double fs = netdem::contact::evaluate(l.params(), h, k.r_eff, k.overlap, k.dslip).f_n;
+    return std::fmin(l.params().mu * r.f_n, fs / (3.0 * std::sqrt(3.0)));
+  }
+  static std::set<Regime> regimes() {
+    return {{0, false}, {int(NormalBranch::Plastic), false}, {int(NormalBranch::Plastic), true},
+            {int(NormalBranch::Elastic), false}, {int(NormalBranch::Elastic), true}};
+  }
+};
+
 // The Luding law holds its parameters by reference: each fixture keeps them in a static.
 template <LudingFeatures F>
 struct LudingFixture : FixtureBase<LudingLaw<F>> {
@@ -192,6 +217,7 @@ std::vector<ContactKinematics> load_path(unsigned seed, int n) {
     // slip: bursts of one sign (gross slip) and small oscillations (stick)
     k.dslip = (i % 53 < 20 ? 0.3 : 0.01) * s * u(rng);
     k.r_eff = Fx::r_eff();
+    k.m_eff = 1.0;
     k.dt = Fx::v_scale() > 0.0 ? dt : 0.0;
     k.v_n = Fx::v_scale() * u(rng);
     k.v_t = Fx::v_scale() * u(rng);
@@ -203,7 +229,7 @@ std::vector<ContactKinematics> load_path(unsigned seed, int n) {
 template <class Fx>
 class LawConformance : public ::testing::Test {};
 
-using Fixtures = ::testing::Types<PlasticElastic, PlasticReversibleCoulomb, PlasticFrictionless,
+using Fixtures = ::testing::Types<PlasticElastic, PlasticReversibleCoulomb, PlasticFrictionless, PlasticDamped,
                                   LudingTable1, LudingHysteretic, LudingLinear>;
 TYPED_TEST_SUITE(LawConformance, Fixtures);
 

@@ -45,6 +45,12 @@ struct PlasticIndentationParams {
   bool reversible = false;
   /// First-touch overlap u_c / (2 R*): below u_c the loading branch is linear (see above); 0: none
   double first_touch = 1.0e-5;
+  /// Contact dashpots for an explicit solver, as fractions of critical damping of the first-touch
+  /// chord stiffness k_c = 6 sigma_y / sqrt(first_touch): gamma_n = 2 damping_n sqrt(k_c m*),
+  /// gamma_t = 2 damping_t sqrt(k_c m*/3) (m*/3: the tangential effective mass of two equal disks,
+  /// rotation included). Constant per pair, so the tangent (rates held) is the undamped one.
+  /// 0 (quasi-static): none. Needs first_touch > 0.
+  double damping_n = 0.0, damping_t = 0.0;
 
   /// min(mu, 1/(3 sqrt 3)): the Coulomb limit and the shear cap tau_y = sigma_y/sqrt(3) combined.
   double mu_eff() const { return std::fmin(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
@@ -52,6 +58,10 @@ struct PlasticIndentationParams {
   /// The shear stress per unit slip in absolute units, k_t sigma_y (k_t is given in sigma_y / R,
   /// lengths in R): so that every force, and S / sigma_y unchanged, scales with sigma_y.
   double shear_stiffness() const { return k_t * sigma_y; }
+  /// The first-touch chord stiffness 6 sigma_y / sqrt(first_touch) (inf for first_touch = 0): the
+  /// largest loading stiffness of any contact, whatever R*.
+  double chord_stiffness() const { return 6.0 * sigma_y / std::sqrt(first_touch); }
+  bool damped() const { return damping_n > 0.0 || damping_t > 0.0; }
   /// Throws std::invalid_argument with a one-line message for an invalid value.
   void validate() const;
 };
@@ -181,6 +191,58 @@ inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
   return r;
 }
 
+/// evaluate() with contact dashpots (explicit dynamics): the normal force F_N = max(0, F_spring +
+/// fd_n) is never attractive; the tangential dashpot force fd_t acts inside the Coulomb limit
+/// min(mu F_N, A_c tau_y) (the spring is reset so that spring + dashpot sits on the limit while
+/// sliding, as LMM05 Eq 21); the contact width A_c = F_spring/(3 sigma_y) comes from the spring.
+/// fd_n = gamma_n d(overlap)/dt, fd_t = -gamma_t d(slip)/dt.
+inline PlasticIndentationResult evaluate_damped(const PlasticIndentationParams& p,
+                                                const PlasticIndentationHistory& h, double r_eff,
+                                                double u_n, double dslip, double fd_n, double fd_t) {
+  PlasticIndentationResult r;
+  normal_force(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
+  r.history.u_max = std::fmax(h.u_max, u_n);
+  r.area = r.f_n / (3.0 * p.sigma_y);
+  if (r.branch == NormalBranch::Open) {
+    r.history.f_t = 0.0;
+    r.history.sliding = 0;
+    return r;
+  }
+  const double k_spring = r.k_n;
+  r.f_n += fd_n;
+  if (!(r.f_n > 0.0)) {  // F_N >= 0: the dashpot does not pull
+    r.f_n = 0.0;
+    r.k_n = 0.0;
+  }
+  if (!p.frictional()) {
+    r.history.f_t = 0.0;
+    r.history.sliding = 0;
+    return r;
+  }
+  const double kt_force = p.shear_stiffness() * r.area;
+  const double spring = h.f_t - kt_force * dslip;
+  const double trial = spring + fd_t;
+  const double cap = r.area * p.sigma_y / std::sqrt(3.0);  // A_c tau_y
+  const bool coulomb = !std::isinf(p.mu) && p.mu * r.f_n < cap;
+  const double limit = coulomb ? p.mu * r.f_n : cap;
+  if (std::fabs(trial) <= limit) {
+    r.f_t = trial;
+    r.history.f_t = spring;
+    r.dft_dslip = -kt_force;
+    r.dft_dun = -p.shear_stiffness() * (k_spring / (3.0 * p.sigma_y)) * dslip;
+    r.sliding = false;
+  } else {
+    const double s = trial > 0.0 ? 1.0 : -1.0;
+    r.f_t = s * limit;
+    r.history.f_t = s * limit - fd_t;
+    r.dft_dslip = 0.0;
+    r.dft_dun = s * (coulomb ? p.mu * r.k_n : k_spring / (3.0 * std::sqrt(3.0)));
+    r.sliding = true;
+  }
+  r.history.sliding = r.sliding ? 1 : 0;
+  return r;
+}
+
 /// The plastic-indentation law behind the contact-law interface (law.hpp). Holds its parameters
 /// by value; a solver builds it once per run (or per parameter change).
 class PlasticIndentationLaw {
@@ -192,12 +254,20 @@ class PlasticIndentationLaw {
   static constexpr bool kHistoryOutlivesSeparation = true;
 
   PlasticIndentationLaw() = default;
-  explicit PlasticIndentationLaw(const Params& p) : p_(p) {}
+  explicit PlasticIndentationLaw(const Params& p)
+      : p_(p), damped_(p.damped()), k_chord_(p.damped() ? p.chord_stiffness() : 0.0) {}
   const Params& params() const { return p_; }
   bool has_history(const History& h) const { return h.u_max > 0.0; }
 
   Response evaluate(const History& h, const ContactKinematics& k, ContactTangent* t) const {
-    const PlasticIndentationResult r = contact::evaluate(p_, h, k.r_eff, k.overlap, k.dslip);
+    PlasticIndentationResult r;
+    if (!damped_) {
+      r = contact::evaluate(p_, h, k.r_eff, k.overlap, k.dslip);
+    } else {
+      const double gn = 2.0 * p_.damping_n * std::sqrt(k_chord_ * k.m_eff);
+      const double gt = 2.0 * p_.damping_t * std::sqrt(k_chord_ * k.m_eff / 3.0);
+      r = evaluate_damped(p_, h, k.r_eff, k.overlap, k.dslip, gn * k.v_n, -gt * k.v_t);
+    }
     Response out;
     out.f_n = r.f_n;
     out.f_t = r.f_t;
@@ -245,7 +315,13 @@ class PlasticIndentationLaw {
         s.k_n_add = std::fmax(0.0, ksec - kn);
       }
     }
-    s.k_t = p_.frictional() ? p_.shear_stiffness() * (r.f_n / (3.0 * p_.sigma_y)) : 0.0;
+    double f_spring = r.f_n;  // the contact width comes from the spring force (no dashpot)
+    if (damped_) {
+      double kn;
+      NormalBranch b;
+      normal_force(p_, k.r_eff, h.u_max, k.overlap, f_spring, kn, b);
+    }
+    s.k_t = p_.frictional() ? p_.shear_stiffness() * (f_spring / (3.0 * p_.sigma_y)) : 0.0;
     return s;
   }
 
@@ -264,6 +340,8 @@ class PlasticIndentationLaw {
 
  private:
   Params p_;
+  bool damped_ = false;
+  double k_chord_ = 0.0;
 };
 static_assert(ContactLaw<PlasticIndentationLaw>);
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "netdem/contact/luding.hpp"
+#include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
 
@@ -37,10 +38,15 @@ struct Particles {
   /// Adds a disk of radius r: mass rho_p pi r^2 h (contact::luding_mass), I = m r^2 / 2.
   std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
                   double pvy = 0.0, double pomega = 0.0);
+  /// Adds a disk of radius r and unit depth with the areal density rho: m = rho pi r^2, I = m r^2/2.
+  std::size_t add_disk(double px, double py, double r, double rho, double pvx = 0.0,
+                       double pvy = 0.0, double pomega = 0.0);
 };
 
 /// The particles of a packing (x, y, r; SI units, m) at rest: add() of each disk in order.
 Particles particles_from(const packing::Packing& p, const LudingParams& params);
+/// The particles of a packing at rest as disks of areal density rho (add_disk(); any units).
+Particles particles_from(const packing::Packing& p, double rho);
 /// The geometric description of the particles (x, y, radius) in `box`; seed 0, no comments.
 packing::Packing to_packing(const Particles& P, const packing::Box& box);
 
@@ -48,7 +54,11 @@ packing::Packing to_packing(const Particles& P, const packing::Box& box);
 enum class ContactModel : std::uint8_t {
   Linear,      ///< luding_evaluate<kLudingLinear>: k2 delta + gamma0 delta', Cundall-Strack spring
   Hysteretic,  ///< {hysteresis}: Eq 4 and Eq 7 without cohesion or temperature
-  Full         ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
+  Full,        ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
+  /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw) with
+  /// DynamicOptions::plastic; any consistent units (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)).
+  /// The Luding parameters are not used; the time step is the law's (plastic_time_step()).
+  PlasticIndentation
 };
 
 enum class WallMode : std::uint8_t { Fixed, Strain, Stress };
@@ -92,12 +102,17 @@ struct DynamicOptions {
   /// Test and diagnosis: the force loop calls the law's evaluate() instead of its in-place
   /// update() (law.hpp update_contact); the results are the same to the last bit.
   bool reference_contact_path = false;
+  /// ContactModel::PlasticIndentation: the law (first_touch > 0: the explicit solver needs the
+  /// bounded first-touch stiffness) and the friction of the walls (flat, R* = r_i).
+  contact::PlasticIndentationParams plastic;
+  double plastic_wall_mu = 0.0;
   /// Throws std::invalid_argument with one line for an invalid value.
   void validate() const;
 };
 
 struct TimeStepInfo {
   double dt = 0.0;                          ///< chosen time step [s]
+  double tc_tangential = 0.0;  ///< plastic law: tangential period pi sqrt(m_t/(k_t A_max)) (0: none)
   double tc_mean = 0.0;                     ///< Eq 6 contact duration of the mean pair [s]
   double tc_lightest = 0.0;                 ///< Eq 6 contact duration of the lightest pair [s]
   double steps_per_contact_lightest = 0.0;  ///< tc_lightest / dt
@@ -108,6 +123,13 @@ double contact_duration(double k2, double gamma0, double m12);
 /// The time step of the rule (or options.dt); throws std::invalid_argument if the lightest pair
 /// gets fewer than options.min_steps_per_contact steps per contact.
 TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o);
+/// The time step of ContactModel::PlasticIndentation: t = pi sqrt(m/k) / steps_per_contact for
+/// the lightest pair with the law's largest normal stiffness (the first-touch chord, times
+/// unload_ratio with the elastic unloading branch) and with the tangential spring k_t sigma_y
+/// A_max on the tangential effective mass m*/3 (rotation included), A_max the largest contact
+/// width; or options.dt, refused (std::invalid_argument) below min_steps_per_contact.
+TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
+                               const DynamicOptions& o, double area_max);
 
 struct Stress2 {
   double xx = 0.0, xy = 0.0, yx = 0.0, yy = 0.0;  ///< [N/m], compression positive
@@ -139,6 +161,8 @@ struct SolverState {
   std::vector<std::uint64_t> pair_key;      ///< (i << 32 | j), i < j, sorted
   std::vector<LudingHistory> pair_history;  ///< one per pair_key
   std::vector<LudingHistory> wall_history;  ///< 4 per particle: left, right, bottom, top
+  /// ContactModel::PlasticIndentation: the histories (pair_history and wall_history stay empty)
+  std::vector<contact::PlasticIndentationHistory> plastic_pair_history, plastic_wall_history;
 };
 
 /// One touching contact at the current state, for output (distributions, snapshots).
@@ -243,6 +267,8 @@ class DynamicSolver {
   void touching_pairs(std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
   /// Committed contact history of pair (i < j); nullptr if the pair is not in the table.
   const LudingHistory* history(std::uint32_t i, std::uint32_t j) const;
+  /// The same for ContactModel::PlasticIndentation.
+  const contact::PlasticIndentationHistory* plastic_history(std::uint32_t i, std::uint32_t j) const;
 
   double wall_force_right() const { return wall_force_[1]; }  ///< contacts on right wall, +x [N]
   double wall_force_top() const { return wall_force_[3]; }    ///< contacts on top wall, +y [N]
@@ -260,6 +286,17 @@ class DynamicSolver {
   void compute_forces_with();
   template <class L, bool InPlace>
   void compute_forces();
+  // the history store of a law's history type (one per law family)
+  template <class H>
+  std::vector<H>& pair_histories();
+  template <class H>
+  std::vector<H>& new_histories();
+  template <class H>
+  std::vector<H>& wall_histories();
+  template <class H>
+  void carry_histories(std::size_t n_new);
+  bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
+  void update_plastic_time_step();
   void compute_forces_dispatch();
   void choose_friction();
   void finish_setup();
@@ -284,6 +321,11 @@ class DynamicSolver {
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
   std::vector<LudingHistory> pair_hist_, new_hist_;
+  // ContactModel::PlasticIndentation: its histories (the Luding ones stay empty) and laws
+  std::vector<contact::PlasticIndentationHistory> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
+  contact::PlasticIndentationParams pl_wall_params_;
+  double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
+  double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
   /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
