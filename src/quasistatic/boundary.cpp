@@ -29,8 +29,10 @@ void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std
 }
 
 // The prescribed motion (Eqs 14-15 on current coordinates) is the affine motion of the increment;
-// the predictor for the free DOFs is the previous increment's displacement (scaled) on an
-// unchanged strain path, else the affine motion.
+// the predictor for the free DOFs is this affine motion plus the previous increment's non-affine
+// part (scaled; rotations: the previous rotation increment, scaled) on an unchanged strain path,
+// else the affine motion alone. The non-affine part is du_prev minus the previous affine motion
+// at the previous increment's start positions, so the predictor does not depend on the origin.
 void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
   const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
   du_aff.assign(3 * n, 0.0);
@@ -43,7 +45,17 @@ void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
   const bool reuse = !du_prev.empty() && dpn > 0.0 && dn > 0.0 &&
                      (dE.array() * dE_prev.array()).sum() / (dn * dpn) > 0.999;
   const double scale = reuse ? dn / dpn : 0.0;
-  for (int q = 0; q < 3 * n; ++q) du[q] = (dof[q] >= 0 && reuse) ? scale * du_prev[q] : du_aff[q];
+  for (int q = 0; q < 3 * n; ++q) du[q] = du_aff[q];
+  if (!reuse) return;
+  // the previous increment's affine part, A_prev x_prev, at its start positions x_prev = x - du_prev
+  const Eigen::Matrix2d A_prev = small_expm(dE_prev) - Eigen::Matrix2d::Identity();
+  for (int p = 0; p < n; ++p) {
+    const Eigen::Vector2d up(du_prev[3 * p], du_prev[3 * p + 1]);
+    const Eigen::Vector2d na = up - A_prev * (Eigen::Vector2d(x[p], y[p]) - up);
+    if (dof[3 * p] >= 0) du[3 * p] += scale * na.x();
+    if (dof[3 * p + 1] >= 0) du[3 * p + 1] += scale * na.y();
+    if (dof[3 * p + 2] >= 0) du[3 * p + 2] = scale * du_prev[3 * p + 2];
+  }
 }
 
 void NetworkSolver::set_reversible_normal(bool reversible) {
