@@ -250,9 +250,9 @@ void DynamicSolver::finish_setup() {
 
 void DynamicSolver::choose_friction() {
   if (plastic())
-    friction_ = opt_.plastic.mu > 0.0 || (box_.enabled && opt_.plastic_wall_mu > 0.0);
+    friction_ = opt_.plastic.mu > 0.0 || (walls_active() && opt_.plastic_wall_mu > 0.0);
   else
-    friction_ = params_.mu > 0.0 || (box_.enabled && params_.mu_wall > 0.0);
+    friction_ = params_.mu > 0.0 || (walls_active() && params_.mu_wall > 0.0);
 }
 
 // ---- the history stores: one per law family; the model's is used, the other stays empty --------
@@ -319,8 +319,8 @@ bool DynamicSolver::needs_rebuild() const {
 void DynamicSolver::build_wall_list() {
   const std::size_t n = P_.size();
   wall_list_.clear();
-  wall_list_valid_ = box_.enabled;
-  if (!box_.enabled) return;
+  wall_list_valid_ = walls_active();
+  if (!walls_active()) return;
   box_build_[0] = box_.x_min;
   box_build_[1] = box_.x_max;
   box_build_[2] = box_.y_min;
@@ -344,7 +344,7 @@ void DynamicSolver::build_wall_list() {
 }
 
 bool DynamicSolver::walls_moved() const {
-  if (!box_.enabled) return false;
+  if (!walls_active()) return false;
   const double lim = 0.5 * skin_;
   return !(std::fabs(box_.x_min - box_build_[0]) < lim &&
            std::fabs(box_.x_max - box_build_[1]) < lim &&
@@ -540,7 +540,7 @@ void DynamicSolver::compute_forces() {
   }
   // walls: the pair (wall, particle), n from the wall into the box
   double wf[4] = {0, 0, 0, 0};
-  if (box_.enabled) {
+  if (walls_active()) {
     const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
     const double wvx[4] = {0, wall_v_[0], 0, 0}, wvy[4] = {0, 0, 0, wall_v_[1]};
     if (wall_touch_.size() != n) wall_touch_.assign(n, 0xF);
@@ -697,6 +697,7 @@ void DynamicSolver::update_plastic_time_step() {
 void DynamicSolver::step() {
   const std::size_t n = P_.size();
   if (plastic()) update_plastic_time_step();
+  impose_affine_motion(ts_.dt);
   const bool checking = opt_.check_every > 0;
   if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
   const bool check = checking && ++since_check_ >= opt_.check_every;
@@ -718,6 +719,7 @@ void DynamicSolver::step() {
       inv_mass_[i] = 1.0 / P_.mass[i];
       inv_inertia_[i] = 1.0 / P_.inertia[i];
     }
+    for (std::uint32_t p : prescribed_) inv_mass_[p] = inv_inertia_[p] = 0.0;  // the kicks leave them
     inv_scale_ = radius_scale_;
   }
   // half-step kick of particles and moving walls; the damping term of Eq 1 is taken at the
@@ -760,6 +762,7 @@ void DynamicSolver::step() {
   time_ += dt;
   if (far || walls_moved()) build_table();
   compute_forces_dispatch();  // forces use the half-step velocities for the damping terms
+  if (opt_.affine_drag > 0.0) apply_affine_drag();
   kick(false);
   if (check) {
     since_check_ = 0;
@@ -769,6 +772,80 @@ void DynamicSolver::step() {
       since_good_ = 0;
     }
   }
+}
+
+// ---- macroscopic strain rate: prescribed particles, affine walls, drag -----------------------------
+void DynamicSolver::set_strain_rate(double e11, double e22) {
+  if (!std::isfinite(e11) || !std::isfinite(e22)) fail("set_strain_rate: the strain rate must be finite");
+  if (!box_.enabled) fail("set_strain_rate: the affine field needs a box (its lower-left corner is x_0)");
+  edot_[0] = e11;
+  edot_[1] = e22;
+}
+
+void DynamicSolver::set_affine_velocities() {
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    P_.vx[i] = edot_[0] * (P_.x[i] - box_.x_min);
+    P_.vy[i] = edot_[1] * (P_.y[i] - box_.y_min);
+    P_.omega[i] = 0.0;
+  }
+}
+
+void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles) {
+  is_prescribed_.assign(P_.size(), 0);
+  for (std::uint32_t p : particles) {
+    if (p >= P_.size()) fail("set_prescribed: particle " + std::to_string(p) + " does not exist");
+    is_prescribed_[p] = 1;
+  }
+  prescribed_.clear();
+  for (std::uint32_t p = 0; p < P_.size(); ++p)
+    if (is_prescribed_[p]) prescribed_.push_back(p);
+  inv_mass_.clear();  // the kicks' inverse masses are refilled (zero for the prescribed)
+}
+
+// Over the coming step of length dt: the prescribed particles and the Affine walls get the
+// velocity (exp(E' dt) - 1)/dt (x - x_0), with which the drift moves them exactly along the
+// exponential affine motion; prescribed spins are zero.
+void DynamicSolver::impose_affine_motion(double dt) {
+  if (prescribed_.empty() && box_.right.mode != WallMode::Affine && box_.top.mode != WallMode::Affine) return;
+  const double gx = std::expm1(edot_[0] * dt) / dt, gy = std::expm1(edot_[1] * dt) / dt;
+  for (std::uint32_t p : prescribed_) {
+    P_.vx[p] = gx * (P_.x[p] - box_.x_min);
+    P_.vy[p] = gy * (P_.y[p] - box_.y_min);
+    P_.omega[p] = 0.0;
+  }
+  if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
+  if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
+}
+
+void DynamicSolver::apply_affine_drag() {
+  const double c = opt_.affine_drag;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    if (!is_prescribed_.empty() && is_prescribed_[i]) continue;
+    P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - edot_[0] * (P_.x[i] - box_.x_min));
+    P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - edot_[1] * (P_.y[i] - box_.y_min));
+    P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
+  }
+}
+
+Stress2 DynamicSolver::boundary_stress() const {
+  Stress2 s;
+  if (!box_.enabled) return s;
+  const double xc = 0.5 * (box_.x_min + box_.x_max), yc = 0.5 * (box_.y_min + box_.y_max);
+  for (std::uint32_t p : prescribed_) {
+    const double lx = P_.x[p] - xc, ly = P_.y[p] - yc;
+    s.xx += P_.fx[p] * lx;
+    s.xy += P_.fx[p] * ly;
+    s.yx += P_.fy[p] * lx;
+    s.yy += P_.fy[p] * ly;
+  }
+  // f_p = the contact forces on p, balanced by the boundary's -f_p: sum_p f_p (x) (x_p - x_c) is
+  // the contact stress sum when every particle is prescribed (compression positive)
+  const double V = (box_.x_max - box_.x_min) * (box_.y_max - box_.y_min);
+  s.xx /= V;
+  s.xy /= V;
+  s.yx /= V;
+  s.yy /= V;
+  return s;
 }
 
 // ---- instability checks (docs/dynamic.md "Instability detection") -------------------------------
@@ -827,7 +904,7 @@ void DynamicSolver::check_health_with(double vmax2) const {
     if (!(wv * dt < travel))
       breach("velocity", fmt::format("a wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m", wv * dt, travel),
              kCauseWall);
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n && box_.contact_walls; ++i)
       if (!(P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max))
         breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
                kCauseLoad);
@@ -845,7 +922,7 @@ void DynamicSolver::check_health_with(double vmax2) const {
                                     "{:.3g} m", d, i, j, lim),
              kCauseLoad);
   }
-  if (box_.enabled) {
+  if (walls_active()) {
     for (std::size_t i = 0; i < n; ++i) {
       const double r = P_.radius[i];
       const double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),

@@ -163,7 +163,7 @@ void DynamicSolver::set_gravity(double gx, double gy) {
 }
 
 std::size_t DynamicSolver::wall_contacts() const {
-  if (!box_.enabled) return 0;
+  if (!walls_active()) return 0;
   std::size_t c = 0;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double r = P_.radius[i];

@@ -176,3 +176,111 @@ TEST(DynamicPlastic, RestartIsBitIdentical) {
   EXPECT_EQ(a.dt(), b.dt());
   for (std::size_t k = 0; k < ca.size(); ++k) EXPECT_EQ(ca[k].f_t, cb[k].f_t);
 }
+
+// ---- the macroscopic strain rate: prescribed particles, affine walls, drag -----------------------
+namespace {
+// A jittered lattice of frictional unit disks in a box [0, W]^2 (lower-left corner not at 0 when
+// shifted), the plastic law with dashpots.
+DynamicSolver affine_scene(double x0, double y0, bool walls, std::vector<std::uint32_t>* all = nullptr) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Particles P;
+  const int side = 7;
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+      P.add_disk(x0 + 1.0 + 2.0 * i + 0.02 * u(rng), y0 + 1.0 + 2.0 * j + 0.02 * u(rng), 1.0 + 0.03 * u(rng), 1.0);
+  Box box;
+  box.x_min = x0;
+  box.y_min = y0;
+  box.x_max = x0 + 2.0 * side;
+  box.y_max = y0 + 2.0 * side;
+  box.contact_walls = walls;
+  box.right.mode = box.top.mode = WallMode::Affine;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic.reversible = true;
+  o.plastic.mu = 0.3;
+  o.plastic.damping_n = o.plastic.damping_t = 0.5;
+  DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  if (all) {
+    all->clear();
+    for (std::uint32_t p = 0; p < s.particles().size(); ++p) all->push_back(p);
+  }
+  return s;
+}
+}  // namespace
+
+// Every particle prescribed: the centres and the box follow x_0 + exp(E' t)(x - x_0) to rounding,
+// the stress from the reactions equals the contact stress (sum over particles of f_p (x) x_p is
+// the sum over contacts of f (x) l), and both are compressive and grow.
+TEST(DynamicPlastic, AffineMotionIsExactAndBoundaryStressIsContactStress) {
+  for (double shift : {0.0, 1e3}) {
+    std::vector<std::uint32_t> all;
+    DynamicSolver s = affine_scene(shift, -shift, false, &all);
+    s.set_prescribed(all);
+    const double e11 = -0.02, e22 = -0.01;
+    s.set_strain_rate(e11, e22);
+    s.set_affine_velocities();
+    const Particles P0 = s.particles();
+    const double x0 = s.box().x_min, y0 = s.box().y_min, X1 = s.box().x_max, Y1 = s.box().y_max;
+    s.run(3000);
+    const double t = s.time();
+    double err = 0.0;
+    for (std::size_t i = 0; i < P0.size(); ++i) {
+      err = std::max(err, std::fabs(s.particles().x[i] - (x0 + std::exp(e11 * t) * (P0.x[i] - x0))));
+      err = std::max(err, std::fabs(s.particles().y[i] - (y0 + std::exp(e22 * t) * (P0.y[i] - y0))));
+    }
+    const double box_err = std::max(std::fabs(s.box().x_max - (x0 + std::exp(e11 * t) * (X1 - x0))),
+                                    std::fabs(s.box().y_max - (y0 + std::exp(e22 * t) * (Y1 - y0))));
+    const Stress2 b = s.boundary_stress(), c = s.contact_stress();
+    std::printf("  shift %g: t = %.3f, max |x - affine| = %.2e, box %.2e; boundary stress (%.6f, %.6f), contact "
+                "(%.6f, %.6f)\n",
+                shift, t, err, box_err, b.xx, b.yy, c.xx, c.yy);
+    EXPECT_LT(err, 1e-12 * (1.0 + shift) * 20.0);
+    EXPECT_LT(box_err, 1e-12 * (1.0 + shift) * 20.0);
+    EXPECT_GT(c.yy, 0.0);
+    EXPECT_NEAR(b.xx, c.xx, 1e-9 * std::fabs(c.yy));
+    EXPECT_NEAR(b.yy, c.yy, 1e-9 * std::fabs(c.yy));
+    EXPECT_NEAR(b.xy, c.xy, 1e-9 * std::fabs(c.yy));
+  }
+}
+
+// The drag acts on the motion relative to the affine field: with no contacts, x'' = -c (x' - e x)
+// (x from the corner x_0) is linear, so a particle started off the field by w0 differs from one
+// started on it by dx(t) = w0 (e^(l1 t) - e^(l2 t)) / (l1 - l2), l^2 + c l - c e = 0 (for e = 0
+// the plain decay w0 e^(-c t) of the relative velocity).
+TEST(DynamicPlastic, AffineDragActsOnTheRelativeMotion) {
+  for (double e : {0.0, -0.01, 0.02}) {
+    const double c = 0.5, w0 = 0.003;
+    double dx = 0.0, dv = 0.0, t = 0.0;
+    for (int off = 0; off < 2; ++off) {
+      Particles P;
+      P.add_disk(10.0, 10.0, 1.0, 1.0);
+      Box box;
+      box.x_max = box.y_max = 40.0;
+      box.right.mode = box.top.mode = WallMode::Affine;
+      DynamicOptions o;
+      o.model = ContactModel::PlasticIndentation;
+      o.affine_drag = c;
+      o.plastic.reversible = true;
+      o.dt = 1e-3;
+      DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+      s.set_strain_rate(e, e);
+      s.set_affine_velocities();
+      SolverState st = s.state();
+      st.particles.vx[0] += off * w0;
+      DynamicSolver r(st, o);
+      r.set_strain_rate(e, e);
+      r.run(4000);
+      t = r.time();
+      dx += (off ? 1.0 : -1.0) * r.particles().x[0];
+      dv += (off ? 1.0 : -1.0) * r.particles().vx[0];
+    }
+    const double d = std::sqrt(c * c + 4.0 * c * e), l1 = 0.5 * (-c + d), l2 = 0.5 * (-c - d);
+    const double dx_ref = w0 * (std::exp(l1 * t) - std::exp(l2 * t)) / (l1 - l2);
+    const double dv_ref = w0 * (l1 * std::exp(l1 * t) - l2 * std::exp(l2 * t)) / (l1 - l2);
+    std::printf("  e = %g, t = %.2f: dx %.6e (closed form %.6e), dv %.6e (%.6e)\n", e, t, dx, dx_ref, dv, dv_ref);
+    EXPECT_NEAR(dx / dx_ref, 1.0, 1e-3);
+    EXPECT_NEAR(dv / dv_ref, 1.0, 1e-3);
+  }
+}

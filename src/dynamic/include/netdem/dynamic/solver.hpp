@@ -61,7 +61,10 @@ enum class ContactModel : std::uint8_t {
   PlasticIndentation
 };
 
-enum class WallMode : std::uint8_t { Fixed, Strain, Stress };
+/// Fixed; Strain: a prescribed velocity; Stress: Eq 1; Affine: the wall follows the macroscopic
+/// strain rate of set_strain_rate() about the fixed lower-left corner (x_max' = E11' (x_max -
+/// x_min), exactly exponential over a step).
+enum class WallMode : std::uint8_t { Fixed, Strain, Stress, Affine };
 
 /// The right (moves along x) or top (moves along y) wall.
 struct MovingWall {
@@ -77,6 +80,9 @@ struct MovingWall {
 /// (x_min) and bottom (y_min) walls fixed, right and top walls moving.
 struct Box : packing::Box {
   bool enabled = true;  ///< false: no walls, unbounded free system
+  /// false: the box is the measurement domain only (density, stress volume, its walls move as
+  /// set), without wall contacts; the centres may leave it (a prescribed boundary layer confines)
+  bool contact_walls = true;
   MovingWall right, top;
   Box() : packing::Box{0.0, 0.0, 1.0, 1.0} {}
   /// Fixed walls at the sides of `b`.
@@ -102,6 +108,10 @@ struct DynamicOptions {
   /// Test and diagnosis: the force loop calls the law's evaluate() instead of its in-place
   /// update() (law.hpp update_contact); the results are the same to the last bit.
   bool reference_contact_path = false;
+  /// Drag on the motion relative to the affine field of set_strain_rate(): force -affine_drag m (v -
+  /// E' (x - x_0)), torque -affine_drag I omega, on the particles that are not prescribed [1/time];
+  /// 0: none.
+  double affine_drag = 0.0;
   /// ContactModel::PlasticIndentation: the law (first_touch > 0: the explicit solver needs the
   /// bounded first-touch stiffness) and the friction of the walls (flat, R* = r_i).
   contact::PlasticIndentationParams plastic;
@@ -256,6 +266,21 @@ class DynamicSolver {
   double wall_velocity_top() const { return wall_v_[1]; }
   /// Sets the gravity vector [m/s^2] between steps.
   void set_gravity(double gx, double gy);
+  /// The macroscopic strain rate E' = diag(e11, e22) (no shear) about the box's lower-left corner
+  /// x_0: prescribed particles follow it, Affine walls follow it, the affine drag acts relative to
+  /// it. Over a step of length dt the affine motion is exactly x_0 + exp(E' dt)(x - x_0).
+  void set_strain_rate(double e11, double e22);
+  double strain_rate_11() const { return edot_[0]; }
+  double strain_rate_22() const { return edot_[1]; }
+  /// Sets every particle's velocity to the affine field E' (x - x_0) and its spin to 0.
+  void set_affine_velocities();
+  /// The particles whose centres follow the affine motion exactly (their rotations are held): the
+  /// kinematic boundary layer of a compaction (netsolve's die mode) or every particle (affine mode).
+  void set_prescribed(const std::vector<std::uint32_t>& particles);
+  const std::vector<std::uint32_t>& prescribed() const { return prescribed_; }
+  /// The stress from the contact forces on the prescribed particles (their reactions, Redanz & Fleck
+  /// Eq 13), about the box centre: Sigma = (1/V) sum_p f_p (x) (x_p - x_c), compression positive.
+  Stress2 boundary_stress() const;
   /// Number of particle-wall contacts (overlap > 0) at the current positions.
   std::size_t wall_contacts() const;
   /// All touching contacts (pairs, then walls) with their forces: the law evaluated on the
@@ -326,6 +351,13 @@ class DynamicSolver {
   contact::PlasticIndentationParams pl_wall_params_;
   double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
   double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
+  // macroscopic strain rate, prescribed particles
+  double edot_[2] = {0.0, 0.0};
+  std::vector<std::uint32_t> prescribed_;
+  std::vector<std::uint8_t> is_prescribed_;
+  bool walls_active() const { return box_.enabled && box_.contact_walls; }
+  void impose_affine_motion(double dt);
+  void apply_affine_drag();
   /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
