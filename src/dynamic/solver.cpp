@@ -465,8 +465,11 @@ Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndenta
 // the law instead of its in-place update (the same results to the last bit, tested). A law whose
 // history outlives separation (plastic flattening) is evaluated for a separated pair that has a
 // history; otherwise a separated pair's history is reset without calling the law.
+// flatten: the law is inlined into the loop (with four call sites of luding_evaluate<F> in this
+// translation unit, pair and wall loops times in-place and reference path, GCC stopped inlining
+// it, which halved the speed of the full law: docs/performance.md "Issue 12").
 template <class Law, bool InPlace>
-void DynamicSolver::compute_forces() {
+[[gnu::flatten]] void DynamicSolver::compute_forces() {
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
@@ -517,10 +520,12 @@ void DynamicSolver::compute_forces() {
     in.v_n = -vn;
     in.v_t = vt;
     in.dslip = vt * dt;
-    in.overlap_start = in.overlap - in.v_n * dt;
-    in.r_eff = ri * rj / s;
     in.dt = dt;
-    if constexpr (kPlasticLaw<Law>) in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+    if constexpr (kPlasticLaw<Law>) {  // (the Luding law reads neither)
+      in.overlap_start = in.overlap - in.v_n * dt;
+      in.r_eff = ri * rj / s;
+      in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+    }
     double f_n, f_t;
     contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
     if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
@@ -580,10 +585,12 @@ void DynamicSolver::compute_forces() {
         in.v_n = -vn;
         in.v_t = vt;
         in.dslip = vt * dt;
-        in.overlap_start = delta - in.v_n * dt;
-        in.r_eff = ai;
         in.dt = dt;
-        if constexpr (kPlasticLaw<Law>) in.m_eff = P_.mass[i];
+        if constexpr (kPlasticLaw<Law>) {
+          in.overlap_start = delta - in.v_n * dt;
+          in.r_eff = ai;
+          in.m_eff = P_.mass[i];
+        }
         double f_n, f_t;
         contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
         if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
