@@ -144,7 +144,8 @@ std::vector<int> select_probes(const YieldArgs& a) {
   return sel;
 }
 
-std::string num(double v) { return std::isfinite(v) ? fmt::format("{:.8g}", v) : "nan"; }
+// a missing value is an empty field (no NaN in a result file; readers: float(x) if x else nan)
+std::string num(double v) { return std::isfinite(v) ? fmt::format("{:.8g}", v) : ""; }
 std::string csv_text(std::string s) {
   std::replace(s.begin(), s.end(), ',', ';');
   std::replace(s.begin(), s.end(), '\n', ' ');

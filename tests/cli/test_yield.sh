@@ -35,6 +35,7 @@ if "$ns" "${args[@]}" --out "$good" >/dev/null 2>"$tmp/stderr" &&
    head -1 "$good/yield_points.csv" | grep -q "theta" &&
    has_columns "$good/yield_points.csv" theta S11 S22 S11_offset S22_offset S11_analytic S22_analytic status &&
    [ "$(tail -n +2 "$good/yield_points.csv" | wc -l)" -eq 4 ] &&
+   ! grep -qiE '(^|,)[-+]?(nan|inf)(,|$)' "$good"/yield_points.csv "$good"/probes/probe_*.csv &&
    [ "$(ls "$good"/probes/probe_*.csv | wc -l)" -eq 4 ] &&
    [ -s "$good/summary.json" ] && grep -q '"unloading"' "$good/summary.json" && grep -q '"share"' "$good/summary.json" &&
    [ -s "$good/surface.svg" ] && [ -s "$good/unload.csv" ] &&
