@@ -1,7 +1,7 @@
 // netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001).
 //
 //   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--out DIR]
-//   netsolve compact  [--affine] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
+//   netsolve compact  [--affine | --boundary layer|walls] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
 //                     [--no-rotation] [--to-density 0.85 | --to-strain S] [--packing FILE] [--increments N] [--out DIR]
 //
 // Every run writes into its own folder: .incomplete (first, removed last), command.txt, the packing,
@@ -58,7 +58,7 @@ struct RunArgs {
 // (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
-  std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85";
+  std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85", boundary = "layer";
   double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
   int increments = 100;
   netdem::qs::SolverOptions solver = netdem::qs::SolverOptions::compact();  // bound directly by the command line
@@ -136,7 +136,10 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
 int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
   using namespace netdem;
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
-  so.mode = a.affine ? qs::BoundaryMode::Affine : qs::BoundaryMode::Die;
+  so.mode = a.affine ? qs::BoundaryMode::Affine
+                     : a.boundary == "walls" ? qs::BoundaryMode::Walls : qs::BoundaryMode::Die;
+  if (a.affine && a.boundary == "walls")
+    throw std::invalid_argument("--affine and --boundary walls exclude each other (--affine prescribes every centre)");
   so.rotations = !a.no_rotation;
   netdem::app::netsolve::apply_law_args(a.law, so);
   so.verbose = a.verbose;
@@ -146,6 +149,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   co.target_density = a.to_density;
   co.target_strain = a.to_strain;
   co.increments = a.increments;
+  if (so.mode == qs::BoundaryMode::Walls && co.path.E12 != 0.0)
+    throw std::invalid_argument(fmt::format("--boundary walls: the walls stay axis-parallel, so the path needs E12 = 0, got {}",
+                                            co.path.E12));
+  if (so.mode == qs::BoundaryMode::Walls && a.save_state)
+    throw std::invalid_argument("--save-state: the state file does not hold wall contacts (--boundary walls) yet");
   const auto snaps = parse_list(a.snapshots, "--snapshots");
 
   app::check_run_dir(out, run_dir_options(ra, a.packing_file));
@@ -256,7 +264,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
   j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? "affine" : "die";
+  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : "die";
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
   j["increments"] = co.increments;
@@ -342,6 +350,11 @@ int main(int argc, char** argv) {
   add_pack_opts(comp);
   auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
   comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
+  comp->add_option("--boundary", ca.boundary,
+                   "layer: the peripheral layer follows the strain (die mode, section 2.4); walls: nothing prescribed, four "
+                   "rigid frictionless walls at the box faces move with the box (E12 = 0; Eq 13 from the wall forces)")
+      ->check(CLI::IsMember({"layer", "walls"}))
+      ->capture_default_str();
   comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
   comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");
   auto* o_density = comp->add_option("--to-density", ca.to_density, "target relative density D")->capture_default_str();

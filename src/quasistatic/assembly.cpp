@@ -120,6 +120,8 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
   }
   // stick tangents differ slightly from M too
   if (opt.law.frictional()) any_nonsymmetric = true;
+  wall_forces();
+  wall_stiffness();
 }
 
 // Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix, from
@@ -224,6 +226,7 @@ void NetworkSolver::Impl::evaluate_forces() {
     }
   }
   omp_set_max_active_levels(levels);
+  wall_forces();  // serial, after the pairs: the same sums in the same order
 }
 
 // Open/closed cycling: a pair that closed and opened again within this increment keeps the
@@ -268,6 +271,11 @@ void NetworkSolver::Impl::refresh_particles(const std::vector<int>& ps) {
     }
   for (const int p : ps)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
+  if (walls())
+    for (const int p : ps) {
+      wall_particle(p, -1.0);
+      wall_particle(p, 1.0);
+    }
 }
 
 /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).

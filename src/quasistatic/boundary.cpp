@@ -18,13 +18,14 @@ void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std
   dof.assign(3 * n, -1);
   nfree = 0;
   for (int p = 0; p < n; ++p) {
-    const bool translations_free = mode == BoundaryMode::Die && !periph[p];
+    const bool walls = mode == BoundaryMode::Walls;  // nothing prescribed
+    const bool translations_free = walls || (mode == BoundaryMode::Die && !periph[p]);
     if (translations_free) {
       dof[3 * p] = nfree++;
       dof[3 * p + 1] = nfree++;
     }
     // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes
-    if (rotations_free && !periph[p]) dof[3 * p + 2] = nfree++;
+    if (rotations_free && (walls || !periph[p])) dof[3 * p + 2] = nfree++;
   }
 }
 
@@ -35,6 +36,7 @@ void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std
 // at the previous increment's start positions, so the predictor does not depend on the origin.
 void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
   const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
+  Fbox_trial = small_expm(dE) * Fbox;  // the walls of BoundaryMode::Walls at the end of the increment
   du_aff.assign(3 * n, 0.0);
   for (int p = 0; p < n; ++p) {
     const Eigen::Vector2d u = A * Eigen::Vector2d(x[p], y[p]);

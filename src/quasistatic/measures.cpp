@@ -39,6 +39,26 @@ StateMeasures NetworkSolver::measures() const {
     Fnet += Fapp;
     Fabs += Fapp.norm();
   }
+  // BoundaryMode::Walls: the reactions are the walls' forces, applied at the contact points on the
+  // faces (the same Eq 13 with the walls as the boundary); they also enter the contact stress below
+  Eigen::Matrix2d SW = Eigen::Matrix2d::Zero();  // wall contacts' share of the contact stress
+  if (s.walls() && s.wfn_c.size() == 4 * static_cast<std::size_t>(s.n)) {
+    const double faces[4] = {s.Fbox(0, 0) * s.box0.x_min, s.Fbox(0, 0) * s.box0.x_max, s.Fbox(1, 1) * s.box0.y_min,
+                             s.Fbox(1, 1) * s.box0.y_max};
+    const Eigen::Vector2d normal[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};  // inward
+    for (int p = 0; p < s.n; ++p)
+      for (int w = 0; w < 4; ++w) {
+        const double fn = s.wfn_c[4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
+        if (!(fn > 0.0)) continue;
+        const Eigen::Vector2d xp(s.x[p], s.y[p]);
+        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], s.y[p]) : Eigen::Vector2d(s.x[p], faces[w]);
+        const Eigen::Vector2d Fapp = fn * normal[w];
+        S += Fapp * (cp - xc).transpose();
+        SW -= Fapp * (xp - cp).transpose();
+        Fnet += Fapp;
+        Fabs += Fapp.norm();
+      }
+  }
   S /= V;
   m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
   m.S11 = S(0, 0);
@@ -75,6 +95,7 @@ StateMeasures NetworkSolver::measures() const {
     sum_tr += std::fabs(s.aux[k].slip - uta);
     sum_ta += std::fabs(uta);
   }
+  SC += SW;
   SC /= V;
   m.S11_contacts = SC(0, 0);
   m.S22_contacts = SC(1, 1);

@@ -33,6 +33,9 @@ void NetworkSolver::Impl::init_linear_solver() {
 void NetworkSolver::Impl::set_options(const SolverOptions& o) {
   opt = o;
   law = Law(o.law);
+  contact::PlasticIndentationParams frictionless = o.law;
+  frictionless.mu = 0.0;
+  wall_law = Law(frictionless);
 }
 
 NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -93,6 +96,8 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   s.dE_prev = st.dE_prev;
   s.tim = st.timings;
   s.lin_base = st.timings;
+  s.whist = st.wall_history;
+  s.wfn_c = st.wall_f_n;
 }
 
 NetworkSolver::NetworkSolver(const NetworkSolver& other) : NetworkSolver(other.state(), other.options()) {}
@@ -118,6 +123,8 @@ NetworkState NetworkSolver::state() const {
   st.pair_j = s.pj;
   st.history = s.hist;
   st.aux = s.aux;
+  st.wall_history = s.whist;
+  st.wall_f_n = s.wfn_c;
   st.f_n = s.fn_c;
   st.f_t = s.ft_c;
   st.sliding = s.slide_c;
@@ -141,6 +148,8 @@ void NetworkState::validate() const {
   if (pair_j.size() != np || history.size() != np || aux.size() != np || f_n.size() != np || f_t.size() != np ||
       sliding.size() != np)
     bad(fmt::format("per-pair arrays do not all have {} entries", np));
+  if ((!wall_history.empty() && wall_history.size() != 4 * n) || wall_f_n.size() != wall_history.size())
+    bad(fmt::format("the wall-contact arrays must be empty or have 4 x {} entries", n));
   for (std::size_t p = 0; p < n; ++p) {
     if (!(std::isfinite(x[p]) && std::isfinite(y[p]) && std::isfinite(theta[p]) && std::isfinite(x_build[p]) &&
           std::isfinite(y_build[p])))

@@ -210,6 +210,7 @@ void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep
     slide_c[k] = t.sliding ? 1 : 0;
     rep.sliding += t.sliding;
   }
+  commit_walls();
   for (int p = 0; p < n; ++p) {
     x[p] += du[3 * p];
     y[p] += du[3 * p + 1];

@@ -45,6 +45,14 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
         for (int B = 0; B < 2; ++B)
           if (sl[A] >= 0 && sl[B] >= 0) Kl.block<3, 3>(3 * sl[A], 3 * sl[B]) += e.stiffness.block<3, 3>(3 * A, 3 * B);
     }
+  if (walls())
+    for (int t = 0; t < m; ++t)
+      for (int w = 0; w < 4; ++w) {
+        const WallEval we = wall_eval(ps[t], w);
+        const int a = w < 2 ? 0 : 1;
+        res(3 * t + a) += we.force;
+        Kl(3 * t + a, 3 * t + a) += we.k;
+      }
   const double eta_t = std::max(eta, 0.0);
   for (int t = 0; t < m; ++t)
     for (int a = 0; a < 3; ++a) {

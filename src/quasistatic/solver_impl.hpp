@@ -10,6 +10,7 @@
 //   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
 //   network_solver.cpp construction, the public accessors, the copyable state
 //   state_io.cpp       the state file (save/restore)
+//   walls.cpp          the rigid frictionless die walls of BoundaryMode::Walls
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -73,9 +74,20 @@ struct DofMap {
   void build(BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph);
 };
 
-struct NetworkSolver::Impl : ContactTable, DofMap {
+/// BoundaryMode::Walls: the contacts of every particle with the four walls (slot 4 p + w; w = 0
+/// left, 1 right, 2 bottom, 3 top), the plastic-indentation law with R* = r_p and mu = 0.
+struct WallTable {
+  std::vector<Law::History> whist;  ///< committed history
+  std::vector<double> wfn_c;        ///< committed normal force
+  std::vector<Response> wtrial;     ///< trial state of the current du
+  std::vector<double> wf, wk;       ///< trial force on p along its wall axis (signed), iteration stiffness
+  Eigen::Matrix2d Fbox_trial = Eigen::Matrix2d::Identity();  ///< the box at the end of the increment
+};
+
+struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   SolverOptions opt;
-  Law law;  ///< the law of opt.law (set_options keeps both together)
+  Law law;       ///< the law of opt.law (set_options keeps both together)
+  Law wall_law;  ///< the same law without friction (the walls are frictionless)
   int n = 0;
   std::vector<double> x, y, th, r;
   std::vector<std::uint8_t> periph;
@@ -151,6 +163,17 @@ struct NetworkSolver::Impl : ContactTable, DofMap {
   double mean_normal_force() const;
   double residual(double fbar, bool fill_rhs, double* max_norm = nullptr);
   void clip_step();
+  // walls.cpp
+  bool walls() const { return opt.mode == BoundaryMode::Walls; }
+  struct WallEval {
+    Response r;
+    double force = 0.0, k = 0.0;  ///< on p along the wall's axis (signed), iteration stiffness
+  };
+  WallEval wall_eval(int p, int w) const;  ///< at x + du against the trial box
+  void wall_particle(int p, double sign);  ///< evaluates p's walls and adds sign x forces to f
+  void wall_forces();                      ///< every wall contact: trial state, forces into f
+  void wall_stiffness();                   ///< the wall contacts' stiffness into K and M
+  void commit_walls();
   // relaxation.cpp
   void local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
   void relax_set(const int* ps, int m, double fbar);

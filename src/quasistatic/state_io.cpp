@@ -98,6 +98,8 @@ class Reader {
 
 void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
+  if (!s.wall_history.empty())
+    throw std::invalid_argument("the state file does not hold wall contacts (--boundary walls) yet");
   const bool pred = !s.du_prev.empty();
   std::string out = "netdem-network-state 1\n";
   out += fmt::format("predictor {}\n", pred ? 1 : 0);

@@ -139,6 +139,51 @@ TEST(NetworkSolver, SquareLatticeMatchesClosedForm) {
   }
 }
 
+// Square lattice between rigid frictionless walls (BoundaryMode::Walls, nothing prescribed): each
+// row is a chain of nc disks between two walls with one force F, disk-disk contacts R* = R/2,
+// disk-wall contacts R* = R (Eq 2: u = F^2 / (72 sigma_y^2 R*)), so the shortening
+// 2 R nc (1 - exp(E11)) = (nc - 1) u_dd + 2 u_dw = nc F^2 / (36 sigma_y^2 R) gives
+// F = 6 sigma_y sqrt(R 2 R nc (1 - exp(E11)) / nc); the wall stress is S11 = -F / (2 R exp(E22)),
+// and the columns likewise. The Eq 13 (wall) stress and the contact stress (with the wall
+// contacts) both reproduce it.
+TEST(NetworkSolver, SquareLatticeBetweenWallsMatchesClosedForm) {
+  const int nc = 8, nr = 6;
+  const double R = 1.0;
+  const auto pk = square_lattice(nc, nr, R);
+  for (const auto& path : {qs::StrainPath::hydrostatic(), qs::StrainPath::closed_die()}) {
+    for (double mu : {0.0, kInf}) {
+      qs::SolverOptions so;
+      so.mode = qs::BoundaryMode::Walls;
+      so.law.mu = mu;
+      so.law.sigma_y = 2.0;
+      so.law.first_touch = 0.0;  // Eq 2 itself (the chord would shift u by < 1e-10 R)
+      so.viscosity = 0.0;
+      so.residual_tol = 1e-10;
+      so.max_residual_tol = 1e-10;
+      so.max_newton = 50;
+      const double D_target = pk.density() * 1.04;
+      auto rr = compact(pk, so, path, D_target, 20);
+      const double sy = so.law.sigma_y;
+      auto chain = [&](int n_disks, double E) {
+        const double d = 2 * R * n_disks * (1 - std::exp(E));
+        return d > 0 ? 6 * sy * std::sqrt(R * d / n_disks) : 0.0;
+      };
+      const double S11 = -chain(nc, rr.m.E11) / (2 * R * std::exp(rr.m.E22));
+      const double S22 = -chain(nr, rr.m.E22) / (2 * R * std::exp(rr.m.E11));
+      const std::string tag = path.name + (mu == 0.0 ? " frictionless" : " sticking");
+      EXPECT_NEAR(rr.m.density, D_target, 1e-12) << tag;
+      EXPECT_NEAR(rr.m.S11, S11, 1e-6 * std::fabs(S22)) << tag;
+      EXPECT_NEAR(rr.m.S22, S22, 1e-6 * std::fabs(S22)) << tag;
+      EXPECT_NEAR(rr.m.S11_contacts, S11, 1e-6 * std::fabs(S22)) << tag;
+      EXPECT_NEAR(rr.m.S22_contacts, S22, 1e-6 * std::fabs(S22)) << tag;
+      EXPECT_EQ(rr.unconverged, 0) << tag;
+      // not the die-mode answer: the softer wall contacts take part of the shortening
+      const auto die = lattice_stress(nc, nr, R, rr.m.E11, rr.m.E22, sy);
+      EXPECT_GT(std::fabs(die(1) - S22), 1e-3 * std::fabs(S22)) << tag;
+    }
+  }
+}
+
 // Reversible normal law and the switch to the section 3.4 unloading branch, on the square
 // lattice (die boundary conditions, sticking): a reversible load-unload path follows Eq 2 back;
 // after set_reversible_normal(false) the same small unloading follows the elastic line

@@ -129,6 +129,10 @@ struct NetworkState {
   std::vector<double> du_prev;    ///< 3 per particle: the last increment (predictor); empty at start
   Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
   SolverTimings timings;
+  /// BoundaryMode::Walls: 4 per particle (left, right, bottom, top), the committed wall-contact
+  /// history and normal force; empty otherwise. (The state file does not hold them yet.)
+  std::vector<contact::PlasticIndentationHistory> wall_history;
+  std::vector<double> wall_f_n;
 
   /// Throws std::invalid_argument (one line) if sizes, order or values are inconsistent.
   void validate() const;

@@ -19,7 +19,9 @@ namespace netdem::qs {
 
 /// Die: the peripheral layer is prescribed (section 2.4), the interior is free. Affine: every
 /// centre follows the macroscopic strain, only the interior rotations are free.
-enum class BoundaryMode { Die, Affine };
+/// Die: the peripheral layer is prescribed (section 2.4); Affine: every centre; Walls: nothing is
+/// prescribed, four rigid frictionless walls at the faces of the box move with it (E12 = 0).
+enum class BoundaryMode { Die, Affine, Walls };
 
 struct SolverOptions {
   BoundaryMode mode = BoundaryMode::Die;

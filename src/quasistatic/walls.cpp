@@ -1,0 +1,100 @@
+// BoundaryMode::Walls: four rigid, frictionless die walls at the faces of the box, moving with it
+// (x_face = F11 x_face0, y_face = F22 y_face0; E12 = 0). Each particle has a slot per wall; the
+// contact is the plastic-indentation law of the pairs with R* = r_p (a flat) and mu = 0, so the
+// force is normal to the wall and the element touches one translational DOF: the stiffness goes on
+// the diagonal of K and M. No particle is prescribed; the stress of the walls (their reactions)
+// takes the place of Eq 13 (measures.cpp).
+#include "solver_impl.hpp"
+
+namespace netdem::qs {
+
+namespace {
+// the face coordinate of wall w for the box deformation F (diagonal)
+double face(const Eigen::Matrix2d& F, const packing::Box& b, int w) {
+  switch (w) {
+    case 0: return F(0, 0) * b.x_min;
+    case 1: return F(0, 0) * b.x_max;
+    case 2: return F(1, 1) * b.y_min;
+    default: return F(1, 1) * b.y_max;
+  }
+}
+// distance of the point (px, py) from wall w, positive inside the box
+double distance(int w, double px, double py, double f) {
+  switch (w) {
+    case 0: return px - f;
+    case 1: return f - px;
+    case 2: return py - f;
+    default: return f - py;
+  }
+}
+}  // namespace
+
+NetworkSolver::Impl::WallEval NetworkSolver::Impl::wall_eval(int p, int w) const {
+  WallEval e;
+  const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
+  const double d1 = distance(w, x[p] + du[3 * p], y[p] + du[3 * p + 1], face(Fbox_trial, box0, w));
+  if (r[p] - d1 <= 0.0 && !wall_law.has_history(whist[s])) return e;
+  ct::ContactKinematics k;
+  k.overlap = r[p] - d1;
+  k.overlap_start = r[p] - distance(w, x[p], y[p], face(Fbox, box0, w));
+  k.r_eff = r[p];
+  ct::ContactTangent t;
+  e.r = wall_law.evaluate(whist[s], k, &t);
+  if (!e.r.loaded) return e;
+  const double sign = (w == 0 || w == 2) ? 1.0 : -1.0;  // the inward normal along the wall's axis
+  e.force = sign * e.r.f_n;
+  e.k = t.dfn_dun + wall_law.iteration_stiffness(whist[s], k, e.r).k_n_add;
+  return e;
+}
+
+void NetworkSolver::Impl::wall_particle(int p, double sign) {
+  for (int w = 0; w < 4; ++w) {
+    const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
+    const int axis = w < 2 ? 0 : 1;
+    if (sign < 0.0) {  // remove the current contribution
+      f[3 * p + axis] -= wf[s];
+      continue;
+    }
+    const WallEval e = wall_eval(p, w);
+    wtrial[s] = e.r;
+    wf[s] = e.force;
+    wk[s] = e.k;
+    f[3 * p + axis] += e.force;
+  }
+}
+
+void NetworkSolver::Impl::wall_forces() {
+  if (!walls()) return;
+  const std::size_t slots = 4 * static_cast<std::size_t>(n);
+  if (whist.size() != slots) {
+    whist.assign(slots, Law::History{});
+    wfn_c.assign(slots, 0.0);
+  }
+  wtrial.resize(slots);
+  wf.resize(slots);
+  wk.resize(slots);
+  for (int p = 0; p < n; ++p) wall_particle(p, 1.0);
+}
+
+void NetworkSolver::Impl::wall_stiffness() {
+  if (!walls()) return;
+  for (int p = 0; p < n; ++p)
+    for (int w = 0; w < 4; ++w) {
+      const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
+      if (!(wk[s] > 0.0)) continue;
+      const int d = dof[3 * p + (w < 2 ? 0 : 1)];
+      if (d < 0) continue;
+      K.valuePtr()[diag_pos[d]] += wk[s];
+      M.valuePtr()[diag_pos[d]] += wk[s];
+    }
+}
+
+void NetworkSolver::Impl::commit_walls() {
+  if (!walls()) return;
+  for (std::size_t s = 0; s < whist.size(); ++s) {
+    if (wtrial[s].loaded || wall_law.has_history(whist[s])) whist[s] = wtrial[s].history;
+    wfn_c[s] = wtrial[s].f_n;
+  }
+}
+
+}  // namespace netdem::qs
