@@ -131,7 +131,8 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
     name = sinter_name(ctl_n, 100, 1.0, f"_muw{INVESTIGATION_MU_WALL:g}")
     out.append(Run(name, "sinter", ["sinter", "--n", str(ctl_n), "--pressure", "100", "--sinter-time", "1",
                                     "--mu-wall", f"{INVESTIGATION_MU_WALL:g}", "--out", d(name), "--quiet"],
-                   info=dict(n=ctl_n, p=100, ts=1.0, role="investigation", twin=sinter_name(ctl_n, 100, 1.0))))
+                   info=dict(n=ctl_n, p=100, ts=1.0, role="investigation", twin=sinter_name(ctl_n, 100, 1.0),
+                             what=f"mu_w = {INVESTIGATION_MU_WALL:g} during the preparation [investigation]")))
     # experiments of issue 15 (t_s = 1): seeds, size, thermal expansion, footnote 5, wall creep,
     # the cooling stiffness update; the switches branch from the grid's state_heat.txt
     exp_n = ctl_n
@@ -176,6 +177,11 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
             out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(ref), "state_sinter.txt"),
                                             "--sinter-time", "1", "--cool-time", cool, "--out", d(name), "--quiet"],
                            deps=[ref], info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=ref, what=what)))
+        name = sinter_name(exp_n, p, 1.0, "_gw20")
+        out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(ref), "state_sinter.txt"),
+                                        "--sinter-time", "1", "--param", "gamma_wall=20", "--out", d(name), "--quiet"],
+                       deps=[ref], info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=ref,
+                                             what="wall damping 100 x (20 kg/s) during the cool-down")))
     # three-particle controls with wall contacts that do not creep
     for arr in ("triangle", "line"):
         for p in GRID_P:
