@@ -363,6 +363,17 @@ TEST(Luding, CoolingReevaluatesEq7) {
   // consistent with section 3.1.3: delta_0 = delta_fluid at the cold k1 is delta_max^fluid
   EXPECT_NEAR(luding_delta_max_cooling(p, p.delta_fluid(), k1c), dmf, 1e-12 * dmf);
   EXPECT_LT(luding_delta_max_cooling(p, 0.99 * p.delta_fluid(), k1c), dmf);
+  // k1 = k2 (no plastic range): cooling back to the cold k1 leaves delta_max finite and unchanged
+  LudingParams e = p;
+  e.k1_ratio = 1.0;
+  LudingHistory he;
+  walk(e, he, linspace(1e-9, 0.01 * p.a0, 20), e.k1());
+  const LudingHistory hot = luding_evaluate(e, he, at(0.0099 * p.a0, 0.02 * e.k1())).history;
+  ASSERT_GT(hot.delta0, 0.0);
+  const LudingHistory cold = luding_evaluate(e, hot, at(0.0099 * p.a0, e.k1())).history;
+  EXPECT_TRUE(std::isfinite(cold.delta_max));
+  EXPECT_DOUBLE_EQ(cold.delta_max, hot.delta_max);
+  EXPECT_DOUBLE_EQ(cold.k2_line, e.k2);
   // switch off: the old line (Fig 5 right with k2' kept)
   LudingParams q = p;
   q.cooling_stiffness_update = false;

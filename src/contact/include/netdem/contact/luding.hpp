@@ -252,9 +252,11 @@ inline LudingHistory luding_thermal_update(const LudingParams& p, const LudingHi
     }
   } else if (k1_Tt > h.k1_seen && h.delta0 > 0.0) {
     if (p.cooling_stiffness_update && p.stiffness_growth) {
-      // LMM05 section 3.3.2 with Eq 7 re-evaluated: delta_max^- = delta_0 / (1 - k1(T)/k2(dmax^-))
-      r.delta_max = std::fmax(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
-      r.k2_line = luding_k2_of(p, r.delta_max);  // "also the stiffness is increased accordingly"
+      if (k1_Tt < p.k2) {  // (k1 = k2: no plastic range left, delta_max stays)
+        // LMM05 section 3.3.2 with Eq 7 re-evaluated: delta_max^- = delta_0 / (1 - k1(T)/k2(dmax^-))
+        r.delta_max = std::fmax(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
+        r.k2_line = luding_k2_of(p, r.delta_max);  // "also the stiffness is increased accordingly"
+      }
     } else if (k1_Tt < k2l) {
       r.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
     }
