@@ -1200,8 +1200,10 @@ reference for the current runs.
   affine, adds +0.0003 to nu computed from the current radii and +0.011 computed from the radii at
   T_melt (2d); min f_n / max f_n after cool-down is in line 5c, the attractive fraction in 15a.
   Fixed radii would not explain the preparation density (0.828 / 0.992 = 0.835 with radii at T_melt).
-* **Force homogenisation (5b).** std(f_n)/mean(f_n) at the end of sintering falls with t_s for
-  p = 100 (0.90 -> 0.56) but not for p = 10.
+* **Force homogenisation (5b, 15d).** std(f_n)/mean(f_n) at the end of sintering falls from
+  t_s = 1e-4 to 1 for p = 100 (0.73 -> 0.55, but not monotonically: Spearman -0.49) and not for
+  p = 10; the width (q95 - q05)/mean (15d) falls with Spearman -0.89 at p = 100 (pass) and not at
+  p = 10.
 * **Fully activated friction after cool-down (5d).** No contact has mu_t >= 0.99 mu after the
   relaxation, for any t_s: the tangential springs were limited by the hot mu(T, t) = mu k1(T,t)/k1
   (~0.01 at the end of long sintering) and the nearly affine, quasi-static cool-down does not
@@ -1212,12 +1214,16 @@ reference for the current runs.
   stress-controlled right wall (m_w = 0.01 kg, ~260 particle masses, gamma_w = 0.2 kg/s, damping
   time 0.05 s) then rang with a period of ~7 ms, comparable with the 5 ms needed to reach
   eps = 0.005, which made the fitted stiffness of weak samples negative and the ratio 3.1 (N = 100)
-  and 4.0 (N = 300). With the ramp the ratio over the issue's window [0, 0.005] is 2.95 and 2.85
-  (6a, inside 1.5-3, near its top); the initial slope over [0, 0.002] gives 1.9 and 1.8 and the
-  secant to the peak 1.8 and 2.0, in line with the paper's "about two" (notes of 6a). The
-  stiffness of the weak p = 10 samples depends on the strain rate: the 10 times slower
-  **investigation** (`*_compress_slow`, 0.1/s) halves it (3.0e4 -> 1.5e4 N/m for N = 100) while the
-  p = 100 value stays, so the ratio there is 5.9 and 8.9: at 1/s part of the p = 10 response is the
+  and 4.0 (N = 300). With the ramp the ratio over the issue's window [0, 0.005] was 2.95 and 2.85
+  before issue 15; the section 3.3.2 fix (k2' re-evaluated on cooling) makes the cooled contacts
+  stiffer, more so the strongly sintered ones of p = 100 (stiffness 9.0e4 -> 1.13e5 N/m at N = 100,
+  9.9e4 -> 1.25e5 at N = 300, against 3.0e4 -> 3.5e4 and 3.5e4 -> 3.8e4 at p = 10), so the ratio is
+  now 3.27 and 3.32, just above the band (6a FAIL; the band is not widened). The initial slope over
+  [0, 0.002] gives 2.06 and 2.06 and the secant to the peak 2.20 and 2.19, in line with the paper's
+  "about two" (notes of 6a). The stiffness of the weak p = 10 samples depends on the strain rate:
+  the 10 times slower **investigation** (`*_compress_slow`, 0.1/s) gives 1.2e4 instead of 3.5e4 N/m
+  for N = 100 while the p = 100 value stays, so the ratio there is 9.2 and 14: at 1/s part of the
+  p = 10 response is the
   damping and inertia of the contacts, and the paper does not state its rate. For weak samples the
   peak of sigma_zz comes early (eps ~ 0.003-0.004, inside the window) and the failure strain of
   unsintered samples is ill-defined (a noisy plateau after an early yield, stick-slip of the right
@@ -1230,7 +1236,10 @@ reference for the current runs.
   contacts inside the sintered block, already present before the vibration, see the note of 7a)
   count as broken-off single grains and lower the largest-cluster fraction of sintered samples.
   A cluster definition by cohesive (attractive or sintered) bonds, or by distance with a small
-  gap tolerance, would match the paper's visual judgement better.
+  gap tolerance, would match the paper's visual judgement better. After the issue 15 fix the
+  N = 300, p = 10, t_s = 1 sample keeps 0.897 N in its largest cluster (0.923 before; 0.960 N
+  before vibrating, 4 % rattlers), just below the band (7a FAIL); 7b for N = 300, p = 10 now passes
+  (0.947, was 0.853). These lines move by a few per cent between binaries: one or two fragments.
 * **Zero-length phases (demsolve), fixed.** The first version of this study found that
   `demsolve sinter --sinter-time 0 --cool-time 0 --relax-time 0` did not end in the heated state:
   the last time step (t = K dt slightly past 0.3) fell past the zero-length phases into `relax` at
