@@ -361,6 +361,13 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   if (!args.state_file.empty()) {
     SolverState st = load_state(args.state_file, args.param_overrides);
     if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;
+    // --param m_wall / gamma_wall also apply to the state's stress-controlled walls (Eq 1)
+    for (const auto& it : args.param_overrides)
+      for (MovingWall* w : {&st.box.right, &st.box.top}) {
+        if (w->mode != WallMode::Stress) continue;
+        if (it.rfind("m_wall=", 0) == 0) w->mass = st.params.m_wall;
+        if (it.rfind("gamma_wall=", 0) == 0) w->damping = st.params.gamma_wall;
+      }
     check_protocol_T(st.params);
     check_temperature(st.thermal.T, st.params, "the state's temperature");
     if (st.box.right.mode == WallMode::Stress || st.box.top.mode == WallMode::Stress)

@@ -206,7 +206,12 @@ const ParamField kFields[] = {
     {"T_radius_ref", &LudingParams::T_radius_ref, nullptr},
     {"stiffness_growth", nullptr, &LudingParams::stiffness_growth},
     {"sliding_breaks_cohesion", nullptr, &LudingParams::sliding_breaks_cohesion},
+    // optional in a state file (added after v2; missing lines keep the default)
+    {"cooling_stiffness_update", nullptr, &LudingParams::cooling_stiffness_update},
+    {"wall_sintering", nullptr, &LudingParams::wall_sintering},
 };
+// The first kRequiredParams fields must be in every state file, the rest may be left out.
+constexpr std::size_t kRequiredParams = 23;
 
 std::string g17(double v) {
   char b[40];
@@ -305,6 +310,12 @@ class Reader {
   Reader(std::istream& in, std::string name) : in_(in), name_(std::move(name)) {}
   /// Next line that is not empty and not a comment.
   std::string line() {
+    if (!pending_.empty()) {
+      std::string s = std::move(pending_);
+      pending_.clear();
+      ++no_;
+      return s;
+    }
     std::string s;
     while (std::getline(in_, s)) {
       ++no_;
@@ -332,6 +343,11 @@ class Reader {
     throw std::invalid_argument(quote_input(name_) + ":" + std::to_string(line) + ": " + msg);
   }
   std::size_t line_no() const { return no_; }
+  /// Gives the last line back: the next line() returns it again.
+  void unread(std::string s) {
+    pending_ = std::move(s);
+    --no_;
+  }
   void count_line() { ++no_; }  ///< a line read by the caller (the first)
   /// A finite real number (strtod: also reads nan and inf, which are refused by name).
   double real(std::istringstream& ls, const char* what) {
@@ -348,6 +364,7 @@ class Reader {
   std::istream& in_;
   std::string name_;
   std::size_t no_ = 0;
+  std::string pending_;
 };
 
 WallMode parse_mode(Reader& r, const std::string& s) {
@@ -429,6 +446,14 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     st.thermal.k1_Tt = r.real(ls, "k1_Tt");
   }
   for (std::size_t k = 0; k < std::size(kFields); ++k) {
+    if (k >= kRequiredParams) {  // optional lines: stop at the first line that is not a param
+      std::string s = r.line();
+      std::istringstream ks(s);
+      std::string key;
+      ks >> key;
+      r.unread(s);
+      if (key != "param") break;
+    }
     auto ls = r.keyed("param");
     const auto key = r.num<std::string>(ls, "parameter name");
     const double v = r.real(ls, "parameter value");

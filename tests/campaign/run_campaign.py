@@ -64,7 +64,8 @@ SKIP_OPTIONS = {"--out", "--help", "-h", "--packing", "--state", "--from-state",
 # Table 1 names of demsolve --param (src/dynamic: kFields)
 PARAM_NAMES = ["k2", "k1_ratio", "kc_ratio", "alpha", "gamma_n", "gamma_t", "mu", "mu_wall", "T_melt", "T_var",
                "da_T", "delta_fluid_rel", "t0", "t0_sinter", "a0", "w0", "h", "rho_p", "m_wall", "gamma_wall",
-               "T_radius_ref", "stiffness_growth", "sliding_breaks_cohesion"]
+               "T_radius_ref", "stiffness_growth", "sliding_breaks_cohesion", "cooling_stiffness_update",
+               "wall_sintering"]
 
 CATEGORIES = [
     ("clear_error", "clear error: exit 1 or 2, one stderr line, no output folder or one marked .incomplete"),

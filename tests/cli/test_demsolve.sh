@@ -72,6 +72,13 @@ result restart_from_prepare_is_exact $?
   /usr/bin/env python3 -c "import json,sys; f=json.load(open('$tmp/z/summary.json'))['final']; sys.exit(0 if f['T'] == 140.0 else 1)"
 result zero_length_phases_end_hot $?
 check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
+# --param m_wall / gamma_wall given with --state reach the state's stress-controlled walls (Eq 1)
+"$ds" sinter --state "$tmp/s/state_prepare.txt" "${times[@]}" --param gamma_wall=7 --param m_wall=0.5 --quiet \
+  --out "$tmp/w" >/dev/null 2>"$tmp/stderr" &&
+  grep -q '^wall_right stress 0 [0-9.e+]* 0.5 7 ' "$tmp/w/state.txt" &&
+  grep -q '^wall_top stress 0 [0-9.e+]* 0.5 7 ' "$tmp/w/state.txt" &&
+  ! cmp -s "$tmp/s/state.txt" "$tmp/w/state.txt"
+result state_walls_take_param $?
 
 # a packing CSV (netsolve's format) as the starting sample
 printf '# box 0 0 10 10\nid,x,y,r\n0,2,2,1\n1,5,5,1.5\n' >"$tmp/two.csv"

@@ -281,6 +281,7 @@ TEST(Luding, FreezeExceptionOnCooling) {
 // ---- section 3.3: delta rules keyed on k1(T, t) ----------------------------------------------
 TEST(Luding, DeltaRulesFollowK1Tt) {
   LudingParams p = quiet_params();
+  p.cooling_stiffness_update = false;  // the line of Fig 5 right kept (CoolingReevaluatesEq7: on)
   const double k1c = p.k1();
   const double dmax = 0.05 * p.a0;
   LudingHistory h;
@@ -307,6 +308,103 @@ TEST(Luding, DeltaRulesFollowK1Tt) {
   // the point (delta_max, k1 delta_max) lies on the line: the loop closes
   const LudingResult top = luding_evaluate(p, hard.history, at(dmax_new, k1c));
   EXPECT_NEAR(top.f_n, k1c * dmax_new, 1e-9 * k1c * dmax);
+}
+
+// Section 3.3.2, last sentence ("also the stiffness is increased accordingly") with Eq 7, 13, 15,
+// 23 along a cooling path. A contact loaded cold to delta_max, softened to k1h at fixed overlap
+// (delta_0 = (1 - k1h/k2')delta_max), then hardened step by step back to the cold k1: at every
+// step delta_0 stays, delta_max solves delta_max (1 - k1/k2(delta_max)) = delta_0 with Eq 7 at
+// the NEW delta_max, the line slope is k2(delta_max), and k_c, f_min, k_t follow from it. At the
+// cold end (k1 = k1c, k1/k2 = 1/2) delta_max has the closed form (delta_0 + sqrt(delta_0^2 +
+// 4 delta_max^fluid delta_0 k1/(k2 - k1)))/2. Without the re-evaluation k2' stays at its
+// pre-heating value and every k2', k_c and f_min assertion fails.
+TEST(Luding, CoolingReevaluatesEq7) {
+  LudingParams p = quiet_params();
+  const double k1c = p.k1(), dmf = p.delta_max_fluid();
+  for (double dmax_rel : {0.01, 0.05, 0.1}) {  // delta_max / a0: small, mid, beyond Fig 9's mean
+    const double dmax = dmax_rel * p.a0;
+    LudingHistory h;
+    walk(p, h, linspace(1e-9, dmax, 50), k1c);
+    const double k2_before = h.k2_line;
+    ASSERT_NEAR(k2_before, k1c + (p.k2 - k1c) * dmax / dmf, 1e-9 * p.k2);  // Eq 7
+    const double d = 0.999 * dmax;  // held overlap (on the line, just below delta_max)
+    const double k1h = 0.0198 * k1c;  // k1(T, t)/k1 at the end of t_s = 1 (Fig 8)
+    h = luding_evaluate(p, h, at(d, k1h)).history;
+    const double d0 = h.delta0;
+    ASSERT_NEAR(d0, (1.0 - k1h / k2_before) * dmax, 1e-15);
+    double prev_dmax = h.delta_max, prev_k2 = h.k2_line;
+    for (double k1 : linspace(k1h, k1c, 40)) {
+      if (k1 == k1h) continue;
+      const LudingResult r = luding_evaluate(p, h, at(d, k1));
+      const LudingHistory& g = r.history;
+      const double k2e = luding_k2_of(p, g.delta_max);  // Eq 7 at the new delta_max
+      EXPECT_DOUBLE_EQ(g.delta0, d0);                       // delta_0^- = const (section 3.3.2)
+      EXPECT_NEAR(g.delta_max * (1.0 - k1 / k2e), d0, 1e-12 * d0);  // delta_max^-(T)
+      EXPECT_NEAR(g.k2_line, k2e, 1e-9 * p.k2);             // "the stiffness is increased"
+      EXPECT_GE(g.delta_max, prev_dmax);
+      EXPECT_GE(g.k2_line, prev_k2);
+      const double kc = (k1 / k1c) * (k2e / p.k2) * p.kc();  // Eq 13
+      EXPECT_NEAR(r.k_c, kc, 1e-9 * p.k2);
+      const double fmin = -(k2e - k1) / (1.0 + k2e / kc) * g.delta_max;  // Eq 15
+      EXPECT_NEAR(r.f_min, fmin, 1e-9 * std::fabs(fmin));
+      EXPECT_NEAR(r.k_t, p.alpha * k2e, 1e-9 * p.k2);       // Eq 23
+      EXPECT_NEAR(r.f_n, std::fmax(k2e * (d - d0), -kc * d), 1e-9 * k1c * dmax);  // Eq 4
+      h = g;
+      prev_dmax = g.delta_max;
+      prev_k2 = g.k2_line;
+    }
+    const double dmax_cold = 0.5 * (d0 + std::sqrt(d0 * d0 + 4.0 * dmf * d0 * k1c / (p.k2 - k1c)));
+    EXPECT_NEAR(h.delta_max, dmax_cold, 1e-12 * dmax_cold);
+    // the cooled contact is stiffer than before heating (the cycle acts like a larger compression)
+    EXPECT_GT(h.k2_line, k2_before * (1.0 + 0.5 * (dmax_cold - dmax) / dmf));
+    std::printf("  delta_max %.3f a0: k2' %.4g -> %.4g N/m, delta_max -> %.4f a0\n", dmax_rel, k2_before,
+                h.k2_line, h.delta_max / p.a0);
+  }
+  // consistent with section 3.1.3: delta_0 = delta_fluid at the cold k1 is delta_max^fluid
+  EXPECT_NEAR(luding_delta_max_cooling(p, p.delta_fluid(), k1c), dmf, 1e-12 * dmf);
+  EXPECT_LT(luding_delta_max_cooling(p, 0.99 * p.delta_fluid(), k1c), dmf);
+  // k1 = k2 (no plastic range): cooling back to the cold k1 leaves delta_max finite and unchanged
+  LudingParams e = p;
+  e.k1_ratio = 1.0;
+  LudingHistory he;
+  walk(e, he, linspace(1e-9, 0.01 * p.a0, 20), e.k1());
+  const LudingHistory hot = luding_evaluate(e, he, at(0.0099 * p.a0, 0.02 * e.k1())).history;
+  ASSERT_GT(hot.delta0, 0.0);
+  const LudingHistory cold = luding_evaluate(e, hot, at(0.0099 * p.a0, e.k1())).history;
+  EXPECT_TRUE(std::isfinite(cold.delta_max));
+  EXPECT_DOUBLE_EQ(cold.delta_max, hot.delta_max);
+  EXPECT_DOUBLE_EQ(cold.k2_line, e.k2);
+  // switch off: the old line (Fig 5 right with k2' kept)
+  LudingParams q = p;
+  q.cooling_stiffness_update = false;
+  LudingHistory h;
+  walk(q, h, linspace(1e-9, 0.05 * p.a0, 50), k1c);
+  const double k2l = h.k2_line;
+  h = luding_evaluate(q, h, at(0.0499 * p.a0, 0.02 * k1c)).history;
+  h = luding_evaluate(q, h, at(0.0499 * p.a0, k1c)).history;
+  EXPECT_DOUBLE_EQ(h.k2_line, k2l);
+}
+
+// The wall law (LudingParams::wall_params): with wall_sintering off the wall contact keeps the cold
+// k1 whatever k1(T, t) is (no creep, section 3.3.1 does not apply), otherwise it creeps like a pair.
+TEST(Luding, WallSinteringSwitch) {
+  LudingParams p = quiet_params();
+  const double k1c = p.k1(), d = 0.002 * p.a0, k1h = 0.02 * k1c;
+  for (bool sinter : {false, true}) {
+    p.wall_sintering = sinter;
+    const LudingParams w = p.wall_params();
+    EXPECT_EQ(w.kc_ratio, 0.0);
+    LudingHistory h;
+    walk(w, h, linspace(1e-9, d, 20), k1c);
+    const LudingResult r = luding_evaluate(w, h, at(d, k1h));
+    if (sinter) {
+      EXPECT_NEAR(r.history.delta0, (1.0 - k1h / h.k2_line) * d, 1e-15);  // delta_0^+ (3.3.1)
+      EXPECT_LT(r.f_n, 0.05 * k1c * d);
+    } else {
+      EXPECT_DOUBLE_EQ(r.history.delta0, h.delta0);  // nothing moves
+      EXPECT_NEAR(r.f_n, k1c * d, 1e-9 * k1c * d);   // still on the cold loading line
+    }
+  }
 }
 
 // ---- footnote 2: the paper's protocol never reaches the fluid limit --------------------------

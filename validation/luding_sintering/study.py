@@ -131,7 +131,65 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
     name = sinter_name(ctl_n, 100, 1.0, f"_muw{INVESTIGATION_MU_WALL:g}")
     out.append(Run(name, "sinter", ["sinter", "--n", str(ctl_n), "--pressure", "100", "--sinter-time", "1",
                                     "--mu-wall", f"{INVESTIGATION_MU_WALL:g}", "--out", d(name), "--quiet"],
-                   info=dict(n=ctl_n, p=100, ts=1.0, role="investigation", twin=sinter_name(ctl_n, 100, 1.0))))
+                   info=dict(n=ctl_n, p=100, ts=1.0, role="investigation", twin=sinter_name(ctl_n, 100, 1.0),
+                             what=f"mu_w = {INVESTIGATION_MU_WALL:g} during the preparation [investigation]")))
+    # experiments of issue 15 (t_s = 1): seeds, size, thermal expansion, footnote 5, wall creep,
+    # the cooling stiffness update; the switches branch from the grid's state_heat.txt
+    exp_n = ctl_n
+    for p in GRID_P:
+        for seed in (2, 3):
+            name = sinter_name(exp_n, p, 1.0, f"_seed{seed}")
+            out.append(Run(name, "sinter", ["sinter", "--n", str(exp_n), "--pressure", f"{p:g}", "--sinter-time", "1",
+                                            "--seed", str(seed), "--out", d(name), "--quiet"],
+                           info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=sinter_name(exp_n, p, 1.0),
+                                     what=f"seed {seed}")))
+        if not quick:
+            name = sinter_name(1000, p, 1.0)
+            out.append(Run(name, "sinter", ["sinter", "--n", "1000", "--pressure", f"{p:g}", "--sinter-time", "1",
+                                            "--out", d(name), "--quiet"],
+                           info=dict(n=1000, p=p, ts=1.0, role="experiment", twin=sinter_name(exp_n, p, 1.0),
+                                     what="N = 1000")))
+        for tag, par, what in (("_daT0", "da_T=0", "da_T = 0 (no thermal expansion)"),
+                               ("_daT2.5e-4", "da_T=2.5e-4", "da_T = 2.5e-4 (the text's '1 % over 80-120 C')")):
+            name = sinter_name(exp_n, p, 1.0, tag)
+            if any(r.name == name for r in out):
+                out[[r.name for r in out].index(name)].info["what"] = what
+                continue
+            out.append(Run(name, "sinter", ["sinter", "--n", str(exp_n), "--pressure", f"{p:g}", "--sinter-time", "1",
+                                            "--param", par, "--out", d(name), "--quiet"],
+                           info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=sinter_name(exp_n, p, 1.0),
+                                     what=what)))
+        base = sinter_name(exp_n, p, BASE_TS)
+        for tag, par, what in (("_nofn5", "sliding_breaks_cohesion=0", "footnote 5 off (cohesion kept when sliding)"),
+                               ("_wallcold", "wall_sintering=0", "wall contacts do not creep (cold k1)"),
+                               ("_k2kept", "cooling_stiffness_update=0", "k2' kept on cooling (before issue 15)")):
+            name = sinter_name(exp_n, p, 1.0, tag)
+            out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(base), "state_heat.txt"),
+                                            "--sinter-time", "1", "--param", par, "--out", d(name), "--quiet"],
+                           deps=[base], info=dict(n=exp_n, p=p, ts=1.0, role="experiment",
+                                                  twin=sinter_name(exp_n, p, 1.0), what=what)))
+        ref = sinter_name(exp_n, p, 1.0)
+        for tag, cool, what in (("_quench", "0.001", "cool-down in 1 ms instead of 0.1 s (from the reference at t = 1.3)"),
+                                ("_slowcool", "1", "cool-down in 1 s instead of 0.1 s (from the reference at t = 1.3)")):
+            if tag == "_slowcool" and p != 100:
+                continue
+            name = sinter_name(exp_n, p, 1.0, tag)
+            out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(ref), "state_sinter.txt"),
+                                            "--sinter-time", "1", "--cool-time", cool, "--out", d(name), "--quiet"],
+                           deps=[ref], info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=ref, what=what)))
+        name = sinter_name(exp_n, p, 1.0, "_gw20")
+        out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(ref), "state_sinter.txt"),
+                                        "--sinter-time", "1", "--param", "gamma_wall=20", "--out", d(name), "--quiet"],
+                       deps=[ref], info=dict(n=exp_n, p=p, ts=1.0, role="experiment", twin=ref,
+                                             what="wall damping 100 x (20 kg/s) during the cool-down")))
+    # three-particle controls with wall contacts that do not creep
+    for arr in ("triangle", "line"):
+        for p in GRID_P:
+            name = f"N3_{arr}_p{p:g}_ts1_wallcold"
+            out.append(Run(name, "sinter", ["sinter", "--n", "3", "--arrangement", arr, "--pressure", f"{p:g}",
+                                            "--sinter-time", "1", "--param", "wall_sintering=0", "--out", d(name),
+                                            "--quiet"],
+                           info=dict(n=3, p=p, ts=1.0, role="three_wallcold", arrangement=arr)))
     # material tests on the final states
     for g in grid:
         state = os.path.join(g.dir, "state_relax.txt")

@@ -54,6 +54,14 @@ struct LudingParams {
   // ---- switches (not in the paper) ----
   bool stiffness_growth = true;  ///< Eq 7 on; off: un/reloading stiffness is the constant k2
   bool sliding_breaks_cohesion = true;  ///< footnote 5: f_n >= 0 while sliding
+  /// Section 3.3.2 "also the stiffness is increased accordingly": while k1(T, t) rises, delta_max
+  /// grows with delta_0 fixed AND the line slope k2' = k2(delta_max) of Eq 7 is re-evaluated at
+  /// the new delta_max (so k_c of Eq 13 and k_t of Eq 23 grow too). Off: the old line is kept.
+  bool cooling_stiffness_update = true;
+  /// Particle-wall contacts sinter: the wall law uses k1(T, t) (Eq 10-12, section 3.3 rules, the
+  /// creep of section 3.3.1). Off (default): the wall contacts keep the cold k1, i.e. they are
+  /// hysteretic (Eq 4, 7) but do not creep; see docs/luding.md (three-particle control).
+  bool wall_sintering = true;
 
   double k1() const { return k1_ratio * k2; }
   double kc() const { return kc_ratio * k2; }
@@ -70,8 +78,11 @@ struct LudingParams {
     LudingParams w = *this;
     w.mu = mu_wall;
     w.kc_ratio = 0.0;
+    w.frozen_k1 = !wall_sintering;
     return w;
   }
+  /// Set by wall_params() (not a user parameter): evaluate with the cold k1 whatever k1(T, t) is.
+  bool frozen_k1 = false;
   /// Throws std::invalid_argument with a one-line message for an invalid value.
   void validate() const;
 };
@@ -207,6 +218,23 @@ inline double luding_dk2_of(const LudingParams& p, double delta_max) {
   return delta_max < dmf ? (p.k2 - p.k1()) / dmf : 0.0;
 }
 
+/// Section 3.3.2 with Eq 7: the delta_max that solves delta_max (1 - k1_Tt / k2(delta_max)) =
+/// delta_0 (delta_0 fixed, k2(.) of Eq 7 evaluated at the solution). Below delta_max^fluid Eq 7 is
+/// k2(d) = A + B d (A = cold k1, B = (k2 - k1)/delta_max^fluid), so B d^2 + (A - k - B delta_0) d
+/// - A delta_0 = 0; beyond it k2(d) = k2 and d = k2 delta_0 / (k2 - k). Needs k1_Tt < k2.
+inline double luding_delta_max_cooling(const LudingParams& p, double delta0, double k1_Tt) {
+  const double A = p.k1(), dmf = p.delta_max_fluid();
+  if (!p.stiffness_growth || !(dmf < std::numeric_limits<double>::infinity()))
+    return p.k2 * delta0 / (p.k2 - k1_Tt);
+  const double B = (p.k2 - A) / dmf;
+  const double b = A - k1_Tt - B * delta0, c4 = 4.0 * B * A * delta0;
+  const double root = std::sqrt(b * b + c4);
+  // the positive root, written without cancellation for either sign of b
+  const double d = b > 0.0 ? 2.0 * A * delta0 / (b + root) : (root - b) / (2.0 * B);
+  if (d < dmf) return d;
+  return p.k2 * delta0 / (p.k2 - k1_Tt);  // LMM05 Eq 7 capped: k2(d) = k2
+}
+
 /// Section 3.3 delta rules, keyed on k1(T, t) (not on dT/dt): while k1(T, t) falls, delta_max
 /// stays and delta_0 grows (Fig 5 left), frozen at delta_fluid (fluid limit); while it rises,
 /// delta_0 stays and delta_max grows on the same k2' line (Fig 5 right).
@@ -222,8 +250,16 @@ inline LudingHistory luding_thermal_update(const LudingParams& p, const LudingHi
       r.delta0 = p.delta_fluid();
       r.fluid = 1;
     }
-  } else if (k1_Tt > h.k1_seen && h.delta0 > 0.0 && k1_Tt < k2l) {
-    r.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
+  } else if (k1_Tt > h.k1_seen && h.delta0 > 0.0) {
+    if (p.cooling_stiffness_update && p.stiffness_growth) {
+      if (k1_Tt < p.k2) {  // (k1 = k2: no plastic range left, delta_max stays)
+        // LMM05 section 3.3.2 with Eq 7 re-evaluated: delta_max^- = delta_0 / (1 - k1(T)/k2(dmax^-))
+        r.delta_max = std::fmax(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
+        r.k2_line = luding_k2_of(p, r.delta_max);  // "also the stiffness is increased accordingly"
+      }
+    } else if (k1_Tt < k2l) {
+      r.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
+    }
   }
   return r;
 }
@@ -239,7 +275,7 @@ inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& 
     return r;
   }
   const double k1c = p.k1();
-  const double k1 = F.thermal ? in.k1_Tt : k1c;  // k1(T, t), Eq 11-12
+  const double k1 = F.thermal && !p.frozen_k1 ? in.k1_Tt : k1c;  // k1(T, t), Eq 11-12
   LudingHistory h = h0;
   if constexpr (F.thermal && F.hysteresis) {
     h = luding_thermal_update(p, h0, k1);
