@@ -287,7 +287,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   Meter meter(walls, r_mean);
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S11_contacts,S22_contacts,S12_contacts,Z,contacts,sliding,mean_fn,"
-      "dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,samples,dt";
+      "dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,samples,dt,outside,D_in_box";
   if (walls) csv += ",wall_vs_contact_gap";
   csv += "\n";
   auto gap_of = [](const Sample& m) {
@@ -309,6 +309,18 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
                        k, e11 * t, e22 * t, 0.0, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
                        m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t, I, kr,
                        steps, samples, s.dt());
+    {  // centres outside the box (squeezed out between the peripheral disks) and the density without them
+      const Particles& Q = s.particles();
+      const Box& b = s.box();
+      int outside = 0;
+      double in = 0.0;
+      for (std::size_t p = 0; p < Q.size(); ++p) {
+        const bool o = Q.x[p] < b.x_min || Q.x[p] > b.x_max || Q.y[p] < b.y_min || Q.y[p] > b.y_max;
+        outside += o;
+        if (!o) in += std::numbers::pi * Q.radius[p] * Q.radius[p];
+      }
+      csv += fmt::format(",{},{:.9g}", outside, in / ((b.x_max - b.x_min) * (b.y_max - b.y_min)));
+    }
     if (walls) {
       const double g = gap_of(m);
       csv += fmt::format(",{:.4e}", g);
