@@ -402,7 +402,16 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
     write_file_atomic(out / "history.csv", csv);
     summary["increments_done"] = done;
     summary["steps"] = steps;
-    return report_unstable(e, s, out, summary);
+    // as report_unstable(), without state_last_good.txt: state files hold the Luding models only
+    summary["status"] = "unstable";
+    summary["status_reason"] = e.what();
+    summary["unstable_quantity"] = e.quantity();
+    summary["unstable_step"] = e.step();
+    summary["unstable_time"] = e.time();
+    write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+    close_run_dir(out);
+    std::fprintf(stderr, "demsolve: error: %s\n", one_line(e.what()).c_str());
+    return exit_code::untrustworthy;
   }
   progress.finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
