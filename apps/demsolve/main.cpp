@@ -5,6 +5,11 @@
 //   demsolve sinter  [--n 300] [--pressure 100] [--sinter-time 1.0] [--seed 1] [--state FILE] [--out DIR]
 //   demsolve compress --state FILE [--strain-rate 1] [--max-strain 0.1] [--out DIR]
 //   demsolve vibrate  --state FILE [--frequency 100] [--amplitude 2e-4] [--time 0.1] [--out DIR]
+//   demsolve compact  [--packing FILE | netsolve's pack options] [--affine] [--path hydrostatic|closed-die|E11,E22,0]
+//                     [--friction MU|inf] [--no-rotation] [--to-density 0.85] [--boundary layer|walls]
+//                     [--inertial-number I] [--increments 100] [--out DIR]
+//     the plastic-indentation law of Redanz & Fleck on netsolve's compaction scene, in netsolve's
+//     units (sigma_y, R, t* = R sqrt(rho/sigma_y)) and files (docs/dynamic.md "demsolve compact").
 //
 // prepare (section 4.1): disks with radii uniform in a0[1 - w0, 1 + w0] placed at random (no
 // overlap) in a square box at density 0.35 with random velocities, compressed by the
@@ -29,6 +34,7 @@
 #include <CLI/CLI.hpp>
 
 #include "netdem/dynamic/state.hpp"
+#include "compact.hpp"
 #include "protocol.hpp"
 
 using namespace netdem::app::dem;
@@ -127,6 +133,41 @@ int main(int argc, char** argv) {
   vib->add_option("--max-steps", va.max_steps, "refuse a run of more time steps than this")->capture_default_str();
   vib->add_flag("--overwrite", va.overwrite, "clear an output folder that holds another run's files first");
   vib->add_option("--out", out_vibrate, "output folder")->default_val("results/vibrate");
+  DemCompactArgs dc;
+  std::string out_dcompact;
+  auto* dcomp = app.add_subcommand("compact", "explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) on "
+                                              "netsolve compact's scene, units and files (docs/dynamic.md)");
+  dcomp->add_option("--width", dc.pack.width, "box width W of a new deposition in units of the mean radius R (netsolve pack)")->capture_default_str();
+  dcomp->add_option("--r-min", dc.pack.r_min, "smallest radius / R")->capture_default_str();
+  dcomp->add_option("--r-max", dc.pack.r_max, "largest radius / R")->capture_default_str();
+  dcomp->add_flag("--mono", dc.pack.mono, "monosized disks (r = R)");
+  dcomp->add_option("--seed", dc.pack.seed, "random seed of the deposition")
+      ->check(netdem::app::netsolve::seed_validator())
+      ->capture_default_str();
+  dcomp->add_option("--lid", dc.pack.lid, "deposition stop rule: centre | inside (netsolve pack)")->capture_default_str();
+  dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
+  dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
+  dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (E12 = 0 only)")->capture_default_str();
+  dcomp->add_option("--friction", dc.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
+  dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
+  dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
+                                               "frictionless walls driven along the path")->capture_default_str();
+  dcomp->add_option("--normal-unloading", dc.normal_unloading, "reversible (Eq 2 retraced) | elastic (section 3.4 branch)")
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
+  dcomp->add_option("--first-touch", dc.first_touch, "first-touch overlap u_c/(2R*) of the linear chord (bounded stiffness)")->capture_default_str();
+  dcomp->add_option("--k-t", dc.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
+  dcomp->add_option("--inertial-number", dc.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) sets the strain rate gamma' = |E'|")->capture_default_str();
+  dcomp->add_option("--damping", dc.damping, "contact dashpots (normal and tangential): fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
+  dcomp->add_option("--drag", dc.drag, "background drag on the motion relative to the affine field [1/t*]")->capture_default_str();
+  dcomp->add_option("--steps-per-contact", dc.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
+  dcomp->add_option("--increments", dc.increments, "output windows (equal strain, as netsolve's increments)")->capture_default_str();
+  dcomp->add_option("--snapshots", dc.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  dcomp->add_option("--max-steps", dc.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
+  dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
+  dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -150,6 +191,11 @@ int main(int argc, char** argv) {
     if (prep->parsed()) return run_protocol(command, sample, run, prot, true, out_prepare);
     if (comp->parsed()) return run_compress(command, ca, out_compress);
     if (vib->parsed()) return run_vibrate(command, va, out_vibrate);
+    if (dcomp->parsed()) {
+      if (dcomp->count("--packing") > 0 && dc.packing_file.empty())
+        throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
+      return run_dem_compact(command, dc, out_dcompact);
+    }
     return run_protocol(command, sample, run, prot, false, out_sinter);
   });
 }

@@ -726,7 +726,11 @@ void DynamicSolver::step() {
       inv_mass_[i] = 1.0 / P_.mass[i];
       inv_inertia_[i] = 1.0 / P_.inertia[i];
     }
-    for (std::uint32_t p : prescribed_) inv_mass_[p] = inv_inertia_[p] = 0.0;  // the kicks leave them
+    for (std::uint32_t p : prescribed_) {  // the kicks leave them
+      inv_mass_[p] = 0.0;
+      if (hold_prescribed_spins_) inv_inertia_[p] = 0.0;
+    }
+    if (!rotations_) std::fill(inv_inertia_.begin(), inv_inertia_.end(), 0.0);
     inv_scale_ = radius_scale_;
   }
   // half-step kick of particles and moving walls; the damping term of Eq 1 is taken at the
@@ -797,7 +801,14 @@ void DynamicSolver::set_affine_velocities() {
   }
 }
 
-void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles) {
+void DynamicSolver::set_rotations(bool free) {
+  rotations_ = free;
+  if (!free) std::fill(P_.omega.begin(), P_.omega.end(), 0.0);
+  inv_mass_.clear();  // refilled by the next step
+}
+
+void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins) {
+  hold_prescribed_spins_ = hold_spins;
   is_prescribed_.assign(P_.size(), 0);
   for (std::uint32_t p : particles) {
     if (p >= P_.size()) fail("set_prescribed: particle " + std::to_string(p) + " does not exist");
@@ -818,7 +829,7 @@ void DynamicSolver::impose_affine_motion(double dt) {
   for (std::uint32_t p : prescribed_) {
     P_.vx[p] = gx * (P_.x[p] - box_.x_min);
     P_.vy[p] = gy * (P_.y[p] - box_.y_min);
-    P_.omega[p] = 0.0;
+    if (hold_prescribed_spins_) P_.omega[p] = 0.0;
   }
   if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
@@ -827,7 +838,10 @@ void DynamicSolver::impose_affine_motion(double dt) {
 void DynamicSolver::apply_affine_drag() {
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    if (!is_prescribed_.empty() && is_prescribed_[i]) continue;
+    if (!is_prescribed_.empty() && is_prescribed_[i]) {
+      if (!hold_prescribed_spins_) P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];  // a free spin
+      continue;
+    }
     P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - edot_[0] * (P_.x[i] - box_.x_min));
     P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - edot_[1] * (P_.y[i] - box_.y_min));
     P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];

@@ -276,8 +276,13 @@ class DynamicSolver {
   void set_affine_velocities();
   /// The particles whose centres follow the affine motion exactly (their rotations are held): the
   /// kinematic boundary layer of a compaction (netsolve's die mode) or every particle (affine mode).
-  void set_prescribed(const std::vector<std::uint32_t>& particles);
+  /// With hold_spins = false only the centres are prescribed and their spins stay free (netsolve's
+  /// affine mode: every centre affine, the rotations unknowns).
+  void set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins = true);
   const std::vector<std::uint32_t>& prescribed() const { return prescribed_; }
+  /// false: every spin is held at zero (netsolve's --no-rotation); true (default): free, except the
+  /// spins set_prescribed holds.
+  void set_rotations(bool free);
   /// The stress from the contact forces on the prescribed particles (their reactions, Redanz & Fleck
   /// Eq 13), about the box centre: Sigma = (1/V) sum_p f_p (x) (x_p - x_c), compression positive.
   Stress2 boundary_stress() const;
@@ -355,6 +360,7 @@ class DynamicSolver {
   double edot_[2] = {0.0, 0.0};
   std::vector<std::uint32_t> prescribed_;
   std::vector<std::uint8_t> is_prescribed_;
+  bool hold_prescribed_spins_ = true, rotations_ = true;
   bool walls_active() const { return box_.enabled && box_.contact_walls; }
   void impose_affine_motion(double dt);
   void apply_affine_drag();

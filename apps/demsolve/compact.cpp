@@ -1,0 +1,468 @@
+// demsolve compact: the explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) as the
+// dynamic referee of netsolve compact: the same packing, strain path, boundary layer, units
+// (sigma_y = 1, R = 1, rho = 1, t* = R sqrt(rho/sigma_y) = 1) and files (history.csv with netsolve's
+// column names and sign convention, summary.json, .vtp snapshots). See docs/dynamic.md
+// "demsolve compact".
+#include "compact.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <unordered_map>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "netdem/dynamic/solver.hpp"
+#include "netdem/dynamic/state.hpp"
+#include "netdem/packing/io.hpp"
+#include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/compaction.hpp"
+#include "output.hpp"
+#include "protocol.hpp"
+#include "run_status.hpp"
+
+namespace fs = std::filesystem;
+using namespace netdem::dem;
+
+namespace netdem::app::dem {
+
+namespace {
+
+std::vector<double> parse_list(const std::string& s, const char* what) {
+  std::vector<double> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    double v = 0;
+    if (!netdem::app::netsolve::parse_double(item, v) || !std::isfinite(v))
+      throw UsageError(fmt::format("{}: '{}' is not a number", what, quote_input(item)));
+    out.push_back(v);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// One sample of the measured state; a history row is the mean of the samples of its window.
+struct Sample {
+  double S11 = 0, S22 = 0, S12 = 0, S11c = 0, S22c = 0, S12c = 0;  ///< netsolve's sign: compression negative
+  double Z = 0, contacts = 0, sliding = 0, mean_fn = 0;
+  double dev_mean_ratio = 0, dev_ratio_of_means = 0, affine_ut = 0;
+  double kinetic = 0, work = 0;  ///< fluctuating kinetic energy; sum F_N u_N / 2 over the disk contacts
+  void add(const Sample& o, double w) {
+    S11 += w * o.S11, S22 += w * o.S22, S12 += w * o.S12, S11c += w * o.S11c, S22c += w * o.S22c, S12c += w * o.S12c;
+    Z += w * o.Z, contacts += w * o.contacts, sliding += w * o.sliding, mean_fn += w * o.mean_fn;
+    dev_mean_ratio += w * o.dev_mean_ratio, dev_ratio_of_means += w * o.dev_ratio_of_means, affine_ut += w * o.affine_ut;
+    kinetic += w * o.kinetic, work += w * o.work;
+  }
+};
+
+/// The measures of the current state (Z, contact counts and the affine-deviation measures as
+/// netsolve's src/quasistatic/measures.cpp, over the disk-disk contacts with F_N > 0).
+class Meter {
+ public:
+  Meter(bool walls, double r_mean) : walls_(walls), r_mean_(r_mean) {}
+
+  Sample measure(const DynamicSolver& s) {
+    Sample m;
+    const Stress2 b = walls_ ? s.wall_stress() : s.boundary_stress();
+    const Stress2 c = s.contact_stress();
+    m.S11 = -b.xx, m.S22 = -b.yy, m.S12 = -0.5 * (b.xy + b.yx);
+    m.S11c = -c.xx, m.S22c = -c.yy, m.S12c = -0.5 * (c.xy + c.yx);
+    s.contacts(cs_);
+    const double E11 = s.strain_rate_11() * s.time(), E22 = s.strain_rate_22() * s.time();
+    const Particles& P = s.particles();
+    std::unordered_map<std::uint64_t, std::pair<double, double>> formed;
+    formed.reserve(cs_.size());
+    int loaded = 0, n_ratio = 0;
+    double sum_fn = 0, sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_ta = 0;
+    for (const auto& ct : cs_) {
+      if (ct.wall >= 0 || !(ct.f_n > 0.0)) continue;
+      const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
+      std::pair<double, double> ef{prev_E11_, prev_E22_};  // first seen: the strain at the previous sample
+      if (const auto it = form_.find(key); it != form_.end()) ef = it->second;
+      formed.emplace(key, ef);
+      ++loaded;
+      sum_fn += ct.f_n;
+      m.sliding += ct.sliding ? 1.0 : 0.0;
+      m.work += 0.5 * ct.f_n * ct.overlap;
+      // Eq 16 with the strain accumulated since the contact formed (netsolve's measures.cpp)
+      const double d11 = E11 - ef.first, d22 = E22 - ef.second;
+      const double Rsum = P.radius[ct.i] + P.radius[ct.j];
+      const double nx = ct.nx, ny = ct.ny;
+      const double una = -(nx * nx * d11 + ny * ny * d22) * Rsum;
+      const double uta = (-ny * nx * d11 + nx * ny * d22) * Rsum;  // t = perp(n) = (-ny, nx)
+      sum_absdev += std::fabs(ct.overlap - una);
+      sum_una += una;
+      if (una > 1e-12 * r_mean_) {
+        sum_ratio += std::fabs(ct.overlap - una) / una;
+        ++n_ratio;
+      }
+      sum_ta += std::fabs(uta);
+    }
+    form_.swap(formed);
+    prev_E11_ = E11;
+    prev_E22_ = E22;
+    const auto n = static_cast<double>(P.size());
+    m.contacts = loaded;
+    m.Z = 2.0 * loaded / n;
+    m.mean_fn = loaded > 0 ? sum_fn / loaded : 0.0;
+    const int nl = std::max(loaded, 1);
+    const double una_mean = sum_una / nl;
+    m.dev_mean_ratio = n_ratio > 0 ? sum_ratio / n_ratio : 0.0;
+    m.dev_ratio_of_means = una_mean > 0 ? (sum_absdev / nl) / una_mean : 0.0;
+    m.affine_ut = una_mean > 0 ? (sum_ta / nl) / una_mean : 0.0;
+    // kinetic energy of the motion relative to the affine field (the non-prescribed particles)
+    const auto& pre = s.prescribed();
+    std::vector<std::uint8_t> is_pre(P.size(), 0);
+    for (auto p : pre) is_pre[p] = 1;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      m.kinetic += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
+      if (is_pre[i]) continue;
+      const double wx = P.vx[i] - s.strain_rate_11() * (P.x[i] - s.box().x_min);
+      const double wy = P.vy[i] - s.strain_rate_22() * (P.y[i] - s.box().y_min);
+      m.kinetic += 0.5 * P.mass[i] * (wx * wx + wy * wy);
+    }
+    return m;
+  }
+  const std::vector<ContactInfo>& last_contacts() const { return cs_; }
+
+ private:
+  bool walls_;
+  double r_mean_;
+  std::vector<ContactInfo> cs_;
+  std::unordered_map<std::uint64_t, std::pair<double, double>> form_;
+  double prev_E11_ = 0.0, prev_E22_ = 0.0;
+};
+
+/// netsolve's snapshot files and field names (apps/netsolve/main.cpp write_snapshot), plus the
+/// velocities: particles_<tag>.vtp, contacts_<tag>.vtp (disk-disk contacts).
+void write_compact_snapshot(const DynamicSolver& s, const fs::path& out, const std::string& tag,
+                            std::vector<ContactInfo>& cs) {
+  const Particles& P = s.particles();
+  std::vector<double> pre(P.size(), 0.0);
+  for (auto p : s.prescribed()) pre[p] = 1.0;
+  Field vel{"velocity", 3, {}};
+  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], 0.0});
+  write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
+                    vtp_particles(P.x, P.y,
+                                  {{"radius", 1, P.radius}, {"theta", 1, P.theta}, {"peripheral", 1, pre}, vel,
+                                   {"omega", 1, P.omega}}));
+  s.contacts(cs);
+  std::vector<int> ci, cj;
+  Field fn{"normal_force", 1, {}}, ft{"tangential_force", 1, {}}, ov{"overlap", 1, {}}, sl{"sliding", 1, {}};
+  for (const auto& c : cs) {
+    if (c.wall >= 0 || !(c.f_n > 0.0)) continue;
+    ci.push_back(static_cast<int>(c.i));
+    cj.push_back(static_cast<int>(c.j));
+    fn.values.push_back(c.f_n);
+    ft.values.push_back(c.f_t);
+    ov.values.push_back(c.overlap);
+    sl.values.push_back(c.sliding ? 1.0 : 0.0);
+  }
+  write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), vtp_network(P.x, P.y, ci, cj, {fn, ft, ov, sl}));
+}
+
+}  // namespace
+
+int run_dem_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
+  // ---- the door: every value before anything is written ----------------------------------------
+  const qs::StrainPath path = qs::StrainPath::parse(a.path);
+  if (path.E12 != 0.0)
+    throw UsageError(fmt::format("--path {}: shear paths (E12 != 0) are not supported by demsolve compact yet (the "
+                                 "explicit solver's strain rate is diagonal)", quote_input(a.path)));
+  if (!(std::isfinite(a.inertial_number) && a.inertial_number > 0.0 && a.inertial_number <= 1.0))
+    throw UsageError(fmt::format("--inertial-number must be in (0, 1], got {}", a.inertial_number));
+  if (!(std::isfinite(a.damping) && a.damping >= 0.0 && a.damping <= 1.0))
+    throw UsageError(fmt::format("--damping must be in [0, 1] (fraction of critical damping), got {}", a.damping));
+  if (!(std::isfinite(a.drag) && a.drag >= 0.0))
+    throw UsageError(fmt::format("--drag must be a finite number >= 0, got {}", a.drag));
+  if (!(std::isfinite(a.first_touch) && a.first_touch > 0.0 && a.first_touch <= 0.01))
+    throw UsageError(fmt::format("--first-touch must be in (0, 0.01] (the explicit solver needs the bounded first-touch "
+                                 "stiffness), got {}", a.first_touch));
+  if (!(std::isfinite(a.k_t) && a.k_t >= 0.0)) throw UsageError(fmt::format("--k-t must be a finite number >= 0, got {}", a.k_t));
+  if (!(std::isfinite(a.steps_per_contact) && a.steps_per_contact >= 10.0 && a.steps_per_contact <= 1e4))
+    throw UsageError(fmt::format("--steps-per-contact must be in [10, 1e4], got {}", a.steps_per_contact));
+  if (a.increments < 1 || a.increments > 1000000)
+    throw UsageError(fmt::format("--increments must be in [1, 1e6], got {}", a.increments));
+  if (a.boundary != "layer" && a.boundary != "walls")
+    throw UsageError(fmt::format("--boundary '{}' is not 'layer' or 'walls'", quote_input(a.boundary)));
+  const bool walls = a.boundary == "walls";
+  if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
+  const double mu = netdem::app::netsolve::parse_friction(a.friction);
+  const auto snaps = parse_list(a.snapshots, "--snapshots");
+  RunDirOptions rdo;
+  rdo.overwrite = a.overwrite;
+  if (!a.packing_file.empty()) rdo.inputs.emplace_back(a.packing_file);
+  check_run_dir(out, rdo);
+  if (a.packing_file.empty()) netdem::app::netsolve::check_deposition_size(a.pack);
+  activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
+  std::string source;
+  const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source);
+  check_memory(pk.size());
+
+  Particles P = particles_from(pk, 1.0);  // rho = 1: areal density of disks of unit depth
+  Box box(pk.box);
+  if (walls) {  // the die walls enclose every disk at the start (the deposition's top disks stick out of its box)
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      box.x_min = std::min(box.x_min, P.x[i] - P.radius[i]);
+      box.x_max = std::max(box.x_max, P.x[i] + P.radius[i]);
+      box.y_min = std::min(box.y_min, P.y[i] - P.radius[i]);
+      box.y_max = std::max(box.y_max, P.y[i] + P.radius[i]);
+    }
+  }
+  box.contact_walls = walls;
+  box.right.mode = box.top.mode = WallMode::Affine;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.steps_per_contact = a.steps_per_contact;
+  o.plastic.sigma_y = 1.0;
+  o.plastic.mu = mu;
+  o.plastic.k_t = a.k_t;
+  o.plastic.reversible = a.normal_unloading == "reversible";
+  o.plastic.first_touch = a.first_touch;
+  o.plastic.damping_n = o.plastic.damping_t = a.damping;
+  o.plastic_wall_mu = 0.0;  // frictionless die walls
+  o.affine_drag = a.drag;
+  o.validate();
+  double area = 0.0;
+  for (double r : P.radius) area += std::numbers::pi * r * r;
+  const double D0 = area / ((box.x_max - box.x_min) * (box.y_max - box.y_min));
+  qs::CompactionOptions co;
+  co.path = path;
+  co.target_density = a.to_density;
+  co.increments = a.increments;
+  try {
+    co.validate(D0);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  // the rate: I = gamma' d sqrt(rho/P_ref), gamma' = |E'| (Frobenius), d = 2R, P_ref = sigma_y
+  const double rho = 1.0, sigma_y = 1.0, d_mean = 2.0;
+  const double gdot = a.inertial_number / (d_mean * std::sqrt(rho / sigma_y));
+  const double norm = std::sqrt(path.E11 * path.E11 + path.E22 * path.E22 + 2.0 * path.E12 * path.E12);
+  const double e11 = gdot * path.E11 / norm, e22 = gdot * path.E22 / norm;
+  const double T = std::log(D0 / a.to_density) / (e11 + e22);  // D = D0 exp(-(E11 + E22) t)
+
+  activity() = "setting up the explicit solver";
+  const std::size_t n = P.size();
+  DynamicSolver s(std::move(P), LudingParams{}, box, o);
+  s.set_strain_rate(e11, e22);
+  s.set_affine_velocities();
+  std::vector<std::uint32_t> pre;
+  if (a.affine) {
+    for (std::uint32_t p = 0; p < n; ++p) pre.push_back(p);
+  } else if (!walls) {
+    const auto layer = packing::peripheral_layer(pk);
+    for (std::uint32_t p = 0; p < n; ++p)
+      if (layer[p]) pre.push_back(p);
+  }
+  // affine: the centres prescribed, the spins free (netsolve's affine mode); layer: the layer's spins held
+  s.set_prescribed(pre, !a.affine);
+  s.set_rotations(!a.no_rotation);
+  const double dt_first = s.dt();
+  const double steps_est = T / dt_first;
+  if (!(steps_est <= a.max_steps))
+    throw UsageError(fmt::format("the run needs at least {:.3g} time steps of {:.3g} t* (I = {:g}), more than --max-steps "
+                                 "= {:.3g}: raise --inertial-number or --max-steps", steps_est, dt_first,
+                                 a.inertial_number, a.max_steps));
+
+  open_run_dir(out, command, rdo);
+  packing::write_packing_csv(pk, out / "packing.csv");
+  if (!a.quiet)
+    std::fprintf(stderr, "demsolve compact: %zu particles, D0 = %.4f, seed %llu (%s); I = %g, gamma' = %.4g, t_end = %.4g, "
+                 "dt = %.3g, about %.3g steps\n", n, D0, static_cast<unsigned long long>(pk.seed), source.c_str(),
+                 a.inertial_number, gdot, T, dt_first, steps_est);
+  std::vector<ContactInfo> snap_buf;
+  write_compact_snapshot(s, out, "initial", snap_buf);
+  double r_mean = 0.0;
+  for (double r : s.particles().radius) r_mean += r;
+  r_mean /= static_cast<double>(n);
+  Meter meter(walls, r_mean);
+  std::string csv =
+      "increment,E11,E22,E12,D,S11,S22,S12,S11_contacts,S22_contacts,S12_contacts,Z,contacts,sliding,mean_fn,"
+      "dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,samples,dt,outside,D_in_box";
+  if (walls) csv += ",wall_vs_contact_gap";
+  csv += "\n";
+  auto gap_of = [](const Sample& m) {
+    const double d11 = m.S11 - m.S11c, d22 = m.S22 - m.S22c;
+    const double c = std::hypot(m.S11c, m.S22c);
+    return c > 0.0 ? std::hypot(d11, d22) / c : 0.0;
+  };
+  Sample last;
+  double last_I = 0.0, max_gap = 0.0, last_gap = 0.0;
+  std::int64_t steps = 0;
+  int done = 0;
+  auto write_row = [&](int k, const Sample& m, int samples) {
+    const double t = s.time();
+    const double Pc = -0.5 * (m.S11c + m.S22c);
+    const double I = Pc > 0.0 ? gdot * d_mean * std::sqrt(rho / Pc) : std::numeric_limits<double>::infinity();
+    const double kr = m.work > 0.0 ? m.kinetic / m.work : 0.0;
+    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},"
+                       "{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.4e},{},{},{:.4e}",
+                       k, e11 * t, e22 * t, 0.0, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
+                       m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t, I, kr,
+                       steps, samples, s.dt());
+    {  // centres outside the box (squeezed out between the peripheral disks) and the density without them
+      const Particles& Q = s.particles();
+      const Box& b = s.box();
+      int outside = 0;
+      double in = 0.0;
+      for (std::size_t p = 0; p < Q.size(); ++p) {
+        const bool o = Q.x[p] < b.x_min || Q.x[p] > b.x_max || Q.y[p] < b.y_min || Q.y[p] > b.y_max;
+        outside += o;
+        if (!o) in += std::numbers::pi * Q.radius[p] * Q.radius[p];
+      }
+      csv += fmt::format(",{},{:.9g}", outside, in / ((b.x_max - b.x_min) * (b.y_max - b.y_min)));
+    }
+    if (walls) {
+      const double g = gap_of(m);
+      csv += fmt::format(",{:.4e}", g);
+      if (k > 0) {
+        last_gap = g;
+        if (s.density() >= D0 + 0.5 * (a.to_density - D0)) max_gap = std::max(max_gap, g);  // once loaded
+      }
+    }
+    csv += "\n";
+    last = m;
+    last_I = I;
+  };
+  nlohmann::json summary;
+  summary["command"] = command;
+  summary["packing"] = source;
+  summary["seed"] = pk.seed;
+  summary["particles"] = n;
+  summary["initial_density"] = D0;
+  summary["sigma_y"] = 1.0;
+  summary["friction"] = a.friction;
+  summary["mode"] = a.affine ? "affine" : walls ? "walls" : "die";
+  summary["boundary"] = a.affine ? "affine" : a.boundary;
+  summary["prescribed"] = pre.size();
+  summary["rotations"] = !a.no_rotation;
+  summary["path"] = {{"name", path.name}, {"E11", path.E11}, {"E22", path.E22}, {"E12", path.E12}};
+  summary["increments"] = a.increments;
+  summary["to_density"] = a.to_density;
+  summary["k_t"] = a.k_t;
+  summary["first_touch"] = a.first_touch;
+  summary["normal_unloading"] = a.normal_unloading;
+  summary["inertial_number"] = a.inertial_number;
+  summary["strain_rate"] = {{"E11", e11}, {"E22", e22}, {"E12", 0.0}, {"gamma_dot", gdot}};
+  summary["t_end"] = T;
+  summary["damping"] = {{"normal", a.damping}, {"tangential", a.damping}};
+  summary["drag"] = a.drag;
+  summary["steps_per_contact"] = a.steps_per_contact;
+  summary["units"] = "sigma_y = 1, R = 1 (lengths of the packing), rho = 1, t* = R sqrt(rho/sigma_y) = 1";
+
+  const auto t0 = std::chrono::steady_clock::now();
+  Progress progress("compact", T, a.quiet);
+  write_row(0, meter.measure(s), 1);
+  std::size_t next_snap = 0;
+  // samples per window: about every 20 steps, at least 10 per window
+  const auto every = static_cast<std::int64_t>(std::clamp(T / a.increments / dt_first / 10.0, 1.0, 20.0));
+  activity() = "compacting";
+  try {
+    for (int k = 1; k <= a.increments; ++k) {
+      const double t_end = T * k / a.increments;
+      Sample acc;
+      int samples = 0;
+      std::int64_t since = 0;
+      while (s.time() < t_end - 1e-12 * T) {
+        s.step();
+        ++steps;
+        if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
+          acc.add(meter.measure(s), 1.0);
+          ++samples;
+          progress.update(s.time());
+        }
+      }
+      if (samples == 0) {
+        acc.add(meter.measure(s), 1.0);
+        samples = 1;
+      }
+      Sample mean;
+      mean.add(acc, 1.0 / samples);
+      s.check_health();  // nothing unchecked reaches a file
+      write_row(k, mean, samples);
+      done = k;
+      while (next_snap < snaps.size() && s.density() >= snaps[next_snap] - 1e-9) {
+        write_compact_snapshot(s, out, fmt::format("D{:.3f}", snaps[next_snap]), snap_buf);
+        ++next_snap;
+      }
+      if (k % 20 == 0) write_file_atomic(out / "history.csv", csv);  // checkpoint
+    }
+  } catch (const InstabilityError& e) {
+    progress.finish();
+    csv += "# stopped: " + one_line(e.what()) + "\n";
+    write_file_atomic(out / "history.csv", csv);
+    summary["increments_done"] = done;
+    summary["steps"] = steps;
+    // as report_unstable(), without state_last_good.txt: state files hold the Luding models only
+    summary["status"] = "unstable";
+    summary["status_reason"] = e.what();
+    summary["unstable_quantity"] = e.quantity();
+    summary["unstable_step"] = e.step();
+    summary["unstable_time"] = e.time();
+    write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+    close_run_dir(out);
+    std::fprintf(stderr, "demsolve: error: %s\n", one_line(e.what()).c_str());
+    return exit_code::untrustworthy;
+  }
+  progress.finish();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_file_atomic(out / "history.csv", csv);
+  write_compact_snapshot(s, out, "final", snap_buf);
+  // die mode prescribes only the peripheral layer: count centres squeezed out of the box (as netsolve)
+  int outside = 0;
+  for (std::size_t p = 0; p < n; ++p) {
+    const double x = s.particles().x[p], y = s.particles().y[p];
+    outside += x < s.box().x_min || x > s.box().x_max || y < s.box().y_min || y > s.box().y_max;
+  }
+  RunStatus status;
+  std::vector<std::string> warnings;
+  if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
+  if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
+  if (walls && max_gap > 0.02)
+    warnings.push_back(fmt::format("wall stress and contact stress differ by up to {:.3g} (above 2 %) in the second half "
+                                   "of the compaction (wall_vs_contact_gap)", max_gap));
+  summary["status"] = status.status;
+  std::string reason = status.ok() ? "every instability check passed" : status.reason();
+  for (const auto& w : warnings) reason += "; warning: " + w;
+  summary["status_reason"] = reason;
+  summary["warnings"] = warnings;
+  summary["increments_done"] = done;
+  summary["centres_outside_box"] = outside;
+  summary["final"] = {{"D", s.density()},         {"S11", last.S11},           {"S22", last.S22},
+                      {"S12", last.S12},          {"S11_contacts", last.S11c}, {"S22_contacts", last.S22c},
+                      {"Z", last.Z},              {"contacts", last.contacts}, {"sliding", last.sliding},
+                      {"E11", e11 * s.time()},    {"E22", e22 * s.time()},     {"E12", 0.0},
+                      {"I", last_I},              {"kinetic_ratio", last.work > 0 ? last.kinetic / last.work : 0.0},
+                      {"time", s.time()}};
+  if (walls) {
+    summary["wall_vs_contact_gap"] = last_gap;
+    summary["max_wall_vs_contact_gap"] = max_gap;
+    summary["wall_vs_contact_warning"] = max_gap > 0.02;
+  }
+  summary["dt"] = {{"first", dt_first}, {"last", s.dt()}};
+  summary["steps"] = steps;
+  summary["neighbour_rebuilds"] = s.rebuilds();
+  summary["timing_s"] = {{"wall", wall}, {"particle_steps_per_s", static_cast<double>(steps) * n / std::max(wall, 1e-9)}};
+  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
+  std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f (contacts %.4f, %.4f), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n",
+              s.density(), last.S11, last.S22, last.S11c, last.S22c, last.Z, last_I, static_cast<long long>(steps), wall,
+              out.c_str());
+  for (const auto& w : warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+  if (!status.ok()) {
+    std::fprintf(stderr, "demsolve: error: %s: %s\n", status.status.c_str(), status.reason().c_str());
+    return exit_code::untrustworthy;
+  }
+  return exit_code::ok;
+}
+
+}  // namespace netdem::app::dem
