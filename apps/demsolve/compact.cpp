@@ -302,12 +302,14 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   auto write_row = [&](int k, const Sample& m, int samples) {
     const double t = s.time();
     const double Pc = -0.5 * (m.S11c + m.S22c);
-    const double I = Pc > 0.0 ? gdot * d_mean * std::sqrt(rho / Pc) : std::numeric_limits<double>::infinity();
+    // the actual inertial number; undefined (an empty field, no inf in a result file) where P = 0
+    const double I = Pc > 0.0 ? gdot * d_mean * std::sqrt(rho / Pc) : std::numeric_limits<double>::quiet_NaN();
     const double kr = m.work > 0.0 ? m.kinetic / m.work : 0.0;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.4e},{},{},{:.4e}",
+                       "{:.6g},{:.6g},{:.6g},{:.9g},{},{:.4e},{},{},{:.4e}",
                        k, e11 * t, e22 * t, 0.0, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
-                       m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t, I, kr,
+                       m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t,
+                       std::isfinite(I) ? fmt::format("{:.6g}", I) : std::string(), kr,
                        steps, samples, s.dt());
     {  // centres outside the box (squeezed out between the peripheral disks) and the density without them
       const Particles& Q = s.particles();

@@ -59,7 +59,7 @@ rows = list(csv.DictReader(l for l in open(d + "/history.csv") if not l.startswi
 need = ("increment E11 E22 E12 D S11 S22 S12 S11_contacts S22_contacts Z contacts sliding mean_fn "
         "dev_un_mean_ratio dev_un_ratio_of_means time I kinetic_ratio steps").split()
 ok = all(c in rows[0] for c in need) and len(rows) == 101
-ok = ok and not any(v.strip().lower() == "nan" for r in rows for v in r.values())
+ok = ok and not any(v.strip().lower() in ("nan", "inf", "-inf", "+inf") for r in rows for v in r.values())
 last = rows[-1]
 ok = ok and abs(float(last["D"]) - 0.85) < 1e-4 and float(last["S11"]) < 0 and float(last["S22"]) < 0
 ok = ok and all(float(r["S22_contacts"]) < 0 for r in rows[1:]) and float(last["Z"]) > 3
