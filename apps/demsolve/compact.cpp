@@ -208,15 +208,8 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   check_memory(pk.size());
 
   Particles P = particles_from(pk, 1.0);  // rho = 1: areal density of disks of unit depth
-  Box box(pk.box);
-  if (walls) {  // the die walls enclose every disk at the start (the deposition's top disks stick out of its box)
-    for (std::size_t i = 0; i < P.size(); ++i) {
-      box.x_min = std::min(box.x_min, P.x[i] - P.radius[i]);
-      box.x_max = std::max(box.x_max, P.x[i] + P.radius[i]);
-      box.y_min = std::min(box.y_min, P.y[i] - P.radius[i]);
-      box.y_max = std::max(box.y_max, P.y[i] + P.radius[i]);
-    }
-  }
+  // the die walls enclose every disk at the start (the deposition's top disks stick out of its box)
+  Box box(walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
   box.contact_walls = walls;
   box.right.mode = box.top.mode = WallMode::Affine;
   DynamicOptions o;

@@ -160,7 +160,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   std::string source;
   if (a.packing_file.empty()) app::netsolve::check_deposition_size(pa, true);
   activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
-  const packing::Packing pk = app::netsolve::input_packing(a.packing_file, pa, source);
+  packing::Packing pk = app::netsolve::input_packing(a.packing_file, pa, source);
+  // the walls enclose every disk at the start (as demsolve compact --boundary walls)
+  if (so.mode == qs::BoundaryMode::Walls) pk.box = app::netsolve::walls_box(pk);
   co.validate(pk.density());
   activity() = "setting up the network solver";
   app::open_run_dir(out, g_command, run_dir_options(ra, a.packing_file));

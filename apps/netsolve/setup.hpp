@@ -1,6 +1,7 @@
 #pragma once
 // Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield): the
 // packing, and the contact-law / Newton options both `compact` and `yield` take.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -153,6 +154,19 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
   app.add_option("--normal-unloading", a.normal_unloading, unloading_help)
       ->check(CLI::IsMember({"reversible", "elastic"}))
       ->capture_default_str();
+}
+
+/// The box of --boundary walls (both tools): the packing's box enlarged to enclose every disk (the
+/// ballistic deposition's top disks stick out of its lid), so that no disk starts inside a wall.
+inline packing::Box walls_box(const packing::Packing& pk) {
+  packing::Box b = pk.box;
+  for (std::size_t i = 0; i < pk.size(); ++i) {
+    b.x_min = std::min(b.x_min, pk.x[i] - pk.r[i]);
+    b.x_max = std::max(b.x_max, pk.x[i] + pk.r[i]);
+    b.y_min = std::min(b.y_min, pk.y[i] - pk.r[i]);
+    b.y_max = std::max(b.y_max, pk.y[i] + pk.r[i]);
+  }
+  return b;
 }
 
 /// Copies the LawArgs into the solver options; throws std::invalid_argument for a bad --friction.
