@@ -401,6 +401,13 @@ def main():
               "|---|---|---|---|---|---|---|"]
     for n in CASES:
         if n not in C:
+            # a case without yield points: say why (its summary.json status), not a silent gap
+            why = "no run"
+            sp = os.path.join(runs, n, "summary.json")
+            if os.path.exists(sp):
+                sj = json.load(open(sp))
+                why = f"{sj.get('status', '?')}: {sj.get('status_reason', '')}"
+            lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | no yield points: {why} | | | | | |")
             continue
         s = C[n]["summary"]
         p = s["precompaction"]
