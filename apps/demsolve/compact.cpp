@@ -34,20 +34,6 @@ namespace netdem::app::dem {
 
 namespace {
 
-std::vector<double> parse_list(const std::string& s, const char* what) {
-  std::vector<double> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) continue;
-    double v = 0;
-    if (!netdem::app::netsolve::parse_double(item, v) || !std::isfinite(v))
-      throw UsageError(fmt::format("{}: '{}' is not a number", what, quote_input(item)));
-    out.push_back(v);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
 
 /// One sample of the measured state; a history row is the mean of the samples of its window.
 struct Sample {
@@ -196,7 +182,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   const bool walls = a.boundary == "walls";
   if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
-  const auto snaps = parse_list(a.snapshots, "--snapshots");
+  const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
   RunDirOptions rdo;
   rdo.overwrite = a.overwrite;
   if (!a.packing_file.empty()) rdo.inputs.emplace_back(a.packing_file);

@@ -65,19 +65,6 @@ struct CompactArgs {
   netdem::app::netsolve::LawArgs law = netdem::app::netsolve::law_args(solver);
 };
 
-std::vector<double> parse_list(const std::string& s, const char* what) {
-  std::vector<double> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) continue;
-    double v = 0;
-    if (!parse_double(item, v) || !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("{}: '{}' is not a number", what, item));
-    out.push_back(v);
-  }
-  return out;
-}
 
 netdem::app::RunDirOptions run_dir_options(const RunArgs& r, const std::string& input = "") {
   netdem::app::RunDirOptions o;
@@ -154,7 +141,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
                                             co.path.E12));
   if (so.mode == qs::BoundaryMode::Walls && a.save_state)
     throw std::invalid_argument("--save-state: the state file does not hold wall contacts (--boundary walls) yet");
-  const auto snaps = parse_list(a.snapshots, "--snapshots");
+  const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
 
   app::check_run_dir(out, run_dir_options(ra, a.packing_file));
   std::string source;

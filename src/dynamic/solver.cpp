@@ -26,9 +26,8 @@ constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 
 }  // namespace
 
-std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx,
-                           double pvy, double pomega) {
-  const double m = contact::luding_mass(p, r);
+std::size_t Particles::add_with_mass(double px, double py, double r, double m, double pvx, double pvy,
+                                     double pomega) {
   x.push_back(px);
   y.push_back(py);
   vx.push_back(pvx);
@@ -44,22 +43,14 @@ std::size_t Particles::add(double px, double py, double r, const LudingParams& p
   return x.size() - 1;
 }
 
+std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx, double pvy,
+                           double pomega) {
+  return add_with_mass(px, py, r, contact::luding_mass(p, r), pvx, pvy, pomega);
+}
+
 std::size_t Particles::add_disk(double px, double py, double r, double rho, double pvx, double pvy,
                                 double pomega) {
-  const double m = rho * std::numbers::pi * r * r;
-  x.push_back(px);
-  y.push_back(py);
-  vx.push_back(pvx);
-  vy.push_back(pvy);
-  omega.push_back(pomega);
-  theta.push_back(0.0);
-  radius.push_back(r);
-  mass.push_back(m);
-  inertia.push_back(0.5 * m * r * r);
-  fx.push_back(0.0);
-  fy.push_back(0.0);
-  torque.push_back(0.0);
-  return x.size() - 1;
+  return add_with_mass(px, py, r, rho * std::numbers::pi * r * r, pvx, pvy, pomega);
 }
 
 Particles particles_from(const packing::Packing& pk, const LudingParams& params) {

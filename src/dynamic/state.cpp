@@ -611,81 +611,14 @@ SolverState read_state_file(const std::string& path) {
 namespace netdem::dem {
 
 namespace {
-template <contact::LudingFeatures F>
-void contacts_impl(const Particles& P, const Box& box, const LudingParams& pp,
-                   const LudingParams& pw, double k1Tt, const std::vector<std::uint64_t>& keys,
-                   const std::vector<LudingHistory>& hist,
-                   const std::vector<LudingHistory>& whist, std::vector<ContactInfo>& out) {
+// The touching contacts (pairs of the table, then the walls) at the current positions, with the
+// law evaluated on the committed histories with a zero slip increment and the current normal
+// rate. eval(history, kinematics, wall, info) fills the forces of `info` and returns whether the
+// contact is reported.
+template <class H, class Eval>
+void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint64_t>& keys,
+                 const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval) {
   out.clear();
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
-    const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
-    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i];
-    const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
-    const double L2 = dx * dx + dy * dy;
-    if (!(L2 < s * s)) continue;
-    const double L = std::sqrt(L2), nx = dx / L, ny = dy / L;
-    const double q = (ri * ri - rj * rj) / (2.0 * L);
-    contact::LudingInput in;
-    in.delta = s - L;
-    in.delta_dot = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
-    in.k1_Tt = k1Tt;
-    const auto r = contact::luding_evaluate<F>(pp, hist[k], in);
-    ContactInfo c;
-    c.i = i;
-    c.j = j;
-    c.overlap = in.delta;
-    c.d_i = 0.5 * L + q;
-    c.d_j = 0.5 * L - q;
-    c.nx = nx;
-    c.ny = ny;
-    c.f_n = r.f_n;
-    c.f_t = r.f_t;
-    c.f_min = r.f_min;
-    c.mu = r.mu;
-    c.sliding = hist[k].sliding != 0;
-    out.push_back(c);
-  }
-  if (!box.enabled) return;
-  const double pos[4] = {box.x_min, box.x_max, box.y_min, box.y_max};
-  const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
-  for (std::size_t i = 0; i < P.size(); ++i)
-    for (int w = 0; w < 4; ++w) {
-      const double dist = w < 2 ? wnx[w] * (P.x[i] - pos[w]) : wny[w] * (P.y[i] - pos[w]);
-      const double delta = P.radius[i] - dist;
-      if (!(delta > 0.0)) continue;
-      contact::LudingInput in;
-      in.delta = delta;
-      in.delta_dot = -(P.vx[i] * wnx[w] + P.vy[i] * wny[w]);
-      in.k1_Tt = k1Tt;
-      const auto& h = whist[4 * i + static_cast<std::size_t>(w)];
-      const auto r = contact::luding_evaluate<F>(pw, h, in);
-      ContactInfo c;
-      c.i = static_cast<std::uint32_t>(i);
-      c.j = static_cast<std::uint32_t>(w);
-      c.wall = w;
-      c.overlap = delta;
-      c.d_i = dist;
-      c.nx = wnx[w];
-      c.ny = wny[w];
-      c.f_n = r.f_n;
-      c.f_t = r.f_t;
-      c.f_min = r.f_min;
-      c.mu = r.mu;
-      c.sliding = h.sliding != 0;
-      out.push_back(c);
-    }
-}
-constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
-
-// The same for the plastic-indentation law: the committed histories with a zero slip increment
-// and the current normal rate (dashpot); the contacts on their loaded branch.
-void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
-                      const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
-                      const std::vector<contact::PlasticIndentationHistory>& hist,
-                      const std::vector<contact::PlasticIndentationHistory>& whist, std::vector<ContactInfo>& out) {
-  out.clear();
-  const contact::PlasticIndentationLaw lp(pp), lw(pw);
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
     const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
@@ -700,8 +633,6 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
     in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
     in.r_eff = ri * rj / s;
     in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
-    const auto r = lp.evaluate(hist[k], in, nullptr);
-    if (!r.loaded) continue;
     ContactInfo c;
     c.i = i;
     c.j = j;
@@ -710,13 +641,11 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
     c.d_j = 0.5 * L - q;
     c.nx = nx;
     c.ny = ny;
-    c.f_n = r.f_n;
-    c.f_t = r.f_t;
-    c.mu = pp.mu_eff();
+    if (!eval(hist[k], in, false, c)) continue;
     c.sliding = hist[k].sliding != 0;
     out.push_back(c);
   }
-  if (!box.enabled) return;
+  if (!(box.enabled && box.contact_walls)) return;
   const double pos[4] = {box.x_min, box.x_max, box.y_min, box.y_max};
   const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
   for (std::size_t i = 0; i < P.size(); ++i)
@@ -729,9 +658,7 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
       in.v_n = -(P.vx[i] * wnx[w] + P.vy[i] * wny[w]);
       in.r_eff = P.radius[i];
       in.m_eff = P.mass[i];
-      const auto& h = whist[4 * i + static_cast<std::size_t>(w)];
-      const auto r = lw.evaluate(h, in, nullptr);
-      if (!r.loaded) continue;
+      const H& h = whist[4 * i + static_cast<std::size_t>(w)];
       ContactInfo c;
       c.i = static_cast<std::uint32_t>(i);
       c.j = static_cast<std::uint32_t>(w);
@@ -740,27 +667,62 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
       c.d_i = dist;
       c.nx = wnx[w];
       c.ny = wny[w];
-      c.f_n = r.f_n;
-      c.f_t = r.f_t;
-      c.mu = pw.mu_eff();
+      if (!eval(h, in, true, c)) continue;
       c.sliding = h.sliding != 0;
       out.push_back(c);
     }
+}
+
+template <contact::LudingFeatures F>
+void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
+                     const std::vector<std::uint64_t>& keys, const std::vector<LudingHistory>& hist,
+                     const std::vector<LudingHistory>& whist, std::vector<ContactInfo>& out) {
+  contacts_of(P, box, keys, hist, whist, out,
+              [&](const LudingHistory& h, const contact::ContactKinematics& k, bool wall, ContactInfo& c) {
+                contact::LudingInput in;
+                in.delta = k.overlap;
+                in.delta_dot = k.v_n;
+                in.k1_Tt = k1Tt;
+                const auto r = contact::luding_evaluate<F>(wall ? pw : pp, h, in);
+                c.f_n = r.f_n;
+                c.f_t = r.f_t;
+                c.f_min = r.f_min;
+                c.mu = r.mu;
+                return true;
+              });
+}
+constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
+
+// The plastic-indentation law: the contacts on their loaded branch.
+void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
+                      const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
+                      const std::vector<contact::PlasticIndentationHistory>& hist,
+                      const std::vector<contact::PlasticIndentationHistory>& whist, std::vector<ContactInfo>& out) {
+  const contact::PlasticIndentationLaw lp(pp), lw(pw);
+  contacts_of(P, box, keys, hist, whist, out,
+              [&](const contact::PlasticIndentationHistory& h, const contact::ContactKinematics& k, bool wall,
+                  ContactInfo& c) {
+                const auto r = (wall ? lw : lp).evaluate(h, k, nullptr);
+                c.f_n = r.f_n;
+                c.f_t = r.f_t;
+                c.mu = (wall ? pw : pp).mu_eff();
+                return r.loaded;
+              });
 }
 }  // namespace
 
 void DynamicSolver::contacts(std::vector<ContactInfo>& out) const {
   switch (opt_.model) {
     case ContactModel::Linear:
-      contacts_impl<contact::kLudingLinear>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
+      luding_contacts<contact::kLudingLinear>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
                                             pair_key_, pair_hist_, wall_hist_, out);
       break;
     case ContactModel::Hysteretic:
-      contacts_impl<kHystereticOut>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
+      luding_contacts<kHystereticOut>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
                                     pair_hist_, wall_hist_, out);
       break;
     case ContactModel::Full:
-      contacts_impl<contact::kLudingFull>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
+      luding_contacts<contact::kLudingFull>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
                                           pair_key_, pair_hist_, wall_hist_, out);
       break;
     case ContactModel::PlasticIndentation:

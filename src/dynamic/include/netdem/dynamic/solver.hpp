@@ -38,6 +38,9 @@ struct Particles {
   /// Adds a disk of radius r: mass rho_p pi r^2 h (contact::luding_mass), I = m r^2 / 2.
   std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
                   double pvy = 0.0, double pomega = 0.0);
+  /// Adds a disk of radius r and mass m, I = m r^2 / 2, at rest unless velocities are given.
+  std::size_t add_with_mass(double px, double py, double r, double m, double pvx = 0.0, double pvy = 0.0,
+                            double pomega = 0.0);
   /// Adds a disk of radius r and unit depth with the areal density rho: m = rho pi r^2, I = m r^2/2.
   std::size_t add_disk(double px, double py, double r, double rho, double pvx = 0.0,
                        double pvy = 0.0, double pomega = 0.0);
