@@ -90,26 +90,33 @@ double contact_duration(double k2, double gamma0, double m12) {
   return std::numbers::pi / std::sqrt(w2);  // LMM05 Eq 6: t_c = pi / omega
 }
 
+namespace {
+// The two lightest masses (m_lo <= m_lo2) of the particles.
+void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
+  m_lo = m_lo2 = P.mass[0];
+  if (P.size() < 2) return;
+  m_lo = std::min(P.mass[0], P.mass[1]);
+  m_lo2 = std::max(P.mass[0], P.mass[1]);
+  for (std::size_t i = 2; i < P.size(); ++i) {
+    const double m = P.mass[i];
+    if (m < m_lo) {
+      m_lo2 = m_lo;
+      m_lo = m;
+    } else if (m < m_lo2) {
+      m_lo2 = m;
+    }
+  }
+}
+}  // namespace
+
 TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o) {
   o.validate();
   const std::size_t n = P.size();
   if (n == 0) fail("choose_time_step: no particles");
-  double mean = 0.0, m_lo = P.mass[0], m_lo2 = P.mass[0];
+  double mean = 0.0, m_lo = 0.0, m_lo2 = 0.0;
   for (double m : P.mass) mean += m;
   mean /= static_cast<double>(n);
-  if (n >= 2) {
-    m_lo = std::min(P.mass[0], P.mass[1]);
-    m_lo2 = std::max(P.mass[0], P.mass[1]);
-    for (std::size_t i = 2; i < n; ++i) {
-      const double m = P.mass[i];
-      if (m < m_lo) {
-        m_lo2 = m_lo;
-        m_lo = m;
-      } else if (m < m_lo2) {
-        m_lo2 = m;
-      }
-    }
-  }
+  lightest_pair(P, m_lo, m_lo2);
   TimeStepInfo ts;
   // k2 is the largest stiffness of the law (cap of Eq 7); gamma_0 of Eq 5.
   ts.tc_mean = contact_duration(p.k2, p.gamma_n, 0.5 * mean);
@@ -131,24 +138,6 @@ TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const D
   return ts;
 }
 
-namespace {
-// The two lightest masses (m_lo <= m_lo2) of the particles.
-void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
-  m_lo = m_lo2 = P.mass[0];
-  if (P.size() < 2) return;
-  m_lo = std::min(P.mass[0], P.mass[1]);
-  m_lo2 = std::max(P.mass[0], P.mass[1]);
-  for (std::size_t i = 2; i < P.size(); ++i) {
-    const double m = P.mass[i];
-    if (m < m_lo) {
-      m_lo2 = m_lo;
-      m_lo = m;
-    } else if (m < m_lo2) {
-      m_lo2 = m;
-    }
-  }
-}
-}  // namespace
 
 TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
                                const DynamicOptions& o, double area_max) {
