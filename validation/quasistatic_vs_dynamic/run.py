@@ -183,7 +183,8 @@ class Run:
             self.h = read_history(os.path.join(d, "history.csv"))
             with open(os.path.join(d, "summary.json")) as f:
                 self.summary = json.load(f)
-            self.ok = len(self.h["D"]) > 1
+            # a run that was killed keeps its .incomplete marker: not used
+            self.ok = len(self.h["D"]) > 1 and not os.path.exists(os.path.join(d, ".incomplete"))
         except (OSError, ValueError, KeyError, IndexError):
             self.ok = False
         mp = os.path.join(d, "meta.json")
@@ -502,6 +503,12 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
               f"{fmt(r.at('outside', 0.85, window=False), 0)} | {r.status} | {fmt(rn.at('S22', 0.83))} | "
               f"{fmt(rn.at('S22', 0.85))} | {rn.status} | {unc} |")
     w("")
+    notes = os.path.join(HERE, "notes_quick.md" if mode["name"] == "quick" else "notes.md")
+    if os.path.isfile(notes):
+        w(f"## Interpretation (hand-written, `{os.path.relpath(notes, REPO)}`; check it against the tables above "
+          "when the runs change)\n")
+        with open(notes) as f:
+            w(f.read().strip() + "\n")
     w("## Figures\n")
     for fn in figs:
         w(f"![{fn}]({fn})\n")
