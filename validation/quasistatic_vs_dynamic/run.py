@@ -420,6 +420,13 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
     counts = {v: sum(1 for r in rows if r["verdict"] == v) for v in ("PASS", "FAIL", "invalid", "not run")}
     w(f"**Summary: {counts['PASS']} PASS, {counts['FAIL']} FAIL, {counts['invalid']} invalid, "
       f"{counts['not run']} not run** (of {len(rows)} lines).\n")
+    w("| case | PASS | FAIL | invalid | not run |")
+    w("|---|---|---|---|---|")
+    for name, _ in combos(mode):
+        cr = [r for r in rows if r["case"] == name]
+        w(f"| {name} | " + " | ".join(str(sum(1 for r in cr if r["verdict"] == v))
+                                     for v in ("PASS", "FAIL", "invalid", "not run")) + " |")
+    w("")
     w("## The table: netsolve (default drag) against the DEM limit σ₀\n")
     w("| case | D | quantity | netsolve (drag 0.01) | σ₀ ± se (DEM, I → 0) | band | verdict | netsolve − σ₀ | "
       "netsolve drag /3, /9, /27 |")
@@ -463,13 +470,15 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
                   f"{fmt(s0b, p)} | {rel} |")
     w("")
     w("### The drag: netsolve at 1/3, 1/9, 1/27 of the default against σ₀ (Σ22 at D = 0.85)\n")
-    w("| case | σ₀ | drag 0.01 | /3 | /9 | /27 | statuses (0.01, /3, /9, /27) | moves toward σ₀? |")
+    w("netsolve's status and its unconverged increments (of 100) per drag in brackets.\n")
+    w("| case | σ₀ | drag 0.01 | /3 | /9 | /27 | status [unconverged] (0.01, /3, /9, /27) | moves toward σ₀? |")
     w("|---|---|---|---|---|---|---|---|")
     for r in rows:
         if r["col"] != "S22" or r["D"] != 0.85:
             continue
         nets = [R[f"net/{r['case']}/v{div}"] for div, _ in VISC]
-        sts = ", ".join(n.status for n in nets)
+        sts = ", ".join(f"{n.status} [{n.summary.get('solver', {}).get('unconverged_increments', '—')}]"
+                        if n.ok else "not run" for n in nets)
         mv = "—"
         if np.isfinite(r["s0"]) and np.isfinite(r["net"][0]) and np.isfinite(r["net"][3]):
             e0, e27 = abs(r["net"][0] - r["s0"]), abs(r["net"][3] - r["s0"])
