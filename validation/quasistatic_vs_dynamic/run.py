@@ -524,6 +524,12 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
     w("## Runs\n")
     w(f"Total time of this invocation: {total:.0f} s wall (runs skipped when up to date). "
       "CPU per run from meta.json (the children's user + system time).\n")
+    lr = os.path.join(out, "last_run.json")
+    if os.path.isfile(lr):
+        with open(lr) as f:
+            j = json.load(f)
+        w(f"Last invocation that ran simulations: {j.get('date')}, {j.get('wall_s', 0):.0f} s wall, "
+          f"{j.get('runs_started', '?')} runs started ({j.get('note', '')}).\n")
     w("| run | status | rc | CPU [s] | wall [s] |")
     w("|---|---|---|---|---|")
     missing = []
@@ -589,6 +595,11 @@ def main():
                 n, msg = fu.result()
                 print(f"[{time.time() - t0:6.0f} s] {n}: {msg}", flush=True)
     total = time.time() - t0
+    if not a.report_only:
+        with open(os.path.join(out, "last_run.json"), "w") as f:
+            json.dump({"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                       "wall_s": total, "runs_started": len(todo), "jobs": a.jobs,
+                       "note": "including skipped runs"}, f, indent=1)
     R = load(runs, mode)
     figs = make_figures(R, out, mode)
     rows = evaluate(R, mode)
