@@ -143,17 +143,23 @@ def run_one(name, binary, args, d, force, timeout):
     rerun = ["--overwrite"] if holds_run(d) else []
     cmd = ["nice", "-n", "10", binary] + args + rerun + ["--out", d]
     t0 = time.time()
-    c0 = os.times()
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        rc, out = proc.returncode, (proc.stdout + proc.stderr).strip()
-    except subprocess.TimeoutExpired:
-        rc, out = None, f"timeout after {timeout} s"
+        # only the wall time is recorded: os.times()' children time is process-wide and overcounts
+        # when --jobs > 1 (the runs of 2026-12-01 have such a cpu_children_s in meta.json: unused)
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            out, _ = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, _ = proc.communicate()
+            out = f"timeout after {timeout} s\n" + (out or "")
+        rc = proc.returncode
+        out = (out or "").strip()
+    except OSError as e:
+        rc, out = None, str(e)
     wall = time.time() - t0
-    c1 = os.times()
     os.makedirs(d, exist_ok=True)
-    meta = {"returncode": rc, "wall_s": wall, "cpu_children_s": (c1.children_user - c0.children_user)
-            + (c1.children_system - c0.children_system), "output": out[-2000:],
+    meta = {"returncode": rc, "wall_s": wall, "output": out[-2000:],
             "binary": os.path.abspath(binary), "binary_sha256": sha256(binary),
             "date": datetime.datetime.now().isoformat(timespec="seconds")}
     with open(os.path.join(d, "meta.json"), "w") as f:
@@ -226,9 +232,6 @@ class Run:
             t = (D - d[j - 1]) / (d[j] - d[j - 1])
             return float(v[j - 1] + t * (v[j] - v[j - 1]))
         return float(np.interp(D, d, v))
-
-    def cpu(self):
-        return self.meta.get("cpu_children_s", float("nan"))
 
 
 def fit(Is, ys):
@@ -523,15 +526,15 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
         w(f"![{fn}]({fn})\n")
     w("## Runs\n")
     w(f"Total time of this invocation: {total:.0f} s wall (runs skipped when up to date). "
-      "CPU per run from meta.json (the children's user + system time).\n")
+      "Wall time per run from meta.json (2 runs at once on 2 shared cores).\n")
     lr = os.path.join(out, "last_run.json")
     if os.path.isfile(lr):
         with open(lr) as f:
             j = json.load(f)
         w(f"Last invocation that ran simulations: {j.get('date')}, {j.get('wall_s', 0):.0f} s wall, "
           f"{j.get('runs_started', '?')} runs started ({j.get('note', '')}).\n")
-    w("| run | status | rc | CPU [s] | wall [s] |")
-    w("|---|---|---|---|---|")
+    w("| run | status | rc | wall [s] |")
+    w("|---|---|---|---|")
     missing = []
     cpu_dem = cpu_net = 0.0
     for name, tool, args, _ in sorted(all_runs(mode), key=lambda x: x[0]):
@@ -540,16 +543,16 @@ def write_report(R, rows, figs, out, mode, runs, cmdline, total, netsolve, demso
             missing.append(name)
             w(f"| {name} | not run | | | |")
             continue
-        cpu = r.cpu()
-        if np.isfinite(cpu):
+        wl = r.meta.get("wall_s", float("nan"))
+        if np.isfinite(wl):
             if tool == "demsolve":
-                cpu_dem += cpu
+                cpu_dem += wl
             else:
-                cpu_net += cpu
-        w(f"| {name} | {r.status} | {r.meta.get('returncode', '—')} | {fmt(cpu, 1)} | "
-          f"{fmt(r.meta.get('wall_s', float('nan')), 1)} |")
+                cpu_net += wl
+        w(f"| {name} | {r.status} | {r.meta.get('returncode', '—')} | {fmt(wl, 1)} |")
     w("")
-    w(f"CPU of the runs present: demsolve {cpu_dem:.0f} s, netsolve {cpu_net:.0f} s.\n")
+    w(f"Sum of the wall times of the runs present: demsolve {cpu_dem:.0f} s, netsolve {cpu_net:.0f} s "
+      "(2 at a time).\n")
     if missing:
         w(f"**Not run ({len(missing)} runs):** " + ", ".join(f"`{m}`" for m in missing) + ".\n")
         w(f"They are completed by `{cmdline}` (it skips the runs that are up to date).\n")
