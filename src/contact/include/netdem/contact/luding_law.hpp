@@ -30,7 +30,6 @@ class LudingLaw {
   using Response = ContactResponse<History>;
   /// The history is reset on separation (docs/luding.md).
   static constexpr bool kHistoryOutlivesSeparation = false;
-  static constexpr LudingFeatures kFeatures = F;
 
   /// The law with parameters p (held by reference: p must outlive the law) at the material state
   /// k1(T, t) = k1_Tt (ignored without F.thermal).
