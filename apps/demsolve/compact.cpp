@@ -4,6 +4,7 @@
 // column names and sign convention, summary.json, .vtp snapshots). See docs/dynamic.md
 // "demsolve compact".
 #include "compact.hpp"
+#include "scene.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -34,126 +35,6 @@ namespace netdem::app::dem {
 
 namespace {
 
-
-/// One sample of the measured state; a history row is the mean of the samples of its window.
-struct Sample {
-  double S11 = 0, S22 = 0, S12 = 0, S11c = 0, S22c = 0, S12c = 0;  ///< netsolve's sign: compression negative
-  double Z = 0, contacts = 0, sliding = 0, mean_fn = 0;
-  double dev_mean_ratio = 0, dev_ratio_of_means = 0, affine_ut = 0;
-  double kinetic = 0, work = 0;  ///< fluctuating kinetic energy; sum F_N u_N / 2 over the disk contacts
-  void add(const Sample& o, double w) {
-    S11 += w * o.S11, S22 += w * o.S22, S12 += w * o.S12, S11c += w * o.S11c, S22c += w * o.S22c, S12c += w * o.S12c;
-    Z += w * o.Z, contacts += w * o.contacts, sliding += w * o.sliding, mean_fn += w * o.mean_fn;
-    dev_mean_ratio += w * o.dev_mean_ratio, dev_ratio_of_means += w * o.dev_ratio_of_means, affine_ut += w * o.affine_ut;
-    kinetic += w * o.kinetic, work += w * o.work;
-  }
-};
-
-/// The measures of the current state (Z, contact counts and the affine-deviation measures as
-/// netsolve's src/quasistatic/measures.cpp, over the disk-disk contacts with F_N > 0).
-class Meter {
- public:
-  Meter(bool walls, double r_mean) : walls_(walls), r_mean_(r_mean) {}
-
-  Sample measure(const DynamicSolver& s) {
-    Sample m;
-    const Stress2 b = walls_ ? s.wall_stress() : s.boundary_stress();
-    const Stress2 c = s.contact_stress();
-    m.S11 = -b.xx, m.S22 = -b.yy, m.S12 = -0.5 * (b.xy + b.yx);
-    m.S11c = -c.xx, m.S22c = -c.yy, m.S12c = -0.5 * (c.xy + c.yx);
-    s.contacts(cs_);
-    const double E11 = s.strain_rate_11() * s.time(), E22 = s.strain_rate_22() * s.time();
-    const Particles& P = s.particles();
-    std::unordered_map<std::uint64_t, std::pair<double, double>> formed;
-    formed.reserve(cs_.size());
-    int loaded = 0, n_ratio = 0;
-    double sum_fn = 0, sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_ta = 0;
-    for (const auto& ct : cs_) {
-      if (ct.wall >= 0 || !(ct.f_n > 0.0)) continue;
-      const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
-      std::pair<double, double> ef{prev_E11_, prev_E22_};  // first seen: the strain at the previous sample
-      if (const auto it = form_.find(key); it != form_.end()) ef = it->second;
-      formed.emplace(key, ef);
-      ++loaded;
-      sum_fn += ct.f_n;
-      m.sliding += ct.sliding ? 1.0 : 0.0;
-      m.work += 0.5 * ct.f_n * ct.overlap;
-      // Eq 16 with the strain accumulated since the contact formed (netsolve's measures.cpp)
-      const double d11 = E11 - ef.first, d22 = E22 - ef.second;
-      const double Rsum = P.radius[ct.i] + P.radius[ct.j];
-      const double nx = ct.nx, ny = ct.ny;
-      const double una = -(nx * nx * d11 + ny * ny * d22) * Rsum;
-      const double uta = (-ny * nx * d11 + nx * ny * d22) * Rsum;  // t = perp(n) = (-ny, nx)
-      sum_absdev += std::fabs(ct.overlap - una);
-      sum_una += una;
-      if (una > 1e-12 * r_mean_) {
-        sum_ratio += std::fabs(ct.overlap - una) / una;
-        ++n_ratio;
-      }
-      sum_ta += std::fabs(uta);
-    }
-    form_.swap(formed);
-    prev_E11_ = E11;
-    prev_E22_ = E22;
-    const auto n = static_cast<double>(P.size());
-    m.contacts = loaded;
-    m.Z = 2.0 * loaded / n;
-    m.mean_fn = loaded > 0 ? sum_fn / loaded : 0.0;
-    const int nl = std::max(loaded, 1);
-    const double una_mean = sum_una / nl;
-    m.dev_mean_ratio = n_ratio > 0 ? sum_ratio / n_ratio : 0.0;
-    m.dev_ratio_of_means = una_mean > 0 ? (sum_absdev / nl) / una_mean : 0.0;
-    m.affine_ut = una_mean > 0 ? (sum_ta / nl) / una_mean : 0.0;
-    // kinetic energy of the motion relative to the affine field (the non-prescribed particles)
-    const auto& pre = s.prescribed();
-    std::vector<std::uint8_t> is_pre(P.size(), 0);
-    for (auto p : pre) is_pre[p] = 1;
-    for (std::size_t i = 0; i < P.size(); ++i) {
-      m.kinetic += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
-      if (is_pre[i]) continue;
-      const double wx = P.vx[i] - s.strain_rate_11() * (P.x[i] - s.box().x_min);
-      const double wy = P.vy[i] - s.strain_rate_22() * (P.y[i] - s.box().y_min);
-      m.kinetic += 0.5 * P.mass[i] * (wx * wx + wy * wy);
-    }
-    return m;
-  }
-  const std::vector<ContactInfo>& last_contacts() const { return cs_; }
-
- private:
-  bool walls_;
-  double r_mean_;
-  std::vector<ContactInfo> cs_;
-  std::unordered_map<std::uint64_t, std::pair<double, double>> form_;
-  double prev_E11_ = 0.0, prev_E22_ = 0.0;
-};
-
-/// netsolve's snapshot files and field names (apps/netsolve/main.cpp write_snapshot), plus the
-/// velocities: particles_<tag>.vtp, contacts_<tag>.vtp (disk-disk contacts).
-void write_compact_snapshot(const DynamicSolver& s, const fs::path& out, const std::string& tag,
-                            std::vector<ContactInfo>& cs) {
-  const Particles& P = s.particles();
-  std::vector<double> pre(P.size(), 0.0);
-  for (auto p : s.prescribed()) pre[p] = 1.0;
-  Field vel{"velocity", 3, {}};
-  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], 0.0});
-  write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
-                    vtp_particles(P.x, P.y,
-                                  {{"radius", 1, P.radius}, {"theta", 1, P.theta}, {"peripheral", 1, pre}, vel,
-                                   {"omega", 1, P.omega}}));
-  s.contacts(cs);
-  std::vector<int> ci, cj;
-  Field fn{"normal_force", 1, {}}, ft{"tangential_force", 1, {}}, ov{"overlap", 1, {}}, sl{"sliding", 1, {}};
-  for (const auto& c : cs) {
-    if (c.wall >= 0 || !(c.f_n > 0.0)) continue;
-    ci.push_back(static_cast<int>(c.i));
-    cj.push_back(static_cast<int>(c.j));
-    fn.values.push_back(c.f_n);
-    ft.values.push_back(c.f_t);
-    ov.values.push_back(c.overlap);
-    sl.values.push_back(c.sliding ? 1.0 : 0.0);
-  }
-  write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), vtp_network(P.x, P.y, ci, cj, {fn, ft, ov, sl}));
-}
 
 }  // namespace
 
@@ -198,18 +79,8 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   Box box(walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
   box.contact_walls = walls;
   box.right.mode = box.top.mode = WallMode::Affine;
-  DynamicOptions o;
-  o.model = ContactModel::PlasticIndentation;
-  o.steps_per_contact = a.steps_per_contact;
-  o.plastic.sigma_y = 1.0;
-  o.plastic.mu = mu;
-  o.plastic.k_t = a.k_t;
-  o.plastic.reversible = a.normal_unloading == "reversible";
-  o.plastic.first_touch = a.first_touch;
-  o.plastic.damping_n = o.plastic.damping_t = a.damping;
-  o.plastic_wall_mu = 0.0;  // frictionless die walls
-  o.affine_drag = a.drag;
-  o.validate();
+  const DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
+                                           a.drag, a.steps_per_contact);
   double area = 0.0;
   for (double r : P.radius) area += std::numbers::pi * r * r;
   const double D0 = area / ((box.x_max - box.x_min) * (box.y_max - box.y_min));
@@ -234,14 +105,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   DynamicSolver s(std::move(P), LudingParams{}, box, o);
   s.set_strain_rate(e11, e22);
   s.set_affine_velocities();
-  std::vector<std::uint32_t> pre;
-  if (a.affine) {
-    for (std::uint32_t p = 0; p < n; ++p) pre.push_back(p);
-  } else if (!walls) {
-    const auto layer = packing::peripheral_layer(pk);
-    for (std::uint32_t p = 0; p < n; ++p)
-      if (layer[p]) pre.push_back(p);
-  }
+  const std::vector<std::uint32_t> pre = prescribed_particles(pk, a.affine, walls);
   // affine: the centres prescribed, the spins free (netsolve's affine mode); layer: the layer's spins held
   s.set_prescribed(pre, !a.affine);
   s.set_rotations(!a.no_rotation);
@@ -342,7 +206,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
 
   const auto t0 = std::chrono::steady_clock::now();
   Progress progress("compact", T, a.quiet);
-  write_row(0, meter.measure(s), 1);
+  write_row(0, meter.measure(s, e11 * s.time(), e22 * s.time()), 1);
   std::size_t next_snap = 0;
   // samples per window: about every 20 steps, at least 10 per window
   const auto every = static_cast<std::int64_t>(std::clamp(T / a.increments / dt_first / 10.0, 1.0, 20.0));
@@ -357,13 +221,13 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
         s.step();
         ++steps;
         if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
-          acc.add(meter.measure(s), 1.0);
+          acc.add(meter.measure(s, e11 * s.time(), e22 * s.time()), 1.0);
           ++samples;
           progress.update(s.time());
         }
       }
       if (samples == 0) {
-        acc.add(meter.measure(s), 1.0);
+        acc.add(meter.measure(s, e11 * s.time(), e22 * s.time()), 1.0);
         samples = 1;
       }
       Sample mean;

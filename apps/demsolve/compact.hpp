@@ -30,6 +30,31 @@ struct DemCompactArgs {
   static constexpr double kDefaultInertialNumber = 1.5e-4;  // docs/dynamic.md "demsolve compact": the fit
 };
 
+/// demsolve yield: netsolve yield's options where they apply (docs/dynamic.md "demsolve yield").
+struct DemYieldArgs {
+  netdem::app::netsolve::PackArgs pack;
+  std::string packing_file;
+  std::string precompact = "hydrostatic", compact_bc = "die", probe_bc;
+  double to_density = 0.85;
+  int increments = 100;
+  std::string friction = "inf", normal_unloading = "reversible";
+  double first_touch = 1e-5, k_t = 1e3;
+  int directions = 24;
+  std::string probe_list;
+  int jobs = 1;
+  double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
+  int fine = 20;
+  double inertial_number = DemCompactArgs::kDefaultInertialNumber;
+  double probe_inertial_number = 0.0;  ///< 0: the precompaction's
+  double relax_drag = 1.0;   ///< drag of the holds after each unloading/probe increment [1/t*]
+  double settle_tol = 1e-6;  ///< a hold ends when the kinetic energy < this x the elastic work ...
+  double settle_time = 50.0; ///< ... or after this time [t*] (the sample counts as unsettled)
+  double damping = 0.5, steps_per_contact = 50.0, max_steps = 1e11;
+  bool no_rotation = false, quiet = false, overwrite = false, allow_unconverged = false;
+};
+
+int run_dem_yield(const std::string& command, const DemYieldArgs& a, const std::filesystem::path& out);
+
 int run_dem_compact(const std::string& command, const DemCompactArgs& a, const std::filesystem::path& out);
 
 }  // namespace netdem::app::dem

@@ -8,6 +8,8 @@
 //   demsolve compact  [--packing FILE | netsolve's pack options] [--affine] [--path hydrostatic|closed-die|E11,E22,0]
 //                     [--friction MU|inf] [--no-rotation] [--to-density 0.85] [--boundary layer|walls]
 //                     [--inertial-number I] [--increments 100] [--out DIR]
+//   demsolve yield    [netsolve yield's options] [--inertial-number I] [--probe-inertial-number I] [--jobs J]
+//     the yield-surface probes of netsolve yield with the explicit DEM (docs/dynamic.md "demsolve yield").
 //     the plastic-indentation law of Redanz & Fleck on netsolve's compaction scene, in netsolve's
 //     units (sigma_y, R, t* = R sqrt(rho/sigma_y)) and files (docs/dynamic.md "demsolve compact").
 //
@@ -168,6 +170,51 @@ int main(int argc, char** argv) {
   dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
   dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
   dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");
+  DemYieldArgs dy;
+  std::string out_dyield;
+  auto* dyield = app.add_subcommand("yield", "yield-surface probes after precompaction with the explicit DEM and the "
+                                             "plastic-indentation law: netsolve yield's scene, probes and files (docs/dynamic.md)");
+  dyield->add_option("--width", dy.pack.width, "box width W of a new deposition in units of R (netsolve pack)")->capture_default_str();
+  dyield->add_option("--r-min", dy.pack.r_min, "smallest radius / R")->capture_default_str();
+  dyield->add_option("--r-max", dy.pack.r_max, "largest radius / R")->capture_default_str();
+  dyield->add_flag("--mono", dy.pack.mono, "monosized disks (r = R)");
+  dyield->add_option("--seed", dy.pack.seed, "random seed of the deposition")
+      ->check(netdem::app::netsolve::seed_validator())
+      ->capture_default_str();
+  dyield->add_option("--packing", dy.packing_file, "packing CSV instead of a new deposition");
+  dyield->add_option("--precompact", dy.precompact, "hydrostatic | closed-die")->capture_default_str();
+  dyield->add_option("--to-density", dy.to_density, "precompaction density D")->capture_default_str();
+  dyield->add_option("--increments", dy.increments, "precompaction output windows (netsolve's increments)")->capture_default_str();
+  dyield->add_option("--compact-bc", dy.compact_bc, "affine | die (the peripheral layer prescribed)")->capture_default_str();
+  dyield->add_option("--probe-bc", dy.probe_bc, "affine | die during unloading and probing (must equal --compact-bc)");
+  dyield->add_option("--friction", dy.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  dyield->add_option("--normal-unloading", dy.normal_unloading, "the law during the precompaction: reversible | elastic")
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
+  dyield->add_option("--first-touch", dy.first_touch, "first-touch overlap u_c/(2R*)")->capture_default_str();
+  dyield->add_option("--k-t", dy.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
+  dyield->add_flag("--no-rotation", dy.no_rotation, "hold every spin at zero");
+  dyield->add_option("--directions", dy.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
+  dyield->add_option("--probes", dy.probe_list, "run only these probe indices, e.g. 0,3,5");
+  dyield->add_option("--jobs", dy.jobs, "probes run at the same time on threads (0: number of cores)")->capture_default_str();
+  dyield->add_option("--offset", dy.offset, "offset strain of the offset yield point")->capture_default_str();
+  dyield->add_option("--max-strain", dy.max_strain, "longest probe |dE|")->capture_default_str();
+  dyield->add_option("--window", dy.window, "curvature smoothing width (normalised arc length)")->capture_default_str();
+  dyield->add_option("--fine", dy.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
+  dyield->add_option("--growth", dy.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
+  dyield->add_option("--unload-tol", dy.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
+  dyield->add_option("--inertial-number", dy.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) of the precompaction")->capture_default_str();
+  dyield->add_option("--probe-inertial-number", dy.probe_inertial_number, "the same for the unloading and the probes (0: --inertial-number)")->capture_default_str();
+  dyield->add_option("--relax-drag", dy.relax_drag, "drag of the hold after each unloading and probe increment [1/t*]")->capture_default_str();
+  dyield->add_option("--settle-tol", dy.settle_tol, "a hold ends when the kinetic energy is below this x the elastic work at the loading point")->capture_default_str();
+  dyield->add_option("--settle-time", dy.settle_time, "longest hold [t*]; a sample that did not settle counts as unconverged")->capture_default_str();
+  dyield->add_option("--damping", dy.damping, "contact dashpots: fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
+  dyield->add_option("--steps-per-contact", dy.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
+  dyield->add_option("--max-steps", dy.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  dyield->add_flag("--quiet", dy.quiet, "no progress on stderr");
+  dyield->add_flag("--allow-unconverged", dy.allow_unconverged, "exit 0 even if the status is unconverged or unstable");
+  dyield->add_flag("--overwrite", dy.overwrite, "clear an output folder that holds another run's files first");
+  dyield->add_option("--out", out_dyield, "output folder")->default_val("results/dem_yield");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -195,6 +242,11 @@ int main(int argc, char** argv) {
       if (dcomp->count("--packing") > 0 && dc.packing_file.empty())
         throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
       return run_dem_compact(command, dc, out_dcompact);
+    }
+    if (dyield->parsed()) {
+      if (dyield->count("--packing") > 0 && dy.packing_file.empty())
+        throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
+      return run_dem_yield(command, dy, out_dyield);
     }
     return run_protocol(command, sample, run, prot, false, out_sinter);
   });

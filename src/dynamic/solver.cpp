@@ -781,6 +781,34 @@ void DynamicSolver::set_affine_velocities() {
   }
 }
 
+void DynamicSolver::set_plastic_law(const contact::PlasticIndentationParams& law) {
+  if (!plastic()) fail("set_plastic_law: the solver runs the Luding law, not the plastic-indentation law");
+  law.validate();
+  if (!(law.first_touch > 0.0))
+    fail("set_plastic_law: the explicit solver needs the plastic law's first-touch overlap > 0");
+  if (opt_.plastic.reversible && !law.reversible) {
+    using L = contact::PlasticIndentationLaw;
+    for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+      const auto i = static_cast<std::size_t>(pair_key_[k] >> 32), j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
+      const double L2 = (P_.x[j] - P_.x[i]) * (P_.x[j] - P_.x[i]) + (P_.y[j] - P_.y[i]) * (P_.y[j] - P_.y[i]);
+      pl_pair_hist_[k] = L::start_unloading_branch(pl_pair_hist_[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
+    }
+    if (walls_active())
+      for (std::size_t i = 0; i < P_.size(); ++i) {
+        const double d4[4] = {P_.x[i] - box_.x_min, box_.x_max - P_.x[i], P_.y[i] - box_.y_min, box_.y_max - P_.y[i]};
+        for (std::size_t w = 0; w < 4; ++w)
+          pl_wall_hist_[4 * i + w] = L::start_unloading_branch(pl_wall_hist_[4 * i + w], P_.radius[i] - d4[w]);
+      }
+  }
+  opt_.plastic = law;
+  pl_wall_params_ = law;
+  pl_wall_params_.mu = opt_.plastic_wall_mu;
+  choose_friction();
+  const double dt_fixed = opt_.dt;
+  ts_ = plastic_time_step(P_, opt_.plastic, opt_, area_max_);
+  if (!(dt_fixed > 0.0)) update_plastic_time_step();
+}
+
 void DynamicSolver::set_rotations(bool free) {
   rotations_ = free;
   if (!free) std::fill(P_.omega.begin(), P_.omega.end(), 0.0);
@@ -813,6 +841,11 @@ void DynamicSolver::impose_affine_motion(double dt) {
   }
   if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
+}
+
+void DynamicSolver::set_affine_drag(double drag) {
+  if (!(std::isfinite(drag) && drag >= 0.0)) fail(fmt::format("set_affine_drag: the drag must be finite and >= 0, got {}", drag));
+  opt_.affine_drag = drag;
 }
 
 void DynamicSolver::apply_affine_drag() {

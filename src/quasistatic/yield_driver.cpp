@@ -80,11 +80,7 @@ std::unique_ptr<NetworkSolver> switch_boundary_mode(const NetworkSolver& solver,
   return out;
 }
 
-ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& a) {
-  const auto t0 = std::chrono::steady_clock::now();
-  ProbeResult res;
-  res.index = index;
-  res.theta = 2 * std::numbers::pi * index / a.directions;
+ProbeOptions probe_options(const ProbeSettings& a) {
   ProbeOptions po;
   po.first_step = a.first_step;
   po.fine_increments = a.fine;
@@ -92,7 +88,14 @@ ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& a) 
   po.max_strain = a.max_strain;
   po.offset = a.offset;
   po.max_step = std::max(a.first_step, a.offset / 4);
-  res.curve = probe(solver, res.theta, a.sigma_y, po);
+  return po;
+}
+
+ProbeResult evaluate_probe(ProbeCurve curve, int index, const ProbeSettings& a) {
+  ProbeResult res;
+  res.index = index;
+  res.theta = 2 * std::numbers::pi * index / a.directions;
+  res.curve = std::move(curve);
   std::vector<double> x, y, s11, s22;
   for (const auto& p : res.curve.samples) {
     x.push_back(p.strain);
@@ -115,6 +118,13 @@ ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& a) 
   if (!res.curvature.found) status = "no curvature point: " + res.curvature.reason;
   if (!res.offset.found) status += (status.empty() ? "" : "; ") + std::string("no offset point: ") + res.offset.reason;
   res.status = status.empty() ? "ok" : status;
+  return res;
+}
+
+ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ProbeCurve curve = probe(solver, 2 * std::numbers::pi * index / a.directions, a.sigma_y, probe_options(a));
+  ProbeResult res = evaluate_probe(std::move(curve), index, a);
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

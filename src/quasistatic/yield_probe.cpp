@@ -296,6 +296,42 @@ YieldEstimate yield_by_offset(const std::vector<double>& x, const std::vector<do
 }
 
 // ------------------------------------------------------------------------------------------------
+ProbeSchedule::ProbeSchedule(const ProbeOptions& o, double x0, double y0) : o_(o), step_(o.first_step) {
+  xs_.push_back(x0);
+  ys_.push_back(y0);
+}
+
+double ProbeSchedule::next() {
+  if (!end_.empty()) return 0.0;
+  ++k_;
+  if (k_ > o_.max_increments) {
+    end_ = "max increments";
+    return 0.0;
+  }
+  if (strain_ >= o_.max_strain * (1 - 1e-12)) {
+    end_ = "max strain";
+    return 0.0;
+  }
+  if (k_ > o_.fine_increments) step_ = std::min(o_.max_step, std::max(step_, o_.first_step) * o_.growth);
+  return std::min(step_, o_.max_strain - strain_);
+}
+
+bool ProbeSchedule::record(double h, double x, double y) {
+  strain_ += h;
+  xs_.push_back(x);
+  ys_.push_back(y);
+  if (xs_.size() >= static_cast<std::size_t>(o_.fit_points) + 1) fit_ = elastic_fit(xs_, ys_, o_.fit_points);
+  if (fit_.ok && fit_.slope > 0.0 && x_cross_ < 0.0 && strain_ >= o_.offset) {
+    if (y <= fit_.y0 + fit_.slope * (x - o_.offset)) x_cross_ = x;
+  }
+  if (x_cross_ > 0.0 && strain_ >= o_.past_offset * x_cross_) {
+    end_ = "past offset";
+    return false;
+  }
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------------
 ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const ProbeOptions& o) {
   if (!(o.first_step > 0.0) || !(o.max_step > 0.0) || !(o.max_strain > 0.0) || !(o.growth >= 1.0) ||
       o.max_increments < 1 || o.fine_increments < 0 || !(sigma_y > 0.0))
@@ -323,19 +359,13 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
     return p;
   };
   c.samples.push_back(sample(0.0, nullptr));
-  double strain = 0.0, step = o.first_step, x_cross = -1.0;
-  ElasticFit fit;
-  for (int k = 1;; ++k) {
-    if (k > o.max_increments) {
-      c.end = "max increments";
+  ProbeSchedule schedule(o, c.samples[0].strain, c.samples[0].stress);
+  for (;;) {
+    const double h = schedule.next();
+    if (!(h > 0.0)) {
+      c.end = schedule.end();
       break;
     }
-    if (strain >= o.max_strain * (1 - 1e-12)) {
-      c.end = "max strain";
-      break;
-    }
-    if (k > o.fine_increments) step = std::min(o.max_step, std::max(step, o.first_step) * o.growth);
-    const double h = std::min(step, o.max_strain - strain);
     IncrementReport r;
     try {
       r = solver.increment(h * dir);
@@ -343,28 +373,15 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
       c.end = std::string("singular: ") + e.what();
       break;
     }
-    strain += h;
-    c.samples.push_back(sample(strain, &r));
+    c.samples.push_back(sample(schedule.strain() + h, &r));
     c.unconverged += !r.converged;
     if (!std::isfinite(c.samples.back().stress)) {
       c.end = "singular: non-finite stress";
       c.samples.pop_back();
       break;
     }
-    if (c.samples.size() >= static_cast<std::size_t>(o.fit_points) + 1) {
-      std::vector<double> xs, ys;
-      for (const auto& p : c.samples) {
-        xs.push_back(p.strain);
-        ys.push_back(p.stress);
-      }
-      fit = elastic_fit(xs, ys, o.fit_points);
-    }
-    if (fit.ok && fit.slope > 0.0 && x_cross < 0.0 && strain >= o.offset) {
-      const auto& p = c.samples.back();
-      if (p.stress <= fit.y0 + fit.slope * (p.strain - o.offset)) x_cross = p.strain;
-    }
-    if (x_cross > 0.0 && strain >= o.past_offset * x_cross) {
-      c.end = "past offset";
+    if (!schedule.record(h, c.samples.back().strain, c.samples.back().stress)) {
+      c.end = schedule.end();
       break;
     }
   }

@@ -261,6 +261,12 @@ class DynamicSolver {
   /// kept. The feature set of the force loop (friction or not) is chosen again.
   void set_params(const LudingParams& params);
   const LudingParams& params() const { return params_; }
+  /// ContactModel::PlasticIndentation: changes the law between steps and chooses the time step
+  /// again (its normal bound depends on the unloading branch). Switching the section 3.4 elastic
+  /// branch on (reversible -> elastic, as netsolve's set_reversible_normal) starts every contact's
+  /// branch at its current overlap (PlasticIndentationLaw::start_unloading_branch: no force jump).
+  void set_plastic_law(const contact::PlasticIndentationParams& law);
+  const contact::PlasticIndentationParams& plastic_law() const { return opt_.plastic; }
   /// Changes the control of the right and top walls (mode, velocity, pressure) between steps; a
   /// strain-controlled wall takes its velocity at once, a stress-controlled one keeps its own.
   void set_walls(const MovingWall& right, const MovingWall& top);
@@ -275,6 +281,9 @@ class DynamicSolver {
   void set_strain_rate(double e11, double e22);
   double strain_rate_11() const { return edot_[0]; }
   double strain_rate_22() const { return edot_[1]; }
+  /// Changes DynamicOptions::affine_drag between steps (e.g. a drag that relaxes a held state).
+  void set_affine_drag(double drag);
+  double affine_drag() const { return opt_.affine_drag; }
   /// Sets every particle's velocity to the affine field E' (x - x_0) and its spin to 0.
   void set_affine_velocities();
   /// The particles whose centres follow the affine motion exactly (their rotations are held): the

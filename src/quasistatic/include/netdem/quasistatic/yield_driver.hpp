@@ -65,6 +65,13 @@ struct ProbeResult {
   double wall_s = 0;
 };
 
+/// The probe() options of the settings: the steps and the stop rule of a probe.
+ProbeOptions probe_options(const ProbeSettings& settings);
+
+/// The yield points (curvature, offset), the elastic fit and the status of a sampled probe curve:
+/// run_probe's evaluation, also applied by demsolve yield to the explicit solver's curves.
+ProbeResult evaluate_probe(ProbeCurve curve, int index, const ProbeSettings& settings);
+
 /// Runs probe `index` from the solver's current state (the solver is advanced).
 ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& settings);
 

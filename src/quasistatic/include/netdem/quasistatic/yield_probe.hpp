@@ -102,6 +102,33 @@ struct ElasticFit {
 /// first window on a curve that starts linear; skips a toe).
 ElasticFit elastic_fit(const std::vector<double>& x, const std::vector<double>& y, int fit_points = 4);
 
+/// The step schedule and stop rule of a probe, shared by probe() and the explicit solver's probes
+/// (demsolve yield): `fine_increments` equal steps of first_step, then each step `growth` times
+/// larger up to max_step; the probe ends at max_strain, after max_increments, or once the curve has
+/// crossed the offset line of its elastic fit (online, over the samples so far) and the strain is
+/// past_offset times the strain there.
+class ProbeSchedule {
+ public:
+  /// x0, y0: the sample of the unloaded state (strain 0).
+  ProbeSchedule(const ProbeOptions& options, double x0, double y0);
+  /// The strain of the next increment, or 0 when the probe ends before it (end() says why).
+  double next();
+  /// Records the sample (x, y) taken after an increment of strain h (h as given by next(); x is
+  /// the sample's strain, which a windowed sample may place before the increment's end). false:
+  /// the probe ends here (end() says why).
+  bool record(double h, double x, double y);
+  double strain() const { return strain_; }  ///< sum of the increments
+  const std::string& end() const { return end_; }
+
+ private:
+  ProbeOptions o_;
+  int k_ = 0;
+  double strain_ = 0.0, step_ = 0.0, x_cross_ = -1.0;
+  ElasticFit fit_;
+  std::vector<double> xs_, ys_;
+  std::string end_;
+};
+
 struct YieldOptions {
   int fit_points = 4;     ///< samples after the first used for the elastic line
   double offset = 1e-3;   ///< offset strain
