@@ -26,7 +26,8 @@ Runs (one at a time, under nice; netsolve with OMP_THREAD_LIMIT=1):
     unconverged increments is recorded and plotted with an open marker);
   * demsolve: --inertial-number 1.5e-3, 1e-3, 4.5e-4, 1.5e-4, 5e-5 (and 1.667e-5 with --slow) at the
     default --steps-per-contact 50, and --steps-per-contact 25, 100 at the default I (the time
-    integration: dt against dt/2). demsolve's default scene ends with exit 3, "unstable" (5-6 disks
+    integration: dt against dt/2); a second, cheaper DEM front at --steps-per-contact 25 (--alt-spc)
+    over I = 1.5e-3, 1e-3, 4.5e-4 (--alt-inertial) and the default I, for a second speed-up column. demsolve's default scene ends with exit 3, "unstable" (5-6 disks
     squeezed out of the die between the peripheral disks; docs/dynamic.md): accepted when history.csv
     and summary.json were written, the status is recorded.
 
@@ -200,6 +201,10 @@ def main():
     ap.add_argument("--inertial", default="1.5e-3,1e-3,4.5e-4,1.5e-4,5e-5", help="demsolve --inertial-number values (spc 50)")
     ap.add_argument("--slow", action="store_true", help="also demsolve at I = 1.667e-5 (about 330 s CPU)")
     ap.add_argument("--spcs", default="25,100", help="demsolve --steps-per-contact values at the default I (50 is the default)")
+    ap.add_argument("--alt-spc", type=float, default=25.0,
+                    help="a second DEM front at this --steps-per-contact (0: none); its I values: --alt-inertial")
+    ap.add_argument("--alt-inertial", default="1.5e-3,1e-3,4.5e-4",
+                    help="demsolve --inertial-number values at --alt-spc (the default I comes from --spcs)")
     ap.add_argument("--fit-inertial-max", type=float, default=4.5e-4,
                     help="the recomputed sigma0 fits the spc-50 DEM runs with I <= this (the docs' range)")
     ap.add_argument("--time", choices=("wall", "cpu"), default="wall",
@@ -233,6 +238,8 @@ def main():
                      "steps": s["solver"]["newton_iterations"], "source": "run"})
     dem_cases = [("I", float(i), DEM_DEFAULT["spc"]) for i in a.inertial.split(",")]
     dem_cases += [("dt", DEM_DEFAULT["I"], float(c)) for c in a.spcs.split(",") if c]
+    if a.alt_spc > 0:
+        dem_cases += [("I_alt", float(i), a.alt_spc) for i in a.alt_inertial.split(",") if i]
     if a.slow:  # last: the longest run
         dem_cases.append(("I", DOCS_I_SLOW["I"], DEM_DEFAULT["spc"]))
     for knob, I, spc in dem_cases:
@@ -265,7 +272,7 @@ def main():
                      "outside": float("nan"), "steps": 2766244.0, "source": "docs"})
 
     # ---------------------------------------------------------------- sigma0, errors, dt, speed-up
-    dem_main = sorted([r for r in rows if r["solver"] == "demsolve" and r["steps_per_contact"] == DEM_DEFAULT["spc"]
+    dem_main = sorted([r for r in rows if r["solver"] == "demsolve" and r["knob"] == "I"
                        and math.isfinite(r["S22"])], key=lambda r: -r["I"])
     # the recomputed sigma0: this script's own runs only (the docs' I = 1.667e-5 row is not used)
     fit_pts = [r for r in dem_main if r["I"] <= a.fit_inertial_max * (1 + 1e-9) and r["source"] == "run"]
@@ -297,8 +304,15 @@ def main():
     # DEM's own limit is sigma0, so its self error is err.
     finest = max((r for r in rows if r["solver"] == "netsolve" and r["knob"] == "increments"),
                  key=lambda r: r["increments"], default=None)
+    alt = sorted([r for r in rows if r["solver"] == "demsolve" and a.alt_spc > 0 and r["steps_per_contact"] == a.alt_spc
+                  and math.isfinite(r["S22"])], key=lambda r: -r["I"])
+    front_alt = pareto([(r["t"], r["err"]) for r in alt])
     for r in rows:
         r["dem_t_at_err"], r["speedup"], r["speedup_flag"] = float("nan"), float("nan"), ""
+        r["speedup_alt"], r["speedup_alt_flag"] = float("nan"), ""
+        if r["solver"] == "netsolve" and len(front_alt) >= 2:
+            td, flag = t_at_error(front_alt, r["err"])
+            r["speedup_alt"], r["speedup_alt_flag"] = td / r["t"], flag
         r["err_self"], r["dem_t_at_err_self"], r["speedup_self"], r["speedup_self_flag"] = (
             r["err"], float("nan"), float("nan"), "")
         if r["solver"] == "netsolve":
@@ -312,7 +326,7 @@ def main():
 
     cols = ["solver", "knob", "increments", "tol", "viscosity", "I", "steps_per_contact", "wall_s", "process_wall_s",
             "process_cpu_s", "S22", "S22_end", "S22_last_inc", "err", "err_end", "err_fit", "status", "unconverged", "outside",
-            "steps", "dem_t_at_err", "speedup", "speedup_flag", "err_self", "dem_t_at_err_self", "speedup_self",
+            "steps", "dem_t_at_err", "speedup", "speedup_flag", "speedup_alt", "speedup_alt_flag", "err_self", "dem_t_at_err_self", "speedup_self",
             "speedup_self_flag", "source"]
     out = write_rows_csv(a.out, a.name, cols, rows)
 
@@ -328,8 +342,9 @@ def main():
       f"'S22 end value' = netsolve's last row. "
       f"Time for the speed-up: {tname} time.\n")
     w("| solver | knob | setting | solver wall [s] | process CPU [s] | S22 (0.85) | S22 end value | error [%] | status | "
-      "DEM time at this error [s] | speed-up | error vs own finest run [%] | speed-up at that error |")
-    w("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+      f"DEM time at this error [s] | speed-up | speed-up vs DEM at spc {a.alt_spc:g} | error vs own finest run [%] | "
+      "speed-up at that error |")
+    w("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         if r["solver"] == "netsolve":
             setting = f"N = {r['increments']}, tol = {r['tol']:g}, drag = {r['viscosity']:.4g}"
@@ -338,6 +353,9 @@ def main():
             su = ("> " if r["speedup_flag"] == "lower bound" else "") + f"{r['speedup']:.2f}" + (
                 " (extrapolated)" if r["speedup_flag"] == "extrapolated" else "")
             td = f"{r['dem_t_at_err']:.1f}"
+            sa = "" if not math.isfinite(r["speedup_alt"]) else (
+                ("> " if r["speedup_alt_flag"] == "lower bound" else "") + f"{r['speedup_alt']:.2f}" + (
+                    " (extrapolated)" if r["speedup_alt_flag"] == "extrapolated" else ""))
             es = "(reference)" if not math.isfinite(r["err_self"]) else f"{100 * r['err_self']:.3f}"
             ss = "" if not math.isfinite(r["speedup_self"]) else (
                 ("> " if r["speedup_self_flag"] == "lower bound" else "") + f"{r['speedup_self']:.0f}" + (
@@ -345,10 +363,10 @@ def main():
         else:
             setting = f"I = {r['I']:.4g}, spc = {r['steps_per_contact']:g}"
             st = r["status"] + (f", {r['outside']:.0f} outside" if math.isfinite(r["outside"]) else "")
-            su, td, es, ss = "", "", "", ""
+            su, td, sa, es, ss = "", "", "", "", ""
         wall = "—" if r["source"] == "docs" else f"{r['wall_s']:.1f}"
         w(f"| {r['solver']} | {r['knob']} | {setting} | {wall} | {r['process_cpu_s']:.1f} | {r['S22']:.5f} | "
-          f"{r['S22_end']:.5f} | {100 * r['err']:.3f} | {st} | {td} | {su} | {es} | {ss} |")
+          f"{r['S22_end']:.5f} | {100 * r['err']:.3f} | {st} | {td} | {su} | {sa} | {es} | {ss} |")
     w("")
     w(f"σ₀ recomputed from these DEM runs (spc 50, I ≤ {a.fit_inertial_max:g}: "
       f"{', '.join(format(r['I'], 'g') for r in fit_pts)}): "
@@ -364,6 +382,8 @@ def main():
           "not shown to be converged), the DEM against σ₀; the speed-up in the last column compares the two "
           "solvers each at that distance from its own limit (secondary; the headline is the speed-up against σ₀).\n")
     w("DEM Pareto front (time, error %): " + ", ".join(f"({t:.1f} s, {100 * e:.3f})" for t, e in front) + "\n")
+    if front_alt:
+        w(f"DEM front at spc {a.alt_spc:g} (time, error %): " + ", ".join(f"({t:.1f} s, {100 * e:.3f})" for t, e in front_alt) + "\n")
     (Path(out) / f"{a.name}.md").write_text("\n".join(L) + "\n")
     print("\n".join(L))
     print("wrote", Path(out) / f"{a.name}.md")
@@ -378,6 +398,9 @@ def main():
     for r in dm:
         ax.annotate(f"I={r['I']:.3g}" + (" (docs, CPU)" if r["source"] == "docs" else ""), (r["t"], 100 * r["err"]),
                     textcoords="offset points", xytext=(4, 4), fontsize=7)
+    if alt:
+        ax.loglog([r["t"] for r in alt], [100 * r["err"] for r in alt], "s--", color="0.5", mfc="none",
+                  label=f"demsolve, I (spc {a.alt_spc:g})")
     dd = [r for r in rows if r["solver"] == "demsolve" and r["knob"] == "dt"]
     if dd:
         ax.loglog([r["t"] for r in dd], [100 * r["err"] for r in dd], "D", color="0.5", mfc="none", ls="none",
@@ -399,7 +422,7 @@ def main():
                 ax.plot(r["t"], 100 * r["err"], "x", ms=14, color="m")
             txt = {"increments": f"N={r['increments']}", "tol": f"tol={r['tol']:g}",
                    "drag": f"drag={r['viscosity']:.3g}"}[knob]
-            off = (-4, 8 + 9 * (j % 2)) if knob == "increments" else (6, -12)
+            off = (-8, 8 + 8 * (j % 3)) if knob == "increments" else (6, -12)
             ax.annotate(txt, (r["t"], 100 * r["err"]), textcoords="offset points", xytext=off, fontsize=6.5, color=col)
     ax.plot([], [], "o", ms=12, mfc="none", color="r", label="netsolve with unconverged increments")
     ax.plot([], [], "x", ms=10, color="m", label="netsolve with disk centres outside the box")
