@@ -428,6 +428,7 @@ def main():
     ax.plot([], [], "x", ms=10, color="m", label="netsolve with disk centres outside the box")
     ax.axhline(100 * SIGMA0_REF_SE / abs(SIGMA0_REF), color="k", ls=":", lw=0.8)
     ax.text(ax.get_xlim()[0], 100 * SIGMA0_REF_SE / abs(SIGMA0_REF), " σ₀ standard error", va="bottom", fontsize=7)
+    ax.set_ylim(top=12)
     ax.set_xlabel("process CPU time [s]" if a.time == "cpu" else "solver wall time (summary.json timing_s.wall) [s]")
     ax.set_ylabel("|Σ22(0.85) − σ₀| / |σ₀| [%]")
     ax.set_title("default compaction, one core: netsolve vs demsolve (σ₀ = DEM I → 0)", fontsize=10)
