@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -181,7 +182,8 @@ struct Relax {
 };
 
 ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter meter, int index,
-                       const qs::ProbeSettings& ps, double gdot, const Sample& start, const Relax& relax) {
+                       const qs::ProbeSettings& ps, double gdot, const Sample& start, const Relax& relax,
+                       const std::function<void(double)>& on_increment) {
   const auto t0 = Clock::now();
   ProbeRun out;
   DynamicSolver s = unloaded;
@@ -231,6 +233,7 @@ ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter
       c.end = schedule.end();
       break;
     }
+    if (on_increment) on_increment(schedule.strain());
   }
   out.result = qs::evaluate_probe(std::move(c), index, ps);
   out.result.wall_s = seconds_since(t0);
@@ -549,6 +552,17 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   std::mutex mtx;
   std::atomic<std::size_t> next{0};
   std::size_t finished = 0;
+  // progress: the probes done plus each running probe's strain over its expected length (the stop
+  // rule ends most compressive probes near 1.3 x the offset strain past the knee: 2 x offset)
+  Progress pprog("probes", static_cast<double>(selection.size()), a.quiet);
+  std::vector<double> frac(selection.size(), 0.0);
+  auto report = [&](std::size_t q, double f) {
+    std::lock_guard<std::mutex> lock(mtx);
+    frac[q] = f;
+    double sum = 0.0;
+    for (double v : frac) sum += v;
+    pprog.update(sum);
+  };
   auto worker = [&] {
     for (;;) {
       const std::size_t q = next.fetch_add(1);
@@ -556,16 +570,18 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
       const int idx = selection[q];
       ProbeRun r;
       try {
-        r = run_dem_probe(s, win, meter, idx, ps, gdot_p, unloaded, relax);
+        r = run_dem_probe(s, win, meter, idx, ps, gdot_p, unloaded, relax,
+                        [&](double strain) { report(q, std::min(0.95, strain / (2.0 * a.offset))); });
       } catch (const std::exception& e) {
         r.result.index = idx;
         r.result.theta = 2 * kPi * idx / a.directions;
         r.result.status = std::string("error: ") + one_line(e.what());
       }
+      report(q, 1.0);
       std::lock_guard<std::mutex> lock(mtx);
       ++finished;
       if (!a.quiet)
-        std::fprintf(stderr, "probe %3d (theta %6.1f deg): %s [%zu/%zu]\n", idx, r.result.theta * 180 / kPi,
+        std::fprintf(stderr, "\rprobe %3d (theta %6.1f deg): %s [%zu/%zu]\n", idx, r.result.theta * 180 / kPi,
                      r.result.status.c_str(), finished, selection.size());
       runs[idx] = std::move(r);
     }
@@ -576,6 +592,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
     worker();
     for (auto& t : threads) t.join();
   }
+  pprog.finish();
   const double t_probes = seconds_since(t0);
 
   // ---- files: probes/probe_NNN.csv and .json, yield_points.csv (netsolve's columns)

@@ -314,3 +314,50 @@ TEST(DynamicPlastic, PrescribedCentresWithFreeSpinsAndHeldRotations) {
     }
   }
 }
+
+// Switching the section 3.4 elastic branch on (reversible -> elastic) between steps starts every
+// contact's branch at its current overlap: the contact forces do not jump (a contact that was
+// unloading on the reversible law continues from its current force), the time step drops by
+// sqrt(unload_ratio) (the normal bound of the elastic branch), and a further compression is then
+// stiffer than on the reversible law (the elastic branch is 10^3 x the loading tangent, so a
+// small unloading drops the stress much faster).
+TEST(DynamicPlastic, ElasticBranchSwitchHasNoForceJump) {
+  std::vector<std::uint32_t> all;
+  DynamicSolver s = affine_scene(0.0, 0.0, false, &all);
+  s.set_prescribed(all);
+  s.set_strain_rate(-0.02, -0.02);
+  s.set_affine_velocities();
+  s.run(3000);
+  s.set_strain_rate(0.01, 0.01);  // unload a little on the reversible law
+  s.set_affine_velocities();
+  s.run(200);
+  std::vector<ContactInfo> before, after;
+  s.contacts(before);
+  const double dt0 = s.dt();
+  DynamicSolver rev = s;  // continues on the reversible law
+  auto law = s.plastic_law();
+  law.reversible = false;
+  s.set_plastic_law(law);
+  s.contacts(after);
+  ASSERT_EQ(before.size(), after.size());
+  ASSERT_GT(before.size(), 20u);
+  double jump = 0.0, fmax = 0.0;
+  for (std::size_t k = 0; k < before.size(); ++k) {
+    jump = std::max(jump, std::fabs(after[k].f_n - before[k].f_n));
+    fmax = std::max(fmax, before[k].f_n);
+  }
+  std::printf("  %zu contacts, max |f_n jump| = %.2e of max f_n %.3f; dt %.3e -> %.3e (ratio %.2f)\n", before.size(),
+              jump, fmax, dt0, s.dt(), dt0 / s.dt());
+  EXPECT_LT(jump, 1e-12 * fmax);
+  EXPECT_FALSE(s.plastic_law().reversible);
+  EXPECT_LT(s.dt(), dt0);
+  // further unloading: the elastic branch gives up its stress faster than Eq 2 retraced
+  const double c0 = s.contact_stress().yy, t_switch = s.time();
+  rev.run(100);
+  while (s.time() < rev.time()) s.step();
+  const double d_el = c0 - s.contact_stress().yy, d_rev = c0 - rev.contact_stress().yy;
+  std::printf("  stress drop over t = %.3g of unloading: elastic branch %.4g, reversible %.4g\n", rev.time() - t_switch,
+              d_el, d_rev);
+  EXPECT_GT(d_el, 2.0 * d_rev);
+  EXPECT_GT(d_rev, 0.0);
+}
