@@ -41,9 +41,6 @@ namespace {
 int run_dem_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
   // ---- the door: every value before anything is written ----------------------------------------
   const qs::StrainPath path = qs::StrainPath::parse(a.path);
-  if (path.E12 != 0.0)
-    throw UsageError(fmt::format("--path {}: shear paths (E12 != 0) are not supported by demsolve compact yet (the "
-                                 "explicit solver's strain rate is diagonal)", quote_input(a.path)));
   if (!(std::isfinite(a.inertial_number) && a.inertial_number > 0.0 && a.inertial_number <= 1.0))
     throw UsageError(fmt::format("--inertial-number must be in (0, 1], got {}", a.inertial_number));
   if (!(std::isfinite(a.damping) && a.damping >= 0.0 && a.damping <= 1.0))
@@ -61,6 +58,9 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   if (a.boundary != "layer" && a.boundary != "walls")
     throw UsageError(fmt::format("--boundary '{}' is not 'layer' or 'walls'", quote_input(a.boundary)));
   const bool walls = a.boundary == "walls";
+  if (walls && path.E12 != 0.0)
+    throw UsageError(fmt::format("--path {}: --boundary walls takes E12 = 0 only (the die walls stay axis-aligned)",
+                                 quote_input(a.path)));
   if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
   const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
@@ -97,13 +97,13 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   const double rho = 1.0, sigma_y = 1.0, d_mean = 2.0;
   const double gdot = a.inertial_number / (d_mean * std::sqrt(rho / sigma_y));
   const double norm = std::sqrt(path.E11 * path.E11 + path.E22 * path.E22 + 2.0 * path.E12 * path.E12);
-  const double e11 = gdot * path.E11 / norm, e22 = gdot * path.E22 / norm;
+  const double e11 = gdot * path.E11 / norm, e22 = gdot * path.E22 / norm, e12 = gdot * path.E12 / norm;
   const double T = std::log(D0 / a.to_density) / (e11 + e22);  // D = D0 exp(-(E11 + E22) t)
 
   activity() = "setting up the explicit solver";
   const std::size_t n = P.size();
   DynamicSolver s(std::move(P), LudingParams{}, box, o);
-  s.set_strain_rate(e11, e22);
+  s.set_strain_rate(e11, e22, e12);
   s.set_affine_velocities();
   const std::vector<std::uint32_t> pre = prescribed_particles(pk, a.affine, walls);
   // affine: the centres prescribed, the spins free (netsolve's affine mode); layer: the layer's spins held
@@ -122,6 +122,16 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
     std::fprintf(stderr, "demsolve compact: %zu particles, D0 = %.4f, seed %llu (%s); I = %g, gamma' = %.4g, t_end = %.4g, "
                  "dt = %.3g, about %.3g steps\n", n, D0, static_cast<unsigned long long>(pk.seed), source.c_str(),
                  a.inertial_number, gdot, T, dt_first, steps_est);
+  // a centre outside the deformed domain: the box, or with shear the parallelogram x_0 + F (box_0 - x_0)
+  const Box box0 = box;
+  auto outside_box = [&](double x, double y) {
+    const Box& b = s.box();
+    if (e12 == 0.0) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max;
+    const auto& F = s.box_deformation();
+    const double det = F[0] * F[3] - F[1] * F[2], dx = x - box0.x_min, dy = y - box0.y_min;
+    const double X = (F[3] * dx - F[1] * dy) / det, Y = (-F[2] * dx + F[0] * dy) / det;
+    return X < 0.0 || X > box0.x_max - box0.x_min || Y < 0.0 || Y > box0.y_max - box0.y_min;
+  };
   std::vector<ContactInfo> snap_buf;
   write_compact_snapshot(s, out, "initial", snap_buf);
   double r_mean = 0.0;
@@ -150,7 +160,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
     const double kr = m.work > 0.0 ? m.kinetic / m.work : 0.0;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},"
                        "{:.6g},{:.6g},{:.6g},{:.9g},{},{:.4e},{},{},{:.4e}",
-                       k, e11 * t, e22 * t, 0.0, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
+                       k, e11 * t, e22 * t, e12 * t, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
                        m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t,
                        std::isfinite(I) ? fmt::format("{:.6g}", I) : std::string(), kr,
                        steps, samples, s.dt());
@@ -160,7 +170,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
       int outside = 0;
       double in = 0.0;
       for (std::size_t p = 0; p < Q.size(); ++p) {
-        const bool o = Q.x[p] < b.x_min || Q.x[p] > b.x_max || Q.y[p] < b.y_min || Q.y[p] > b.y_max;
+        const bool o = outside_box(Q.x[p], Q.y[p]);
         outside += o;
         if (!o) in += std::numbers::pi * Q.radius[p] * Q.radius[p];
       }
@@ -197,7 +207,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   summary["first_touch"] = a.first_touch;
   summary["normal_unloading"] = a.normal_unloading;
   summary["inertial_number"] = a.inertial_number;
-  summary["strain_rate"] = {{"E11", e11}, {"E22", e22}, {"E12", 0.0}, {"gamma_dot", gdot}};
+  summary["strain_rate"] = {{"E11", e11}, {"E22", e22}, {"E12", e12}, {"gamma_dot", gdot}};
   summary["t_end"] = T;
   summary["damping"] = {{"normal", a.damping}, {"tangential", a.damping}};
   summary["drag"] = a.drag;
@@ -206,7 +216,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
 
   const auto t0 = std::chrono::steady_clock::now();
   Progress progress("compact", T, a.quiet);
-  write_row(0, meter.measure(s, e11 * s.time(), e22 * s.time()), 1);
+  write_row(0, meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1);
   std::size_t next_snap = 0;
   // samples per window: about every 20 steps, at least 10 per window
   const auto every = static_cast<std::int64_t>(std::clamp(T / a.increments / dt_first / 10.0, 1.0, 20.0));
@@ -221,13 +231,13 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
         s.step();
         ++steps;
         if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
-          acc.add(meter.measure(s, e11 * s.time(), e22 * s.time()), 1.0);
+          acc.add(meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1.0);
           ++samples;
           progress.update(s.time());
         }
       }
       if (samples == 0) {
-        acc.add(meter.measure(s, e11 * s.time(), e22 * s.time()), 1.0);
+        acc.add(meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1.0);
         samples = 1;
       }
       Sample mean;
@@ -265,8 +275,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   // die mode prescribes only the peripheral layer: count centres squeezed out of the box (as netsolve)
   int outside = 0;
   for (std::size_t p = 0; p < n; ++p) {
-    const double x = s.particles().x[p], y = s.particles().y[p];
-    outside += x < s.box().x_min || x > s.box().x_max || y < s.box().y_min || y > s.box().y_max;
+    outside += outside_box(s.particles().x[p], s.particles().y[p]);
   }
   RunStatus status;
   std::vector<std::string> warnings;
@@ -285,7 +294,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   summary["final"] = {{"D", s.density()},         {"S11", last.S11},           {"S22", last.S22},
                       {"S12", last.S12},          {"S11_contacts", last.S11c}, {"S22_contacts", last.S22c},
                       {"Z", last.Z},              {"contacts", last.contacts}, {"sliding", last.sliding},
-                      {"E11", e11 * s.time()},    {"E22", e22 * s.time()},     {"E12", 0.0},
+                      {"E11", e11 * s.time()},    {"E22", e22 * s.time()},     {"E12", e12 * s.time()},
                       {"I", last_I},              {"kinetic_ratio", last.work > 0 ? last.kinetic / last.work : 0.0},
                       {"time", s.time()}};
   if (walls) {

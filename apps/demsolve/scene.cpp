@@ -2,6 +2,7 @@
 #include "scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -14,7 +15,7 @@ using namespace netdem::dem;
 
 namespace netdem::app::dem {
 
-Sample Meter::measure(const DynamicSolver& s, double E11, double E22) {
+Sample Meter::measure(const DynamicSolver& s, double E11, double E22, double E12) {
   Sample m;
   const Stress2 b = walls_ ? s.wall_stress() : s.boundary_stress();
   const Stress2 c = s.contact_stress();
@@ -22,14 +23,14 @@ Sample Meter::measure(const DynamicSolver& s, double E11, double E22) {
   m.S11c = -c.xx, m.S22c = -c.yy, m.S12c = -0.5 * (c.xy + c.yx);
   s.contacts(cs_);
   const Particles& P = s.particles();
-  std::unordered_map<std::uint64_t, std::pair<double, double>> formed;
+  std::unordered_map<std::uint64_t, std::array<double, 3>> formed;
   formed.reserve(cs_.size());
   int loaded = 0, n_ratio = 0;
   double sum_fn = 0, sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_ta = 0;
   for (const auto& ct : cs_) {
     if (ct.wall >= 0 || !(ct.f_n > 0.0)) continue;
     const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
-    std::pair<double, double> ef{prev_E11_, prev_E22_};  // first seen: the strain at the previous sample
+    std::array<double, 3> ef{prev_E11_, prev_E22_, prev_E12_};  // first seen: the strain at the previous sample
     if (const auto it = form_.find(key); it != form_.end()) ef = it->second;
     formed.emplace(key, ef);
     ++loaded;
@@ -37,11 +38,16 @@ Sample Meter::measure(const DynamicSolver& s, double E11, double E22) {
     m.sliding += ct.sliding ? 1.0 : 0.0;
     m.work += 0.5 * ct.f_n * ct.overlap;
     // Eq 16 with the strain accumulated since the contact formed (netsolve's measures.cpp)
-    const double d11 = E11 - ef.first, d22 = E22 - ef.second;
+    const double d11 = E11 - ef[0], d22 = E22 - ef[1], d12 = E12 - ef[2];
     const double Rsum = P.radius[ct.i] + P.radius[ct.j];
     const double nx = ct.nx, ny = ct.ny;
-    const double una = -(nx * nx * d11 + ny * ny * d22) * Rsum;
-    const double uta = (-ny * nx * d11 + nx * ny * d22) * Rsum;  // t = perp(n) = (-ny, nx)
+    // n.dE.n and t.dE.n, t = perp(n) = (-ny, nx) (the d12 terms vanish on diagonal paths)
+    double una = -(nx * nx * d11 + ny * ny * d22) * Rsum;
+    double uta = (-ny * nx * d11 + nx * ny * d22) * Rsum;
+    if (d12 != 0.0) {
+      una -= 2.0 * nx * ny * d12 * Rsum;
+      uta += (nx * nx - ny * ny) * d12 * Rsum;
+    }
     sum_absdev += std::fabs(ct.overlap - una);
     sum_una += una;
     if (una > 1e-12 * r_mean_) {
@@ -53,6 +59,7 @@ Sample Meter::measure(const DynamicSolver& s, double E11, double E22) {
   form_.swap(formed);
   prev_E11_ = E11;
   prev_E22_ = E22;
+  prev_E12_ = E12;
   const auto n = static_cast<double>(P.size());
   m.contacts = loaded;
   m.Z = 2.0 * loaded / n;
@@ -69,8 +76,13 @@ Sample Meter::measure(const DynamicSolver& s, double E11, double E22) {
   for (std::size_t i = 0; i < P.size(); ++i) {
     m.kinetic += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
     if (is_pre[i]) continue;
-    const double wx = P.vx[i] - s.strain_rate_11() * (P.x[i] - s.box().x_min);
-    const double wy = P.vy[i] - s.strain_rate_22() * (P.y[i] - s.box().y_min);
+    const double dx = P.x[i] - s.box().x_min, dy = P.y[i] - s.box().y_min;
+    double wx = P.vx[i] - s.strain_rate_11() * dx;
+    double wy = P.vy[i] - s.strain_rate_22() * dy;
+    if (s.strain_rate_12() != 0.0) {
+      wx -= s.strain_rate_12() * dy;
+      wy -= s.strain_rate_12() * dx;
+    }
     m.kinetic += 0.5 * P.mass[i] * (wx * wx + wy * wy);
   }
   return m;

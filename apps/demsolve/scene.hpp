@@ -1,6 +1,7 @@
 #pragma once
 // The measured state of demsolve's plastic-indentation scenes (compact, yield): window samples in
 // netsolve's sign convention and column meanings, and netsolve's snapshot files.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -36,17 +37,17 @@ class Meter {
  public:
   Meter(bool walls, double r_mean) : walls_(walls), r_mean_(r_mean) {}
 
-  /// The measures at the current state; E11, E22: the macroscopic strain accumulated so far (the
+  /// The measures at the current state; E11, E22, E12: the macroscopic strain accumulated so far (the
   /// affine-deviation measures use the strain since each contact formed).
-  Sample measure(const DynamicSolver& s, double E11, double E22);
+  Sample measure(const DynamicSolver& s, double E11, double E22, double E12 = 0.0);
   const std::vector<ContactInfo>& last_contacts() const { return cs_; }
 
  private:
   bool walls_;
   double r_mean_;
   std::vector<ContactInfo> cs_;
-  std::unordered_map<std::uint64_t, std::pair<double, double>> form_;
-  double prev_E11_ = 0.0, prev_E22_ = 0.0;
+  std::unordered_map<std::uint64_t, std::array<double, 3>> form_;
+  double prev_E11_ = 0.0, prev_E22_ = 0.0, prev_E12_ = 0.0;
 };
 
 /// netsolve's snapshot files and field names (apps/netsolve/main.cpp write_snapshot), plus the

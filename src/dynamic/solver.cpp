@@ -197,6 +197,8 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
   }
   wall_v_[0] = box_.right.mode == WallMode::Strain ? box_.right.velocity : 0.0;
   wall_v_[1] = box_.top.mode == WallMode::Strain ? box_.top.velocity : 0.0;
+  centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
+  centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   if (plastic())
     pl_wall_hist_.assign(4 * n, contact::PlasticIndentationHistory{});
   else
@@ -766,17 +768,27 @@ void DynamicSolver::step() {
 }
 
 // ---- macroscopic strain rate: prescribed particles, affine walls, drag -----------------------------
-void DynamicSolver::set_strain_rate(double e11, double e22) {
-  if (!std::isfinite(e11) || !std::isfinite(e22)) fail("set_strain_rate: the strain rate must be finite");
+void DynamicSolver::set_strain_rate(double e11, double e22, double e12) {
+  if (!std::isfinite(e11) || !std::isfinite(e22) || !std::isfinite(e12)) fail("set_strain_rate: the strain rate must be finite");
   if (!box_.enabled) fail("set_strain_rate: the affine field needs a box (its lower-left corner is x_0)");
+  if (e12 != 0.0 && walls_active())
+    fail("set_strain_rate: a shear rate (e12 != 0) needs a box without contact walls (the walls stay axis-aligned)");
   edot_[0] = e11;
   edot_[1] = e22;
+  edot_[2] = e12;
+  sheared_ = sheared_ || e12 != 0.0;
 }
 
 void DynamicSolver::set_affine_velocities() {
+  const double e12 = edot_[2];
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    P_.vx[i] = edot_[0] * (P_.x[i] - box_.x_min);
-    P_.vy[i] = edot_[1] * (P_.y[i] - box_.y_min);
+    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
+    P_.vx[i] = edot_[0] * dx;
+    P_.vy[i] = edot_[1] * dy;
+    if (e12 != 0.0) {
+      P_.vx[i] += e12 * dy;
+      P_.vy[i] += e12 * dx;
+    }
     P_.omega[i] = 0.0;
   }
 }
@@ -831,13 +843,45 @@ void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles, 
 // Over the coming step of length dt: the prescribed particles and the Affine walls get the
 // velocity (exp(E' dt) - 1)/dt (x - x_0), with which the drift moves them exactly along the
 // exponential affine motion; prescribed spins are zero.
+namespace {
+/// exp(L t) - I of the symmetric L = [[a, c], [c, b]] (row-major), without cancellation for small t:
+/// exp(L t) = e^(m t) (cosh(d t) I + sinh(d t)/d (L - m I)), m = (a + b)/2, d = sqrt(((a - b)/2)^2 + c^2),
+/// and e^(m t) cosh(d t) - 1 = expm1(m t) cosh(d t) + 2 sinh^2(d t / 2).
+std::array<double, 4> expm1_sym2(double a, double b, double c, double t) {
+  const double m = 0.5 * (a + b), h = 0.5 * (a - b), d = std::sqrt(h * h + c * c);
+  const double em = std::exp(m * t), ch = std::cosh(d * t), s2 = std::sinh(0.5 * d * t);
+  const double sh = d * t > 1e-8 ? std::sinh(d * t) / d : t * (1.0 + d * d * t * t / 6.0);
+  const double diag = std::expm1(m * t) * ch + 2.0 * s2 * s2;
+  return {diag + em * sh * h, em * sh * c, em * sh * c, diag - em * sh * h};
+}
+}  // namespace
+
 void DynamicSolver::impose_affine_motion(double dt) {
+  {  // the accumulated map
+    auto M = edot_[2] != 0.0 ? expm1_sym2(edot_[0], edot_[1], edot_[2], dt)
+                             : std::array<double, 4>{std::expm1(edot_[0] * dt), 0.0, 0.0, std::expm1(edot_[1] * dt)};
+    M[0] += 1.0;
+    M[3] += 1.0;
+    const auto F = F_;
+    F_ = {M[0] * F[0] + M[1] * F[2], M[0] * F[1] + M[1] * F[3], M[2] * F[0] + M[3] * F[2], M[2] * F[1] + M[3] * F[3]};
+  }
   if (prescribed_.empty() && box_.right.mode != WallMode::Affine && box_.top.mode != WallMode::Affine) return;
   const double gx = std::expm1(edot_[0] * dt) / dt, gy = std::expm1(edot_[1] * dt) / dt;
-  for (std::uint32_t p : prescribed_) {
-    P_.vx[p] = gx * (P_.x[p] - box_.x_min);
-    P_.vy[p] = gy * (P_.y[p] - box_.y_min);
-    if (hold_prescribed_spins_) P_.omega[p] = 0.0;
+  if (edot_[2] != 0.0) {  // x_0 + exp(L dt)(x - x_0) over the step: v = (exp(L dt) - I)(x - x_0) / dt
+    const auto G = expm1_sym2(edot_[0], edot_[1], edot_[2], dt);
+    const double g11 = G[0] / dt, g22 = G[3] / dt, g12 = G[1] / dt;
+    for (std::uint32_t p : prescribed_) {
+      const double dx = P_.x[p] - box_.x_min, dy = P_.y[p] - box_.y_min;
+      P_.vx[p] = g11 * dx + g12 * dy;
+      P_.vy[p] = g12 * dx + g22 * dy;
+      if (hold_prescribed_spins_) P_.omega[p] = 0.0;
+    }
+  } else {
+    for (std::uint32_t p : prescribed_) {
+      P_.vx[p] = gx * (P_.x[p] - box_.x_min);
+      P_.vy[p] = gy * (P_.y[p] - box_.y_min);
+      if (hold_prescribed_spins_) P_.omega[p] = 0.0;
+    }
   }
   if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
@@ -855,8 +899,14 @@ void DynamicSolver::apply_affine_drag() {
       if (!hold_prescribed_spins_) P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];  // a free spin
       continue;
     }
-    P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - edot_[0] * (P_.x[i] - box_.x_min));
-    P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - edot_[1] * (P_.y[i] - box_.y_min));
+    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
+    double ax = edot_[0] * dx, ay = edot_[1] * dy;
+    if (edot_[2] != 0.0) {
+      ax += edot_[2] * dy;
+      ay += edot_[2] * dx;
+    }
+    P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - ax);
+    P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - ay);
     P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
   }
 }
@@ -864,7 +914,12 @@ void DynamicSolver::apply_affine_drag() {
 Stress2 DynamicSolver::boundary_stress() const {
   Stress2 s;
   if (!box_.enabled) return s;
-  const double xc = 0.5 * (box_.x_min + box_.x_max), yc = 0.5 * (box_.y_min + box_.y_max);
+  double xc = 0.5 * (box_.x_min + box_.x_max), yc = 0.5 * (box_.y_min + box_.y_max);
+  if (sheared_) {  // the centre of the deformed parallelogram x_0 + F (c_0 - x_0)
+    const double X = centre0_[0] - box_.x_min, Y = centre0_[1] - box_.y_min;
+    xc = box_.x_min + F_[0] * X + F_[1] * Y;
+    yc = box_.y_min + F_[2] * X + F_[3] * Y;
+  }
   for (std::uint32_t p : prescribed_) {
     const double lx = P_.x[p] - xc, ly = P_.y[p] - yc;
     s.xx += P_.fx[p] * lx;

@@ -71,6 +71,8 @@ DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& option
   elastic_ = st.elastic;
   wall_hist_ = st.wall_history;
   pl_wall_hist_ = st.plastic_wall_history;
+  centre0_[0] = 0.5 * (box_.x_min + box_.x_max);  // the affine map starts again at the restart
+  centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   finish_setup();
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).

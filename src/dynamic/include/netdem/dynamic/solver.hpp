@@ -12,6 +12,7 @@
 // Stress is reported as force per length (N/m) with compression POSITIVE.
 // See docs/dynamic.md.
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -278,9 +279,18 @@ class DynamicSolver {
   /// The macroscopic strain rate E' = diag(e11, e22) (no shear) about the box's lower-left corner
   /// x_0: prescribed particles follow it, Affine walls follow it, the affine drag acts relative to
   /// it. Over a step of length dt the affine motion is exactly x_0 + exp(E' dt)(x - x_0).
-  void set_strain_rate(double e11, double e22);
+  ///
+  /// With e12 != 0 (a symmetric shear rate, netsolve's E12; only without contact walls) the affine
+  /// map is x_0 + exp(L dt)(x - x_0), L = [[e11, e12], [e12, e22]]; the box then stays the
+  /// axis-aligned rectangle of the diagonal rates (its area, and so density() and the stresses' V,
+  /// is exactly the deformed domain's, det exp(L t) = exp(tr L t)), and box_deformation() holds the
+  /// accumulated map, whose parallelogram is the deformed domain.
+  void set_strain_rate(double e11, double e22, double e12 = 0.0);
   double strain_rate_11() const { return edot_[0]; }
   double strain_rate_22() const { return edot_[1]; }
+  double strain_rate_12() const { return edot_[2]; }
+  /// The accumulated affine map F (row-major f11, f12, f21, f22) since construction: x_0 + F (X - x_0).
+  const std::array<double, 4>& box_deformation() const { return F_; }
   /// Changes DynamicOptions::affine_drag between steps (e.g. a drag that relaxes a held state).
   void set_affine_drag(double drag);
   double affine_drag() const { return opt_.affine_drag; }
@@ -369,7 +379,10 @@ class DynamicSolver {
   double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
   double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
   // macroscopic strain rate, prescribed particles
-  double edot_[2] = {0.0, 0.0};
+  double edot_[3] = {0.0, 0.0, 0.0};  ///< e11, e22, e12
+  std::array<double, 4> F_ = {1.0, 0.0, 0.0, 1.0};
+  bool sheared_ = false;  ///< e12 was ever non-zero (boundary_stress takes the parallelogram's centre)
+  double centre0_[2] = {0.0, 0.0};  ///< the box centre at construction
   std::vector<std::uint32_t> prescribed_;
   std::vector<std::uint8_t> is_prescribed_;
   bool hold_prescribed_spins_ = true, rotations_ = true;
