@@ -46,8 +46,8 @@ struct DemYieldArgs {
   int fine = 20;
   double inertial_number = DemCompactArgs::kDefaultInertialNumber;
   double probe_inertial_number = 0.0;  ///< 0: the precompaction's
-  double relax_drag = 1.0;   ///< drag of the holds after each unloading/probe increment [1/t*]
-  double settle_tol = 1e-6;  ///< a hold ends when the kinetic energy < this x the elastic work ...
+  double relax_drag = 30.0;  ///< drag of the holds after each unloading/probe increment [1/t*]
+  double settle_tol = 1e-3;  ///< a hold ends when the unbalanced force < this x the mean contact force ...
   double settle_time = 50.0; ///< ... or after this time [t*] (the sample counts as unsettled)
   double damping = 0.5, steps_per_contact = 50.0, max_steps = 1e11;
   bool no_rotation = false, quiet = false, overwrite = false, allow_unconverged = false;

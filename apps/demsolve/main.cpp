@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
   dyield->add_option("--inertial-number", dy.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) of the precompaction")->capture_default_str();
   dyield->add_option("--probe-inertial-number", dy.probe_inertial_number, "the same for the unloading and the probes (0: --inertial-number)")->capture_default_str();
   dyield->add_option("--relax-drag", dy.relax_drag, "drag of the hold after each unloading and probe increment [1/t*]")->capture_default_str();
-  dyield->add_option("--settle-tol", dy.settle_tol, "a hold ends when the kinetic energy is below this x the elastic work at the loading point")->capture_default_str();
+  dyield->add_option("--settle-tol", dy.settle_tol, "a hold ends when the RMS unbalanced force is below this x the mean contact force of the loading point (and the kinetic energy below its square x the elastic work)")->capture_default_str();
   dyield->add_option("--settle-time", dy.settle_time, "longest hold [t*]; a sample that did not settle counts as unconverged")->capture_default_str();
   dyield->add_option("--damping", dy.damping, "contact dashpots: fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
   dyield->add_option("--steps-per-contact", dy.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();

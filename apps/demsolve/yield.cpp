@@ -100,13 +100,14 @@ class Windows {
     return w;
   }
 
-  /// Holds the strain (rate 0) with the drag `drag` on until the fluctuating kinetic energy is
-  /// below tol x work_ref (the elastic work sum F_N u_N / 2 at the loading point: the residual
-  /// stress oscillation is then about sqrt(tol) of the loading stress; checked every 50 steps) or
-  /// for at most t_max;
+  /// Holds the strain (rate 0) with the drag `drag` on until the unbalanced contact force (RMS over
+  /// the free particles, DynamicSolver::unbalanced_force_rms) is below tol x f_ref (the mean contact
+  /// normal force at the loading point: netsolve's Newton residual and tolerance) and the kinetic
+  /// energy below tol^2 x the elastic work at the loading point (so that an overdamped creep does
+  /// not pass for rest), checked every 50 steps, or for at most t_max;
   /// then the drag is off again. Returns the state at the end (a sample at rest: the drag force on
   /// it is ~0, so it is an equilibrium of the contact forces alone) and whether it settled.
-  Sample settle(double drag, double tol, double work_ref, double t_max, bool& settled, std::int64_t& steps) {
+  Sample settle(double drag, double tol, double f_ref, double work_ref, double t_max, bool& settled, std::int64_t& steps) {
     const double e11 = s_.strain_rate_11(), e22 = s_.strain_rate_22();
     set_rate(0.0, 0.0);
     s_.set_affine_drag(drag);
@@ -116,7 +117,7 @@ class Windows {
     for (;;) {
       for (int k = 0; k < 50; ++k, ++steps) s_.step();
       m = measure();
-      if (m.kinetic <= tol * work_ref) {
+      if (s_.unbalanced_force_rms() <= tol * f_ref && m.kinetic <= tol * tol * work_ref) {
         settled = true;
         break;
       }
@@ -178,7 +179,7 @@ struct ProbeRun {
 /// One probe on a copy of the unloaded solver.
 /// The hold after each strain increment of the unloading and the probes.
 struct Relax {
-  double drag = 1.0, tol = 1e-6, work_ref = 0.0, t_max = 50.0;
+  double drag = 30.0, tol = 1e-3, f_ref = 0.0, work_ref = 0.0, t_max = 50.0;
 };
 
 ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter meter, int index,
@@ -220,7 +221,7 @@ ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter
     try {
       const Window ramp = w.run(s.time() + h / gdot, 1);
       out.steps += ramp.steps;
-      m = w.settle(relax.drag, relax.tol, relax.work_ref, relax.t_max, settled, out.steps);
+      m = w.settle(relax.drag, relax.tol, relax.f_ref, relax.work_ref, relax.t_max, settled, out.steps);
     } catch (const InstabilityError& e) {
       c.end = std::string("unstable: ") + one_line(e.what());
       break;
@@ -467,6 +468,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   relax.tol = a.settle_tol;
   relax.t_max = a.settle_time;
   relax.work_ref = loaded.work;
+  relax.f_ref = loaded.mean_fn;
   t0 = Clock::now();
   s.set_plastic_law(elastic_law);
   win.set_rate(-gdot_p * path.E11 / norm, -gdot_p * path.E22 / norm);
@@ -491,13 +493,13 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   try {
     // the first hold settles the precompacted state on the elastic branch (zero strain)
     bool settled = false;
-    unloaded = win.settle(relax.drag, relax.tol, relax.work_ref, relax.t_max, settled, usteps);
+    unloaded = win.settle(relax.drag, relax.tol, relax.f_ref, relax.work_ref, relax.t_max, settled, usteps);
     unsettled += !settled;
     p_prev = proj(unloaded);
     for (uk = 1; uk <= 40; ++uk) {
       const Window ramp = win.run(s.time() + h / gdot_p, 1);
       usteps += ramp.steps;
-      unloaded = win.settle(relax.drag, relax.tol, relax.work_ref, relax.t_max, settled, usteps);
+      unloaded = win.settle(relax.drag, relax.tol, relax.f_ref, relax.work_ref, relax.t_max, settled, usteps);
       unsettled += !settled;
       lambda += h;
       urow(uk, lambda, unloaded, usteps);

@@ -892,6 +892,22 @@ void DynamicSolver::set_affine_drag(double drag) {
   opt_.affine_drag = drag;
 }
 
+double DynamicSolver::unbalanced_force_rms() const {
+  const double c = opt_.affine_drag;
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    if (!is_prescribed_.empty() && is_prescribed_[i]) continue;
+    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
+    const double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
+    const double fx = P_.fx[i] + c * P_.mass[i] * (P_.vx[i] - ax), fy = P_.fy[i] + c * P_.mass[i] * (P_.vy[i] - ay);
+    const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i] : 0.0;
+    sum += fx * fx + fy * fy + m * m;
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
+}
+
 void DynamicSolver::apply_affine_drag() {
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
