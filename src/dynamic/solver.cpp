@@ -897,7 +897,14 @@ double DynamicSolver::unbalanced_force_rms() const {
   double sum = 0.0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    if (!is_prescribed_.empty() && is_prescribed_[i]) continue;
+    if (!is_prescribed_.empty() && is_prescribed_[i]) {
+      if (!hold_prescribed_spins_ && rotations_) {  // a prescribed centre with a free spin: its torque
+        const double m = (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i];
+        sum += m * m;
+        ++n;
+      }
+      continue;
+    }
     const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
     const double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
     const double fx = P_.fx[i] + c * P_.mass[i] * (P_.vx[i] - ax), fy = P_.fy[i] + c * P_.mass[i] * (P_.vy[i] - ay);

@@ -294,9 +294,10 @@ class DynamicSolver {
   /// Changes DynamicOptions::affine_drag between steps (e.g. a drag that relaxes a held state).
   void set_affine_drag(double drag);
   double affine_drag() const { return opt_.affine_drag; }
-  /// The RMS over the particles that are not prescribed of the contact force on each (the force of
-  /// the last evaluation without the affine drag) and of its torque / radius: the equilibrium
-  /// residual of a held state (netsolve's Newton residual in the same units).
+  /// The RMS over the free degrees of freedom of the contact force on each particle that is not
+  /// prescribed (the force of the last evaluation without the affine drag) and of the torque / radius
+  /// of every free spin (prescribed centres with free spins included): the equilibrium residual of a
+  /// held state (netsolve's Newton residual in the same units).
   double unbalanced_force_rms() const;
   /// Sets every particle's velocity to the affine field E' (x - x_0) and its spin to 0.
   void set_affine_velocities();
