@@ -106,8 +106,11 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   s.set_strain_rate(e11, e22, e12);
   s.set_affine_velocities();
   const std::vector<std::uint32_t> pre = prescribed_particles(pk, a.affine, walls);
-  // affine: the centres prescribed, the spins free (netsolve's affine mode); layer: the layer's spins held
+  // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free but the layer's
   s.set_prescribed(pre, !a.affine);
+  // affine: every centre prescribed, the spins free except the peripheral layer's, as netsolve and Redanz &
+  // Fleck section 2.4 ("the rotation of particles in the peripheral layer is prevented")
+  if (a.affine) s.hold_spins(prescribed_particles(pk, false, false));
   s.set_rotations(!a.no_rotation);
   const double dt_first = s.dt();
   const double steps_est = T / dt_first;

@@ -329,6 +329,9 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   s.set_affine_velocities();
   const std::vector<std::uint32_t> pre = prescribed_particles(pk, affine, false);
   s.set_prescribed(pre, !affine);
+  // affine: every centre prescribed, the spins free except the peripheral layer's, as netsolve and Redanz &
+  // Fleck section 2.4 ("the rotation of particles in the peripheral layer is prevented")
+  if (affine) s.hold_spins(prescribed_particles(pk, false, false));
   s.set_rotations(!a.no_rotation);
   const double dt_first = s.dt();
   // the probes run on the elastic branch, whose stiffness bound sets a smaller step

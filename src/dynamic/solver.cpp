@@ -710,7 +710,7 @@ void DynamicSolver::step() {
     }
     for (std::uint32_t p : prescribed_) {  // the kicks leave them
       inv_mass_[p] = 0.0;
-      if (hold_prescribed_spins_) inv_inertia_[p] = 0.0;
+      if (spin_held_[p]) inv_inertia_[p] = 0.0;
     }
     if (!rotations_) std::fill(inv_inertia_.begin(), inv_inertia_.end(), 0.0);
     inv_scale_ = radius_scale_;
@@ -827,12 +827,23 @@ void DynamicSolver::set_rotations(bool free) {
   inv_mass_.clear();  // refilled by the next step
 }
 
+void DynamicSolver::hold_spins(const std::vector<std::uint32_t>& particles) {
+  for (std::uint32_t p : particles) {
+    if (p >= P_.size() || is_prescribed_.empty() || !is_prescribed_[p])
+      fail("hold_spins: particle " + std::to_string(p) + " is not prescribed (call set_prescribed first)");
+    spin_held_[p] = 1;
+    P_.omega[p] = 0.0;
+  }
+  inv_mass_.clear();  // the kicks' inverse inertias are refilled
+}
+
 void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins) {
-  hold_prescribed_spins_ = hold_spins;
   is_prescribed_.assign(P_.size(), 0);
+  spin_held_.assign(P_.size(), 0);
   for (std::uint32_t p : particles) {
     if (p >= P_.size()) fail("set_prescribed: particle " + std::to_string(p) + " does not exist");
     is_prescribed_[p] = 1;
+    spin_held_[p] = hold_spins ? 1 : 0;
   }
   prescribed_.clear();
   for (std::uint32_t p = 0; p < P_.size(); ++p)
@@ -874,13 +885,13 @@ void DynamicSolver::impose_affine_motion(double dt) {
       const double dx = P_.x[p] - box_.x_min, dy = P_.y[p] - box_.y_min;
       P_.vx[p] = g11 * dx + g12 * dy;
       P_.vy[p] = g12 * dx + g22 * dy;
-      if (hold_prescribed_spins_) P_.omega[p] = 0.0;
+      if (spin_held_[p]) P_.omega[p] = 0.0;
     }
   } else {
     for (std::uint32_t p : prescribed_) {
       P_.vx[p] = gx * (P_.x[p] - box_.x_min);
       P_.vy[p] = gy * (P_.y[p] - box_.y_min);
-      if (hold_prescribed_spins_) P_.omega[p] = 0.0;
+      if (spin_held_[p]) P_.omega[p] = 0.0;
     }
   }
   if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
@@ -898,7 +909,7 @@ double DynamicSolver::unbalanced_force_rms() const {
   std::size_t n = 0;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
-      if (!hold_prescribed_spins_ && rotations_) {  // a prescribed centre with a free spin: its torque
+      if (!spin_held_[i] && rotations_) {  // a prescribed centre with a free spin: its torque
         const double m = (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i];
         sum += m * m;
         ++n;
@@ -919,7 +930,7 @@ void DynamicSolver::apply_affine_drag() {
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
-      if (!hold_prescribed_spins_) P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];  // a free spin
+      if (!spin_held_[i]) P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];  // a free spin
       continue;
     }
     const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;

@@ -306,6 +306,11 @@ class DynamicSolver {
   /// With hold_spins = false only the centres are prescribed and their spins stay free (netsolve's
   /// affine mode: every centre affine, the rotations unknowns).
   void set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins = true);
+  /// Holds the spins of these prescribed particles as well (after set_prescribed(..., false)): e.g.
+  /// netsolve's and Redanz & Fleck's affine mode, every centre prescribed and the peripheral layer's
+  /// rotations prevented (section 2.4: "In both cases, the rotation of particles in the peripheral
+  /// layer is prevented").
+  void hold_spins(const std::vector<std::uint32_t>& particles);
   const std::vector<std::uint32_t>& prescribed() const { return prescribed_; }
   /// false: every spin is held at zero (netsolve's --no-rotation); true (default): free, except the
   /// spins set_prescribed holds.
@@ -390,7 +395,8 @@ class DynamicSolver {
   double centre0_[2] = {0.0, 0.0};  ///< the box centre at construction
   std::vector<std::uint32_t> prescribed_;
   std::vector<std::uint8_t> is_prescribed_;
-  bool hold_prescribed_spins_ = true, rotations_ = true;
+  std::vector<std::uint8_t> spin_held_;  ///< per particle: a prescribed centre whose spin is held
+  bool rotations_ = true;
   bool walls_active() const { return box_.enabled && box_.contact_walls; }
   void impose_affine_motion(double dt);
   void apply_affine_drag();
