@@ -499,6 +499,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
     unloaded = win.settle(relax.drag, relax.tol, relax.f_ref, relax.work_ref, relax.t_max, settled, usteps);
     unsettled += !settled;
     p_prev = proj(unloaded);
+    double un_prev = norm3(unloaded);
     for (uk = 1; uk <= 40; ++uk) {
       const Window ramp = win.run(s.time() + h / gdot_p, 1);
       usteps += ramp.steps;
@@ -508,6 +509,14 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
       urow(uk, lambda, unloaded, usteps);
       const double un = norm3(unloaded);
       if (un < a.unload_tol * sigma_y) break;
+      // netsolve's noise floor: once |Sigma| is below 5 % of the loading stress, a rise means the
+      // floor is reached (the held states of a die network are equilibria to the settle tolerance)
+      if (un < 0.05 * s0 && un > un_prev) {
+        umsg = fmt::format("noise floor: |Sigma| rose from {:.3g} to {:.3g} sigma_y (tolerance {:.3g}); probing from there",
+                           un_prev, un, a.unload_tol);
+        break;
+      }
+      un_prev = un;
       const double p = proj(unloaded);
       if (!(p > 0.0)) {
         umsg = fmt::format("the stress projection on the loading stress crossed zero at |Sigma| = {:.3g} sigma_y", un);
