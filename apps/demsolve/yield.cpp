@@ -57,17 +57,16 @@ json jnum(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// A window: the solver advanced at its current strain rate until t_end; the mean of the samples
-/// (about every `every` steps and at the end) and the mean sample time.
+/// (about every `every` steps and at the end) and the steps taken.
 struct Window {
   Sample mean;
-  double t_mean = 0.0;
   int samples = 0;
   std::int64_t steps = 0;
 };
 
 class Windows {
  public:
-  Windows(DynamicSolver& s, Meter& meter, double r_mean) : s_(s), meter_(meter), r_mean_(r_mean) {}
+  Windows(DynamicSolver& s, Meter& meter) : s_(s), meter_(meter) {}
   /// Strain accumulated before the current rate was set (for the affine-deviation measures).
   double E11 = 0.0, E22 = 0.0, t_rate = 0.0;
   void set_rate(double e11, double e22) {
@@ -90,12 +89,10 @@ class Windows {
       ++w.steps;
       if (++since % every == 0 || !(s_.time() < t_end - 1e-12 * std::fabs(t_end))) {
         acc.add(measure(), 1.0);
-        w.t_mean += s_.time();
         ++w.samples;
       }
     } while (s_.time() < t_end - 1e-12 * std::fabs(t_end));
     w.mean.add(acc, 1.0 / w.samples);
-    w.t_mean /= w.samples;
     s_.check_health();
     return w;
   }
@@ -132,7 +129,6 @@ class Windows {
  private:
   DynamicSolver& s_;
   Meter& meter_;
-  [[maybe_unused]] double r_mean_;
 };
 
 double norm3(const Sample& m) { return std::sqrt(m.S11 * m.S11 + m.S22 * m.S22 + 2.0 * m.S12 * m.S12); }
@@ -188,7 +184,7 @@ ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter
   const auto t0 = Clock::now();
   ProbeRun out;
   DynamicSolver s = unloaded;
-  Windows w(s, meter, 0.0);
+  Windows w(s, meter);
   w.E11 = wref.strain11(), w.E22 = wref.strain22();
   w.t_rate = s.time();
   const double theta = 2 * kPi * index / ps.directions;
@@ -358,7 +354,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   for (double r : s.particles().radius) r_mean += r;
   r_mean /= static_cast<double>(n);
   Meter meter(false, r_mean);
-  Windows win(s, meter, r_mean);
+  Windows win(s, meter);
   win.t_rate = 0.0;  // the rate set above holds from t = 0
 
   // ---- (1) precompaction
