@@ -432,3 +432,53 @@ TEST(PlasticIndentation, FirstTouchChordBelowUc) {
     EXPECT_DOUBLE_EQ(f, plastic_force(p, reff, 1e-3 * uc));
   }
 }
+
+// Spheres (issue 16; Fleck 1995): F_N = 3 sigma_y pi a^2 with a^2 = 2 R* u_N, the contact area
+// pi a^2 = F_N / (3 sigma_y) in the tangential spring and the shear cap, the unloading line at
+// unload_ratio x the loading tangent 6 pi sigma_y R*; a sphere pair's geometry from its centres.
+TEST(PlasticIndentation3D, SphereNormalAndTangentialLawsAreFlecks) {
+  const double pi = std::acos(-1.0);
+  PlasticIndentationParams p;
+  p.sigma_y = 2.0;
+  p.k_t = 500.0;
+  p.unload_ratio = 50.0;
+  const PlasticIndentationLaw3 law(p);
+  // two spheres, R1 = 1, R2 = 0.5 (R* = 1/3), centres 1.49 apart along (1, 2, 2)/3
+  const Eigen::Vector3d n(1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0), x0(0.1, -0.2, 0.3);
+  const PairGeometry3 g = pair_geometry(x0, Eigen::Vector3d(x0 + 1.49 * n), 1.0, 0.5);
+  EXPECT_NEAR(g.overlap, 0.01, 1e-14);
+  EXPECT_NEAR(g.r_eff, 1.0 / 3.0, 1e-15);
+  EXPECT_NEAR((g.n - n).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(g.d_i + g.d_j, 1.49, 1e-14);
+  // the intersection circle: d_i^2 + a^2 = R1^2 and d_j^2 + a^2 = R2^2 (geometric radius)
+  EXPECT_NEAR(g.d_i * g.d_i - g.d_j * g.d_j, 1.0 - 0.25, 1e-13);
+  Kinematics<3> k;
+  k.transport.n = n;
+  k.r_eff = g.r_eff;
+  k.overlap = g.overlap;
+  const double a2 = 2.0 * g.r_eff * g.overlap;
+  const auto r0 = law.evaluate({}, k, nullptr);
+  EXPECT_NEAR(r0.f_n, 3.0 * p.sigma_y * pi * a2, 1e-13 * r0.f_n);
+  EXPECT_EQ(r0.branch, int(NormalBranch::Plastic));
+  // a sticking slip increment: dF_T = -k_t sigma_y (pi a^2) dxi, in the plane
+  const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  k.dslip = 1e-7 * (0.6 * t1 + 0.8 * t2);
+  Tangent<3> tg;
+  const auto r1 = law.evaluate({}, k, &tg);
+  EXPECT_FALSE(r1.sliding);
+  EXPECT_LT((r1.f_t + p.k_t * p.sigma_y * pi * a2 * k.dslip).norm(), 1e-13 * r1.f_n);
+  EXPECT_NEAR(tg.dfn_dun, 6.0 * pi * p.sigma_y * g.r_eff, 1e-12 * tg.dfn_dun);
+  // gross slip: |F_T| = min(mu, 1/(3 sqrt 3)) F_N = pi a^2 sigma_y / sqrt 3 (sticking, mu = inf),
+  // along the slip's opposite
+  k.dslip = 1e-2 * t2;
+  const auto r2 = law.evaluate({}, k, nullptr);
+  EXPECT_TRUE(r2.sliding);
+  EXPECT_NEAR(r2.f_t.norm(), pi * a2 * p.sigma_y / std::sqrt(3.0), 1e-12 * r2.f_n);
+  EXPECT_LT((r2.f_t / r2.f_t.norm() + t2).norm(), 1e-12);
+  // unloading from u_max = 0.01 to 0.0099: the elastic line of slope unload_ratio x 6 pi sigma_y R*
+  k.dslip.setZero();
+  k.overlap = 0.0099;
+  const auto r3 = law.evaluate(r0.history, k, nullptr);
+  EXPECT_EQ(r3.branch, int(NormalBranch::Elastic));
+  EXPECT_NEAR(r3.f_n, r0.f_n - p.unload_ratio * 6.0 * pi * p.sigma_y * g.r_eff * 1e-4, 1e-11 * r0.f_n);
+}

@@ -27,36 +27,75 @@
 // virtual call per contact). `ContactLaw` checks a law type against it.
 //
 // Kinematics come from a solver in the contact frame of kinematics.hpp: overlap > 0 touching,
-// the slip is j's contact point relative to i's along t = perp(n), forces are on j.
+// the slip is j's contact point relative to i's (2D: along t = perp(n); 3D: a vector in the
+// tangent plane), forces are on j. A law has a dimension `L::kDim` (2 or 3): the same law
+// template is instantiated for both (dim.hpp).
 #include <concepts>
 #include <cstdint>
 
+#include <Eigen/Core>
+
+#include "netdem/contact/dim.hpp"
+
 namespace netdem::contact {
 
+/// The rotation that carries a law's stored tangential vectors (a spring, a force) from the
+/// tangent plane of the last step into the current one (kinematics.hpp computes it). 2D: nothing
+/// to do (a tangential quantity is the component along t, which rotates with n).
+template <int D>
+struct Transport {
+  double apply(double v) const { return v; }
+};
+/// 3D: the rigid rotation of the pair over the step (the lever-arm weighted mean rotation of the
+/// two particles, then the rotation of the normal relative to it), followed by the projection onto
+/// the current tangent plane (LMM05 Eq 16), which only removes rounding.
+template <>
+struct Transport<3> {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  ///< the current normal
+  Eigen::Vector3d apply(const Eigen::Vector3d& v) const {
+    const Eigen::Vector3d w = R * v;
+    return w - n * n.dot(w);
+  }
+};
+
 /// One contact over one step (explicit) or one increment (quasi-static), in the contact frame.
-struct ContactKinematics {
+/// Tangential quantities are `Dim<D>::Tan`: the component along t in 2D, a vector in the current
+/// tangent plane in 3D.
+template <int D>
+struct Kinematics {
+  using Tan = typename Dim<D>::Tan;
   double overlap = 0.0;    ///< u_N at the end of the step (> 0: touching)
   double overlap_start = 0.0;  ///< u_N at the start of the step
-  double dslip = 0.0;      ///< slip increment over the step (kinematics.hpp, Redanz & Fleck Eq 5)
+  Tan dslip = tan_zero<Tan>();  ///< slip increment over the step (kinematics.hpp, Redanz & Fleck Eq 5)
   double v_n = 0.0;        ///< d overlap / dt (> 0 approaching); 0 in a quasi-static increment
-  double v_t = 0.0;        ///< slip rate; 0 in a quasi-static increment
+  Tan v_t = tan_zero<Tan>();  ///< slip rate; 0 in a quasi-static increment
   double r_eff = 0.0;      ///< R* = r_i r_j / (r_i + r_j) (r_i for a flat wall)
   double m_eff = 0.0;      ///< m_i m_j / (m_i + m_j) (m_i for a wall); 0 when unknown
   double dt = 0.0;         ///< the step; 0 in a quasi-static increment
+  [[no_unique_address]] Transport<D> transport;  ///< carries the stored tangential history into the current plane
 };
+using ContactKinematics = Kinematics<2>;
 
 /// Consistent tangent in the contact frame: derivatives of the end forces with respect to the end
-/// overlap and the slip increment, the rates v_n, v_t held fixed.
-struct ContactTangent {
-  double dfn_dun = 0.0, dfn_dslip = 0.0;
-  double dft_dun = 0.0, dft_dslip = 0.0;
+/// overlap and the slip increment, the rates v_n, v_t held fixed. 3D: dfn_dslip is the gradient,
+/// dft_dun the derivative vector, dft_dslip the 3x3 matrix d f_t / d dslip (in-plane block used).
+template <int D>
+struct Tangent {
+  using Tan = typename Dim<D>::Tan;
+  using TanMat = typename Dim<D>::TanMat;
+  double dfn_dun = 0.0;
+  Tan dfn_dslip = tan_zero<Tan>();
+  Tan dft_dun = tan_zero<Tan>();
+  TanMat dft_dslip = tan_identity<D>(0.0);
 };
+using ContactTangent = Tangent<2>;
 
 /// What one evaluation returns.
-template <class History>
+template <class History, int D = 2>
 struct ContactResponse {
   double f_n = 0.0;   ///< normal force on j along n (> 0 repulsive)
-  double f_t = 0.0;   ///< tangential force on j along t
+  typename Dim<D>::Tan f_t = tan_zero<typename Dim<D>::Tan>();  ///< tangential force on j
   bool loaded = false;   ///< the contact is closed (not on its open branch): it carries the forces
   bool sliding = false;  ///< the tangential force is on its limit
   std::uint8_t branch = 0;  ///< the law's branch code, for diagnostics; 0 = open for every law
@@ -78,12 +117,13 @@ struct IterationStiffness {
 
 template <class L>
 concept ContactLaw = requires(const L& law, const typename L::History& h,
-                              const ContactKinematics& k, ContactTangent* t,
-                              const ContactResponse<typename L::History>& r) {
+                              const Kinematics<L::kDim>& k, Tangent<L::kDim>* t,
+                              const ContactResponse<typename L::History, L::kDim>& r) {
   typename L::Params;
   typename L::History;
+  { L::kDim } -> std::convertible_to<int>;
   { law.params() } -> std::convertible_to<const typename L::Params&>;
-  { law.evaluate(h, k, t) } -> std::same_as<ContactResponse<typename L::History>>;
+  { law.evaluate(h, k, t) } -> std::same_as<ContactResponse<typename L::History, L::kDim>>;
   { law.stiffness_bound(h, k) } -> std::same_as<StiffnessBound>;
   { law.iteration_stiffness(h, k, r) } -> std::same_as<IterationStiffness>;
   { law.has_history(h) } -> std::same_as<bool>;
@@ -96,12 +136,12 @@ concept ContactLaw = requires(const L& law, const typename L::History& h,
 /// history to the last bit (the conformance suite checks every law that has one, and
 /// Dynamic.InPlaceUpdateIsBitIdentical a whole run). InPlace = false: always `evaluate`.
 template <bool InPlace = true, ContactLaw L>
-inline void update_contact(const L& law, typename L::History& h, const ContactKinematics& k,
-                           double& f_n, double& f_t) {
+inline void update_contact(const L& law, typename L::History& h, const Kinematics<L::kDim>& k,
+                           double& f_n, typename Dim<L::kDim>::Tan& f_t) {
   if constexpr (InPlace && requires { law.update(h, k, f_n, f_t); }) {
     law.update(h, k, f_n, f_t);
   } else {
-    const ContactResponse<typename L::History> r = law.evaluate(h, k, nullptr);
+    const ContactResponse<typename L::History, L::kDim> r = law.evaluate(h, k, nullptr);
     h = r.history;
     f_n = r.f_n;
     f_t = r.f_t;

@@ -22,6 +22,8 @@
 #include <limits>
 #include <numbers>
 
+#include "netdem/contact/dim.hpp"
+
 namespace netdem::contact {
 
 /// All parameters of LMM05 Table 1, with the paper's values as defaults (SI units).
@@ -104,50 +106,62 @@ inline bool luding_is_linear(const LudingParams& p, bool constant_temperature) {
 }
 
 /// Per-contact history (plain data). Lifecycle: created zero on first touch; reset (returned as a
-/// fresh history) on separation, delta <= 0; for a pair-order flip negate xi.
-struct LudingHistory {
+/// fresh history) on separation, delta <= 0; for a pair-order flip negate xi. In 3D xi is a vector
+/// in the tangent plane (global axes), carried into the current plane each step (LMM05 Eq 16; the
+/// law interface's Transport, law.hpp); in 2D it is the component along t.
+template <int D>
+struct LudingHistoryT {
+  using Tan = typename Dim<D>::Tan;
   double delta_max = 0.0;  ///< delta_max (Fig 2); 0 = fresh contact
   double delta0 = 0.0;     ///< force-free overlap delta_0 of the un/reloading line
   double k2_line = 0.0;    ///< slope k2' = k2(delta_max) of the un/reloading line (Eq 7)
   double k1_seen = 0.0;    ///< k1(T, t) at which (delta_max, delta0) were last made consistent
-  double xi = 0.0;         ///< tangential spring length along t (Eq 16-21)
+  Tan xi = tan_zero<Tan>();  ///< tangential spring (Eq 16-21)
   std::uint8_t fluid = 0;  ///< 1 once delta_0 reached delta_fluid (fluid limit, frozen delta_0)
   std::uint8_t sliding = 0;  ///< 1 if the committed step slid
   /// True for the zero history of a pair that has not touched (or was reset on separation).
   bool fresh() const {
-    return delta_max == 0.0 && delta0 == 0.0 && k2_line == 0.0 && k1_seen == 0.0 && xi == 0.0 &&
+    return delta_max == 0.0 && delta0 == 0.0 && k2_line == 0.0 && k1_seen == 0.0 && tan_is_zero(xi) &&
            fluid == 0 && sliding == 0;
   }
 };
+using LudingHistory = LudingHistoryT<2>;
 
-/// Kinematic input of one step (contact frame).
-struct LudingInput {
+/// Kinematic input of one step (contact frame; 3D: the tangential vectors in the current plane).
+template <int D>
+struct LudingInputT {
+  using Tan = typename Dim<D>::Tan;
   double delta = 0.0;      ///< overlap at the end of the step [m]
   double delta_dot = 0.0;  ///< d delta / dt (> 0 approaching) [m/s]
-  double dxi = 0.0;        ///< slip increment over the step [m]
-  double xi_dot = 0.0;     ///< slip rate v_t [m/s]
+  Tan dxi = tan_zero<Tan>();     ///< slip increment over the step [m]
+  Tan xi_dot = tan_zero<Tan>();  ///< slip rate v_t [m/s]
   double k1_Tt = 0.0;      ///< k1(T, t) of the material [N/m] (ignored without F.thermal)
 };
+using LudingInput = LudingInputT<2>;
 
 enum class LudingBranch : std::uint8_t { Open = 0, Loading = 1, Line = 2, Cohesive = 3, Fluid = 4 };
 
-struct LudingResult {
+template <int D>
+struct LudingResultT {
+  using Tan = typename Dim<D>::Tan;
+  using TanMat = typename Dim<D>::TanMat;
   double f_n = 0.0;     ///< normal force on j along n (spring + Eq 5 damping), > 0 repulsive
-  double f_t = 0.0;     ///< tangential force on j along t
-  double m_roll = 0.0;  ///< rolling moment: not in the paper (section 5), always 0 (hook)
+  Tan f_t = tan_zero<Tan>();     ///< tangential force on j
+  Tan m_roll = tan_zero<Tan>();  ///< rolling moment: not in the paper (section 5), always 0 (hook)
   double f_min = 0.0;   ///< Eq 15 for the committed state (<= 0)
   double k_c = 0.0;     ///< Eq 13
   double k_t = 0.0;     ///< Eq 23
   double mu = 0.0;      ///< Eq 24
   // tangent (rates held fixed): derivatives with respect to delta and dxi
   double dfn_ddelta = 0.0;
-  double dfn_dxi = 0.0;
-  double dft_ddelta = 0.0;
-  double dft_dxi = 0.0;
+  Tan dfn_dxi = tan_zero<Tan>();
+  Tan dft_ddelta = tan_zero<Tan>();
+  TanMat dft_dxi = tan_identity<D>(0.0);
   LudingBranch branch = LudingBranch::Open;
   bool sliding = false;
-  LudingHistory history;  ///< the history to commit if the step is accepted
+  LudingHistoryT<D> history;  ///< the history to commit if the step is accepted
 };
+using LudingResult = LudingResultT<2>;
 
 // ---------------------------------------------------------------------------------------------
 // Temperature (sections 3.2-3.4)
@@ -238,9 +252,10 @@ inline double luding_delta_max_cooling(const LudingParams& p, double delta0, dou
 /// Section 3.3 delta rules, keyed on k1(T, t) (not on dT/dt): while k1(T, t) falls, delta_max
 /// stays and delta_0 grows (Fig 5 left), frozen at delta_fluid (fluid limit); while it rises,
 /// delta_0 stays and delta_max grows on the same k2' line (Fig 5 right).
-inline LudingHistory luding_thermal_update(const LudingParams& p, const LudingHistory& h,
-                                           double k1_Tt) {
-  LudingHistory r = h;
+template <int D>
+inline LudingHistoryT<D> luding_thermal_update(const LudingParams& p, const LudingHistoryT<D>& h,
+                                               double k1_Tt) {
+  LudingHistoryT<D> r = h;
   r.k1_seen = k1_Tt;
   if (h.delta_max <= 0.0 || h.fluid) return r;  // fresh contact, or fluid: delta_0 frozen
   const double k2l = h.k2_line;
@@ -264,19 +279,21 @@ inline LudingHistory luding_thermal_update(const LudingParams& p, const LudingHi
   return r;
 }
 
-/// One step of the law (see LudingInput). Pure: the new history is returned, not stored.
-template <LudingFeatures F = kLudingFull>
-inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& h0,
-                                    const LudingInput& in) {
-  LudingResult r;
+/// One step of the law (see LudingInput). Pure: the new history is returned, not stored. In 3D
+/// the history's spring must already be in the current tangent plane (LudingLaw does that).
+template <LudingFeatures F = kLudingFull, int D>
+inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHistoryT<D>& h0,
+                                        const LudingInputT<D>& in) {
+  using Tan = typename Dim<D>::Tan;
+  LudingResultT<D> r;
   const double delta = in.delta;
   if (!(delta > 0.0)) {  // open: no force; the history is reset (docs/luding.md)
-    r.history = LudingHistory{};
+    r.history = LudingHistoryT<D>{};
     return r;
   }
   const double k1c = p.k1();
   const double k1 = F.thermal && !p.frozen_k1 ? in.k1_Tt : k1c;  // k1(T, t), Eq 11-12
-  LudingHistory h = h0;
+  LudingHistoryT<D> h = h0;
   if constexpr (F.thermal && F.hysteresis) {
     h = luding_thermal_update(p, h0, k1);
   } else {
@@ -362,7 +379,8 @@ inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& 
   double fn = f + p.gamma_n * in.delta_dot;  // LMM05 Eq 5
   double dfn = kn;
 
-  // ---- tangential, Eq 14, 16-24 (2D: xi is a scalar along t, Eq 16 is implicit) ----
+  // ---- tangential, Eq 14, 16-24 (2D: xi is a scalar along t, Eq 16 is implicit; 3D: vectors in
+  // the tangent plane, Eq 16 applied to the history before the call) ----
   const double mu = F.thermal ? (k1 / k1c) * p.mu : p.mu;  // LMM05 Eq 24
   const double kt = p.alpha * h.k2_line;                   // LMM05 Eq 23
   const double dkt = p.alpha * dk2l;
@@ -370,20 +388,27 @@ inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& 
   r.k_t = kt;
   const double fc = F.friction ? mu * (fn - fmin) : 0.0;  // LMM05 Eq 14: f_C = mu (f_n - f_min)
   if (F.friction && fc > 0.0) {
-    const double xi_trial = h.xi + in.dxi;                     // LMM05 Eq 20
-    const double ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
-    if (std::fabs(ft0) <= fc) {                                // static friction
+    const Tan xi_trial = h.xi + in.dxi;                     // LMM05 Eq 20
+    const Tan ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
+    const double ft0_norm = tan_norm(ft0);
+    if (ft0_norm <= fc) {                                   // static friction
       r.f_t = ft0;
       h.xi = xi_trial;
-      r.dft_dxi = -kt;
+      r.dft_dxi = tan_identity<D>(-kt);
       r.dft_ddelta = -dkt * xi_trial;
       r.sliding = false;
     } else {                                                   // sliding friction
-      const double s = ft0 > 0.0 ? 1.0 : -1.0;
+      const Tan s = tan_direction(ft0);
       r.f_t = s * fc;                                          // LMM05 Eq 22
       h.xi = -(fc * s + p.gamma_t * in.xi_dot) / kt;           // LMM05 Eq 21
-      r.dft_dxi = 0.0;
       r.dft_ddelta = s * mu * (dfn - dfmin);
+      if constexpr (D == 3) {  // the direction s = ft0/|ft0| turns with ft0
+        const Eigen::Matrix3d P = (fc / ft0_norm) * (Eigen::Matrix3d::Identity() - s * s.transpose());
+        r.dft_dxi = -kt * P;
+        r.dft_ddelta += P * (-dkt * xi_trial);
+      } else {
+        r.dft_dxi = 0.0;
+      }
       r.sliding = true;
       if (p.sliding_breaks_cohesion && fn < 0.0) {             // LMM05 footnote 5: f_n >= 0
         fn = 0.0;
@@ -391,12 +416,12 @@ inline LudingResult luding_evaluate(const LudingParams& p, const LudingHistory& 
       }
     }
   } else {  // f_n <= f_min: no tangential force, the spring is released
-    h.xi = 0.0;
+    h.xi = tan_zero<Tan>();
   }
   h.sliding = r.sliding ? 1 : 0;
   r.f_n = fn;
   r.dfn_ddelta = dfn;
-  r.dfn_dxi = 0.0;
+  r.dfn_dxi = tan_zero<Tan>();
   // Rolling resistance (not in LMM05): a rolling sub-model would add its moment to r.m_roll here
   // from a rolling-spring history slot; none is modelled, r.m_roll = 0.
   r.history = h;

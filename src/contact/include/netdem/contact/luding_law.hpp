@@ -12,7 +12,8 @@ namespace netdem::contact {
 
 /// Field-by-field copy of a history (GCC expanded the struct assignment of the law's result into
 /// overlapping 16-byte moves through the stack, which stall on store forwarding).
-inline void store_luding_history(LudingHistory& dst, const LudingHistory& src) {
+template <int D>
+inline void store_luding_history(LudingHistoryT<D>& dst, const LudingHistoryT<D>& src) {
   dst.delta_max = src.delta_max;
   dst.delta0 = src.delta0;
   dst.k2_line = src.k2_line;
@@ -22,12 +23,17 @@ inline void store_luding_history(LudingHistory& dst, const LudingHistory& src) {
   dst.sliding = src.sliding;
 }
 
-template <LudingFeatures F = kLudingFull>
+/// D = 3: the spring is a vector in the tangent plane, carried into the current plane by the
+/// step's Transport (LMM05 Eq 16 generalised to a rotation, law.hpp) before the step.
+template <LudingFeatures F = kLudingFull, int D = 2>
 class LudingLaw {
  public:
+  static constexpr int kDim = D;
   using Params = LudingParams;
-  using History = LudingHistory;
-  using Response = ContactResponse<History>;
+  using History = LudingHistoryT<D>;
+  using Response = ContactResponse<History, D>;
+  using Kin = Kinematics<D>;
+  using Tan = typename Dim<D>::Tan;
   /// The history is reset on separation (docs/luding.md).
   static constexpr bool kHistoryOutlivesSeparation = false;
 
@@ -38,8 +44,8 @@ class LudingLaw {
   double k1_Tt() const { return k1_Tt_; }
   bool has_history(const History& h) const { return !h.fresh(); }
 
-  LudingInput input(const ContactKinematics& k) const {
-    LudingInput in;
+  LudingInputT<D> input(const Kin& k) const {
+    LudingInputT<D> in;
     in.delta = k.overlap;
     in.delta_dot = k.v_n;
     in.dxi = k.dslip;
@@ -48,8 +54,22 @@ class LudingLaw {
     return in;
   }
 
-  Response evaluate(const History& h, const ContactKinematics& k, ContactTangent* t) const {
-    const LudingResult r = luding_evaluate<F>(*p_, h, input(k));
+  /// The history in the current tangent plane (2D: h itself).
+  static const History& transported(const History& h, const Kin& k, History& buf) {
+    if constexpr (D == 2) {
+      (void)k;
+      (void)buf;
+      return h;
+    } else {
+      buf = h;
+      buf.xi = k.transport.apply(h.xi);
+      return buf;
+    }
+  }
+
+  Response evaluate(const History& h, const Kin& k, Tangent<D>* t) const {
+    History buf;
+    const LudingResultT<D> r = luding_evaluate<F>(*p_, transported(h, k, buf), input(k));
     Response out;
     out.f_n = r.f_n;
     out.f_t = r.f_t;
@@ -67,7 +87,7 @@ class LudingLaw {
   }
 
   /// The un/reloading line k2(delta_max) <= k2 (Eq 7) bounds every branch; k_t = alpha k2 (Eq 23).
-  StiffnessBound stiffness_bound(const History&, const ContactKinematics&) const {
+  StiffnessBound stiffness_bound(const History&, const Kin&) const {
     StiffnessBound s;
     s.k_n = p_->k2;
     s.k_t = F.friction ? p_->alpha * p_->k2 : 0.0;
@@ -77,11 +97,10 @@ class LudingLaw {
   /// Newton needs a non-negative normal stiffness: on the attractive branch (tangent -k_c, Eq 4)
   /// the iteration matrix gets k_c added (zero normal stiffness). The tangential spring is k_t of
   /// Eq 23. (No solver runs this law implicitly yet; this re-evaluates the law for its tangent.)
-  IterationStiffness iteration_stiffness(const History& h, const ContactKinematics& k,
-                                         const Response& r) const {
+  IterationStiffness iteration_stiffness(const History& h, const Kin& k, const Response& r) const {
     IterationStiffness s;
     if (!r.loaded) return s;
-    ContactTangent t;
+    Tangent<D> t;
     (void)evaluate(h, k, &t);
     s.k_n_add = t.dfn_dun < 0.0 ? -t.dfn_dun : 0.0;
     s.k_t = F.friction ? p_->alpha * r.history.k2_line : 0.0;
@@ -93,12 +112,12 @@ class LudingLaw {
   /// (no hysteresis, cohesion or temperature) it is luding_evaluate<F> written out for the linear
   /// spring-dashpot with the Cundall-Strack spring, operation for operation, without the tangent
   /// and the result struct.
-  void update(History& h, const ContactKinematics& k, double& f_n, double& f_t) const {
+  void update(History& h, const Kin& k, double& f_n, Tan& f_t) const {
     const Params& p = *p_;
-    if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
+    if constexpr (D == 2 && !F.hysteresis && !F.cohesion && !F.thermal) {
       const double delta = k.overlap;
       if (!(delta > 0.0)) {  // open (rounding at L = a_i + a_j): no force, history reset
-        h = LudingHistory{};
+        h = History{};
         f_n = f_t = 0.0;
         return;
       }
@@ -134,7 +153,8 @@ class LudingLaw {
       f_n = fn;
       f_t = ft;
     } else {
-      const LudingResult r = luding_evaluate<F>(p, h, input(k));
+      History buf;
+      const LudingResultT<D> r = luding_evaluate<F>(p, transported(h, k, buf), input(k));
       store_luding_history(h, r.history);
       f_n = r.f_n;
       f_t = r.f_t;
@@ -147,5 +167,7 @@ class LudingLaw {
 };
 static_assert(ContactLaw<LudingLaw<kLudingFull>>);
 static_assert(ContactLaw<LudingLaw<kLudingLinear>>);
+static_assert(ContactLaw<LudingLaw<kLudingFull, 3>>);
+static_assert(ContactLaw<LudingLaw<kLudingLinear, 3>>);
 
 }  // namespace netdem::contact

@@ -26,9 +26,17 @@
 // |F_T| <= min(mu F_N, A_c sigma_y/sqrt 3) = mu_eff F_N with mu_eff = min(mu, 1/(3 sqrt 3))
 // (section 3.1: "sticking", mu = inf, acts like mu_eff = 0.192). Slip direction from the trial
 // force, i.e. from the slip increment (Eq 5, 7). Rolling moment: zero (section 2.1).
+//
+// Spheres (D = 3; Fleck 1995, the 3D analogue of Eq 2, issue 16): F_N = 3 sigma_y pi a^2 with
+// a^2 = 2 R* u_N, i.e. F_N = 6 pi sigma_y R* u_N (linear in u_N); A_c = pi a^2 = F_N / (3 sigma_y)
+// as in 2D, so the tangential law (Eq 6 with the area pi a^2, the cap pi a^2 sigma_y / sqrt 3), the
+// unloading branch and the first-touch rule (the chord of a linear law is the law) are the same
+// code. sigma_y is then a stress and the tangential force a vector in the tangent plane. The
+// dimension enters only through the normal force of the loading branch (plastic_force<D>).
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 #include "netdem/contact/kinematics.hpp"
 #include "netdem/contact/law.hpp"
@@ -59,70 +67,92 @@ struct PlasticIndentationParams {
   /// lengths in R): so that every force, and S / sigma_y unchanged, scales with sigma_y.
   double shear_stiffness() const { return k_t * sigma_y; }
   /// The first-touch chord stiffness 6 sigma_y / sqrt(first_touch) (inf for first_touch = 0): the
-  /// largest loading stiffness of any contact, whatever R*.
+  /// largest loading stiffness of any 2D contact, whatever R*.
   double chord_stiffness() const { return 6.0 * sigma_y / std::sqrt(first_touch); }
+  /// The loading stiffness of a 3D contact, 6 pi sigma_y R* (its chord and tangent).
+  double chord_stiffness_3d(double r_eff) const { return 6.0 * std::numbers::pi * sigma_y * r_eff; }
   bool damped() const { return damping_n > 0.0 || damping_t > 0.0; }
   /// Throws std::invalid_argument with a one-line message for an invalid value.
   void validate() const;
 };
 
-struct PlasticIndentationHistory {
+template <int D>
+struct PlasticIndentationHistoryT {
+  using Tan = typename Dim<D>::Tan;
   double u_max = 0.0;     ///< largest overlap reached (plastic flattening); 0 = never touched
-  double f_t = 0.0;       ///< committed tangential force on j along t
+  Tan f_t = tan_zero<Tan>();  ///< committed tangential force on j (2D: along t)
   std::uint8_t sliding = 0;  ///< 1 if the last committed increment slid
 };
+using PlasticIndentationHistory = PlasticIndentationHistoryT<2>;
 
 enum class NormalBranch : std::uint8_t { Open = 0, Plastic = 1, Elastic = 2 };
 
 /// Contact-frame result of one trial increment.
-struct PlasticIndentationResult {
+template <int D>
+struct PlasticIndentationResultT {
+  using Tan = typename Dim<D>::Tan;
   double f_n = 0.0;   ///< normal force, >= 0 (repulsive)
   double k_n = 0.0;   ///< dF_N/du_N on the active branch
   double area = 0.0;  ///< A_c = F_N/(3 sigma_y)
-  double f_t = 0.0;   ///< tangential force on j along t
-  double dft_dun = 0.0;    ///< dF_T/du_N at the trial state
-  double dft_dslip = 0.0;  ///< dF_T/d(slip increment) at the trial state
+  Tan f_t = tan_zero<Tan>();      ///< tangential force on j (2D: along t)
+  Tan dft_dun = tan_zero<Tan>();  ///< dF_T/du_N at the trial state
+  typename Dim<D>::TanMat dft_dslip = tan_identity<D>(0.0);  ///< dF_T/d(slip increment)
   NormalBranch branch = NormalBranch::Open;
   bool sliding = false;
-  PlasticIndentationHistory history;  ///< the history to commit if the increment is accepted
+  PlasticIndentationHistoryT<D> history;  ///< the history to commit if the increment is accepted
 };
+using PlasticIndentationResult = PlasticIndentationResultT<2>;
 
-/// Eq 2: plastic-branch force and tangent.
+/// Eq 2: plastic-branch force and tangent (D = 3: 3 sigma_y pi a^2, a^2 = 2 R* u).
+template <int D = 2>
 inline double plastic_force(const PlasticIndentationParams& p, double r_eff, double u) {
-  return u > 0.0 ? 3.0 * p.sigma_y * std::sqrt(8.0 * u * r_eff) : 0.0;
+  if constexpr (D == 2) {
+    return u > 0.0 ? 3.0 * p.sigma_y * std::sqrt(8.0 * u * r_eff) : 0.0;
+  } else {
+    return u > 0.0 ? p.chord_stiffness_3d(r_eff) * u : 0.0;
+  }
 }
+template <int D = 2>
 inline double plastic_tangent(const PlasticIndentationParams& p, double r_eff, double u) {
-  return 3.0 * p.sigma_y * std::sqrt(2.0 * r_eff / u);
+  if constexpr (D == 2) {
+    return 3.0 * p.sigma_y * std::sqrt(2.0 * r_eff / u);
+  } else {
+    (void)u;
+    return p.chord_stiffness_3d(r_eff);
+  }
 }
 
 /// The loading branch with the first-touch rule: Eq 2 above u_c, the chord F_2(u_c) u/u_c below.
 inline double first_touch_overlap(const PlasticIndentationParams& p, double r_eff) {
   return p.first_touch * 2.0 * r_eff;
 }
+template <int D = 2>
 inline double loading_force(const PlasticIndentationParams& p, double r_eff, double u) {
   const double uc = first_touch_overlap(p, r_eff);
-  if (u < uc) return u > 0.0 ? plastic_force(p, r_eff, uc) * (u / uc) : 0.0;
-  return plastic_force(p, r_eff, u);
+  if (u < uc) return u > 0.0 ? plastic_force<D>(p, r_eff, uc) * (u / uc) : 0.0;
+  return plastic_force<D>(p, r_eff, u);
 }
+template <int D = 2>
 inline double loading_tangent(const PlasticIndentationParams& p, double r_eff, double u) {
   const double uc = first_touch_overlap(p, r_eff);
-  if (u < uc) return plastic_force(p, r_eff, uc) / uc;
-  return plastic_tangent(p, r_eff, u);
+  if (u < uc) return plastic_force<D>(p, r_eff, uc) / uc;
+  return plastic_tangent<D>(p, r_eff, u);
 }
 
 /// Normal force on the branch selected by the committed u_max (no history change).
+template <int D = 2>
 inline void normal_force(const PlasticIndentationParams& p, double r_eff, double u_max, double u,
                          double& f, double& k, NormalBranch& branch) {
   if (p.reversible) u_max = 0.0;
   if (u >= u_max && u > 0.0) {  // loading: Eq 2
-    f = loading_force(p, r_eff, u);
-    k = loading_tangent(p, r_eff, u);
+    f = loading_force<D>(p, r_eff, u);
+    k = loading_tangent<D>(p, r_eff, u);
     branch = NormalBranch::Plastic;
     return;
   }
   if (u_max > 0.0) {  // elastic un/reloading line through (u_max, F_max), section 3.4
-    const double ku = p.unload_ratio * loading_tangent(p, r_eff, u_max);
-    const double fe = loading_force(p, r_eff, u_max) - ku * (u_max - u);
+    const double ku = p.unload_ratio * loading_tangent<D>(p, r_eff, u_max);
+    const double fe = loading_force<D>(p, r_eff, u_max) - ku * (u_max - u);
     if (fe > 0.0) {
       f = fe;
       k = ku;
@@ -136,54 +166,67 @@ inline void normal_force(const PlasticIndentationParams& p, double r_eff, double
 }
 
 /// Overlap at which a contact with history u_max carries no force (u_max for a fresh contact).
+template <int D = 2>
 inline double separation_overlap(const PlasticIndentationParams& p, double r_eff, double u_max) {
   if (u_max <= 0.0 || p.reversible) return 0.0;
-  return u_max - loading_force(p, r_eff, u_max) / (p.unload_ratio * loading_tangent(p, r_eff, u_max));
+  return u_max - loading_force<D>(p, r_eff, u_max) / (p.unload_ratio * loading_tangent<D>(p, r_eff, u_max));
 }
 
 /// Secant normal stiffness over a predicted overlap change u0 -> u1 (exact integral of Eq 2 over
 /// the increment). Used instead of the tangent for young contacts, whose tangent is singular at
 /// u_N = 0. Returns the tangent at u0 when |u1 - u0| is negligible.
+template <int D = 2>
 inline double normal_secant(const PlasticIndentationParams& p, double r_eff, double u_max, double u0,
                             double u1) {
   double f0, k0, f1, k1;
   NormalBranch b;
-  normal_force(p, r_eff, u_max, u0, f0, k0, b);
+  normal_force<D>(p, r_eff, u_max, u0, f0, k0, b);
   // the end point sees the history the start point leaves behind (u_max >= u0 once committed)
-  normal_force(p, r_eff, std::fmax(u_max, u0), u1, f1, k1, b);
+  normal_force<D>(p, r_eff, std::fmax(u_max, u0), u1, f1, k1, b);
   const double du = u1 - u0;
   if (std::fabs(du) <= 1e-14 * (1.0 + std::fabs(u0))) return k0;
   return std::fmax((f1 - f0) / du, 0.0);
 }
 
 /// One trial increment in the contact frame: end overlap u_n and slip increment dslip (Eq 5),
-/// starting from the committed history. Pure function: the new history is returned, not stored.
-inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
-                                         const PlasticIndentationHistory& h, double r_eff, double u_n,
-                                         double dslip) {
-  PlasticIndentationResult r;
-  normal_force(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
+/// starting from the committed history (3D: its f_t already in the current tangent plane). Pure
+/// function: the new history is returned, not stored.
+template <int D>
+inline PlasticIndentationResultT<D> evaluate(const PlasticIndentationParams& p,
+                                             const PlasticIndentationHistoryT<D>& h, double r_eff,
+                                             double u_n, const typename Dim<D>::Tan& dslip) {
+  using Tan = typename Dim<D>::Tan;
+  PlasticIndentationResultT<D> r;
+  normal_force<D>(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
   r.history.u_max = std::fmax(h.u_max, u_n);
   r.area = r.f_n / (3.0 * p.sigma_y);
   if (!p.frictional() || r.branch == NormalBranch::Open) {
-    r.history.f_t = 0.0;
+    r.history.f_t = tan_zero<Tan>();
     r.history.sliding = 0;
     return r;
   }
   // Eq 6 in rate form: elastic predictor on the shear spring
   const double kt_force = p.shear_stiffness() * r.area;
-  const double trial = h.f_t - kt_force * dslip;
+  const Tan trial = h.f_t - kt_force * dslip;
   const double limit = p.mu_eff() * r.f_n;  // min(mu F_N, A_c tau_y)
-  if (std::fabs(trial) <= limit) {
+  const double trial_norm = tan_norm(trial);
+  if (trial_norm <= limit) {
     r.f_t = trial;
-    r.dft_dslip = -kt_force;
+    r.dft_dslip = tan_identity<D>(-kt_force);
     r.dft_dun = -p.shear_stiffness() * (r.k_n / (3.0 * p.sigma_y)) * dslip;
     r.sliding = false;
   } else {  // gross slip, Eq 7: F_T = sgn * mu_eff F_N (return mapping onto the limit)
-    const double s = trial > 0.0 ? 1.0 : -1.0;
+    const Tan s = tan_direction(trial);
     r.f_t = s * limit;
-    r.dft_dslip = 0.0;
     r.dft_dun = s * p.mu_eff() * r.k_n;
+    if constexpr (D == 3) {  // the direction turns with the trial force
+      const Eigen::Matrix3d P = (limit / trial_norm) * (Eigen::Matrix3d::Identity() - s * s.transpose());
+      const Tan dtrial_dun = -p.shear_stiffness() * (r.k_n / (3.0 * p.sigma_y)) * dslip;
+      r.dft_dslip = -kt_force * P;
+      r.dft_dun += P * dtrial_dun;
+    } else {
+      r.dft_dslip = 0.0;
+    }
     r.sliding = true;
   }
   r.history.f_t = r.f_t;
@@ -196,15 +239,18 @@ inline PlasticIndentationResult evaluate(const PlasticIndentationParams& p,
 /// min(mu F_N, A_c tau_y) (the spring is reset so that spring + dashpot sits on the limit while
 /// sliding, as LMM05 Eq 21); the contact width A_c = F_spring/(3 sigma_y) comes from the spring.
 /// fd_n = gamma_n d(overlap)/dt, fd_t = -gamma_t d(slip)/dt.
-inline PlasticIndentationResult evaluate_damped(const PlasticIndentationParams& p,
-                                                const PlasticIndentationHistory& h, double r_eff,
-                                                double u_n, double dslip, double fd_n, double fd_t) {
-  PlasticIndentationResult r;
-  normal_force(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
+template <int D>
+inline PlasticIndentationResultT<D> evaluate_damped(const PlasticIndentationParams& p,
+                                                    const PlasticIndentationHistoryT<D>& h, double r_eff,
+                                                    double u_n, const typename Dim<D>::Tan& dslip,
+                                                    double fd_n, const typename Dim<D>::Tan& fd_t) {
+  using Tan = typename Dim<D>::Tan;
+  PlasticIndentationResultT<D> r;
+  normal_force<D>(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
   r.history.u_max = std::fmax(h.u_max, u_n);
   r.area = r.f_n / (3.0 * p.sigma_y);
   if (r.branch == NormalBranch::Open) {
-    r.history.f_t = 0.0;
+    r.history.f_t = tan_zero<Tan>();
     r.history.sliding = 0;
     return r;
   }
@@ -215,28 +261,36 @@ inline PlasticIndentationResult evaluate_damped(const PlasticIndentationParams& 
     r.k_n = 0.0;
   }
   if (!p.frictional()) {
-    r.history.f_t = 0.0;
+    r.history.f_t = tan_zero<Tan>();
     r.history.sliding = 0;
     return r;
   }
   const double kt_force = p.shear_stiffness() * r.area;
-  const double spring = h.f_t - kt_force * dslip;
-  const double trial = spring + fd_t;
+  const Tan spring = h.f_t - kt_force * dslip;
+  const Tan trial = spring + fd_t;
   const double cap = r.area * p.sigma_y / std::sqrt(3.0);  // A_c tau_y
   const bool coulomb = !std::isinf(p.mu) && p.mu * r.f_n < cap;
   const double limit = coulomb ? p.mu * r.f_n : cap;
-  if (std::fabs(trial) <= limit) {
+  const double trial_norm = tan_norm(trial);
+  if (trial_norm <= limit) {
     r.f_t = trial;
     r.history.f_t = spring;
-    r.dft_dslip = -kt_force;
+    r.dft_dslip = tan_identity<D>(-kt_force);
     r.dft_dun = -p.shear_stiffness() * (k_spring / (3.0 * p.sigma_y)) * dslip;
     r.sliding = false;
   } else {
-    const double s = trial > 0.0 ? 1.0 : -1.0;
+    const Tan s = tan_direction(trial);
     r.f_t = s * limit;
     r.history.f_t = s * limit - fd_t;
-    r.dft_dslip = 0.0;
     r.dft_dun = s * (coulomb ? p.mu * r.k_n : k_spring / (3.0 * std::sqrt(3.0)));
+    if constexpr (D == 3) {
+      const Eigen::Matrix3d P = (limit / trial_norm) * (Eigen::Matrix3d::Identity() - s * s.transpose());
+      const Tan dtrial_dun = -p.shear_stiffness() * (k_spring / (3.0 * p.sigma_y)) * dslip;
+      r.dft_dslip = -kt_force * P;
+      r.dft_dun += P * dtrial_dun;
+    } else {
+      r.dft_dslip = 0.0;
+    }
     r.sliding = true;
   }
   r.history.sliding = r.sliding ? 1 : 0;
@@ -244,29 +298,55 @@ inline PlasticIndentationResult evaluate_damped(const PlasticIndentationParams& 
 }
 
 /// The plastic-indentation law behind the contact-law interface (law.hpp). Holds its parameters
-/// by value; a solver builds it once per run (or per parameter change).
-class PlasticIndentationLaw {
+/// by value; a solver builds it once per run (or per parameter change). D = 3: spheres (the
+/// tangential force a vector, carried into the current plane by the step's Transport).
+template <int D>
+class PlasticIndentationLawT {
  public:
+  static constexpr int kDim = D;
   using Params = PlasticIndentationParams;
-  using History = PlasticIndentationHistory;
-  using Response = ContactResponse<History>;
+  using History = PlasticIndentationHistoryT<D>;
+  using Response = ContactResponse<History, D>;
+  using Kin = Kinematics<D>;
+  using Tan = typename Dim<D>::Tan;
   /// u_max outlives separation: a separated contact reloads elastically from its flattening.
   static constexpr bool kHistoryOutlivesSeparation = true;
 
-  PlasticIndentationLaw() = default;
-  explicit PlasticIndentationLaw(const Params& p)
-      : p_(p), damped_(p.damped()), k_chord_(p.damped() ? p.chord_stiffness() : 0.0) {}
+  PlasticIndentationLawT() = default;
+  explicit PlasticIndentationLawT(const Params& p)
+      : p_(p), damped_(p.damped()), k_chord_(p.damped() && D == 2 ? p.chord_stiffness() : 0.0) {}
   const Params& params() const { return p_; }
   bool has_history(const History& h) const { return h.u_max > 0.0; }
 
-  Response evaluate(const History& h, const ContactKinematics& k, ContactTangent* t) const {
-    PlasticIndentationResult r;
-    if (!damped_) {
-      r = contact::evaluate(p_, h, k.r_eff, k.overlap, k.dslip);
+  /// The history in the current tangent plane (2D: h itself).
+  static const History& transported(const History& h, const Kin& k, History& buf) {
+    if constexpr (D == 2) {
+      (void)k;
+      (void)buf;
+      return h;
     } else {
+      buf = h;
+      buf.f_t = k.transport.apply(h.f_t);
+      return buf;
+    }
+  }
+
+  Response evaluate(const History& h0, const Kin& k, Tangent<D>* t) const {
+    PlasticIndentationResultT<D> r;
+    History buf;
+    const History& h = transported(h0, k, buf);
+    if (!damped_) {
+      r = contact::evaluate<D>(p_, h, k.r_eff, k.overlap, k.dslip);
+    } else if constexpr (D == 2) {
       const double gn = 2.0 * p_.damping_n * std::sqrt(k_chord_ * k.m_eff);
       const double gt = 2.0 * p_.damping_t * std::sqrt(k_chord_ * k.m_eff / 3.0);
-      r = evaluate_damped(p_, h, k.r_eff, k.overlap, k.dslip, gn * k.v_n, -gt * k.v_t);
+      r = evaluate_damped<D>(p_, h, k.r_eff, k.overlap, k.dslip, gn * k.v_n, -gt * k.v_t);
+    } else {  // the 3D loading stiffness 6 pi sigma_y R*; the sphere's tangential mass 2/7
+      const double kc = p_.chord_stiffness_3d(k.r_eff);
+      const double gn = 2.0 * p_.damping_n * std::sqrt(kc * k.m_eff);
+      const double gt = 2.0 * p_.damping_t * std::sqrt(kc * k.m_eff * kTangentialMassRatio<3>);
+      const Tan fd_t = -gt * k.v_t;
+      r = evaluate_damped<D>(p_, h, k.r_eff, k.overlap, k.dslip, gn * k.v_n, fd_t);
     }
     Response out;
     out.f_n = r.f_n;
@@ -277,7 +357,7 @@ class PlasticIndentationLaw {
     out.history = r.history;
     if (t) {
       t->dfn_dun = r.k_n;
-      t->dfn_dslip = 0.0;
+      t->dfn_dslip = tan_zero<Tan>();
       t->dft_dun = r.dft_dun;
       t->dft_dslip = r.dft_dslip;
     }
@@ -287,12 +367,12 @@ class PlasticIndentationLaw {
   /// Normal: the tangent of the active branch at the end of the step, or the elastic
   /// un/reloading stiffness of the history when that is larger (it is the stiffest branch the
   /// contact can reach in a step). Tangential: k_t A_c at the end force.
-  StiffnessBound stiffness_bound(const History& h, const ContactKinematics& k) const {
+  StiffnessBound stiffness_bound(const History& h, const Kin& k) const {
     double f, kn;
     NormalBranch b;
-    normal_force(p_, k.r_eff, h.u_max, k.overlap, f, kn, b);
+    normal_force<D>(p_, k.r_eff, h.u_max, k.overlap, f, kn, b);
     const double u_max = p_.reversible ? 0.0 : std::fmax(h.u_max, k.overlap);
-    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * loading_tangent(p_, k.r_eff, u_max));
+    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * loading_tangent<D>(p_, k.r_eff, u_max));
     StiffnessBound s;
     s.k_n = kn;
     s.k_t = p_.frictional() ? p_.shear_stiffness() * f / (3.0 * p_.sigma_y) : 0.0;
@@ -303,15 +383,14 @@ class PlasticIndentationLaw {
   /// overshoots into separation: on the plastic branch the normal stiffness is raised to the secant
   /// of Eq 2 over the step (from the start overlap, or from the force-free overlap) when that is
   /// stiffer. The tangential stiffness is the shear spring k_t A_c, also while sliding.
-  IterationStiffness iteration_stiffness(const History& h, const ContactKinematics& k,
-                                         const Response& r) const {
+  IterationStiffness iteration_stiffness(const History& h, const Kin& k, const Response& r) const {
     IterationStiffness s;
     if (r.branch == static_cast<std::uint8_t>(NormalBranch::Plastic)) {
-      const double u_sep = separation_overlap(p_, k.r_eff, h.u_max);
+      const double u_sep = separation_overlap<D>(p_, k.r_eff, h.u_max);
       const double u_from = std::fmax(k.overlap_start, u_sep);
       if (k.overlap > u_from) {
-        const double ksec = normal_secant(p_, k.r_eff, h.u_max, u_from, k.overlap);
-        const double kn = loading_tangent(p_, k.r_eff, k.overlap);
+        const double ksec = normal_secant<D>(p_, k.r_eff, h.u_max, u_from, k.overlap);
+        const double kn = loading_tangent<D>(p_, k.r_eff, k.overlap);
         s.k_n_add = std::fmax(0.0, ksec - kn);
       }
     }
@@ -319,7 +398,7 @@ class PlasticIndentationLaw {
     if (damped_) {
       double kn;
       NormalBranch b;
-      normal_force(p_, k.r_eff, h.u_max, k.overlap, f_spring, kn, b);
+      normal_force<D>(p_, k.r_eff, h.u_max, k.overlap, f_spring, kn, b);
     }
     s.k_t = p_.frictional() ? p_.shear_stiffness() * (f_spring / (3.0 * p_.sigma_y)) : 0.0;
     return s;
@@ -332,7 +411,7 @@ class PlasticIndentationLaw {
     History r = h;
     r.u_max = std::fmax(u, 0.0);
     if (u <= 0.0) {
-      r.f_t = 0.0;
+      r.f_t = tan_zero<Tan>();
       r.sliding = 0;
     }
     return r;
@@ -343,6 +422,9 @@ class PlasticIndentationLaw {
   bool damped_ = false;
   double k_chord_ = 0.0;
 };
+using PlasticIndentationLaw = PlasticIndentationLawT<2>;
+using PlasticIndentationLaw3 = PlasticIndentationLawT<3>;
 static_assert(ContactLaw<PlasticIndentationLaw>);
+static_assert(ContactLaw<PlasticIndentationLaw3>);
 
 }  // namespace netdem::contact
