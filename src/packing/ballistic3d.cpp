@@ -45,7 +45,8 @@ constexpr double kTwoPi = 2 * std::numbers::pi;
 constexpr double kContactTol = 1e-10;  // relative gap below which a sphere (wall, floor) is touching
 constexpr double kGrazing = 1e-6;      // n_z <= this: carries no weight for a fall, a fall passes it
 constexpr double kAdmissible = 1e-10;  // n . d >= -this: admissible; KKT multiplier >= -this: valid
-constexpr double kStill = 1e-9;        // |projected gravity| below this: no motion (rest or on top)
+constexpr double kStill = 1e-9;
+constexpr double kTop = 1e-9;          // a two-support equilibrium this far above its circle's centre is unstable        // |projected gravity| below this: no motion (rest or on top)
 constexpr double kSkip = 1e-9;         // an event closer than this angle to the start of a path of an
                                        // obstacle already touching is the contact itself, not a new touch
 constexpr long kMaxSteps = 100000;     // per sphere; a guard against a logic error
@@ -59,6 +60,7 @@ V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
 double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 double norm(V3 a) { return std::sqrt(dot(a, a)); }
 V3 unit(V3 a) { return (1.0 / norm(a)) * a; }
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 
 constexpr int kFloor = -1, kWallX0 = -2, kWallX1 = -3, kWallY0 = -4, kWallY1 = -5;
 
@@ -366,6 +368,30 @@ class Depositor3 {
           return true;
         }
       }
+      if (active.size() == 2 && (a0.ob.sphere() || contacts_[static_cast<std::size_t>(active[1])].ob.sphere())) {
+        // two supports with gravity in the plane of their normals: an equilibrium on the circle of
+        // positions touching both, stable at its lowest point, unstable above the circle's centre
+        // (e.g. on two spheres that touch the same wall, all three centres in the wall's plane):
+        // then the sphere rolls along the circle, towards +t if admissible, else -t
+        const Contact& b0 = contacts_[static_cast<std::size_t>(active[1])];
+        const Circle ci = circle(a0, b0);
+        if (ci.rho > 0 && dot(unit(c - ci.C), V3{0, 0, 1}) > kTop) {
+          V3 t = cross(a0.n, b0.n);
+          if (norm(t) > 0) {
+            t = unit(t);
+            if (t.x < 0 || (t.x == 0 && t.y < 0)) t = -1.0 * t;  // orientation independent of the contact order
+            for (V3 h : {t, -1.0 * t}) {
+              bool ok = true;
+              for (std::size_t j = 0; j < contacts_.size(); ++j)
+                if (dot(contacts_[j].n, h) < -kAdmissible) ok = false;
+              if (!ok) continue;
+              ++rep.on_top;
+              roll2(c, r, a0, b0, h);
+              return true;
+            }
+          }
+        }
+      }
       bool floor = false;
       for (const Contact& k : contacts_) floor = floor || k.ob.id == kFloor;
       if (floor) ++rep.floor;
@@ -416,26 +442,38 @@ class Depositor3 {
 
   /// Roll on the circle of positions touching both a and b (at least one a sphere), downhill
   /// along the unit tangent v, to the lowest point, a lift-off or the first touch.
-  void roll2(V3& c, double r, const Contact& a, const Contact& b, V3 v) {
+  struct Circle {
+    V3 C, axis;
+    double rho = 0;  // 0: degenerate
+  };
+  /// The circle of centre positions touching both a and b (at least one a sphere).
+  static Circle circle(const Contact& a, const Contact& b) {
     const Obstacle* s = a.ob.sphere() ? &a.ob : &b.ob;  // a sphere
     const Obstacle* o = a.ob.sphere() ? &b.ob : &a.ob;
-    V3 C, axis;
+    Circle ci;
     double rho2;
     if (o->sphere()) {
       const V3 e = o->p - s->p;
       const double D = norm(e);
-      axis = (1.0 / D) * e;
+      ci.axis = (1.0 / D) * e;
       const double sd = (D * D + s->R * s->R - o->R * o->R) / (2 * D);
-      C = s->p + sd * axis;
+      ci.C = s->p + sd * ci.axis;
       rho2 = s->R * s->R - sd * sd;
     } else {
-      axis = o->n;
+      ci.axis = o->n;
       const double t = o->off - dot(o->n, s->p);
-      C = s->p + t * axis;
+      ci.C = s->p + t * ci.axis;
       rho2 = s->R * s->R - t * t;
     }
-    if (!(rho2 > 0)) return;  // degenerate (tangent supports): the next stop re-evaluates
-    const double rho = std::sqrt(rho2);
+    ci.rho = rho2 > 0 ? std::sqrt(rho2) : 0.0;
+    return ci;
+  }
+
+  void roll2(V3& c, double r, const Contact& a, const Contact& b, V3 v) {
+    const Circle ci = circle(a, b);
+    if (!(ci.rho > 0)) return;  // degenerate (tangent supports): the next stop re-evaluates
+    const V3 C = ci.C, axis = ci.axis;
+    const double rho = ci.rho;
     V3 u = c - C;
     u = unit(u - dot(u, axis) * axis);
     v = v - dot(v, axis) * axis;
