@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -593,4 +594,26 @@ TEST(PackingIO3d, MismatchedDimsAreOneLineErrorsNamingTheLine) {
   has("# box 0 0 0 4 4 0\n# dim 3\nid,x,y,z,r\n0,1,1,1,1\n", "t.csv:1: box line: box has non-positive size");
   has("# box 0 0 0 4 4 4\n# dim 3\nid,x,y,z,r\n0,1,1,1,1\n1,1,1,1.5,1\n", "too close");
   has("# box 0 0 4\n", "t.csv:1: box line must be");
+}
+
+TEST(PackingIO3d, TwoDimensionalFilesAreWrittenAsBefore) {
+  // the 2D writer's bytes are the format of docs/packing.md (no dim line, four-number box,
+  // id,x,y,r), and a 2D file reads back as dim 2 with no z
+  Packing p;
+  p.box = {0, 0, 10, 5};
+  p.seed = 3;
+  p.x = {1, 4.25}, p.y = {2, 2.5}, p.r = {0.5, 1};
+  p.comments = {"note"};
+  const auto path = std::filesystem::temp_directory_path() / ("netdem_p2d_" + std::to_string(::getpid()) + ".csv");
+  netdem::packing::write_packing_csv(p, path);
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "# box 0 0 10 5\n# seed 3\n# note\nid,x,y,r\n0,1,2,0.5\n1,4.25,2.5,1\n");
+  const Packing q = netdem::packing::read_packing_csv(path);
+  EXPECT_EQ(q.dim, 2);
+  EXPECT_TRUE(q.z.empty());
+  EXPECT_EQ(q.box.z_min, 0.0);
+  EXPECT_EQ(q.box.z_max, 0.0);
+  EXPECT_DOUBLE_EQ(q.density(), std::numbers::pi * (0.25 + 1.0) / 50.0);
+  std::filesystem::remove(path);
 }
