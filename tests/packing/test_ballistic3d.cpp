@@ -491,6 +491,15 @@ TEST(Queries3d, TouchingPairsEqualAllPairsAndValidate) {
   const Packing q = netdem::packing::ballistic_deposition_3d(opts(8, 31, Lateral::Periodic));
   EXPECT_GT(netdem::packing::touching_pairs_periodic_xy(q, 1e-9).size(), netdem::packing::touching_pairs(q, 1e-9).size());
   EXPECT_THROW((void)netdem::packing::peripheral_layer(q), std::invalid_argument);
+  // wall contacts: floor and the four side walls; periodic: the floor only
+  Packing w = base_box(5, 5);
+  add(w, 1, 1, 1, 1);    // floor, x_min, y_min
+  add(w, 4, 2, 2.5, 1);  // x_max
+  const auto sw = netdem::packing::contact_stats(w, 1e-9), sp = netdem::packing::contact_stats(w, 1e-9, true);
+  EXPECT_EQ(sw.wall_contacts, 4u);
+  EXPECT_EQ(sp.wall_contacts, 1u);
+  EXPECT_EQ(sw.disk_contacts, 0u);
+  EXPECT_EQ(sp.disk_contacts, 0u);  // nearest image: |d|^2 = 2^2 + 1 + 1.5^2 > 2^2
   // density by volume
   Packing one = base_box(2, 2);
   add(one, 1, 1, 1, 1);

@@ -26,7 +26,9 @@
 // contact set is re-evaluated. Contact distances hold to rounding (~1e-15 relative).
 // A contact with n_z <= 1e-6 carries no weight for a fall (as in 2D); a sphere exactly on top of one
 // sphere (|n_xy| <= 1e-9) is an unstable equilibrium and rolls off towards the first admissible
-// direction of +x, -x, +y, -y, then the diagonals.
+// direction of +x, -x, +y, -y, then the diagonals; a two-support equilibrium above the centre of
+// the supports' circle (e.g. three monosized spheres in one wall's plane) is unstable too and rolls
+// on along the circle (towards +x first).
 //
 // Lateral boundary (`Lateral`): Walls (planes x = 0, W and y = 0, W; drops at x, y in
 // [r, W - r]) or Periodic in x and y (drops at x, y in [0, W), minimum image: contacts across the
@@ -68,7 +70,7 @@ struct Deposition3dReport {
   std::size_t floor = 0;          ///< rests with a floor contact
   std::size_t three = 0;          ///< rests with >= 3 active supports (spheres and walls), no floor
   std::size_t two = 0;            ///< rests on two supports (lowest point of their circle)
-  std::size_t on_top = 0;         ///< exactly-on-top roll-offs taken
+  std::size_t on_top = 0;         ///< roll-offs from unstable equilibria (on top of one sphere, above a two-support circle)
   std::size_t discarded = 0;      ///< spheres discarded by the stop rule
   std::size_t unresolved = 0;     ///< stops where no active set satisfied the KKT test (taken as rest)
   std::size_t max_steps = 0;      ///< the most motion steps one sphere needed
