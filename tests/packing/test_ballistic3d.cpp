@@ -649,3 +649,39 @@ TEST(PackingIO3d, TwoDimensionalFilesAreWrittenAsBefore) {
   EXPECT_DOUBLE_EQ(q.density(), std::numbers::pi * (0.25 + 1.0) / 50.0);
   std::filesystem::remove(path);
 }
+
+TEST(Queries3d, FindClosePairEqualsAllPairs) {
+  // CellGrid3 behind find_close_pair(): the first pair by the documented rule (disks i in order,
+  // partners j no larger, ties j < i, the smallest j) with centre distance below r_i, against a
+  // brute-force scan, on random polydisperse 3D sets (radius ratios 1 to 20, with and without pairs)
+  std::mt19937_64 rng(9);
+  auto u = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  int found = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const double ratio = 1.0 + 19.0 * u(), L = 5.0 + 20.0 * u();
+    const std::size_t n = 2 + static_cast<std::size_t>(200 * u());
+    Packing p = base_box(L, L);
+    for (std::size_t i = 0; i < n; ++i) add(p, L * u(), L * u(), L * u(), 0.05 * (1.0 + (ratio - 1.0) * u()));
+    std::size_t bi = n, bj = n;
+    for (std::size_t i = 0; i < n && bi == n; ++i)
+      for (std::size_t j = 0; j < n; ++j) {
+        if (j == i || p.r[j] > p.r[i] || (p.r[j] == p.r[i] && j > i)) continue;
+        const V d = separation(p, i, j, false);
+        if (dot(d, d) < p.r[i] * p.r[i]) {
+          bi = i, bj = j;
+          break;
+        }
+      }
+    const auto c = netdem::packing::find_close_pair(p);
+    if (bi == n) {
+      EXPECT_FALSE(c.has_value()) << "trial " << trial;
+    } else {
+      ASSERT_TRUE(c.has_value()) << "trial " << trial;
+      EXPECT_EQ(c->i, bi) << "trial " << trial;
+      EXPECT_EQ(c->j, bj) << "trial " << trial;
+      ++found;
+    }
+  }
+  EXPECT_GT(found, 10);
+  EXPECT_LT(found, 60);
+}
