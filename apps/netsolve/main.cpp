@@ -1,6 +1,6 @@
 // netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001).
 //
-//   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--out DIR]
+//   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--dim 2|3] [--lateral walls|periodic] [--out DIR]
 //   netsolve compact  [--affine | --boundary layer|walls] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
 //                     [--no-rotation] [--to-density 0.85 | --to-strain S] [--packing FILE] [--increments N] [--out DIR]
 //
