@@ -214,18 +214,28 @@ void append_fields(std::string& s, const std::vector<Field>& fields) {
     s += "\n        </DataArray>\n";
   }
 }
-void append_points(std::string& s, const std::vector<double>& x, const std::vector<double>& y) {
+void append_points(std::string& s, const std::vector<double>& x, const std::vector<double>& y,
+                   const std::vector<double>* z = nullptr) {
   s += "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n          ";
-  for (std::size_t p = 0; p < x.size(); ++p) s += fmt::format("{:.12g} {:.12g} 0 ", x[p], y[p]);
+  if (z) {
+    for (std::size_t p = 0; p < x.size(); ++p) s += fmt::format("{:.12g} {:.12g} {:.12g} ", x[p], y[p], (*z)[p]);
+  } else {
+    for (std::size_t p = 0; p < x.size(); ++p) s += fmt::format("{:.12g} {:.12g} 0 ", x[p], y[p]);
+  }
   s += "\n        </DataArray>\n      </Points>\n";
 }
 }  // namespace
 
 std::string vtp_particles(const std::vector<double>& x, const std::vector<double>& y, const std::vector<Field>& pd) {
+  return vtp_particles_3d(x, y, nullptr, pd);
+}
+
+std::string vtp_particles_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
+                             const std::vector<Field>& pd) {
   std::string s = "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <PolyData>\n";
   s += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
                    x.size(), x.size());
-  append_points(s, x, y);
+  append_points(s, x, y, z);
   s += "      <PointData>\n";
   append_fields(s, pd);
   s += "      </PointData>\n      <Verts>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n          ";

@@ -77,6 +77,9 @@ struct Field {
 
 /// Particles as VTK PolyData vertices (ParaView: glyph by "radius").
 std::string vtp_particles(const std::vector<double>& x, const std::vector<double>& y, const std::vector<Field>& point_data);
+/// The same with the real z of every point (3D packings); z == nullptr writes z = 0 (as above).
+std::string vtp_particles_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
+                             const std::vector<Field>& point_data);
 /// Contact network as VTK PolyData lines between centres, with cell data per contact.
 std::string vtp_network(const std::vector<double>& x, const std::vector<double>& y, const std::vector<int>& i,
                         const std::vector<int>& j, const std::vector<Field>& cell_data);

@@ -71,7 +71,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   if (a.packing_file.empty()) netdem::app::netsolve::check_deposition_size(a.pack);
   activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
   std::string source;
-  const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source);
+  const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve compact");
   check_memory(pk.size());
 
   Particles P = particles_from(pk, 1.0);  // rho = 1: areal density of disks of unit depth

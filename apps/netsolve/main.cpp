@@ -1,6 +1,6 @@
 // netsolve: quasi-static implicit network solver for powder compaction (Redanz & Fleck 2001).
 //
-//   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--out DIR]
+//   netsolve pack     [--width 80] [--r-min 0.9] [--r-max 1.1] [--seed 1] [--dim 2|3] [--lateral walls|periodic] [--out DIR]
 //   netsolve compact  [--affine | --boundary layer|walls] [--path hydrostatic|closed-die|E11,E22,E12] [--friction MU|inf]
 //                     [--no-rotation] [--to-density 0.85 | --to-strain S] [--packing FILE] [--increments N] [--out DIR]
 //
@@ -73,7 +73,48 @@ netdem::app::RunDirOptions run_dir_options(const RunArgs& r, const std::string& 
   return o;
 }
 
+/// netsolve pack --dim 3: the 3D ballistic deposition (ballistic3d.hpp), packing.csv in the 3D
+/// format, particles.vtp (x, y, z with radius and z as point data) and summary.json.
+int run_pack_3d(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
+  netdem::app::check_run_dir(out, run_dir_options(ra));
+  netdem::app::netsolve::check_deposition_size(a);
+  if (a.lateral != "walls" && a.lateral != "periodic")
+    throw netdem::app::UsageError(fmt::format("--lateral '{}' is not 'walls' or 'periodic'", netdem::packing::quote_input(a.lateral)));
+  activity() = fmt::format("building the 3D ballistic deposition of width {} R", a.width);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto pk = netdem::app::netsolve::make_packing_3d(a);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  activity() = "writing the packing";
+  netdem::app::open_run_dir(out, g_command, run_dir_options(ra));
+  netdem::packing::write_packing_csv(pk, out / "packing.csv");
+  const bool periodic = a.lateral == "periodic";
+  const auto st = netdem::packing::contact_stats(pk, 1e-6, periodic);
+  netdem::app::write_file_atomic(out / "particles.vtp",
+                                 netdem::app::vtp_particles_3d(pk.x, pk.y, &pk.z, {{"radius", 1, pk.r}, {"z", 1, pk.z}}));
+  nlohmann::json j;
+  j["command"] = g_command;
+  j["dim"] = 3;
+  j["lateral"] = a.lateral;
+  j["seed"] = a.seed;
+  j["width"] = a.width;
+  j["particles"] = st.particles;
+  j["sphere_contacts"] = st.disk_contacts;
+  j["wall_contacts"] = st.wall_contacts;
+  j["density"] = st.density;
+  j["coordination"] = st.coordination;
+  j["timing_s"] = {{"deposition", wall}};
+  j["status"] = "ok";
+  j["status_reason"] = "a packing has no convergence criteria";
+  netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  netdem::app::close_run_dir(out);
+  std::printf("seed %llu (3D, %s): %zu spheres, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
+              static_cast<unsigned long long>(a.seed), a.lateral.c_str(), st.particles, st.disk_contacts, st.wall_contacts,
+              st.density, st.coordination, (out / "packing.csv").c_str());
+  return 0;
+}
+
 int run_pack(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
+  if (a.dim == 3) return run_pack_3d(a, ra, out);
   netdem::app::check_run_dir(out, run_dir_options(ra));
   netdem::app::netsolve::check_deposition_size(a);
   activity() = fmt::format("building the ballistic deposition of width {} R", a.width);
@@ -332,8 +373,13 @@ int main(int argc, char** argv) {
     c->add_flag("--overwrite", ra.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
     c->add_option("--lid", pa.lid, "stop rule: 'centre' keeps disks whose centre is below the lid (D0 near the paper's), 'inside' only whole disks")->capture_default_str();
   };
-  auto* pack = app.add_subcommand("pack", "ballistic deposition packing (section 2.2)");
+  auto* pack = app.add_subcommand("pack", "ballistic deposition packing (section 2.2; --dim 3: spheres, docs/packing.md)");
   add_pack_opts(pack);
+  pack->add_option("--dim", pa.dim, "2: disks (the paper's packings), 3: spheres under gravity along -z (ballistic3d.hpp)")
+      ->check(CLI::IsMember({2, 3}))
+      ->capture_default_str();
+  auto* o_lateral = pack->add_option("--lateral", pa.lateral, "3D only: side boundary 'walls' (planes x, y = 0, W) or 'periodic' in x and y")
+                        ->capture_default_str();
   pack->add_option("--out", out, "output folder")->default_val("results/pack");
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
@@ -383,7 +429,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   return netdem::app::netsolve::guarded("netsolve", [&]() {
-    if (*pack) return run_pack(pa, ra, out);
+    if (*pack) {
+      if (pa.dim == 2 && o_lateral->count() > 0)
+        throw netdem::app::UsageError("--lateral is for --dim 3 only (the 2D deposition has side walls)");
+      if (pa.dim == 3 && pack->count("--lid") > 0 && pa.lid != "inside")
+        throw netdem::app::UsageError(fmt::format("--lid '{}': the 3D deposition implements only --lid inside (whole spheres below the lid)",
+                                                  netdem::packing::quote_input(pa.lid)));
+      return run_pack(pa, ra, out);
+    }
     if (o_packing->count() > 0 && ca.packing_file.empty())
       throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
     using CO = netdem::qs::CompactionOptions;

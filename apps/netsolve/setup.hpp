@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "netdem/packing/ballistic.hpp"
+#include "netdem/packing/ballistic3d.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
@@ -29,6 +30,8 @@ struct PackArgs {
   bool mono = false;
   std::string lid = "centre";
   std::uint64_t seed = 1;
+  int dim = 2;                     ///< netsolve pack --dim: 2 (disks) or 3 (spheres, ballistic3d.hpp)
+  std::string lateral = "walls";   ///< --lateral (3D only): walls | periodic
 };
 
 /// --seed: a whole number in [0, 2^64) written with digits only (CLI11 would wrap -1 to 2^64 - 1).
@@ -64,13 +67,16 @@ inline double mem_available_bytes() {
 /// Refuses (UsageError) a deposition whose estimated size cannot fit: N ~ W^2 D0 / (pi <r^2>) with
 /// D0 = 0.85 (ballistic packings reach 0.81), above kMaxDisks disks or, with the solver when
 /// `solve`, above MemAvailable. Also a width that is not finite and positive.
+/// 3D (a.dim == 3): N ~ W^3 0.65 / (4/3 pi <r^3>) spheres (deposits reach about 0.58).
 inline void check_deposition_size(const PackArgs& a, bool solve = false) {
   const double r0 = a.mono ? 1.0 : a.r_min, r1 = a.mono ? 1.0 : a.r_max;
   if (!(std::isfinite(a.width) && a.width > 0.0))
     throw UsageError(fmt::format("--width must be a positive finite number of radii, got {}", a.width));
   if (!(std::isfinite(r0) && std::isfinite(r1) && r0 > 0.0 && r1 >= r0)) return;  // the deposition's own checks say why
   const double r2 = (r0 * r0 + r0 * r1 + r1 * r1) / 3.0;  // <r^2> of radii uniform in [r_min, r_max]
-  const double disks = a.width * a.width * 0.85 / (std::numbers::pi * r2);
+  const double r3 = (r0 + r1) * (r0 * r0 + r1 * r1) / 4.0;  // <r^3>
+  const double disks = a.dim == 3 ? a.width * a.width * a.width * 0.65 / (4.0 / 3.0 * std::numbers::pi * r3)
+                                  : a.width * a.width * 0.85 / (std::numbers::pi * r2);
   const double bytes = disks * (kDepositionBytesPerDisk + (solve ? kSolverBytesPerDisk : 0.0));
   if (disks > kMaxDisks) {
     const std::string n = std::isfinite(disks) ? fmt::format("about {:.3g}", disks) : "more than 1e300";
@@ -103,14 +109,38 @@ inline packing::Packing make_packing(const PackArgs& a) {
   return packing::ballistic_deposition(o);
 }
 
-/// The packing file if one is given, else a new deposition; `source` describes which.
-inline packing::Packing input_packing(const std::string& packing_file, const PackArgs& a, std::string& source) {
+/// The 3D deposition of `a` (netsolve pack --dim 3): Lid::Inside stop rule, --lateral walls|periodic.
+inline packing::Packing make_packing_3d(const PackArgs& a) {
+  packing::Deposition3dOptions o;
+  o.width = a.width;
+  o.r_min = a.mono ? 1.0 : a.r_min;
+  o.r_max = a.mono ? 1.0 : a.r_max;
+  o.seed = a.seed;
+  if (a.lateral == "walls") {
+    o.lateral = packing::Lateral::Walls;
+  } else if (a.lateral == "periodic") {
+    o.lateral = packing::Lateral::Periodic;
+  } else {
+    throw std::invalid_argument(fmt::format("--lateral '{}' is not 'walls' or 'periodic'", a.lateral));
+  }
+  auto p = packing::ballistic_deposition_3d(o);
+  if (o.lateral == packing::Lateral::Periodic) p.comments.emplace_back("lateral periodic (x, y)");
+  return p;
+}
+
+/// The packing file if one is given, else a new deposition; `source` describes which. `command`
+/// names the (2D only) subcommand in the refusal of a 3D packing file.
+inline packing::Packing input_packing(const std::string& packing_file, const PackArgs& a, std::string& source,
+                                      const char* command = "netsolve compact") {
   if (!packing_file.empty()) {
     if (std::filesystem::is_directory(packing_file))
       throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes DIR/packing.csv)",
                                    packing_file.substr(0, 80)));
     source = packing_file;
-    return packing::read_packing_csv(packing_file);
+    packing::Packing p = packing::read_packing_csv(packing_file);
+    if (p.dim != 2)
+      throw UsageError(fmt::format("--packing {} is a 3D packing; {} is 2D only", packing_file.substr(0, 200), command));
+    return p;
   }
   source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", a.width, a.mono ? 1.0 : a.r_min,
                        a.mono ? 1.0 : a.r_max, a.seed);

@@ -551,7 +551,7 @@ int run_yield(const YieldArgs& a, const std::string& command) {
   if (a.from_state.empty()) {
     if (a.packing_file.empty()) app::netsolve::check_deposition_size(a.pack, true);
     app::netsolve::activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
-    pk = app::netsolve::input_packing(a.packing_file, a.pack, source);
+    pk = app::netsolve::input_packing(a.packing_file, a.pack, source, "netsolve yield");
     co.validate(pk.density());
   } else {
     solver = restore_compacted(a, co.path, so);

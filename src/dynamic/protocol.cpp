@@ -113,6 +113,7 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
 Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
   if (spec.packing_file.empty()) return place_sample(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
+  if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing; demsolve is 2D only", spec.packing_file));
   const double unit = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = unit;
   return particles_from_packing(p, lp, unit, box);

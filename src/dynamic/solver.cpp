@@ -54,6 +54,7 @@ std::size_t Particles::add_disk(double px, double py, double r, double rho, doub
 }
 
 Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
+  if (pk.dim != 2) throw std::invalid_argument("dem: the packing is 3D (dim 3); the DEM is 2D only");
   Particles P;
   for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
   return P;

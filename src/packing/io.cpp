@@ -101,16 +101,27 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
     if (control_char(c) != std::string_view::npos)
       throw std::invalid_argument("write_packing_csv: a comment contains a control character");
     const std::string_view k = keyword(c);
-    if (k == "box" || k == "seed")
+    if (k == "box" || k == "seed" || k == "dim")
       throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", quote_input(c)));
   }
   std::string text;
   text.reserve(64 * p.size() + 256);
-  text += fmt::format("# box {:.17g} {:.17g} {:.17g} {:.17g}\n", p.box.x_min, p.box.y_min, p.box.x_max, p.box.y_max);
+  if (p.dim == 3) {  // 3D: six-number box and a dim line (docs/packing.md)
+    text += fmt::format("# box {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n# dim 3\n", p.box.x_min, p.box.y_min,
+                        p.box.z_min, p.box.x_max, p.box.y_max, p.box.z_max);
+  } else {
+    text += fmt::format("# box {:.17g} {:.17g} {:.17g} {:.17g}\n", p.box.x_min, p.box.y_min, p.box.x_max, p.box.y_max);
+  }
   if (p.seed != 0) text += fmt::format("# seed {}\n", p.seed);
   for (const std::string& c : p.comments) text += "# " + std::string(trim(c)) + "\n";
-  text += "id,x,y,r\n";
-  for (std::size_t i = 0; i < p.size(); ++i) text += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", i, p.x[i], p.y[i], p.r[i]);
+  if (p.dim == 3) {
+    text += "id,x,y,z,r\n";
+    for (std::size_t i = 0; i < p.size(); ++i)
+      text += fmt::format("{},{:.17g},{:.17g},{:.17g},{:.17g}\n", i, p.x[i], p.y[i], p.z[i], p.r[i]);
+  } else {
+    text += "id,x,y,r\n";
+    for (std::size_t i = 0; i < p.size(); ++i) text += fmt::format("{},{:.17g},{:.17g},{:.17g}\n", i, p.x[i], p.y[i], p.r[i]);
+  }
 
   // Atomic replace: write a sibling temporary file, flush, then rename over the target.
   const std::filesystem::path tmp =
@@ -148,8 +159,9 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
   };
 
   Packing p;
-  bool have_box = false, have_seed = false, have_header = false;
-  std::size_t box_line = 0;
+  bool have_box = false, have_seed = false, have_header = false, have_dim = false;
+  std::size_t box_line = 0, dim_line = 0, header_line = 0;
+  int box_dim = 2;  // 4 numbers: 2D box, 6 numbers: 3D box
   std::vector<long long> ids;
   std::vector<std::size_t> lines;  // source line of each disk
   std::string raw;
@@ -166,23 +178,45 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
       const std::string_view k = keyword(body);
       if (k == "box") {
         const auto w = split_ws(body);
-        double v[4];
-        if (w.size() != 5) fail(ln, "box line must be '# box x_min y_min x_max y_max'");
-        for (int i = 0; i < 4; ++i)
+        double v[6];
+        if (w.size() != 5 && w.size() != 7)
+          fail(ln, "box line must be '# box x_min y_min x_max y_max' (2D) or '# box x_min y_min z_min x_max y_max z_max' (3D)");
+        const int nv = static_cast<int>(w.size()) - 1;
+        for (int i = 0; i < nv; ++i)
           if (!parse_double(w[static_cast<std::size_t>(i) + 1], v[i]))
             fail(ln, fmt::format("box line: non-numeric field '{}'", quote_input(w[static_cast<std::size_t>(i) + 1])));
-        for (int i = 0; i < 4; ++i)
+        for (int i = 0; i < nv; ++i)
           if (!std::isfinite(v[i])) fail(ln, "box line: NaN or infinite bound");
         if (have_box) fail(ln, fmt::format("second box line (first on line {})", box_line));
-        if (!(v[2] > v[0]) || !(v[3] > v[1])) fail(ln, "box line: box has non-positive size");
-        static constexpr const char* kBound[4] = {"box x_min", "box y_min", "box x_max", "box y_max"};
-        for (int i = 0; i < 4; ++i) coordinate(ln, kBound[i], v[i]);
-        if (!(v[2] - v[0] >= kMinBoxSize) || !(v[3] - v[1] >= kMinBoxSize))
-          fail(ln, fmt::format("box line: width {} or height {} is below {:g} (file units; docs/packing.md)", v[2] - v[0],
-                               v[3] - v[1], kMinBoxSize));
-        p.box = {v[0], v[1], v[2], v[3]};
+        if (nv == 4) {
+          if (!(v[2] > v[0]) || !(v[3] > v[1])) fail(ln, "box line: box has non-positive size");
+          static constexpr const char* kBound[4] = {"box x_min", "box y_min", "box x_max", "box y_max"};
+          for (int i = 0; i < 4; ++i) coordinate(ln, kBound[i], v[i]);
+          if (!(v[2] - v[0] >= kMinBoxSize) || !(v[3] - v[1] >= kMinBoxSize))
+            fail(ln, fmt::format("box line: width {} or height {} is below {:g} (file units; docs/packing.md)",
+                                 v[2] - v[0], v[3] - v[1], kMinBoxSize));
+          p.box = {v[0], v[1], v[2], v[3]};
+        } else {
+          if (!(v[3] > v[0]) || !(v[4] > v[1]) || !(v[5] > v[2])) fail(ln, "box line: box has non-positive size");
+          static constexpr const char* kBound[6] = {"box x_min", "box y_min", "box z_min", "box x_max", "box y_max", "box z_max"};
+          for (int i = 0; i < 6; ++i) coordinate(ln, kBound[i], v[i]);
+          if (!(v[3] - v[0] >= kMinBoxSize) || !(v[4] - v[1] >= kMinBoxSize) || !(v[5] - v[2] >= kMinBoxSize))
+            fail(ln, fmt::format("box line: size {} x {} x {} is below {:g} along some axis (file units; docs/packing.md)",
+                                 v[3] - v[0], v[4] - v[1], v[5] - v[2], kMinBoxSize));
+          p.box = {v[0], v[1], v[3], v[4], v[2], v[5]};
+        }
+        box_dim = nv == 6 ? 3 : 2;
         have_box = true;
         box_line = ln;
+      } else if (k == "dim") {
+        const auto w = split_ws(body);
+        if (w.size() != 2 || (w[1] != "2" && w[1] != "3")) fail(ln, "dim line must be '# dim 2' or '# dim 3'");
+        if (have_dim) fail(ln, fmt::format("second dim line (first on line {})", dim_line));
+        if (have_header)
+          fail(ln, fmt::format("dim line after the header (line {}): '# dim 3' must come before the header", header_line));
+        p.dim = w[1] == "3" ? 3 : 2;
+        have_dim = true;
+        dim_line = ln;
       } else if (k == "seed") {
         const auto w = split_ws(body);
         if (w.size() != 2 || !parse_int(w[1], p.seed)) fail(ln, "seed line must be '# seed <unsigned integer>'");
@@ -194,44 +228,68 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
       continue;
     }
     const auto f = split(line, ',');
+    const bool three = p.dim == 3;
+    const std::size_t nf = three ? 5 : 4;
     if (!have_header) {
-      if (f.size() != 4 || f[0] != "id" || f[1] != "x" || f[2] != "y" || f[3] != "r")
-        fail(ln, fmt::format("bad header '{}', expected 'id,x,y,r'", quote_input(line)));
+      const bool h2 = f.size() == 4 && f[0] == "id" && f[1] == "x" && f[2] == "y" && f[3] == "r";
+      const bool h3 = f.size() == 5 && f[0] == "id" && f[1] == "x" && f[2] == "y" && f[3] == "z" && f[4] == "r";
+      if (three && h2) fail(ln, fmt::format("header 'id,x,y,r' is 2D, but line {} says '# dim 3' (expected 'id,x,y,z,r')", dim_line));
+      if (!three && h3)
+        fail(ln, "header 'id,x,y,z,r' is 3D, but there is no '# dim 3' line before it (a 3D file needs '# dim 3')");
+      if (three ? !h3 : !h2)
+        fail(ln, fmt::format("bad header '{}', expected '{}'", quote_input(line), three ? "id,x,y,z,r" : "id,x,y,r"));
       have_header = true;
+      header_line = ln;
       continue;
     }
-    if (f.size() != 4) fail(ln, fmt::format("expected 4 fields (id,x,y,r), got {}", f.size()));
+    if (f.size() != nf) fail(ln, fmt::format("expected {} fields ({}), got {}", nf, three ? "id,x,y,z,r" : "id,x,y,r", f.size()));
     long long id = 0;
     if (!parse_int(f[0], id) || id < 0) fail(ln, fmt::format("id '{}' is not a non-negative integer", quote_input(f[0])));
-    double v[3];
-    static constexpr const char* kName[3] = {"x", "y", "r"};
-    for (std::size_t i = 0; i < 3; ++i) {
+    double v[4];
+    static constexpr const char* kName2[3] = {"x", "y", "r"};
+    static constexpr const char* kName3[4] = {"x", "y", "z", "r"};
+    const char* const* kName = three ? kName3 : kName2;
+    const std::size_t nv = nf - 1;
+    for (std::size_t i = 0; i < nv; ++i) {
       if (!parse_double(f[i + 1], v[i])) fail(ln, fmt::format("non-numeric {} '{}'", kName[i], quote_input(f[i + 1])));
       if (!std::isfinite(v[i])) fail(ln, fmt::format("{} is {} (disk id {})", kName[i], quote_input(f[i + 1]), id));
     }
-    if (!(v[2] > 0)) fail(ln, fmt::format("r <= 0 (r = {}, disk id {})", v[2], id));
-    if (!(v[2] >= kMinRadius && v[2] <= kMaxRadius))
-      fail(ln, fmt::format("r = {} (disk id {}) is outside [{:g}, {:g}] (file units; docs/packing.md)", v[2], id,
+    const double rad = v[nv - 1];
+    if (!(rad > 0)) fail(ln, fmt::format("r <= 0 (r = {}, disk id {})", rad, id));
+    if (!(rad >= kMinRadius && rad <= kMaxRadius))
+      fail(ln, fmt::format("r = {} (disk id {}) is outside [{:g}, {:g}] (file units; docs/packing.md)", rad, id,
                            kMinRadius, kMaxRadius));
     coordinate(ln, "x", v[0]);
     coordinate(ln, "y", v[1]);
+    if (three) coordinate(ln, "z", v[2]);
     if (ids.size() >= kMaxDisks) fail(ln, fmt::format("more than {} disks", kMaxDisks));
     ids.push_back(id);
     lines.push_back(ln);
     p.x.push_back(v[0]);
     p.y.push_back(v[1]);
-    p.r.push_back(v[2]);
+    if (three) p.z.push_back(v[2]);
+    p.r.push_back(rad);
   }
   if (in.bad()) throw std::runtime_error(fmt::format("{}: read error after line {}", file, ln));
-  if (!have_box) fail(ln, "missing '# box x_min y_min x_max y_max' line");
-  if (!have_header) fail(ln, "missing header 'id,x,y,r'");
+  if (!have_box)
+    fail(ln, p.dim == 3 ? "missing '# box x_min y_min z_min x_max y_max z_max' line" : "missing '# box x_min y_min x_max y_max' line");
+  if (box_dim != p.dim)
+    fail(box_line, p.dim == 3 ? fmt::format("box line has 4 numbers (a 2D box), but line {} says '# dim 3' (expected "
+                                            "'# box x_min y_min z_min x_max y_max z_max')",
+                                            dim_line)
+                              : "box line has 6 numbers (a 3D box), but there is no '# dim 3' line (a 2D box is "
+                                "'# box x_min y_min x_max y_max')");
+  if (!have_header) fail(ln, p.dim == 3 ? "missing header 'id,x,y,z,r'" : "missing header 'id,x,y,r'");
   if (p.size() == 0) fail(ln, "no disks");
 
   for (std::size_t i = 0; i < p.size(); ++i) {  // same criterion as validate(): centre in the box
     const double t = 1e-9 * p.r[i];
     const Box& b = p.box;
     if (p.x[i] < b.x_min - t || p.x[i] > b.x_max + t || p.y[i] < b.y_min - t || p.y[i] > b.y_max + t)
-      fail(lines[i], fmt::format("disk id {} is outside the box (centre ({}, {}))", ids[i], p.x[i], p.y[i]));
+      fail(lines[i], p.dim == 3 ? fmt::format("sphere id {} is outside the box (centre ({}, {}, {}))", ids[i], p.x[i], p.y[i], p.z[i])
+                                : fmt::format("disk id {} is outside the box (centre ({}, {}))", ids[i], p.x[i], p.y[i]));
+    if (p.dim == 3 && (p.z[i] < b.z_min - t || p.z[i] > b.z_max + t))
+      fail(lines[i], fmt::format("sphere id {} is outside the box (centre ({}, {}, {}))", ids[i], p.x[i], p.y[i], p.z[i]));
   }
   // Sort by id (ids in any order), reject duplicates.
   std::vector<std::size_t> order(p.size());
@@ -266,14 +324,17 @@ Packing read_packing_csv(std::istream& in, const std::string& file) {
   }
   Packing q;
   q.box = p.box;
+  q.dim = p.dim;
   q.seed = p.seed;
   q.comments = std::move(p.comments);
   q.x.reserve(p.size());
   q.y.reserve(p.size());
   q.r.reserve(p.size());
+  if (p.dim == 3) q.z.reserve(p.size());
   for (std::size_t i : order) {
     q.x.push_back(p.x[i]);
     q.y.push_back(p.y[i]);
+    if (p.dim == 3) q.z.push_back(p.z[i]);
     q.r.push_back(p.r[i]);
   }
   try {

@@ -40,6 +40,7 @@ void NetworkSolver::Impl::set_options(const SolverOptions& o) {
 
 NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
   options.validate();
+  if (pk.dim != 2) throw std::invalid_argument("network solver: the packing is 3D (dim 3); the network solver is 2D only");
   packing::validate(pk);
   auto& s = *impl_;
   s.set_options(options);

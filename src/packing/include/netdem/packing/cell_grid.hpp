@@ -141,4 +141,47 @@ class GrowingCellGrid {
   std::size_t size_ = 0;
 };
 
+/// 3D static grid (CSR) over a fixed point set (x, y, z), the 3D form of CellGrid for the packing
+/// queries of 3D packings (issue 16): cubic cells of side >= min_cell fitted to the bounding box,
+/// the side doubled until there are at most 4 N + 64 cells; coordinates outside map to the nearest
+/// edge cell, a non-finite extent gives one cell. for_each_near(x, y, z, reach, f) visits every
+/// point within `reach` of (x, y, z) (and others, the caller filters), cells by z, then y, then x,
+/// points of a cell in index order.
+class CellGrid3 {
+ public:
+  CellGrid3() = default;
+  CellGrid3(std::span<const double> x, std::span<const double> y, std::span<const double> z, double min_cell) {
+    rebuild(x, y, z, min_cell);
+  }
+  void rebuild(std::span<const double> x, std::span<const double> y, std::span<const double> z, double min_cell);
+
+  template <class F>
+  void for_each_near(double x, double y, double z, double reach, F&& f) const {
+    if (ids_.empty()) return;
+    const long x0 = coord(0, x - reach), x1 = coord(0, x + reach);
+    const long y0 = coord(1, y - reach), y1 = coord(1, y + reach);
+    const long z0 = coord(2, z - reach), z1 = coord(2, z + reach);
+    for (long c = z0; c <= z1; ++c)
+      for (long b = y0; b <= y1; ++b)
+        for (long a = x0; a <= x1; ++a) {
+          const auto cell = static_cast<std::size_t>((c * count_[1] + b) * count_[0] + a);
+          for (std::uint32_t k = start_[cell]; k < start_[cell + 1]; ++k) f(ids_[k]);
+        }
+  }
+  long coord(int axis, double v) const {
+    const auto a = static_cast<std::size_t>(axis);
+    const double c = std::floor((v - origin_[a]) / cell_);
+    if (!(c >= 0)) return 0;
+    return c >= static_cast<double>(count_[a] - 1) ? count_[a] - 1 : static_cast<long>(c);
+  }
+  long cells() const { return count_[0] * count_[1] * count_[2]; }
+  std::size_t size() const { return ids_.size(); }
+
+ private:
+  std::array<double, 3> origin_{0.0, 0.0, 0.0};
+  double cell_ = 1.0;
+  std::array<long, 3> count_{1, 1, 1};
+  std::vector<std::uint32_t> start_, ids_, cell_of_;
+};
+
 }  // namespace netdem::packing

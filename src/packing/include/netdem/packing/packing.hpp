@@ -6,6 +6,11 @@
 // Gravity points along -y; the container is the axis-aligned box `Packing::box` with a floor at
 // y_min, side walls at x_min / x_max and an open lid at y_max (disks must nevertheless lie inside
 // the box). Lengths are in units of the reference radius R used to build the packing.
+//
+// 3D (issue 16, `Packing::dim == 3`): spheres with centres (x, y, z), gravity along -z, the box
+// [x_min, x_max] x [y_min, y_max] x [z_min, z_max] with the floor at z_min and the lid at z_max;
+// `z` is empty and box.z_min = z_max = 0 in 2D. validate(), touching_pairs(), contact_stats() and
+// find_close_pair() work in both dimensions; peripheral_layer() is 2D only (throws in 3D).
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -17,43 +22,62 @@ namespace netdem::packing {
 
 struct Box {
   double x_min = 0, y_min = 0, x_max = 0, y_max = 0;
+  double z_min = 0, z_max = 0;  ///< 3D only (both 0 in 2D)
   double width() const { return x_max - x_min; }
   double height() const { return y_max - y_min; }
-  double area() const { return width() * height(); }
+  double depth() const { return z_max - z_min; }  ///< 3D: the extent along z (gravity axis)
+  double area() const { return width() * height(); }  ///< the 2D box area (x-y)
+  double volume() const { return width() * height() * depth(); }  ///< the 3D box volume
 };
 
-/// Structure of arrays, one entry per disk (2D, unit depth).
+/// Structure of arrays, one entry per disk (2D, unit depth) or sphere (3D).
 struct Packing {
   std::vector<double> x, y, r;
+  std::vector<double> z;  ///< 3D only: empty in 2D, size() entries in 3D
+  int dim = 2;            ///< 2 (disks, x y r) or 3 (spheres, x y z r)
   Box box;
   std::uint64_t seed = 0;              ///< 0 if unknown (hand-made file)
   std::vector<std::string> comments;  ///< extra '# ...' lines carried through I/O (without the '# ')
 
   std::size_t size() const { return x.size(); }
-  double solid_area() const;  ///< sum pi r^2
-  double density() const;     ///< solid_area / box.area() (relative density D, section 2.2)
+  double solid_area() const;    ///< sum pi r^2 (the 2D solid area, whatever dim)
+  double solid_volume() const;  ///< sum 4/3 pi r^3 (spheres)
+  double solid_measure() const { return dim == 3 ? solid_volume() : solid_area(); }
+  double box_measure() const { return dim == 3 ? box.volume() : box.area(); }
+  /// Relative density D: 2D solid_area / box.area() (section 2.2), 3D solid_volume / box.volume().
+  double density() const;
 };
 
 struct ContactStats {
   std::size_t particles = 0;      ///< N (nodes of the contact network)
   std::size_t disk_contacts = 0;  ///< disk-disk contacts (elements of the network)
   std::size_t wall_contacts = 0;  ///< disk-wall contacts: left, right and bottom walls (not the lid)
-  double density = 0;             ///< relative density D = solid_area / box area
+  double density = 0;             ///< relative density D = Packing::density() (3D: by volume)
   double coordination = 0;        ///< Z = 2 * disk_contacts / particles (walls excluded)
 };
 
 /// Pairs (i < j, sorted) with |x_i - x_j| <= (r_i + r_j) * (1 + tol). Cell list, not all pairs.
+/// 3D: the distance of the centres (x, y, z).
 std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol = 1e-6);
 
+/// 3D packings periodic in x and y (ballistic_deposition_3d with Lateral::Periodic): the same
+/// with minimum-image distances across the x and y period of the box (a pair counts once).
+/// Needs dim == 3 and a box at least 4 r_max (1 + tol) wide in x and y, so that a pair touches
+/// in at most one image (throws std::invalid_argument otherwise).
+std::vector<std::pair<int, int>> touching_pairs_periodic_xy(const Packing& p, double tol = 1e-6);
+
 /// Disk contacts as touching_pairs(); wall contacts: a disk within tol * r of the left, right or
-/// bottom wall counts once per wall it touches.
-ContactStats contact_stats(const Packing& p, double tol = 1e-6);
+/// bottom wall counts once per wall it touches. 3D: the four side walls x_min, x_max, y_min,
+/// y_max and the floor z_min (not the lid z_max); `periodic_xy` (3D only): the contacts of
+/// touching_pairs_periodic_xy() and only the floor as a wall.
+ContactStats contact_stats(const Packing& p, double tol = 1e-6, bool periodic_xy = false);
 
 /// Peripheral layer for the die-compaction boundary conditions (section 2.4): flag 1 for disks
 /// within tol * r of the left, right or bottom wall or of y_max, and for the free top surface
 /// ("skyline": a disk is in the top layer if, for some x in its horizontal extent, its upper
 /// surface is the highest disk surface at that x). Exact: the upper envelope of the half-circles is
-/// evaluated on the breakpoints where it may change owner, not sampled.
+/// evaluated on the breakpoints where it may change owner, not sampled. 2D only: a 3D packing
+/// throws std::invalid_argument (not implemented yet, issue 16).
 std::vector<std::uint8_t> peripheral_layer(const Packing& p, double tol = 1e-6);
 
 /// Largest radius ratio r_max / r_min a packing may have (validate(), the reader).
@@ -74,8 +98,9 @@ struct ClosePair {
 /// finite positive radii (validate() checks those first).
 std::optional<ClosePair> find_close_pair(const Packing& p);
 
-/// Throws std::invalid_argument with ONE line naming the first problem found: box with NaN/inf or
-/// non-positive size, x/y/r size mismatch, empty packing, then per disk in id order NaN/inf
+/// Throws std::invalid_argument with ONE line naming the first problem found: dim not 2 or 3, box
+/// with NaN/inf or non-positive size (3D: also along z), x/y/r (3D: z) size mismatch (2D: z must
+/// be empty), empty packing, then per disk in id order NaN/inf
 /// coordinate or radius, r <= 0, disk outside the box (its CENTRE outside the box by more than
 /// 1e-9 r), then r_max / r_min > kMaxRadiusRatio, and finally pairs closer than max(r_i, r_j)
 /// (find_close_pair(); "disk j duplicates disk i" for centres closer than 1e-12 (r_i + r_j)).
