@@ -28,6 +28,7 @@ constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 
 std::size_t Particles::add_with_mass(double px, double py, double r, double m, double pvx, double pvy,
                                      double pomega) {
+  if (dim != 2) fail("Particles: a disk cannot join spheres");
   x.push_back(px);
   y.push_back(py);
   vx.push_back(pvx);
@@ -51,6 +52,46 @@ std::size_t Particles::add(double px, double py, double r, const LudingParams& p
 std::size_t Particles::add_disk(double px, double py, double r, double rho, double pvx, double pvy,
                                 double pomega) {
   return add_with_mass(px, py, r, rho * std::numbers::pi * r * r, pvx, pvy, pomega);
+}
+
+std::size_t Particles::add_sphere_with_mass(double px, double py, double pz, double r, double m,
+                                            const std::array<double, 3>& v, const std::array<double, 3>& w) {
+  if (dim != 3 && !x.empty()) fail("Particles: a sphere cannot join disks");
+  dim = 3;
+  x.push_back(px);
+  y.push_back(py);
+  z.push_back(pz);
+  vx.push_back(v[0]);
+  vy.push_back(v[1]);
+  vz.push_back(v[2]);
+  wx.push_back(w[0]);
+  wy.push_back(w[1]);
+  omega.push_back(w[2]);
+  theta.push_back(0.0);
+  radius.push_back(r);
+  mass.push_back(m);
+  inertia.push_back(contact::Dim<3>::kInertia * m * r * r);
+  fx.push_back(0.0);
+  fy.push_back(0.0);
+  fz.push_back(0.0);
+  tx.push_back(0.0);
+  ty.push_back(0.0);
+  torque.push_back(0.0);
+  return x.size() - 1;
+}
+
+std::size_t Particles::add_sphere(double px, double py, double pz, double r, double rho,
+                                  const std::array<double, 3>& v) {
+  return add_sphere_with_mass(px, py, pz, r, rho * (4.0 / 3.0) * std::numbers::pi * r * r * r, v);
+}
+
+Particles spheres_from(const packing::Packing& pk, double rho) {
+  if (pk.dim != 3) fail("spheres_from: the packing is 2D");
+  if (!(rho > 0.0) || !std::isfinite(rho)) fail("spheres_from: the density must be positive and finite");
+  Particles P;
+  P.dim = 3;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], rho);
+  return P;
 }
 
 Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
@@ -154,12 +195,18 @@ TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndenta
   mean /= static_cast<double>(P.size());
   const double m12 = m_lo * m_lo2 / (m_lo + m_lo2);
   // the stiffest normal branch: the first-touch chord, times unload_ratio on the elastic branch
-  const double kn = law.chord_stiffness() * (law.reversible ? 1.0 : law.unload_ratio);
+  // (3D: the loading stiffness 6 pi sigma_y R* with the largest R*, a wall contact's r_max)
+  double r_max = 0.0;
+  for (double r : P.radius) r_max = std::max(r_max, r);
+  const double kn = (P.dim == 3 ? law.chord_stiffness_3d(r_max) : law.chord_stiffness()) *
+                    (law.reversible ? 1.0 : law.unload_ratio);
   TimeStepInfo ts;
   ts.tc_mean = std::numbers::pi * std::sqrt(0.5 * mean / kn);
   ts.tc_lightest = std::numbers::pi * std::sqrt(m12 / kn);
   const double kt = law.frictional() ? law.shear_stiffness() * area_max : 0.0;
-  ts.tc_tangential = kt > 0.0 ? std::numbers::pi * std::sqrt(m12 / 3.0 / kt) : 0.0;
+  ts.tc_tangential = kt > 0.0 ? (P.dim == 3 ? std::numbers::pi * std::sqrt(m12 * contact::kTangentialMassRatio<3> / kt)
+                                            : std::numbers::pi * std::sqrt(m12 / 3.0 / kt))
+                              : 0.0;
   const double tc = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
   ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;
   ts.steps_per_contact_lightest = tc / ts.dt;
@@ -170,21 +217,33 @@ TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndenta
   return ts;
 }
 
-DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
-                             const DynamicOptions& options)
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                                  const DynamicOptions& options)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
   opt_.validate();
   const std::size_t n = P_.size();
   if (n >= (std::size_t{1} << 32)) fail("DynamicSolver: too many particles");
+  if (P_.dim != D) fail(fmt::format("DynamicSolver: the particles are {}D, the solver {}D", P_.dim, D));
+  if constexpr (D == 3) {
+    if (box_.enabled && !(box_.z_max > box_.z_min)) fail("DynamicSolver: a 3D box must have z_max > z_min");
+    if (!(P_.z.size() == n && P_.vz.size() == n && P_.fz.size() == n && P_.wx.size() == n && P_.wy.size() == n &&
+          P_.tx.size() == n && P_.ty.size() == n))
+      fail("DynamicSolver: inconsistent 3D particle arrays");
+  }
   if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
     fail("DynamicSolver: box must have x_max > x_min and y_max > y_min");
   for (std::size_t i = 0; i < n; ++i)
     if (!(P_.radius[i] > 0.0) || !(P_.mass[i] > 0.0) || !(P_.inertia[i] > 0.0))
       fail("DynamicSolver: particle " + std::to_string(i) + " has a non-positive radius or mass");
-  for (const MovingWall* w : {&box_.right, &box_.top})
+  for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
+  if constexpr (D == 3) {
+    for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
+      if (w->mode == WallMode::Affine) throw std::logic_error("DynamicSolver: affine walls are 2D only (issue 16)");
+  }
   ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, opt_, 0.0) : choose_time_step(P_, params_, opt_);
   thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
   // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
@@ -193,23 +252,26 @@ DynamicSolver::DynamicSolver(Particles particles, const LudingParams& params, co
     radius_scale_ = contact::luding_radius(params_, 1.0, thermal_.T);
     for (std::size_t i = 0; i < n; ++i) {
       P_.radius[i] = radius_ref_[i] * radius_scale_;
-      P_.inertia[i] = 0.5 * P_.mass[i] * P_.radius[i] * P_.radius[i];
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
     }
   }
-  wall_v_[0] = box_.right.mode == WallMode::Strain ? box_.right.velocity : 0.0;
-  wall_v_[1] = box_.top.mode == WallMode::Strain ? box_.top.velocity : 0.0;
+  for (int a = 0; a < D; ++a) {
+    const MovingWall& w = moving_wall(a);
+    wall_v_[a] = w.mode == WallMode::Strain ? w.velocity : 0.0;
+  }
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   if (plastic())
-    pl_wall_hist_.assign(4 * n, contact::PlasticIndentationHistory{});
+    pl_wall_hist_.assign(kWalls * n, PlasticHist{});
   else
-    wall_hist_.assign(4 * n, LudingHistory{});
+    wall_hist_.assign(kWalls * n, LudingHist{});
   finish_setup();
   build_table();
   compute_forces_dispatch();
 }
 
-void DynamicSolver::finish_setup() {
+template <int D>
+void DynamicSolverT<D>::finish_setup() {
   const std::size_t n = P_.size();
   wall_params_ = params_.wall_params();
   pl_wall_params_ = opt_.plastic;
@@ -231,7 +293,8 @@ void DynamicSolver::finish_setup() {
   radius_scale_build_ = radius_scale_;
 }
 
-void DynamicSolver::choose_friction() {
+template <int D>
+void DynamicSolverT<D>::choose_friction() {
   if (plastic())
     friction_ = opt_.plastic.mu > 0.0 || (walls_active() && opt_.plastic_wall_mu > 0.0);
   else
@@ -240,26 +303,45 @@ void DynamicSolver::choose_friction() {
 
 // ---- the history stores: one per law family; the model's is used, the other stays empty --------
 namespace {
-using PlasticHistory = contact::PlasticIndentationHistory;
-inline bool is_fresh(const LudingHistory& h) { return h.fresh(); }
-inline bool is_fresh(const PlasticHistory& h) { return h.u_max == 0.0 && h.f_t == 0.0 && h.sliding == 0; }
+template <int D>
+inline bool is_fresh(const contact::LudingHistoryT<D>& h) { return h.fresh(); }
+template <int D>
+inline bool is_fresh(const contact::PlasticIndentationHistoryT<D>& h) {
+  return h.u_max == 0.0 && contact::tan_is_zero(h.f_t) && h.sliding == 0;
+}
 }  // namespace
-template <>
-std::vector<LudingHistory>& DynamicSolver::pair_histories<LudingHistory>() { return pair_hist_; }
-template <>
-std::vector<PlasticHistory>& DynamicSolver::pair_histories<PlasticHistory>() { return pl_pair_hist_; }
-template <>
-std::vector<LudingHistory>& DynamicSolver::new_histories<LudingHistory>() { return new_hist_; }
-template <>
-std::vector<PlasticHistory>& DynamicSolver::new_histories<PlasticHistory>() { return pl_new_hist_; }
-template <>
-std::vector<LudingHistory>& DynamicSolver::wall_histories<LudingHistory>() { return wall_hist_; }
-template <>
-std::vector<PlasticHistory>& DynamicSolver::wall_histories<PlasticHistory>() { return pl_wall_hist_; }
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::pair_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return pair_hist_;
+  } else {
+    return pl_pair_hist_;
+  }
+}
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::new_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return new_hist_;
+  } else {
+    return pl_new_hist_;
+  }
+}
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::wall_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return wall_hist_;
+  } else {
+    return pl_wall_hist_;
+  }
+}
 
 // The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted).
+template <int D>
 template <class H>
-void DynamicSolver::carry_histories(std::size_t n_new) {
+void DynamicSolverT<D>::carry_histories(std::size_t n_new) {
   std::vector<H>& old_h = pair_histories<H>();
   std::vector<H>& new_h = new_histories<H>();
   new_h.assign(n_new, H{});
@@ -285,21 +367,28 @@ double displacement_limit(double skin, double radius_ref_max, double scale, doub
 }
 }  // namespace
 
-bool DynamicSolver::needs_rebuild() const {
+template <int D>
+bool DynamicSolverT<D>::needs_rebuild() const {
   const double lim =
       displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
   if (!(lim > 0.0) || walls_moved()) return true;
   const double lim2 = lim * lim;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double dx = P_.x[i] - x_build_[i], dy = P_.y[i] - y_build_[i];
-    if (dx * dx + dy * dy > lim2) return true;
+    double d2 = dx * dx + dy * dy;
+    if constexpr (D == 3) {
+      const double dz = P_.z[i] - z_build_[i];
+      d2 += dz * dz;
+    }
+    if (d2 > lim2) return true;
   }
   return false;
 }
 
 // Wall candidates: particles within a_i + skin of a wall. Any other particle's wall histories
 // are cleared here (it does not touch a wall, so the next evaluation would clear them anyway).
-void DynamicSolver::build_wall_list() {
+template <int D>
+void DynamicSolverT<D>::build_wall_list() {
   const std::size_t n = P_.size();
   wall_list_.clear();
   wall_list_valid_ = walls_active();
@@ -308,67 +397,92 @@ void DynamicSolver::build_wall_list() {
   box_build_[1] = box_.x_max;
   box_build_[2] = box_.y_min;
   box_build_[3] = box_.y_max;
-  if (wall_touch_.size() != n) wall_touch_.assign(n, 0xF);
+  if constexpr (D == 3) {
+    box_build_[4] = box_.z_min;
+    box_build_[5] = box_.z_max;
+  }
+  constexpr std::uint8_t kAll = (1u << kWalls) - 1u;
+  if (wall_touch_.size() != n) wall_touch_.assign(n, kAll);
   for (std::size_t i = 0; i < n; ++i) {
     const double xi = P_.x[i], yi = P_.y[i], reach = P_.radius[i] + skin_;
-    const bool near = xi - box_.x_min < reach || box_.x_max - xi < reach ||
-                      yi - box_.y_min < reach || box_.y_max - yi < reach;
+    bool near = xi - box_.x_min < reach || box_.x_max - xi < reach ||
+                yi - box_.y_min < reach || box_.y_max - yi < reach;
+    if constexpr (D == 3) near = near || P_.z[i] - box_.z_min < reach || box_.z_max - P_.z[i] < reach;
     if (near) {
       wall_list_.push_back(static_cast<std::uint32_t>(i));
-      wall_touch_[i] = 0xF;  // the next evaluation visits its four wall histories
+      wall_touch_[i] = kAll;  // the next evaluation visits its wall histories
     } else if (wall_touch_[i] != 0) {
       if (plastic())
-        for (std::size_t w = 0; w < 4; ++w) pl_wall_hist_[4 * i + w] = PlasticHistory{};
+        for (std::size_t w = 0; w < kWalls; ++w) pl_wall_hist_[kWalls * i + w] = PlasticHist{};
       else
-        for (std::size_t w = 0; w < 4; ++w) wall_hist_[4 * i + w] = LudingHistory{};
+        for (std::size_t w = 0; w < kWalls; ++w) wall_hist_[kWalls * i + w] = LudingHist{};
       wall_touch_[i] = 0;
     }
   }
 }
 
-bool DynamicSolver::walls_moved() const {
+template <int D>
+bool DynamicSolverT<D>::walls_moved() const {
   if (!walls_active()) return false;
   const double lim = 0.5 * skin_;
-  return !(std::fabs(box_.x_min - box_build_[0]) < lim &&
-           std::fabs(box_.x_max - box_build_[1]) < lim &&
-           std::fabs(box_.y_min - box_build_[2]) < lim &&
-           std::fabs(box_.y_max - box_build_[3]) < lim);
+  bool stay = std::fabs(box_.x_min - box_build_[0]) < lim && std::fabs(box_.x_max - box_build_[1]) < lim &&
+              std::fabs(box_.y_min - box_build_[2]) < lim && std::fabs(box_.y_max - box_build_[3]) < lim;
+  if constexpr (D == 3)
+    stay = stay && std::fabs(box_.z_min - box_build_[4]) < lim && std::fabs(box_.z_max - box_build_[5]) < lim;
+  return !stay;
 }
 
-void DynamicSolver::build_table() {
+template <int D>
+void DynamicSolverT<D>::build_table() {
   const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
   x_build_ = P_.x;
   y_build_ = P_.y;
+  if constexpr (D == 3) z_build_ = P_.z;
   build_wall_list();
   new_key_.clear();
   if (n >= 2) {
     double rmax = 0.0;
     for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.radius[i]);
     // cell side >= largest interaction range 2 rmax + skin (3 x 3 cells per query); <= ~4 n cells
-    grid_.rebuild(P_.x, P_.y, 2.0 * rmax + skin_);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double xi = P_.x[i], yi = P_.y[i], ri = P_.radius[i];
-      grid_.for_each_near(xi, yi, ri + rmax + skin_, [&](std::uint32_t j) {
-        if (j <= i) return;
-        const double dx = P_.x[j] - xi, dy = P_.y[j] - yi;
-        const double range = ri + P_.radius[j] + skin_;
-        if (dx * dx + dy * dy < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
-      });
+    if constexpr (D == 2) {
+      grid_.rebuild(P_.x, P_.y, 2.0 * rmax + skin_);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double xi = P_.x[i], yi = P_.y[i], ri = P_.radius[i];
+        grid_.for_each_near(xi, yi, ri + rmax + skin_, [&](std::uint32_t j) {
+          if (j <= i) return;
+          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi;
+          const double range = ri + P_.radius[j] + skin_;
+          if (dx * dx + dy * dy < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+        });
+      }
+    } else {  // 3 x 3 x 3 cells per query
+      grid_.rebuild(P_.x, P_.y, P_.z, 2.0 * rmax + skin_);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double xi = P_.x[i], yi = P_.y[i], zi = P_.z[i], ri = P_.radius[i];
+        grid_.for_each_near(xi, yi, zi, ri + rmax + skin_, [&](std::uint32_t j) {
+          if (j <= i) return;
+          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi, dz = P_.z[j] - zi;
+          const double range = ri + P_.radius[j] + skin_;
+          if (dx * dx + dy * dy + dz * dz < range * range)
+            new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+        });
+      }
     }
     std::sort(new_key_.begin(), new_key_.end());
   }
   // carry the committed histories of the pairs that stay in the table (both lists sorted)
   pair_live_.assign(new_key_.size(), 0);
   if (plastic())
-    carry_histories<PlasticHistory>(new_key_.size());
+    carry_histories<PlasticHist>(new_key_.size());
   else
-    carry_histories<LudingHistory>(new_key_.size());
+    carry_histories<LudingHist>(new_key_.size());
   pair_key_.swap(new_key_);
 }
 
-void DynamicSolver::touching_pairs(
+template <int D>
+void DynamicSolverT<D>::touching_pairs(
     std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const {
   out.clear();
   for (std::uint64_t key : pair_key_) {
@@ -376,18 +490,22 @@ void DynamicSolver::touching_pairs(
     const std::uint32_t j = static_cast<std::uint32_t>(key & 0xffffffffu);
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
     const double s = P_.radius[i] + P_.radius[j];
-    if (dx * dx + dy * dy < s * s) out.emplace_back(i, j);
+    double L2 = dx * dx + dy * dy;
+    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+    if (L2 < s * s) out.emplace_back(i, j);
   }
 }
 
-const LudingHistory* DynamicSolver::history(std::uint32_t i, std::uint32_t j) const {
+template <int D>
+auto DynamicSolverT<D>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist* {
   const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
   auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
   if (plastic() || it == pair_key_.end() || *it != key) return nullptr;
   return &pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
 }
 
-const contact::PlasticIndentationHistory* DynamicSolver::plastic_history(std::uint32_t i, std::uint32_t j) const {
+template <int D>
+auto DynamicSolverT<D>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist* {
   const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
   auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
   if (!plastic() || it == pair_key_.end() || *it != key) return nullptr;
@@ -395,15 +513,17 @@ const contact::PlasticIndentationHistory* DynamicSolver::plastic_history(std::ui
 }
 
 // ---- forces ------------------------------------------------------------------------------------
+template <int D>
 template <LudingFeatures F>
-void DynamicSolver::compute_forces_with() {
+void DynamicSolverT<D>::compute_forces_with() {
   if (opt_.reference_contact_path)
-    compute_forces<contact::LudingLaw<F>, false>();
+    compute_forces<contact::LudingLaw<F, D>, false>();
   else
-    compute_forces<contact::LudingLaw<F>, true>();
+    compute_forces<contact::LudingLaw<F, D>, true>();
 }
 
-void DynamicSolver::compute_forces_dispatch() {
+template <int D>
+void DynamicSolverT<D>::compute_forces_dispatch() {
   // once per step: the contact loop below is straight-line code for one law and feature set
   switch (opt_.model) {
     case ContactModel::Linear:
@@ -425,14 +545,14 @@ void DynamicSolver::compute_forces_dispatch() {
         compute_forces_with<kFullFrictionless>();
       break;
     case ContactModel::PlasticIndentation:
-      compute_forces<contact::PlasticIndentationLaw, true>();
+      compute_forces<contact::PlasticIndentationLawT<D>, true>();
       break;
   }
 }
 
 namespace {
 template <class Law>
-constexpr bool kPlasticLaw = std::is_same_v<Law, contact::PlasticIndentationLaw>;
+constexpr bool kPlasticLaw = std::is_same_v<Law, contact::PlasticIndentationLawT<Law::kDim>>;
 // The law object of a step: the plastic law from its parameters, the Luding law from its
 // parameters and the material state k1(T, t).
 template <class Law>
@@ -451,8 +571,9 @@ Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndenta
 // flatten: the law is inlined into the loop (with four call sites of luding_evaluate<F> in this
 // translation unit, pair and wall loops times in-place and reference path, GCC stopped inlining
 // it, which halved the speed of the full law: docs/performance.md "Issue 12").
+template <int D>
 template <class Law, bool InPlace>
-[[gnu::flatten]] void DynamicSolver::compute_forces() {
+[[gnu::flatten]] void DynamicSolverT<D>::compute_forces() {
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
@@ -461,11 +582,16 @@ template <class Law, bool InPlace>
   std::vector<H>& pair_hist = pair_histories<H>();
   std::vector<H>& wall_hist = wall_histories<H>();
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
+  double s3[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
   if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
     for (std::size_t i = 0; i < n; ++i) {
       P_.fx[i] = P_.mass[i] * opt_.gravity_x;
       P_.fy[i] = P_.mass[i] * opt_.gravity_y;
       P_.torque[i] = 0.0;
+      if constexpr (D == 3) {
+        P_.fz[i] = P_.mass[i] * opt_.gravity_z;
+        P_.tx[i] = P_.ty[i] = 0.0;
+      }
     }
   }
   forces_initialised_ = false;
@@ -477,7 +603,9 @@ template <class Law, bool InPlace>
     const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
     const double ri = P_.radius[i], rj = P_.radius[j];
-    const double L2 = dx * dx + dy * dy, s = ri + rj;
+    double dz = 0.0;
+    if constexpr (D == 3) dz = P_.z[j] - P_.z[i];
+    const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
         if (pair_live_[k]) {
@@ -490,48 +618,98 @@ template <class Law, bool InPlace>
       }
     }
     pair_live_[k] = 1;
-    const double L = std::sqrt(L2), iL = 1.0 / L;
-    const double nx = dx * iL, ny = dy * iL, tx = -ny, ty = nx;  // n from i to j, t = perp(n)
-    const double q = (ri * ri - rj * rj) * (0.5 * iL);
-    const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
-    // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
-    const double rvx = P_.vx[j] - P_.vx[i], rvy = P_.vy[j] - P_.vy[i];
-    const double vn = rvx * nx + rvy * ny;
-    const double vt = rvx * tx + rvy * ty - P_.omega[i] * di - P_.omega[j] * dj;
-    contact::ContactKinematics in;
-    in.overlap = s - L;
-    in.v_n = -vn;
-    in.v_t = vt;
-    in.dslip = vt * dt;
-    in.dt = dt;
-    if constexpr (kPlasticLaw<Law>) {  // (the Luding law reads neither)
-      in.overlap_start = in.overlap - in.v_n * dt;
-      in.r_eff = ri * rj / s;
-      in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+    if constexpr (D == 2) {
+      const double L = std::sqrt(L2), iL = 1.0 / L;
+      const double nx = dx * iL, ny = dy * iL, tx = -ny, ty = nx;  // n from i to j, t = perp(n)
+      const double q = (ri * ri - rj * rj) * (0.5 * iL);
+      const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
+      // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
+      const double rvx = P_.vx[j] - P_.vx[i], rvy = P_.vy[j] - P_.vy[i];
+      const double vn = rvx * nx + rvy * ny;
+      const double vt = rvx * tx + rvy * ty - P_.omega[i] * di - P_.omega[j] * dj;
+      contact::ContactKinematics in;
+      in.overlap = s - L;
+      in.v_n = -vn;
+      in.v_t = vt;
+      in.dslip = vt * dt;
+      in.dt = dt;
+      if constexpr (kPlasticLaw<Law>) {  // (the Luding law reads neither)
+        in.overlap_start = in.overlap - in.v_n * dt;
+        in.r_eff = ri * rj / s;
+        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+      }
+      double f_n, f_t;
+      contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
+      if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
+      if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+      const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
+      P_.fx[j] += fx;
+      P_.fy[j] += fy;
+      P_.fx[i] -= fx;
+      P_.fy[i] -= fy;
+      P_.torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
+      P_.torque[j] -= dj * f_t;
+      sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
+      sxy += fx * dy;
+      syx += fy * dx;
+      syy += fy * dy;
+      if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
+    } else {
+      const double L = std::sqrt(L2), iL = 1.0 / L;
+      const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
+      const double q = (ri * ri - rj * rj) * (0.5 * iL);
+      const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
+      const Eigen::Vector3d vrel(P_.vx[j] - P_.vx[i], P_.vy[j] - P_.vy[i], P_.vz[j] - P_.vz[i]);
+      const Eigen::Vector3d wi(P_.wx[i], P_.wy[i], P_.omega[i]), wj(P_.wx[j], P_.wy[j], P_.omega[j]);
+      const Eigen::Vector3d W = di * wi + dj * wj;  // L x the pair's rotation rate (kinematics.hpp)
+      // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
+      const double vn = vrel.dot(n);
+      const Eigen::Vector3d vc = vrel - W.cross(n);
+      const Eigen::Vector3d vt = vc - n * vc.dot(n);
+      contact::Kinematics<3> in;
+      in.overlap = s - L;
+      in.v_n = -vn;
+      in.v_t = vt;
+      in.dslip = vt * dt;
+      in.dt = dt;
+      in.transport = contact::step_transport(n, (n.cross(vrel) + W.dot(n) * n) * (iL * dt));
+      if constexpr (kPlasticLaw<Law>) {
+        in.overlap_start = in.overlap - in.v_n * dt;
+        in.r_eff = ri * rj / s;
+        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+      }
+      double f_n;
+      Eigen::Vector3d f_t;
+      contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
+      if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
+      if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+      const Eigen::Vector3d f = f_n * n + f_t;  // on j
+      P_.fx[j] += f.x();
+      P_.fy[j] += f.y();
+      P_.fz[j] += f.z();
+      P_.fx[i] -= f.x();
+      P_.fy[i] -= f.y();
+      P_.fz[i] -= f.z();
+      const Eigen::Vector3d m = n.cross(f_t);  // M_i = -d_i n x f_t, M_j = -d_j n x f_t
+      P_.tx[i] -= di * m.x();
+      P_.ty[i] -= di * m.y();
+      P_.torque[i] -= di * m.z();
+      P_.tx[j] -= dj * m.x();
+      P_.ty[j] -= dj * m.y();
+      P_.torque[j] -= dj * m.z();
+      const double l[3] = {dx, dy, dz};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) s3[r][c] += f(r) * l[c];
+      if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
     }
-    double f_n, f_t;
-    contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
-    if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
-    if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
-    const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-    P_.fx[j] += fx;
-    P_.fy[j] += fy;
-    P_.fx[i] -= fx;
-    P_.fy[i] -= fy;
-    P_.torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-    P_.torque[j] -= dj * f_t;
-    sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
-    sxy += fx * dy;
-    syx += fy * dx;
-    syy += fy * dy;
-    if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
   }
   // walls: the pair (wall, particle), n from the wall into the box
-  double wf[4] = {0, 0, 0, 0};
-  if (walls_active()) {
+  double wf[2 * D] = {};
+  if (walls_active() && D == 2) {
     const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
     const double wvx[4] = {0, wall_v_[0], 0, 0}, wvy[4] = {0, 0, 0, wall_v_[1]};
     if (wall_touch_.size() != n) wall_touch_.assign(n, 0xF);
+    if constexpr (D == 2) {
     // the candidates of the last build suffice unless a wall moved by skin/2 since (then all)
     const bool use_list = wall_list_valid_ && !walls_moved();
     const std::size_t n_visit = use_list ? wall_list_.size() : n;
@@ -590,13 +768,91 @@ template <class Law, bool InPlace>
         if constexpr (!kPlasticLaw<Law>) el += 0.5 * wall_params_.k2 * delta * delta;
       }
     }
+    }
   }
-  for (int w = 0; w < 4; ++w) wall_force_[w] = wf[w];
+  if constexpr (D == 3) {
+    if (walls_active()) {
+      // wall w: axis a = w / 2; w even: the minimum (normal +e_a), odd: the maximum (normal -e_a,
+      // moving at wall_v_[a])
+      constexpr std::uint8_t kAll = (1u << kWalls) - 1u;
+      if (wall_touch_.size() != n) wall_touch_.assign(n, kAll);
+      const bool use_list = wall_list_valid_ && !walls_moved();
+      const std::size_t n_visit = use_list ? wall_list_.size() : n;
+      const double lo[3] = {box_.x_min, box_.y_min, box_.z_min}, hi[3] = {box_.x_max, box_.y_max, box_.z_max};
+      for (std::size_t c = 0; c < n_visit; ++c) {
+        const std::size_t i = use_list ? wall_list_[c] : c;
+        const double pos[3] = {P_.x[i], P_.y[i], P_.z[i]}, ai = P_.radius[i];
+        double d6[6];
+        unsigned touch = 0;
+        for (int w = 0; w < 6; ++w) {
+          d6[w] = (w & 1) ? hi[w / 2] - pos[w / 2] : pos[w / 2] - lo[w / 2];
+          touch |= ai - d6[w] > 0.0 ? (1u << w) : 0u;
+        }
+        const unsigned todo = touch | wall_touch_[i];
+        wall_touch_[i] = static_cast<std::uint8_t>(touch);
+        if (todo == 0) continue;
+        const Eigen::Vector3d wi(P_.wx[i], P_.wy[i], P_.omega[i]);
+        for (int w = 0; w < 6; ++w) {
+          if (!((todo >> w) & 1u)) continue;
+          H& h = wall_hist[kWalls * i + static_cast<std::size_t>(w)];
+          const double dist = d6[w];
+          const double delta = ai - dist;
+          if (!(delta > 0.0)) {
+            if constexpr (!Law::kHistoryOutlivesSeparation) {
+              h = H{};
+              continue;
+            } else if (!wall_law.has_history(h)) {
+              continue;
+            }
+          }
+          const int ax = w / 2;
+          Eigen::Vector3d nw = Eigen::Vector3d::Zero();
+          nw(ax) = (w & 1) ? -1.0 : 1.0;
+          Eigen::Vector3d vrel(P_.vx[i], P_.vy[i], P_.vz[i]);
+          if (w & 1) vrel(ax) -= wall_v_[ax];
+          const double vn = vrel.dot(nw);
+          const Eigen::Vector3d vc = vrel - dist * wi.cross(nw);  // the particle's contact point
+          const Eigen::Vector3d vt = vc - nw * vc.dot(nw);
+          contact::Kinematics<3> in;
+          in.overlap = delta;
+          in.v_n = -vn;
+          in.v_t = vt;
+          in.dslip = vt * dt;
+          in.dt = dt;
+          in.transport = contact::step_transport(nw, wi.dot(nw) * dt * nw);  // the twist; n is fixed
+          if constexpr (kPlasticLaw<Law>) {
+            in.overlap_start = delta - in.v_n * dt;
+            in.r_eff = ai;
+            in.m_eff = P_.mass[i];
+          }
+          double f_n;
+          Eigen::Vector3d f_t;
+          contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
+          if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+          const Eigen::Vector3d f = f_n * nw + f_t;  // on the particle
+          P_.fx[i] += f.x();
+          P_.fy[i] += f.y();
+          P_.fz[i] += f.z();
+          const Eigen::Vector3d m = nw.cross(f_t);  // -dist n x f_t
+          P_.tx[i] -= dist * m.x();
+          P_.ty[i] -= dist * m.y();
+          P_.torque[i] -= dist * m.z();
+          wf[w] -= f(ax);  // the force of the contacts on the wall along its axis
+          const Eigen::Vector3d l = dist * nw;  // contact point -> particle centre
+          for (int r = 0; r < 3; ++r)
+            for (int cc = 0; cc < 3; ++cc) s3[r][cc] += f(r) * l(cc);
+          if constexpr (!kPlasticLaw<Law>) el += 0.5 * wall_params_.k2 * delta * delta;
+        }
+      }
+    }
+  }
+  for (int w = 0; w < kWalls; ++w) wall_force_[w] = wf[w];
   if constexpr (kPlasticLaw<Law>) area_max_ = fn_max / (3.0 * opt_.plastic.sigma_y);
   sxx_ = sxx;
   sxy_ = sxy;
   syx_ = syx;
   syy_ = syy;
+  if constexpr (D == 3) std::copy(&s3[0][0], &s3[0][0] + 9, &s3_[0][0]);
   elastic_ = el;
 }
 
@@ -659,16 +915,77 @@ int kick_drift_pass(std::size_t n, double h, double dt, double lim2, Particles& 
                                        P.fy.data(), P.torque.data(), im, iI, xb, yb,
                                        P.mass.data(), gx, gy);
 }
+// 3D: the same passes over (x, y, z), the spin vector (wx, wy, omega) and the torque (tx, ty,
+// torque); spheres have an isotropic inertia, so the spin kick is h tau / I per component.
+template <bool Track>
+double kick_pass3(std::size_t n, double h, Particles& P, const double* __restrict im, const double* __restrict iI) {
+  double* __restrict vx = P.vx.data();
+  double* __restrict vy = P.vy.data();
+  double* __restrict vz = P.vz.data();
+  double* __restrict wx = P.wx.data();
+  double* __restrict wy = P.wy.data();
+  double* __restrict wz = P.omega.data();
+  const double* __restrict fx = P.fx.data();
+  const double* __restrict fy = P.fy.data();
+  const double* __restrict fz = P.fz.data();
+  const double* __restrict tx = P.tx.data();
+  const double* __restrict ty = P.ty.data();
+  const double* __restrict tz = P.torque.data();
+  double vmax2 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    vx[i] += h * fx[i] * im[i];
+    vy[i] += h * fy[i] * im[i];
+    vz[i] += h * fz[i] * im[i];
+    wx[i] += h * tx[i] * iI[i];
+    wy[i] += h * ty[i] * iI[i];
+    wz[i] += h * tz[i] * iI[i];
+    if constexpr (Track) {
+      const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+      vmax2 = v2 <= vmax2 ? vmax2 : v2;
+    }
+  }
+  return vmax2;
+}
+int kick_drift_pass3(std::size_t n, double h, double dt, double lim2, Particles& P, const double* __restrict im,
+                     const double* __restrict iI, const double* __restrict xb, const double* __restrict yb,
+                     const double* __restrict zb, double gx, double gy, double gz) {
+  kick_pass3<false>(n, h, P, im, iI);
+  int moved = 0;
+  double* __restrict x = P.x.data();
+  double* __restrict y = P.y.data();
+  double* __restrict z = P.z.data();
+  const double* __restrict vx = P.vx.data();
+  const double* __restrict vy = P.vy.data();
+  const double* __restrict vz = P.vz.data();
+  const double* __restrict m = P.mass.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] += dt * vx[i];  // drift
+    y[i] += dt * vy[i];
+    z[i] += dt * vz[i];
+    const double ddx = x[i] - xb[i], ddy = y[i] - yb[i], ddz = z[i] - zb[i];
+    moved |= ddx * ddx + ddy * ddy + ddz * ddz > lim2 ? 1 : 0;
+    P.fx[i] = m[i] * gx;
+    P.fy[i] = m[i] * gy;
+    P.fz[i] = m[i] * gz;
+    P.tx[i] = P.ty[i] = P.torque[i] = 0.0;
+  }
+  return moved;
+}
 }  // namespace
 
 // ContactModel::PlasticIndentation: the tangential bound k_t sigma_y A_c grows with the contact
 // width; the step follows it (with 10 % margin for the growth within a step).
-void DynamicSolver::update_plastic_time_step() {
+template <int D>
+void DynamicSolverT<D>::update_plastic_time_step() {
   const contact::PlasticIndentationParams& law = opt_.plastic;
   const double kt = law.frictional() ? law.shear_stiffness() * 1.1 * area_max_ : 0.0;
   if (kt <= 0.0) return;
   const double m12 = pl_m12_;
-  ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 / 3.0 / kt);
+  if constexpr (D == 2) {
+    ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 / 3.0 / kt);
+  } else {  // the sphere's tangential mass m* 2/7 (dim.hpp)
+    ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 * contact::kTangentialMassRatio<3> / kt);
+  }
   const double tc = std::min(ts_.tc_lightest, ts_.tc_tangential);
   if (opt_.dt > 0.0) {
     ts_.steps_per_contact_lightest = tc / ts_.dt;
@@ -684,23 +1001,34 @@ void DynamicSolver::update_plastic_time_step() {
   ts_.steps_per_contact_lightest = opt_.steps_per_contact;
 }
 
-void DynamicSolver::step() {
+template <int D>
+void DynamicSolverT<D>::step() {
   const std::size_t n = P_.size();
   if (plastic()) update_plastic_time_step();
   impose_affine_motion(ts_.dt);
   const bool checking = opt_.check_every > 0;
-  if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
+  if constexpr (D == 2) {  // (3D: no state files yet, so no snapshot)
+    if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
+  }
   const bool check = checking && ++since_check_ >= opt_.check_every;
   ++since_good_;
   double vmax2 = 0.0;
   const double dt = ts_.dt, h = 0.5 * dt;
   // Eq 1 total wall forces at the current state: F_w - p z - gamma_w x'
   auto wall_accel = [&](int which) {
-    const MovingWall& w = which == 0 ? box_.right : box_.top;
-    if (w.mode != WallMode::Stress) return 0.0;
-    const double z = which == 0 ? box_.y_max - box_.y_min : box_.x_max - box_.x_min;
-    const double Fw = which == 0 ? wall_force_[1] : wall_force_[3];
-    return (Fw - w.pressure * z - w.damping * wall_v_[which]) / w.mass;  // LMM05 Eq 1
+    if constexpr (D == 2) {
+      const MovingWall& w = which == 0 ? box_.right : box_.top;
+      if (w.mode != WallMode::Stress) return 0.0;
+      const double z = which == 0 ? box_.y_max - box_.y_min : box_.x_max - box_.x_min;
+      const double Fw = which == 0 ? wall_force_[1] : wall_force_[3];
+      return (Fw - w.pressure * z - w.damping * wall_v_[which]) / w.mass;  // LMM05 Eq 1
+    } else {  // Eq 1 with the wall's current area
+      const MovingWall& w = moving_wall(which);
+      if (w.mode != WallMode::Stress) return 0.0;
+      const double e[3] = {box_.x_max - box_.x_min, box_.y_max - box_.y_min, box_.z_max - box_.z_min};
+      const double A = e[(which + 1) % 3] * e[(which + 2) % 3];
+      return (wall_force_[2 * which + 1] - w.pressure * A - w.damping * wall_v_[which]) / w.mass;
+    }
   };
   if (inv_mass_.size() != n || inv_scale_ != radius_scale_) {  // no division in the kicks
     inv_mass_.resize(n);
@@ -724,6 +1052,21 @@ void DynamicSolver::step() {
   const double lim2 = lim * lim;
   bool far = !(lim > 0.0);
   auto kick = [&](bool drift) {
+    if constexpr (D == 3) {
+      if (drift) {
+        far = far || kick_drift_pass3(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(), x_build_.data(),
+                                      y_build_.data(), z_build_.data(), opt_.gravity_x, opt_.gravity_y,
+                                      opt_.gravity_z) != 0;
+        forces_initialised_ = true;
+      } else if (check) {
+        vmax2 = kick_pass3<true>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
+      } else {
+        kick_pass3<false>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
+      }
+      if (box_.enabled)
+        for (int a = 0; a < 3; ++a) wall_v_[a] += h * wall_accel(a);
+      return;
+    }
     if (drift) {
       const bool gravity = opt_.gravity_x != 0.0 || opt_.gravity_y != 0.0;
       const int moved =
@@ -752,6 +1095,7 @@ void DynamicSolver::step() {
   if (box_.enabled) {
     box_.x_max += dt * wall_v_[0];
     box_.y_max += dt * wall_v_[1];
+    if constexpr (D == 3) box_.z_max += dt * wall_v_[2];
   }
   time_ += dt;
   if (far || walls_moved()) build_table();
@@ -761,15 +1105,19 @@ void DynamicSolver::step() {
   if (check) {
     since_check_ = 0;
     check_health_with(vmax2);
-    if (since_good_ >= HealthLimits::kLastGoodEvery) {
-      last_good_ = std::make_shared<const SolverState>(state());
-      since_good_ = 0;
+    if constexpr (D == 2) {
+      if (since_good_ >= HealthLimits::kLastGoodEvery) {
+        last_good_ = std::make_shared<const SolverState>(state());
+        since_good_ = 0;
+      }
     }
   }
 }
 
 // ---- macroscopic strain rate: prescribed particles, affine walls, drag -----------------------------
-void DynamicSolver::set_strain_rate(double e11, double e22, double e12) {
+template <int D>
+void DynamicSolverT<D>::set_strain_rate(double e11, double e22, double e12) {
+  if constexpr (D == 3) throw std::logic_error("set_strain_rate is 2D only (issue 16, 3D first part)");
   if (!std::isfinite(e11) || !std::isfinite(e22) || !std::isfinite(e12)) fail("set_strain_rate: the strain rate must be finite");
   if (!box_.enabled) fail("set_strain_rate: the affine field needs a box (its lower-left corner is x_0)");
   if (e12 != 0.0 && walls_active())
@@ -780,7 +1128,9 @@ void DynamicSolver::set_strain_rate(double e11, double e22, double e12) {
   sheared_ = sheared_ || e12 != 0.0;
 }
 
-void DynamicSolver::set_affine_velocities() {
+template <int D>
+void DynamicSolverT<D>::set_affine_velocities() {
+  if constexpr (D == 3) throw std::logic_error("set_affine_velocities is 2D only (issue 16, 3D first part)");
   const double e12 = edot_[2];
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
@@ -794,23 +1144,29 @@ void DynamicSolver::set_affine_velocities() {
   }
 }
 
-void DynamicSolver::set_plastic_law(const contact::PlasticIndentationParams& law) {
+template <int D>
+void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams& law) {
   if (!plastic()) fail("set_plastic_law: the solver runs the Luding law, not the plastic-indentation law");
   law.validate();
   if (!(law.first_touch > 0.0))
     fail("set_plastic_law: the explicit solver needs the plastic law's first-touch overlap > 0");
   if (opt_.plastic.reversible && !law.reversible) {
-    using L = contact::PlasticIndentationLaw;
+    using L = contact::PlasticIndentationLawT<D>;
     for (std::size_t k = 0; k < pair_key_.size(); ++k) {
       const auto i = static_cast<std::size_t>(pair_key_[k] >> 32), j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
-      const double L2 = (P_.x[j] - P_.x[i]) * (P_.x[j] - P_.x[i]) + (P_.y[j] - P_.y[i]) * (P_.y[j] - P_.y[i]);
+      double L2 = (P_.x[j] - P_.x[i]) * (P_.x[j] - P_.x[i]) + (P_.y[j] - P_.y[i]) * (P_.y[j] - P_.y[i]);
+      if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
       pl_pair_hist_[k] = L::start_unloading_branch(pl_pair_hist_[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
     }
     if (walls_active())
       for (std::size_t i = 0; i < P_.size(); ++i) {
-        const double d4[4] = {P_.x[i] - box_.x_min, box_.x_max - P_.x[i], P_.y[i] - box_.y_min, box_.y_max - P_.y[i]};
-        for (std::size_t w = 0; w < 4; ++w)
-          pl_wall_hist_[4 * i + w] = L::start_unloading_branch(pl_wall_hist_[4 * i + w], P_.radius[i] - d4[w]);
+        double dw[2 * D] = {P_.x[i] - box_.x_min, box_.x_max - P_.x[i], P_.y[i] - box_.y_min, box_.y_max - P_.y[i]};
+        if constexpr (D == 3) {
+          dw[4] = P_.z[i] - box_.z_min;
+          dw[5] = box_.z_max - P_.z[i];
+        }
+        for (std::size_t w = 0; w < kWalls; ++w)
+          pl_wall_hist_[kWalls * i + w] = L::start_unloading_branch(pl_wall_hist_[kWalls * i + w], P_.radius[i] - dw[w]);
       }
   }
   opt_.plastic = law;
@@ -822,13 +1178,22 @@ void DynamicSolver::set_plastic_law(const contact::PlasticIndentationParams& law
   if (!(dt_fixed > 0.0)) update_plastic_time_step();
 }
 
-void DynamicSolver::set_rotations(bool free) {
+template <int D>
+void DynamicSolverT<D>::set_rotations(bool free) {
   rotations_ = free;
   if (!free) std::fill(P_.omega.begin(), P_.omega.end(), 0.0);
+  if constexpr (D == 3) {
+    if (!free) {
+      std::fill(P_.wx.begin(), P_.wx.end(), 0.0);
+      std::fill(P_.wy.begin(), P_.wy.end(), 0.0);
+    }
+  }
   inv_mass_.clear();  // refilled by the next step
 }
 
-void DynamicSolver::hold_spins(const std::vector<std::uint32_t>& particles) {
+template <int D>
+void DynamicSolverT<D>::hold_spins(const std::vector<std::uint32_t>& particles) {
+  if constexpr (D == 3) throw std::logic_error("hold_spins is 2D only (issue 16, 3D first part)");
   for (std::uint32_t p : particles) {
     if (p >= P_.size() || is_prescribed_.empty() || !is_prescribed_[p])
       fail("hold_spins: particle " + std::to_string(p) + " is not prescribed (call set_prescribed first)");
@@ -838,7 +1203,9 @@ void DynamicSolver::hold_spins(const std::vector<std::uint32_t>& particles) {
   inv_mass_.clear();  // the kicks' inverse inertias are refilled
 }
 
-void DynamicSolver::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins) {
+template <int D>
+void DynamicSolverT<D>::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins) {
+  if constexpr (D == 3) throw std::logic_error("set_prescribed is 2D only (issue 16, 3D first part)");
   is_prescribed_.assign(P_.size(), 0);
   spin_held_.assign(P_.size(), 0);
   for (std::uint32_t p : particles) {
@@ -868,7 +1235,12 @@ std::array<double, 4> expm1_sym2(double a, double b, double c, double t) {
 }
 }  // namespace
 
-void DynamicSolver::impose_affine_motion(double dt) {
+template <int D>
+void DynamicSolverT<D>::impose_affine_motion(double dt) {
+  if constexpr (D == 3) {  // (set_strain_rate and set_prescribed refuse 3D: nothing moves)
+    (void)dt;
+    return;
+  }
   {  // the accumulated map
     auto M = edot_[2] != 0.0 ? expm1_sym2(edot_[0], edot_[1], edot_[2], dt)
                              : std::array<double, 4>{std::expm1(edot_[0] * dt), 0.0, 0.0, std::expm1(edot_[1] * dt)};
@@ -899,12 +1271,15 @@ void DynamicSolver::impose_affine_motion(double dt) {
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
 }
 
-void DynamicSolver::set_affine_drag(double drag) {
+template <int D>
+void DynamicSolverT<D>::set_affine_drag(double drag) {
   if (!(std::isfinite(drag) && drag >= 0.0)) fail(fmt::format("set_affine_drag: the drag must be finite and >= 0, got {}", drag));
   opt_.affine_drag = drag;
 }
 
-double DynamicSolver::unbalanced_force_rms() const {
+template <int D>
+double DynamicSolverT<D>::unbalanced_force_rms() const {
+  if constexpr (D == 3) throw std::logic_error("unbalanced_force_rms is 2D only (issue 16, 3D first part)");
   const double c = opt_.affine_drag;
   double sum = 0.0;
   std::size_t n = 0;
@@ -927,7 +1302,9 @@ double DynamicSolver::unbalanced_force_rms() const {
   return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
 }
 
-void DynamicSolver::apply_affine_drag() {
+template <int D>
+void DynamicSolverT<D>::apply_affine_drag() {
+  if constexpr (D == 3) throw std::logic_error("the affine drag is 2D only (issue 16, 3D first part)");
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
@@ -946,8 +1323,12 @@ void DynamicSolver::apply_affine_drag() {
   }
 }
 
-Stress2 DynamicSolver::boundary_stress() const {
-  Stress2 s;
+template <int D>
+auto DynamicSolverT<D>::boundary_stress() const -> Stress {
+  if constexpr (D == 3) {
+    throw std::logic_error("boundary_stress is 2D only (issue 16, 3D first part)");
+  } else {
+  Stress s;
   if (!box_.enabled) return s;
   double xc = 0.5 * (box_.x_min + box_.x_max), yc = 0.5 * (box_.y_min + box_.y_max);
   if (sheared_) {  // the centre of the deformed parallelogram x_0 + F (c_0 - x_0)
@@ -970,6 +1351,7 @@ Stress2 DynamicSolver::boundary_stress() const {
   s.yx /= V;
   s.yy /= V;
   return s;
+  }
 }
 
 // ---- instability checks (docs/dynamic.md "Instability detection") -------------------------------
@@ -984,16 +1366,19 @@ const char* const kCauseLoad =
     "(--steps-per-contact)";
 }  // namespace
 
-void DynamicSolver::breach(const std::string& quantity, const std::string& what, const std::string& cause) const {
+template <int D>
+void DynamicSolverT<D>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const {
   const std::int64_t step = ts_.dt > 0.0 ? static_cast<std::int64_t>(std::llround(time_ / ts_.dt)) : 0;
   throw InstabilityError(fmt::format("unstable at step {} (t = {:.6g} s): {}; likely cause: {}", step, time_, what,
                                      cause),
                          quantity, step, time_);
 }
 
-void DynamicSolver::check_health() const { check_health_with(-1.0); }
+template <int D>
+void DynamicSolverT<D>::check_health() const { check_health_with(-1.0); }
 
-void DynamicSolver::check_health_with(double vmax2) const {
+template <int D>
+void DynamicSolverT<D>::check_health_with(double vmax2) const {
   const std::size_t n = P_.size();
   const bool track = vmax2 < 0.0;  // (NaN: not negative, the pass below reports it)
   if (track) vmax2 = 0.0;
@@ -1002,43 +1387,61 @@ void DynamicSolver::check_health_with(double vmax2) const {
     const double v[7] = {P_.x[i], P_.y[i], P_.vx[i], P_.vy[i], P_.omega[i], P_.fx[i], P_.fy[i]};
     bool fin = std::isfinite(P_.radius[i]) && std::isfinite(P_.torque[i]);
     for (double q : v) fin = fin && std::isfinite(q);
+    if constexpr (D == 3) {
+      const double v3[7] = {P_.z[i], P_.vz[i], P_.wx[i], P_.wy[i], P_.fz[i], P_.tx[i], P_.ty[i]};
+      for (double q : v3) fin = fin && std::isfinite(q);
+    }
     if (!fin)
       breach("finite", fmt::format("particle {} has a non-finite position, velocity or force", i), kCauseStep);
     rmin = std::min(rmin, P_.radius[i]);
-    area += P_.radius[i] * P_.radius[i];
-    if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]);
+    if constexpr (D == 2) {
+      area += P_.radius[i] * P_.radius[i];
+      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]);
+    } else {
+      area += P_.radius[i] * P_.radius[i] * P_.radius[i];
+      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]);
+    }
   }
   if (!(std::isfinite(vmax2))) breach("finite", "a particle velocity is not finite", kCauseStep);
-  if (!(std::isfinite(wall_v_[0]) && std::isfinite(wall_v_[1]) && std::isfinite(wall_force_[1]) &&
-        std::isfinite(wall_force_[3])))
-    breach("finite", "a wall velocity or force is not finite", kCauseWall);
+  bool wall_finite = true;
+  for (int a = 0; a < D; ++a) wall_finite = wall_finite && std::isfinite(wall_v_[a]) && std::isfinite(wall_force_[2 * a + 1]);
+  if (!wall_finite) breach("finite", "a wall velocity or force is not finite", kCauseWall);
   const double dt = ts_.dt, travel = HealthLimits::kMaxTravel * rmin;
   if (!(std::sqrt(vmax2) * dt < travel))
     breach("velocity", fmt::format("max|v| dt = {:.3g} m is not below 0.1 r_min = {:.3g} m", std::sqrt(vmax2) * dt, travel),
            kCauseStep);
   if (box_.enabled) {
-    const double b[4] = {box_.x_min, box_.x_max, box_.y_min, box_.y_max};
+    const double b[6] = {box_.x_min, box_.x_max, box_.y_min, box_.y_max, box_.z_min, box_.z_max};
     for (double q : b)
       if (!std::isfinite(q)) breach("finite", "the box is not finite", kCauseWall);
     if (!(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
       breach("box", fmt::format("the box extents {:.3g} x {:.3g} m are not positive", box_.x_max - box_.x_min,
                                 box_.y_max - box_.y_min),
              kCauseWall);
-    const double wv = std::max(std::fabs(wall_v_[0]), std::fabs(wall_v_[1]));
+    if constexpr (D == 3) {
+      if (!(box_.z_max > box_.z_min))
+        breach("box", fmt::format("the box extent {:.3g} m along z is not positive", box_.z_max - box_.z_min), kCauseWall);
+    }
+    double wv = std::max(std::fabs(wall_v_[0]), std::fabs(wall_v_[1]));
+    if constexpr (D == 3) wv = std::max(wv, std::fabs(wall_v_[2]));
     if (!(wv * dt < travel))
       breach("velocity", fmt::format("a wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m", wv * dt, travel),
              kCauseWall);
-    for (std::size_t i = 0; i < n && box_.contact_walls; ++i)
-      if (!(P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max))
+    for (std::size_t i = 0; i < n && box_.contact_walls; ++i) {
+      bool inside = P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max;
+      if constexpr (D == 3) inside = inside && P_.z[i] >= box_.z_min && P_.z[i] <= box_.z_max;
+      if (!inside)
         breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
                kCauseLoad);
+    }
   }
   // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
   // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
   for (std::uint64_t key : pair_key_) {
     const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
     const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i], s = P_.radius[i] + P_.radius[j];
-    const double L2 = dx * dx + dy * dy;
+    double L2 = dx * dx + dy * dy;
+    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
     if (!(L2 < s * s)) continue;
     const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
     if (!(d < lim))
@@ -1049,14 +1452,16 @@ void DynamicSolver::check_health_with(double vmax2) const {
   if (walls_active()) {
     for (std::size_t i = 0; i < n; ++i) {
       const double r = P_.radius[i];
-      const double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
-                                std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
+      double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
+                          std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
+      if constexpr (D == 3) d = std::max(d, std::max(r - (P_.z[i] - box_.z_min), r - (box_.z_max - P_.z[i])));
       if (!(d < HealthLimits::kMaxOverlap * r))
         breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below half its radius, {:.3g} m", i, d,
                                       HealthLimits::kMaxOverlap * r),
                kCauseLoad);
     }
-    const double nu = std::numbers::pi * area / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
+    const double nu = D == 2 ? std::numbers::pi * area / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min))
+                             : (4.0 / 3.0) * std::numbers::pi * area / box_measure();
     if (!(nu <= HealthLimits::kMaxDensity))
       breach("density", fmt::format("nu = {:.4g} is above 1.25", nu),
              "overlaps beyond the model's range: the pressure is too high for the stiffness (2p/k2, k1_ratio) or a "
@@ -1064,52 +1469,94 @@ void DynamicSolver::check_health_with(double vmax2) const {
   }
 }
 
-void DynamicSolver::run(std::size_t n_steps) {
+template <int D>
+void DynamicSolverT<D>::run(std::size_t n_steps) {
   for (std::size_t s = 0; s < n_steps; ++s) step();
 }
 
 // ---- observables --------------------------------------------------------------------------------
-Stress2 DynamicSolver::wall_stress() const {
-  Stress2 s;
+template <int D>
+double DynamicSolverT<D>::box_measure() const {
+  const double a = (box_.x_max - box_.x_min) * (box_.y_max - box_.y_min);
+  if constexpr (D == 2) {
+    return a;
+  } else {
+    return a * (box_.z_max - box_.z_min);
+  }
+}
+
+template <int D>
+auto DynamicSolverT<D>::wall_stress() const -> Stress {
+  Stress s;
   if (!box_.enabled) return s;
-  s.xx = wall_force_[1] / (box_.y_max - box_.y_min);
-  s.yy = wall_force_[3] / (box_.x_max - box_.x_min);
+  if constexpr (D == 2) {
+    s.xx = wall_force_[1] / (box_.y_max - box_.y_min);
+    s.yy = wall_force_[3] / (box_.x_max - box_.x_min);
+  } else {
+    const double e[3] = {box_.x_max - box_.x_min, box_.y_max - box_.y_min, box_.z_max - box_.z_min};
+    for (int a = 0; a < 3; ++a) s.s[a][a] = wall_force_[2 * a + 1] / (e[(a + 1) % 3] * e[(a + 2) % 3]);
+  }
   return s;
 }
 
-Stress2 DynamicSolver::contact_stress() const {
-  Stress2 s;
+template <int D>
+auto DynamicSolverT<D>::contact_stress() const -> Stress {
+  Stress s;
   if (!box_.enabled) return s;
-  const double V = (box_.x_max - box_.x_min) * (box_.y_max - box_.y_min);
-  s.xx = sxx_ / V;
-  s.xy = sxy_ / V;
-  s.yx = syx_ / V;
-  s.yy = syy_ / V;
+  const double V = box_measure();
+  if constexpr (D == 2) {
+    s.xx = sxx_ / V;
+    s.xy = sxy_ / V;
+    s.yx = syx_ / V;
+    s.yy = syy_ / V;
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) s.s[a][b] = s3_[a][b] / V;
+  }
   return s;
 }
 
-double DynamicSolver::density() const {
+template <int D>
+double DynamicSolverT<D>::density() const {
   if (!box_.enabled) return 0.0;
   double a = 0.0;
-  for (double r : P_.radius) a += std::numbers::pi * r * r;
-  return a / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
+  if constexpr (D == 2) {
+    for (double r : P_.radius) a += std::numbers::pi * r * r;
+    return a / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
+  } else {
+    for (double r : P_.radius) a += (4.0 / 3.0) * std::numbers::pi * r * r * r;
+    return a / box_measure();
+  }
 }
 
-Energies DynamicSolver::energies() const {
+template <int D>
+Energies DynamicSolverT<D>::energies() const {
   Energies e;
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]) +
-                 0.5 * P_.inertia[i] * P_.omega[i] * P_.omega[i];
-    e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i]);
+    if constexpr (D == 2) {
+      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]) +
+                   0.5 * P_.inertia[i] * P_.omega[i] * P_.omega[i];
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i]);
+    } else {
+      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]) +
+                   0.5 * P_.inertia[i] * (P_.wx[i] * P_.wx[i] + P_.wy[i] * P_.wy[i] + P_.omega[i] * P_.omega[i]);
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i] + opt_.gravity_z * P_.z[i]);
+    }
   }
   e.elastic = elastic_;
   if (box_.enabled) {
     if (box_.right.mode == WallMode::Stress)
       e.wall_kinetic += 0.5 * box_.right.mass * wall_v_[0] * wall_v_[0];
     if (box_.top.mode == WallMode::Stress)
-      e.wall_kinetic += 0.5 * box_.top.mass * wall_v_[1] * wall_v_[1];
+      e.wall_kinetic += 0.5 * box_.top.mass * wall_v_[D - 1] * wall_v_[D - 1];
+    if constexpr (D == 3) {
+      if (box_.back.mode == WallMode::Stress) e.wall_kinetic += 0.5 * box_.back.mass * wall_v_[1] * wall_v_[1];
+    }
   }
   return e;
 }
+
+template class DynamicSolverT<2>;
+template class DynamicSolverT<3>;
 
 }  // namespace netdem::dem

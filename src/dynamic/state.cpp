@@ -26,8 +26,12 @@ namespace {
 
 std::string quote_input(const std::string& s) { return packing::quote_input(s, 80); }
 
-DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& options)
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& options)
     : P_(st.particles), params_(st.params), box_(st.box), opt_(options) {
+  if constexpr (D == 3) {
+    throw std::logic_error("state files and restarts are 2D only (issue 16, 3D first part)");
+  } else {
   params_.validate();
   opt_.validate();
   const std::size_t n = P_.size();
@@ -81,9 +85,14 @@ DynamicSolver::DynamicSolver(const SolverState& st, const DynamicOptions& option
   pl_pair_hist_ = st.plastic_pair_history;
   build_table();
   rebuilds_ = 0;
+  }
 }
 
-SolverState DynamicSolver::state() const {
+template <int D>
+SolverState DynamicSolverT<D>::state() const {
+  if constexpr (D == 3) {
+    throw std::logic_error("state files and restarts are 2D only (issue 16, 3D first part)");
+  } else {
   SolverState st;
   st.particles = P_;
   st.radius_ref = radius_ref_;
@@ -119,9 +128,11 @@ SolverState DynamicSolver::state() const {
   st.wall_history = wall_hist_;
   st.plastic_wall_history = pl_wall_hist_;
   return st;
+  }
 }
 
-void DynamicSolver::advance_temperature(double T_new, double dt, double t0) {
+template <int D>
+void DynamicSolverT<D>::advance_temperature(double T_new, double dt, double t0) {
   if (opt_.model != ContactModel::Full)
     fail("advance_temperature: a temperature needs ContactModel::Full");
   if (!std::isfinite(T_new) || !(dt >= 0.0) || !(t0 > 0.0))
@@ -134,19 +145,49 @@ void DynamicSolver::advance_temperature(double T_new, double dt, double t0) {
     radius_scale_ = contact::luding_radius(params_, 1.0, T_new);
     for (std::size_t i = 0; i < P_.size(); ++i) {
       P_.radius[i] = radius_ref_[i] * radius_scale_;
-      P_.inertia[i] = 0.5 * P_.mass[i] * P_.radius[i] * P_.radius[i];
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
     }
   }
 }
 
-void DynamicSolver::set_params(const LudingParams& params) {
+template <int D>
+void DynamicSolverT<D>::set_params(const LudingParams& params) {
   params.validate();
   params_ = params;
   wall_params_ = params_.wall_params();
   choose_friction();
 }
 
-void DynamicSolver::set_walls(const MovingWall& right, const MovingWall& top) {
+template <int D>
+void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& back, const MovingWall& top) {
+  if constexpr (D == 2) {
+    (void)right;
+    (void)back;
+    (void)top;
+    fail("set_walls: a 2D box has two moving walls (right, top)");
+  } else {
+    for (const MovingWall* w : {&right, &back, &top}) {
+      if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
+        fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
+      if (w->mode == WallMode::Affine) throw std::logic_error("set_walls: affine walls are 2D only (issue 16)");
+    }
+    box_.right = right;
+    box_.back = back;
+    box_.top = top;
+    for (int a = 0; a < 3; ++a) {
+      const MovingWall& w = moving_wall(a);
+      if (w.mode == WallMode::Strain) wall_v_[a] = w.velocity;
+      if (w.mode == WallMode::Fixed) wall_v_[a] = 0.0;
+    }
+  }
+}
+
+template <int D>
+void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& top) {
+  if constexpr (D == 3) {
+    set_walls(right, box_.back, top);
+    return;
+  }
   for (const MovingWall* w : {&right, &top})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
@@ -158,19 +199,30 @@ void DynamicSolver::set_walls(const MovingWall& right, const MovingWall& top) {
   if (top.mode == WallMode::Fixed) wall_v_[1] = 0.0;
 }
 
-void DynamicSolver::set_gravity(double gx, double gy) {
+template <int D>
+void DynamicSolverT<D>::set_gravity(double gx, double gy) {
   if (!std::isfinite(gx) || !std::isfinite(gy)) fail("set_gravity: gravity must be finite");
   opt_.gravity_x = gx;
   opt_.gravity_y = gy;
 }
 
-std::size_t DynamicSolver::wall_contacts() const {
+template <int D>
+void DynamicSolverT<D>::set_gravity(double gx, double gy, double gz) {
+  if (D == 2 && gz != 0.0) fail("set_gravity: a 2D solver has no z");
+  if (!std::isfinite(gz)) fail("set_gravity: gravity must be finite");
+  set_gravity(gx, gy);
+  opt_.gravity_z = gz;
+}
+
+template <int D>
+std::size_t DynamicSolverT<D>::wall_contacts() const {
   if (!walls_active()) return 0;
   std::size_t c = 0;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double r = P_.radius[i];
     c += (P_.x[i] - box_.x_min < r) + (box_.x_max - P_.x[i] < r) + (P_.y[i] - box_.y_min < r) +
          (box_.y_max - P_.y[i] < r);
+    if constexpr (D == 3) c += (P_.z[i] - box_.z_min < r) + (box_.z_max - P_.z[i] < r);
   }
   return c;
 }
@@ -713,7 +765,12 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
 }
 }  // namespace
 
-void DynamicSolver::contacts(std::vector<ContactInfo>& out) const {
+template <int D>
+void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
+  if constexpr (D == 3) {
+    (void)out;
+    throw std::logic_error("contacts() is 2D only (issue 16, 3D first part)");
+  } else {
   switch (opt_.model) {
     case ContactModel::Linear:
       luding_contacts<contact::kLudingLinear>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
@@ -731,6 +788,29 @@ void DynamicSolver::contacts(std::vector<ContactInfo>& out) const {
       plastic_contacts(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
       break;
   }
+  }
 }
+
+// the members defined here, for both dimensions (the class: solver.cpp)
+template DynamicSolverT<2>::DynamicSolverT(const SolverState&, const DynamicOptions&);
+template SolverState DynamicSolverT<2>::state() const;
+template void DynamicSolverT<2>::advance_temperature(double, double, double);
+template void DynamicSolverT<2>::set_params(const LudingParams&);
+template void DynamicSolverT<2>::set_walls(const MovingWall&, const MovingWall&);
+template void DynamicSolverT<2>::set_walls(const MovingWall&, const MovingWall&, const MovingWall&);
+template void DynamicSolverT<2>::set_gravity(double, double);
+template void DynamicSolverT<2>::set_gravity(double, double, double);
+template std::size_t DynamicSolverT<2>::wall_contacts() const;
+template void DynamicSolverT<2>::contacts(std::vector<ContactInfo>&) const;
+template DynamicSolverT<3>::DynamicSolverT(const SolverState&, const DynamicOptions&);
+template SolverState DynamicSolverT<3>::state() const;
+template void DynamicSolverT<3>::advance_temperature(double, double, double);
+template void DynamicSolverT<3>::set_params(const LudingParams&);
+template void DynamicSolverT<3>::set_walls(const MovingWall&, const MovingWall&);
+template void DynamicSolverT<3>::set_walls(const MovingWall&, const MovingWall&, const MovingWall&);
+template void DynamicSolverT<3>::set_gravity(double, double);
+template void DynamicSolverT<3>::set_gravity(double, double, double);
+template std::size_t DynamicSolverT<3>::wall_contacts() const;
+template void DynamicSolverT<3>::contacts(std::vector<ContactInfo>&) const;
 
 }  // namespace netdem::dem

@@ -30,6 +30,7 @@
 // the slip is j's contact point relative to i's (2D: along t = perp(n); 3D: a vector in the
 // tangent plane), forces are on j. A law has a dimension `L::kDim` (2 or 3): the same law
 // template is instantiated for both (dim.hpp).
+#include <cmath>
 #include <concepts>
 #include <cstdint>
 
@@ -53,9 +54,16 @@ template <>
 struct Transport<3> {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  ///< the current normal
+  /// true (an explicit step's first-order R, step_transport()): the result is rescaled to |v|
+  bool preserve_length = false;
   Eigen::Vector3d apply(const Eigen::Vector3d& v) const {
-    const Eigen::Vector3d w = R * v;
-    return w - n * n.dot(w);
+    Eigen::Vector3d w = R * v;
+    w -= n * n.dot(w);
+    if (preserve_length) {
+      const double a = w.squaredNorm();
+      if (a > 0.0) w *= std::sqrt(v.squaredNorm() / a);
+    }
+    return w;
   }
 };
 

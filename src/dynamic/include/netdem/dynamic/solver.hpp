@@ -1,5 +1,6 @@
 #pragma once
-// Explicit (molecular-dynamics) DEM solver for 2D disks with the sintering contact law of
+// Explicit (molecular-dynamics) DEM solver for 2D disks (DynamicSolver) and 3D spheres
+// (DynamicSolver3; issue 16: the same template, DynamicSolverT<D>, see "3D" below) with the sintering contact law of
 // Luding, Manetsberger & Muellers, J. Mech. Phys. Solids 53 (2005) 455 (LMM05), sections 2-3:
 // Newton's equations Eq 2 by velocity Verlet (kick-drift-kick), time step of Eq 6, Verlet-table
 // neighbour search, a bi-axial box whose right/top walls are strain- or stress-controlled (Eq 1).
@@ -11,6 +12,14 @@
 // stiffness N/m, damping kg/s, wall pressure p in N/m (force per wall length), wall mass kg.
 // Stress is reported as force per length (N/m) with compression POSITIVE.
 // See docs/dynamic.md.
+//
+// 3D (D = 3, issue 16, first part): spheres (I = 2/5 m r^2, rotation vectors), the box with six
+// walls (x_min .. z_max; gravity usually along -z), the right (x_max), back (y_max) and top (z_max)
+// walls moving (strain- or stress-controlled, Eq 1 with the wall's current area), the laws through
+// the interface in 3D (law.hpp: the tangential history carried into the current plane every step
+// by contact::step_transport). Not yet in 3D (they throw std::logic_error with one line): state
+// files and restarts (so no last_good() snapshot), contacts(), the affine field (set_strain_rate,
+// prescribed particles, the affine drag, boundary_stress).
 #include <cstddef>
 #include <array>
 #include <cstdint>
@@ -19,6 +28,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <type_traits>
 
 #include "netdem/contact/luding.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
@@ -30,12 +41,24 @@ namespace netdem::dem {
 using contact::LudingHistory;
 using contact::LudingParams;
 
-/// Particle state in flat arrays (structure of arrays), index = particle id.
+/// Particle state in flat arrays (structure of arrays), index = particle id. 3D (spheres, dim 3):
+/// z, vz, fz and the spin and torque about x and y are filled as well; omega and torque are then the
+/// components about z and theta is unused (0).
 struct Particles {
   std::vector<double> x, y, vx, vy, omega, theta;  ///< position [m], velocity [m/s], angle [rad]
   std::vector<double> radius, mass, inertia;       ///< [m], [kg], [kg m^2]
   std::vector<double> fx, fy, torque;              ///< accumulators [N], [N m]
+  std::vector<double> z, vz, fz, wx, wy, tx, ty;   ///< 3D only (empty in 2D)
+  int dim = 2;                                     ///< 2: disks; 3: spheres (set by the first add)
   std::size_t size() const { return x.size(); }
+  /// Adds a sphere of radius r and mass m, I = 2/5 m r^2, with velocity v and spin w (dim = 3; a
+  /// Particles holds disks or spheres, not both: throws std::invalid_argument).
+  std::size_t add_sphere_with_mass(double px, double py, double pz, double r, double m,
+                                   const std::array<double, 3>& v = {0, 0, 0},
+                                   const std::array<double, 3>& w = {0, 0, 0});
+  /// Adds a sphere of density rho: m = rho 4/3 pi r^3.
+  std::size_t add_sphere(double px, double py, double pz, double r, double rho,
+                         const std::array<double, 3>& v = {0, 0, 0});
   /// Adds a disk of radius r: mass rho_p pi r^2 h (contact::luding_mass), I = m r^2 / 2.
   std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
                   double pvy = 0.0, double pomega = 0.0);
@@ -47,6 +70,8 @@ struct Particles {
                        double pvy = 0.0, double pomega = 0.0);
 };
 
+/// The spheres of a 3D packing at rest, density rho (add_sphere()).
+Particles spheres_from(const packing::Packing& p, double rho);
 /// The particles of a packing (x, y, r; SI units, m) at rest: add() of each disk in order.
 Particles particles_from(const packing::Packing& p, const LudingParams& params);
 /// The particles of a packing at rest as disks of areal density rho (add_disk(); any units).
@@ -87,7 +112,8 @@ struct Box : packing::Box {
   /// false: the box is the measurement domain only (density, stress volume, its walls move as
   /// set), without wall contacts; the centres may leave it (a prescribed boundary layer confines)
   bool contact_walls = true;
-  MovingWall right, top;
+  MovingWall right, top;  ///< x_max; y_max (2D) or z_max (3D)
+  MovingWall back;        ///< 3D only: y_max
   Box() : packing::Box{0.0, 0.0, 1.0, 1.0} {}
   /// Fixed walls at the sides of `b`.
   explicit Box(const packing::Box& b) : packing::Box(b) {}
@@ -106,6 +132,7 @@ struct DynamicOptions {
   double dt = 0.0;                      ///< > 0: this time step (still checked); 0: from the rule
   double skin = 0.0;                    ///< Verlet skin [m]; 0: 0.3 x mean radius
   double gravity_x = 0.0, gravity_y = 0.0;  ///< [m/s^2]
+  double gravity_z = 0.0;                   ///< [m/s^2], 3D only
   double temperature = 80.0;  ///< [deg C] initial T of the thermal state (ContactModel::Full)
   /// Steps between the instability checks of step() (DynamicSolver::check_health; 0: never).
   std::int64_t check_every = 500;
@@ -147,6 +174,10 @@ TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndenta
 
 struct Stress2 {
   double xx = 0.0, xy = 0.0, yx = 0.0, yy = 0.0;  ///< [N/m], compression positive
+};
+/// 3D stress [N/m^2], compression positive; s[a][b] = (1/V) sum f_a l_b.
+struct Stress3 {
+  double s[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
 };
 
 struct Energies {
@@ -218,17 +249,24 @@ struct HealthLimits {
   static constexpr std::int64_t kLastGoodEvery = 1000;  ///< steps between refreshes of last_good()
 };
 
-class DynamicSolver {
+template <int D>
+class DynamicSolverT {
  public:
+  static constexpr int kDim = D;
+  static constexpr int kWalls = 2 * D;  ///< axis a: wall 2a at the minimum, 2a + 1 at the maximum
+  using LudingHist = contact::LudingHistoryT<D>;
+  using PlasticHist = contact::PlasticIndentationHistoryT<D>;
+  using Stress = std::conditional_t<D == 2, Stress2, Stress3>;
+
   /// Restart: continues exactly (bit for bit) where the solver that produced `state` stopped.
-  /// The state's params and dt are used; options give the model and the checks.
-  DynamicSolver(const SolverState& state, const DynamicOptions& options);
-  /// The complete state at the current time (for state files and restarts).
+  /// The state's params and dt are used; options give the model and the checks. (2D only)
+  DynamicSolverT(const SolverState& state, const DynamicOptions& options);
+  /// The complete state at the current time (for state files and restarts). (2D only)
   SolverState state() const;
 
   /// Validates, chooses the time step, builds the neighbour table, computes the first forces.
-  DynamicSolver(Particles particles, const LudingParams& params, const Box& box,
-                const DynamicOptions& options);
+  DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                 const DynamicOptions& options);
 
   /// One velocity-Verlet step (Eq 2, Eq 1). Every options.check_every steps it runs
   /// check_health() (the closing kick of that step also takes max|v|); throws InstabilityError
@@ -271,11 +309,16 @@ class DynamicSolver {
   /// Changes the control of the right and top walls (mode, velocity, pressure) between steps; a
   /// strain-controlled wall takes its velocity at once, a stress-controlled one keeps its own.
   void set_walls(const MovingWall& right, const MovingWall& top);
+  /// 3D: the right (x_max), back (y_max) and top (z_max) walls.
+  void set_walls(const MovingWall& right, const MovingWall& back, const MovingWall& top);
   /// Velocities of the right and top walls [m/s].
   double wall_velocity_right() const { return wall_v_[0]; }
-  double wall_velocity_top() const { return wall_v_[1]; }
+  double wall_velocity_top() const { return wall_v_[D - 1]; }
+  /// Velocity of the moving wall of axis a (its maximum) [m/s].
+  double wall_velocity(int axis) const { return wall_v_[axis]; }
   /// Sets the gravity vector [m/s^2] between steps.
   void set_gravity(double gx, double gy);
+  void set_gravity(double gx, double gy, double gz);
   /// The macroscopic strain rate E' = diag(e11, e22) (no shear) about the box's lower-left corner
   /// x_0: prescribed particles follow it, Affine walls follow it, the affine drag acts relative to
   /// it. Over a step of length dt the affine motion is exactly x_0 + exp(E' dt)(x - x_0).
@@ -317,7 +360,7 @@ class DynamicSolver {
   void set_rotations(bool free);
   /// The stress from the contact forces on the prescribed particles (their reactions, Redanz & Fleck
   /// Eq 13), about the box centre: Sigma = (1/V) sum_p f_p (x) (x_p - x_c), compression positive.
-  Stress2 boundary_stress() const;
+  Stress boundary_stress() const;
   /// Number of particle-wall contacts (overlap > 0) at the current positions.
   std::size_t wall_contacts() const;
   /// All touching contacts (pairs, then walls) with their forces: the law evaluated on the
@@ -328,24 +371,31 @@ class DynamicSolver {
   /// Pairs (i < j) of the table that currently overlap, sorted.
   void touching_pairs(std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
   /// Committed contact history of pair (i < j); nullptr if the pair is not in the table.
-  const LudingHistory* history(std::uint32_t i, std::uint32_t j) const;
+  const LudingHist* history(std::uint32_t i, std::uint32_t j) const;
   /// The same for ContactModel::PlasticIndentation.
-  const contact::PlasticIndentationHistory* plastic_history(std::uint32_t i, std::uint32_t j) const;
+  const PlasticHist* plastic_history(std::uint32_t i, std::uint32_t j) const;
 
   double wall_force_right() const { return wall_force_[1]; }  ///< contacts on right wall, +x [N]
-  double wall_force_top() const { return wall_force_[3]; }    ///< contacts on top wall, +y [N]
-  /// Wall stresses F_right / height and F_top / width [N/m].
-  Stress2 wall_stress() const;
+  double wall_force_top() const { return wall_force_[2 * D - 1]; }  ///< contacts on top wall, +y (3D: +z) [N]
+  /// The force of the contacts on wall w (0 .. 2D - 1) along its axis [N].
+  double wall_force(int w) const { return wall_force_[w]; }
+  /// Wall stresses F_right / height and F_top / width [N/m] (3D: the three moving walls' forces
+  /// over their areas on the diagonal [N/m^2]).
+  Stress wall_stress() const;
   /// Contact-network stress Sigma = (1/V) sum_c f_c (x) l_c at the last force evaluation: pairs
   /// with l = x_j - x_i and f on j, wall contacts with l = particle centre - contact point.
-  Stress2 contact_stress() const;
-  /// Density nu = sum pi a_i^2 / box area.
+  Stress contact_stress() const;
+  /// Density nu = sum pi a_i^2 / box area (3D: sum 4/3 pi a_i^3 / box volume).
   double density() const;
   Energies energies() const;
 
  private:
   template <contact::LudingFeatures F>
   void compute_forces_with();
+  double box_measure() const;  ///< area (2D) or volume (3D) of the box
+  const MovingWall& moving_wall(int axis) const {
+    return axis == 0 ? box_.right : (axis == D - 1 ? box_.top : box_.back);
+  }
   template <class L, bool InPlace>
   void compute_forces();
   // the history store of a law's history type (one per law family)
@@ -382,9 +432,9 @@ class DynamicSolver {
   double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
-  std::vector<LudingHistory> pair_hist_, new_hist_;
+  std::vector<LudingHist> pair_hist_, new_hist_;
   // ContactModel::PlasticIndentation: its histories (the Luding ones stay empty) and laws
-  std::vector<contact::PlasticIndentationHistory> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
+  std::vector<PlasticHist> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
   contact::PlasticIndentationParams pl_wall_params_;
   double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
   double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
@@ -403,10 +453,11 @@ class DynamicSolver {
   /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
-  std::vector<double> x_build_, y_build_;
-  packing::CellGrid grid_;  ///< over the positions of the last table build (storage reused)
-  // wall histories: 4 per particle (left, right, bottom, top); wall state
-  std::vector<LudingHistory> wall_hist_;
+  std::vector<double> x_build_, y_build_, z_build_;
+  /// over the positions of the last table build (storage reused)
+  std::conditional_t<D == 2, packing::CellGrid, packing::CellGrid3> grid_;
+  // wall histories: 2D per particle (2D: left, right, bottom, top; 3D: x_min .. z_max); wall state
+  std::vector<LudingHist> wall_hist_;
   /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force
   /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
   /// histories of the other particles. Particles with no bit and no overlap are skipped by the
@@ -415,7 +466,7 @@ class DynamicSolver {
   /// Particles within a_i + skin of a wall at the last table build (ascending); with the walls
   /// within skin/2 of box_build_ (else a rebuild) no other particle can touch a wall.
   std::vector<std::uint32_t> wall_list_;
-  double box_build_[4] = {0, 0, 0, 0};  ///< x_min, x_max, y_min, y_max at the build
+  double box_build_[2 * D] = {};  ///< x_min, x_max, y_min, y_max (, z_min, z_max) at the build
   bool wall_list_valid_ = false;
   /// 1/m and 1/I for the kicks, refilled by step() when the particle count or radius_scale_ (the
   /// only thing that changes the inertia, Eq 9) differs from the values they were computed for.
@@ -423,12 +474,18 @@ class DynamicSolver {
   double inv_scale_ = -1.0;
   /// step() set the force accumulators to m g in its first pass (compute_forces skips its own)
   bool forces_initialised_ = false;
-  double wall_force_[4] = {0, 0, 0, 0};
-  double wall_v_[2] = {0, 0};  ///< right, top velocities
+  double wall_force_[2 * D] = {};
+  double wall_v_[D] = {};  ///< velocities of the moving walls: right, top (3D: right, back, top)
   double sxx_ = 0, sxy_ = 0, syx_ = 0, syy_ = 0, elastic_ = 0;
+  double s3_[3][3] = {};  ///< 3D: sum f (x) l
   // instability checks
   std::int64_t since_check_ = 0, since_good_ = 0;
   std::shared_ptr<const SolverState> last_good_;
 };
+
+using DynamicSolver = DynamicSolverT<2>;
+using DynamicSolver3 = DynamicSolverT<3>;
+extern template class DynamicSolverT<2>;
+extern template class DynamicSolverT<3>;
 
 }  // namespace netdem::dem

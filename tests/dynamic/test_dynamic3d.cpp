@@ -1,0 +1,307 @@
+// Tests of the explicit DEM in 3D (DynamicSolver3, issue 16): closed forms for spheres.
+#include <gtest/gtest.h>
+
+#include "test_scale.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "netdem/contact/kinematics.hpp"
+#include "netdem/contact/luding_law.hpp"
+#include "netdem/dynamic/solver.hpp"
+
+using namespace netdem::dem;
+using netdem::contact::LudingParams;
+
+namespace {
+
+constexpr double kRho = 2000.0;  // kg/m^3
+
+LudingParams linear_params() {  // k1 = k2, k_c = 0
+  LudingParams p;
+  p.k1_ratio = 1.0;
+  p.kc_ratio = 0.0;
+  p.mu = 0.0;
+  p.mu_wall = 0.0;
+  return p;
+}
+
+double sphere_mass(double a) { return kRho * 4.0 / 3.0 * std::numbers::pi * a * a * a; }
+
+struct Collision {
+  double e = 0.0, tc = 0.0;
+};
+
+// Head-on collision of two equal spheres in free space along a skew direction u, relative speed v0.
+Collision two_sphere(const LudingParams& p, double steps_per_contact, const Eigen::Vector3d& u) {
+  Particles P;
+  const double a = p.a0, v0 = 0.1;
+  const Eigen::Vector3d x1 = (2.0 * a + 1e-6) * u, v = 0.5 * v0 * u;
+  P.add_sphere(0.0, 0.0, 0.0, a, kRho, {v.x(), v.y(), v.z()});
+  P.add_sphere(x1.x(), x1.y(), x1.z(), a, kRho, {-v.x(), -v.y(), -v.z()});
+  Box box;
+  box.enabled = false;
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  o.steps_per_contact = steps_per_contact;
+  DynamicSolver3 s(std::move(P), p, box, o);
+  auto overlap = [&] {
+    const auto& q = s.particles();
+    const Eigen::Vector3d d(q.x[1] - q.x[0], q.y[1] - q.y[0], q.z[1] - q.z[0]);
+    return 2.0 * a - d.norm();
+  };
+  double d_prev = overlap(), t_in = -1.0, t_out = -1.0;
+  for (int k = 0; k < 1000000 && t_out < 0.0; ++k) {
+    s.step();
+    const double d = overlap();
+    const double t_cross = s.time() - s.dt() * d / (d - d_prev);
+    if (d_prev <= 0.0 && d > 0.0) t_in = t_cross;
+    if (t_in >= 0.0 && d_prev > 0.0 && d <= 0.0) t_out = t_cross;
+    d_prev = d;
+  }
+  EXPECT_GT(t_out, 0.0);
+  s.run(5);
+  const auto& q = s.particles();
+  const Eigen::Vector3d dv(q.vx[1] - q.vx[0], q.vy[1] - q.vy[0], q.vz[1] - q.vz[0]);
+  return {dv.dot(u) / v0, t_out - t_in};
+}
+
+}  // namespace
+
+// Restitution and contact duration of two spheres with the linear spring-dashpot (LMM05 Eq 5,
+// 6): e = exp(-eta t_c), t_c = pi / sqrt(k2 / m12 - eta^2), with the sphere masses, to the
+// integrator's O(dt) (the dashpot is taken at the half-step velocity), in any direction.
+TEST(Dynamic3D, TwoSphereRestitutionAndDuration) {
+  LudingParams p = linear_params();
+  p.gamma_n = 0.5;
+  const double m12 = 0.5 * sphere_mass(p.a0);
+  const double eta = p.gamma_n / (2.0 * m12);
+  const double tc = std::numbers::pi / std::sqrt(p.k2 / m12 - eta * eta);
+  const double e = std::exp(-eta * tc);
+  double err[2];
+  int k = 0;
+  for (double spc : {50.0, 200.0}) {
+    const Collision c = two_sphere(p, spc, Eigen::Vector3d(1.0, -2.0, 2.0).normalized());
+    const double dt = tc / spc;
+    err[k] = std::fabs(c.e - e);
+    std::printf("  %3.0f steps/contact: e = %.6f (closed form %.6f), t_c = %.6e s (%.6e)\n", spc, c.e, e, c.tc, tc);
+    EXPECT_LE(err[k], eta * dt);
+    EXPECT_LE(std::fabs(c.tc - tc) / tc, eta * dt);
+    ++k;
+  }
+  EXPECT_GT(err[0], 2.0 * err[1]);  // converges with dt
+  // the same collision along x, y or z (the dimension's axes are not special)
+  const Collision cx = two_sphere(p, 50.0, Eigen::Vector3d::UnitX());
+  const Collision cz = two_sphere(p, 50.0, Eigen::Vector3d::UnitZ());
+  EXPECT_NEAR(cx.e, cz.e, 1e-12);
+  EXPECT_NEAR(cx.tc, cz.tc, 1e-12 * cx.tc);
+}
+
+// Dense random packing of spheres whose contacts never open (pitch 1.85 a0 < 2 a_min, velocities
+// small against the overlaps; the walls at half a pitch from the outer centres touch too): a
+// smooth Hamiltonian, on which velocity Verlet's energy error is O(dt^2), over 5 contact times
+// (short enough that the runs at different dt follow the same trajectory). As the 2D test.
+static double lattice_energy_error(double steps_per_contact, double duration, int side) {
+  LudingParams p = linear_params();
+  p.gamma_n = 0.0;
+  p.gamma_t = 0.0;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Particles P;
+  const double pitch = 1.85 * p.a0, v = 0.3;
+  for (int a = 0; a < side; ++a)
+    for (int b = 0; b < side; ++b)
+      for (int c = 0; c < side; ++c) {
+        const double r = p.a0 * (1.0 + 0.05 * u(rng));
+        const double slack = 0.5 * pitch - r;
+        P.add_sphere((a + 0.5) * pitch + 0.5 * slack * u(rng), (b + 0.5) * pitch + 0.5 * slack * u(rng),
+                     (c + 0.5) * pitch + 0.5 * slack * u(rng), r, kRho, {v * u(rng), v * u(rng), v * u(rng)});
+      }
+  Box box;
+  box.x_max = box.y_max = box.z_max = side * pitch;
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  o.steps_per_contact = steps_per_contact;
+  DynamicSolver3 s(std::move(P), p, box, o);
+  const double e0 = s.energies().total();
+  double err = 0.0;
+  const std::size_t n = static_cast<std::size_t>(duration / s.dt());
+  for (std::size_t k = 0; k < n; ++k) {
+    s.step();
+    err = std::fmax(err, std::fabs(s.energies().total() - e0) / e0);
+  }
+  return err;
+}
+
+TEST(Dynamic3D, EnergyConservedSecondOrder) {
+  const int side = netdem::test::small_scale() ? 4 : 5;
+  const LudingParams p = linear_params();
+  const double duration = 5.0 * contact_duration(p.k2, 0.0, 0.5 * sphere_mass(p.a0));
+  const double e1 = lattice_energy_error(25.0, duration, side);
+  const double e2 = lattice_energy_error(50.0, duration, side);
+  const double e3 = lattice_energy_error(100.0, duration, side);
+  const double o1 = std::log2(e1 / e2), o2 = std::log2(e2 / e3);
+  std::printf("  %d spheres, persistent contacts: max |dE|/E = %.3e, %.3e, %.3e at 25, 50, 100 steps/contact; "
+              "observed orders %.3f, %.3f\n",
+              side * side * side, e1, e2, e3, o1, o2);
+  EXPECT_GE(o1, 1.8);
+  EXPECT_LE(o1, 2.2);
+  EXPECT_GE(o2, 1.8);
+  EXPECT_LE(o2, 2.2);
+}
+
+// A sphere on an inclined plane (gravity tilted by theta against the bottom wall z_min), the
+// linear law with wall friction mu_w. Rotation locked: it sticks for tan theta < mu and slides
+// with a = g (sin theta - mu cos theta) above. Free (I = 2/5 m r^2): it rolls without slipping,
+// a = 5/7 g sin theta, for tan theta < 7 mu / 2, and slides with a = g (sin - mu cos) above.
+TEST(Dynamic3D, SphereOnInclineSticksSlidesAndRolls) {
+  const double g = 9.81, mu = 0.3;
+  auto run = [&](double theta, bool rotation) {
+    LudingParams p = linear_params();
+    p.mu_wall = mu;
+    p.gamma_n = 0.5;
+    p.gamma_t = 0.1;
+    Particles P;
+    P.add_sphere(0.05, 0.05, p.a0 + 1e-9, p.a0, kRho);
+    Box box;
+    box.x_max = 1.0;
+    box.y_max = 0.1;
+    box.z_max = 0.1;
+    DynamicOptions o;
+    o.model = ContactModel::Linear;
+    o.gravity_x = g * std::sin(theta);
+    o.gravity_z = -g * std::cos(theta);
+    DynamicSolver3 s(std::move(P), p, box, o);
+    s.set_rotations(rotation);
+    s.run(static_cast<std::size_t>(0.02 / s.dt()));  // settle on the plane
+    const double x0 = s.particles().x[0], v0 = s.particles().vx[0], t0 = s.time();
+    s.run(static_cast<std::size_t>(0.05 / s.dt()));
+    const double T = s.time() - t0;
+    const double dxs = s.particles().x[0] - x0;
+    return 2.0 * (dxs - v0 * T) / (T * T);  // mean acceleration along the incline
+  };
+  const double th_stick = std::atan(0.8 * mu), th_slide = std::atan(1.5 * mu), th_roll = std::atan(2.0 * mu),
+               th_rslide = std::atan(5.0 * mu);
+  const double a_stick = run(th_stick, false), a_slide = run(th_slide, false);
+  const double a_roll = run(th_roll, true), a_rslide = run(th_rslide, true);
+  const double slide = g * (std::sin(th_slide) - mu * std::cos(th_slide));
+  const double roll = 5.0 / 7.0 * g * std::sin(th_roll);
+  const double rslide = g * (std::sin(th_rslide) - mu * std::cos(th_rslide));
+  std::printf("  locked: tan = 0.8 mu: a = %.3e; tan = 1.5 mu: a = %.5f (closed form %.5f)\n", a_stick, a_slide, slide);
+  std::printf("  free:   tan = 2 mu: a = %.5f (rolling 5/7 g sin = %.5f); tan = 5 mu: a = %.5f (sliding %.5f)\n", a_roll,
+              roll, a_rslide, rslide);
+  EXPECT_LT(std::fabs(a_stick), 1e-3 * g);
+  EXPECT_NEAR(a_slide / slide, 1.0, 5e-3);
+  EXPECT_NEAR(a_roll / roll, 1.0, 5e-3);
+  EXPECT_NEAR(a_rslide / rslide, 1.0, 5e-3);
+}
+
+// A rigidly rotating pair (velocities w x x, spins w) with a loaded tangential spring: the step's
+// kinematics give no slip, and step_transport carries the spring with the pair (first order per
+// step, length kept: the error after one radian is O(dt)).
+TEST(Dynamic3D, RigidRotationCarriesTheSpring) {
+  using V3 = Eigen::Vector3d;
+  const V3 w = V3(0.3, -0.5, 0.8).normalized();  // rad/s
+  const V3 xi0(0.1, 0.2, -0.1), xj0 = xi0 + 1.9e-3 * V3(1.0, 0.4, -0.3).normalized();
+  const double ri = 1e-3, rj = 1e-3;
+  double err[2];
+  int k = 0;
+  for (int steps : {1000, 4000}) {
+    const double dt = 1.0 / steps;
+    const netdem::contact::PairGeometry3 g0 = netdem::contact::pair_geometry(xi0, xj0, ri, rj);
+    V3 spring = 1e-6 * g0.n.unitOrthogonal();
+    const V3 s0 = spring;
+    double slip = 0.0;
+    for (int q = 1; q <= steps; ++q) {
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(q * dt, w).toRotationMatrix();
+      const V3 xi = R * xi0, xj = R * xj0;
+      const netdem::contact::PairGeometry3 g = netdem::contact::pair_geometry(xi, xj, ri, rj);
+      // the solver's step kinematics (solver.cpp compute_forces, 3D)
+      const V3 vrel = w.cross(xj - xi), W = g.d_i * w + g.d_j * w;
+      const V3 vc = vrel - W.cross(g.n);
+      slip += (vc - g.n * vc.dot(g.n)).norm() * dt;
+      const auto t = netdem::contact::step_transport(g.n, (g.n.cross(vrel) + W.dot(g.n) * g.n) * (dt / g.L));
+      spring = t.apply(spring);
+    }
+    const V3 exact = Eigen::AngleAxisd(1.0, w).toRotationMatrix() * s0;
+    err[k++] = (spring - exact).norm() / s0.norm();
+    std::printf("  %d steps: slip %.2e m, |spring - R spring0| / |spring0| = %.3e, length %.15f\n", steps, slip,
+                err[k - 1], spring.norm() / s0.norm());
+    EXPECT_LT(slip, 1e-15);
+    EXPECT_NEAR(spring.norm(), s0.norm(), steps * 1e-15 * s0.norm());  // rounding only (a rescale per step)
+  }
+  EXPECT_LT(err[0], 1e-3);
+  EXPECT_LT(err[1], 0.3 * err[0]);  // O(dt)
+}
+
+// Stress-controlled walls in 3D (Eq 1 with the wall's area): a frictionless damped sample of
+// spheres settles with each moving wall's force = p x its current area, and the contact stress
+// carries the same pressure on the diagonal.
+TEST(Dynamic3D, StressControlledWallsSettleToPressure) {
+  LudingParams p = linear_params();
+  p.gamma_n = 1.0;
+  const int side = netdem::test::small_scale() ? 3 : 4;
+  const double pitch = 2.2 * p.a0;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Particles P;
+  for (int a = 0; a < side; ++a)
+    for (int b = 0; b < side; ++b)
+      for (int c = 0; c < side; ++c)
+        P.add_sphere((a + 0.5) * pitch, (b + 0.5) * pitch, (c + 0.5) * pitch, p.a0 * (1.0 + 0.2 * u(rng)), kRho);
+  Box box;
+  box.x_max = box.y_max = box.z_max = side * pitch;
+  const double pressure = 1e5;  // N/m^2
+  for (MovingWall* w : {&box.right, &box.back, &box.top}) {
+    w->mode = WallMode::Stress;
+    w->pressure = pressure;
+    w->mass = 1e-3;
+    w->damping = 2.0;
+  }
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  DynamicSolver3 s(std::move(P), p, box, o);
+  const double nu0 = s.density();
+  s.run(static_cast<std::size_t>(0.06 / s.dt()));
+  const auto& b = s.box();
+  const double e[3] = {b.x_max - b.x_min, b.y_max - b.y_min, b.z_max - b.z_min};
+  const Stress3 sw = s.wall_stress(), sc = s.contact_stress();
+  std::printf("  %d spheres: nu %.3f -> %.3f; wall stress %.5f %.5f %.5f p; contact stress %.4f %.4f %.4f p, "
+              "off-diagonal max %.1e p\n",
+              side * side * side, nu0, s.density(), sw.s[0][0] / pressure, sw.s[1][1] / pressure,
+              sw.s[2][2] / pressure, sc.s[0][0] / pressure, sc.s[1][1] / pressure, sc.s[2][2] / pressure,
+              std::fmax(std::fabs(sc.s[0][1]), std::fmax(std::fabs(sc.s[0][2]), std::fabs(sc.s[1][2]))) / pressure);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(s.wall_force(2 * a + 1) / (pressure * e[(a + 1) % 3] * e[(a + 2) % 3]), 1.0, 1e-3);
+    EXPECT_NEAR(sc.s[a][a] / pressure, 1.0, 1e-2);
+  }
+  EXPECT_GT(s.density(), nu0);
+}
+
+// The 3D solver refuses what it does not do yet, with one line.
+TEST(Dynamic3D, RefusesTheTwoDOnlyParts) {
+  LudingParams p = linear_params();
+  Particles P;
+  P.add_sphere(0.005, 0.005, 0.005, p.a0, kRho);
+  Box box;
+  box.x_max = box.y_max = box.z_max = 0.01;
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  DynamicSolver3 s(P, p, box, o);
+  EXPECT_THROW(s.state(), std::logic_error);
+  EXPECT_THROW(s.set_strain_rate(-1.0, -1.0), std::logic_error);
+  EXPECT_THROW(s.set_prescribed({0}), std::logic_error);
+  // disks into a 3D solver, spheres into a 2D one
+  Particles disks;
+  disks.add(0.005, 0.005, p.a0, p);
+  EXPECT_THROW(DynamicSolver3(disks, p, box, o), std::invalid_argument);
+  EXPECT_THROW(DynamicSolver(P, p, box, o), std::invalid_argument);
+  Box flat = box;
+  flat.z_max = 0.0;
+  EXPECT_THROW(DynamicSolver3(P, p, flat, o), std::invalid_argument);
+}
