@@ -240,10 +240,6 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
-  if constexpr (D == 3) {
-    for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
-      if (w->mode == WallMode::Affine) throw std::logic_error("DynamicSolver: affine walls are 2D only (issue 16)");
-  }
   ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, opt_, 0.0) : choose_time_step(P_, params_, opt_);
   thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
   // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
@@ -1129,8 +1125,33 @@ void DynamicSolverT<D>::set_strain_rate(double e11, double e22, double e12) {
 }
 
 template <int D>
+void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33) {
+  if constexpr (D == 2) {
+    (void)e11;
+    (void)e22;
+    (void)e33;
+    fail("set_strain_rate3: a 2D solver takes set_strain_rate(e11, e22, e12)");
+  } else {
+    if (!std::isfinite(e11) || !std::isfinite(e22) || !std::isfinite(e33))
+      fail("set_strain_rate3: the strain rate must be finite");
+    if (!box_.enabled) fail("set_strain_rate3: the affine field needs a box (its lower corner is x_0)");
+    edot3_[0] = e11;
+    edot3_[1] = e22;
+    edot3_[2] = e33;
+  }
+}
+
+template <int D>
 void DynamicSolverT<D>::set_affine_velocities() {
-  if constexpr (D == 3) throw std::logic_error("set_affine_velocities is 2D only (issue 16, 3D first part)");
+  if constexpr (D == 3) {
+    for (std::size_t i = 0; i < P_.size(); ++i) {
+      P_.vx[i] = edot3_[0] * (P_.x[i] - box_.x_min);
+      P_.vy[i] = edot3_[1] * (P_.y[i] - box_.y_min);
+      P_.vz[i] = edot3_[2] * (P_.z[i] - box_.z_min);
+      P_.wx[i] = P_.wy[i] = P_.omega[i] = 0.0;
+    }
+    return;
+  }
   const double e12 = edot_[2];
   for (std::size_t i = 0; i < P_.size(); ++i) {
     const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
@@ -1193,19 +1214,18 @@ void DynamicSolverT<D>::set_rotations(bool free) {
 
 template <int D>
 void DynamicSolverT<D>::hold_spins(const std::vector<std::uint32_t>& particles) {
-  if constexpr (D == 3) throw std::logic_error("hold_spins is 2D only (issue 16, 3D first part)");
   for (std::uint32_t p : particles) {
     if (p >= P_.size() || is_prescribed_.empty() || !is_prescribed_[p])
       fail("hold_spins: particle " + std::to_string(p) + " is not prescribed (call set_prescribed first)");
     spin_held_[p] = 1;
     P_.omega[p] = 0.0;
+    if constexpr (D == 3) P_.wx[p] = P_.wy[p] = 0.0;
   }
   inv_mass_.clear();  // the kicks' inverse inertias are refilled
 }
 
 template <int D>
 void DynamicSolverT<D>::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins) {
-  if constexpr (D == 3) throw std::logic_error("set_prescribed is 2D only (issue 16, 3D first part)");
   is_prescribed_.assign(P_.size(), 0);
   spin_held_.assign(P_.size(), 0);
   for (std::uint32_t p : particles) {
@@ -1237,8 +1257,22 @@ std::array<double, 4> expm1_sym2(double a, double b, double c, double t) {
 
 template <int D>
 void DynamicSolverT<D>::impose_affine_motion(double dt) {
-  if constexpr (D == 3) {  // (set_strain_rate and set_prescribed refuse 3D: nothing moves)
-    (void)dt;
+  if constexpr (D == 3) {  // diagonal E' (set_strain_rate3): x_0 + exp(E' dt)(x - x_0) exactly
+    double g[3];
+    for (int a = 0; a < 3; ++a) {
+      const double m = std::expm1(edot3_[a] * dt);
+      F3_[static_cast<std::size_t>(a)] *= 1.0 + m;
+      g[a] = m / dt;
+    }
+    for (std::uint32_t p : prescribed_) {
+      P_.vx[p] = g[0] * (P_.x[p] - box_.x_min);
+      P_.vy[p] = g[1] * (P_.y[p] - box_.y_min);
+      P_.vz[p] = g[2] * (P_.z[p] - box_.z_min);
+      if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+    }
+    const double L[3] = {box_.x_max - box_.x_min, box_.y_max - box_.y_min, box_.z_max - box_.z_min};
+    for (int a = 0; a < 3; ++a)
+      if (moving_wall(a).mode == WallMode::Affine) wall_v_[a] = g[a] * L[a];
     return;
   }
   {  // the accumulated map
@@ -1279,7 +1313,29 @@ void DynamicSolverT<D>::set_affine_drag(double drag) {
 
 template <int D>
 double DynamicSolverT<D>::unbalanced_force_rms() const {
-  if constexpr (D == 3) throw std::logic_error("unbalanced_force_rms is 2D only (issue 16, 3D first part)");
+  if constexpr (D == 3) {
+    const double c = opt_.affine_drag;
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < P_.size(); ++i) {
+      const bool pres = !is_prescribed_.empty() && is_prescribed_[i];
+      if (rotations_ && !(pres && spin_held_[i])) {
+        const double r = P_.radius[i], I = P_.inertia[i];
+        const double mx = (P_.tx[i] + c * I * P_.wx[i]) / r, my = (P_.ty[i] + c * I * P_.wy[i]) / r,
+                     mz = (P_.torque[i] + c * I * P_.omega[i]) / r;
+        sum += mx * mx + my * my + mz * mz;
+        ++n;
+      }
+      if (pres) continue;
+      const double m = P_.mass[i];
+      const double fx = P_.fx[i] + c * m * (P_.vx[i] - edot3_[0] * (P_.x[i] - box_.x_min));
+      const double fy = P_.fy[i] + c * m * (P_.vy[i] - edot3_[1] * (P_.y[i] - box_.y_min));
+      const double fz = P_.fz[i] + c * m * (P_.vz[i] - edot3_[2] * (P_.z[i] - box_.z_min));
+      sum += fx * fx + fy * fy + fz * fz;
+      if (!rotations_) ++n;
+    }
+    return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
+  }
   const double c = opt_.affine_drag;
   double sum = 0.0;
   std::size_t n = 0;
@@ -1304,7 +1360,22 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
 
 template <int D>
 void DynamicSolverT<D>::apply_affine_drag() {
-  if constexpr (D == 3) throw std::logic_error("the affine drag is 2D only (issue 16, 3D first part)");
+  if constexpr (D == 3) {
+    const double c = opt_.affine_drag;
+    for (std::size_t i = 0; i < P_.size(); ++i) {
+      const bool pres = !is_prescribed_.empty() && is_prescribed_[i];
+      if (!(pres && spin_held_[i])) {
+        P_.tx[i] -= c * P_.inertia[i] * P_.wx[i];
+        P_.ty[i] -= c * P_.inertia[i] * P_.wy[i];
+        P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
+      }
+      if (pres) continue;
+      P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - edot3_[0] * (P_.x[i] - box_.x_min));
+      P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - edot3_[1] * (P_.y[i] - box_.y_min));
+      P_.fz[i] -= c * P_.mass[i] * (P_.vz[i] - edot3_[2] * (P_.z[i] - box_.z_min));
+    }
+    return;
+  }
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
@@ -1325,8 +1396,21 @@ void DynamicSolverT<D>::apply_affine_drag() {
 
 template <int D>
 auto DynamicSolverT<D>::boundary_stress() const -> Stress {
-  if constexpr (D == 3) {
-    throw std::logic_error("boundary_stress is 2D only (issue 16, 3D first part)");
+  if constexpr (D == 3) {  // about the box centre (diagonal E': the box is the deformed domain)
+    Stress s;
+    if (!box_.enabled) return s;
+    const double c[3] = {0.5 * (box_.x_min + box_.x_max), 0.5 * (box_.y_min + box_.y_max),
+                         0.5 * (box_.z_min + box_.z_max)};
+    for (std::uint32_t p : prescribed_) {
+      const double f[3] = {P_.fx[p], P_.fy[p], P_.fz[p]};
+      const double l[3] = {P_.x[p] - c[0], P_.y[p] - c[1], P_.z[p] - c[2]};
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) s.s[a][b] += f[a] * l[b];
+    }
+    const double V = box_measure();
+    for (auto& row : s.s)
+      for (double& v : row) v /= V;
+    return s;
   } else {
   Stress s;
   if (!box_.enabled) return s;

@@ -169,7 +169,6 @@ void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& bac
     for (const MovingWall* w : {&right, &back, &top}) {
       if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
         fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
-      if (w->mode == WallMode::Affine) throw std::logic_error("set_walls: affine walls are 2D only (issue 16)");
     }
     box_.right = right;
     box_.back = back;

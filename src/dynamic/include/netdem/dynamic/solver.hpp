@@ -329,6 +329,12 @@ class DynamicSolverT {
   /// is exactly the deformed domain's, det exp(L t) = exp(tr L t)), and box_deformation() holds the
   /// accumulated map, whose parallelogram is the deformed domain.
   void set_strain_rate(double e11, double e22, double e12 = 0.0);
+  /// 3D: the diagonal strain rate E' = diag(e11, e22, e33) about the box's lower corner
+  /// (x_min, y_min, z_min): prescribed particles, Affine walls and the affine drag follow it, over a
+  /// step exactly x_0 + exp(E' dt)(x - x_0). (3D shear rates: not yet.)
+  void set_strain_rate3(double e11, double e22, double e33);
+  /// 3D: the accumulated diagonal map exp(E' t) since construction.
+  const std::array<double, 3>& box_deformation3() const { return F3_; }
   double strain_rate_11() const { return edot_[0]; }
   double strain_rate_22() const { return edot_[1]; }
   double strain_rate_12() const { return edot_[2]; }
@@ -441,6 +447,8 @@ class DynamicSolverT {
   // macroscopic strain rate, prescribed particles
   double edot_[3] = {0.0, 0.0, 0.0};  ///< e11, e22, e12
   std::array<double, 4> F_ = {1.0, 0.0, 0.0, 1.0};
+  double edot3_[3] = {0.0, 0.0, 0.0};  ///< 3D: e11, e22, e33
+  std::array<double, 3> F3_ = {1.0, 1.0, 1.0};
   bool sheared_ = false;  ///< e12 was ever non-zero (boundary_stress takes the parallelogram's centre)
   double centre0_[2] = {0.0, 0.0};  ///< the box centre at construction
   std::vector<std::uint32_t> prescribed_;
