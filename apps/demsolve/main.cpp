@@ -1,6 +1,6 @@
 // demsolve: explicit 2D DEM with Luding's sintering contact law (Luding, Manetsberger & Muellers 2005).
 //
-//   demsolve prepare [--n 300] [--pressure 100] [--seed 1] [--time 0.2] [--out DIR] [--quiet]
+//   demsolve prepare [--n 300] [--pressure 100] [--seed 1] [--time 0.2] [--dim 2|3] [--out DIR] [--quiet]
 //                    [--packing FILE [--length-unit M]]
 //   demsolve sinter  [--n 300] [--pressure 100] [--sinter-time 1.0] [--seed 1] [--state FILE] [--out DIR]
 //   demsolve compress --state FILE [--strain-rate 1] [--max-strain 0.1] [--out DIR]
@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   netdem::dem::SinterProtocol prot;
   std::string out_prepare, out_sinter;
 
-  std::vector<CLI::Option*> pressure_opts, sample_opts, packing_opts;
+  std::vector<CLI::Option*> pressure_opts, sample_opts, packing_opts, dim_opts;
   // CLI11 turns "-1" into 2^64 - 1 for an unsigned option: refuse a sign
   auto unsigned_only = [](const std::string& v) -> std::string {
     return v.find_first_not_of("0123456789") == std::string::npos && !v.empty() ? ""
@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     c->add_option("--param", run.param_overrides, "contact parameter NAME=VALUE (Table 1 names, e.g. k2=2e5, da_T=0)");
     c->add_flag("--quiet", run.quiet, "no progress on stderr");
+    dim_opts.push_back(c->add_option("--dim", run.dim, "2: disks (LMM05); 3: spheres in a box of six walls, three of them "
+                                                       "stress-controlled, --pressure in N/m^2 (default 100 N/m / (2 a0)); "
+                                                       "a state file gives its own")
+                           ->check(CLI::IsMember({2, 3}))
+                           ->capture_default_str());
     limits(c);
   };
   auto* prep = app.add_subcommand("prepare", "random disks compressed by stress-controlled walls, frictionless, 80 deg C (section 4.1)");
@@ -233,6 +238,7 @@ int main(int argc, char** argv) {
   for (auto* o : pressure_opts) run.pressure_given = run.pressure_given || o->count() > 0;
   for (auto* o : sample_opts) run.sample_given = run.sample_given || o->count() > 0;
   for (auto* o : packing_opts) run.packing_given = run.packing_given || o->count() > 0;
+  for (auto* o : dim_opts) run.dim_given = run.dim_given || o->count() > 0;
   run.max_steps = max_steps;
   return guarded([&] {
     if (prep->parsed()) return run_protocol(command, sample, run, prot, true, out_prepare);

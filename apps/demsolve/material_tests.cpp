@@ -41,6 +41,12 @@ void write_common(const std::string& command, const SolverState& st, const fs::p
 
 }  // namespace
 
+namespace {
+template <int D>
+int run_compress_body(const std::string& command, const CompressArgs& a, const fs::path& out, const CompressionTest& test,
+                      SolverState& st);
+}  // namespace
+
 int run_compress(const std::string& command, const CompressArgs& a, const fs::path& out) {
   CompressionTest test;
   test.strain_rate = a.strain_rate;
@@ -50,15 +56,22 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   if (!(std::isfinite(a.pressure) && a.pressure >= 0.0))
     throw std::invalid_argument(fmt::format("--pressure must be a positive number of N/m, got {}", a.pressure));
   SolverState st = load_state(a.state_file, a.param_overrides);
+  return st.dim() == 3 ? run_compress_body<3>(command, a, out, test, st) : run_compress_body<2>(command, a, out, test, st);
+}
+
+namespace {
+template <int D>
+int run_compress_body(const std::string& command, const CompressArgs& a, const fs::path& out, const CompressionTest& test,
+                      SolverState& st) {
   const double p = a.pressure > 0.0 ? a.pressure : st.box.right.pressure;
   if (!(p > 0.0)) throw std::invalid_argument("the state has no wall pressure: give --pressure");
-  const std::string warning = check_loading(p, st.params, a.pressure > 0.0 ? "--pressure" : "the state's wall pressure");
+  const std::string warning = check_loading(p, st.params, a.pressure > 0.0 ? "--pressure" : "the state's wall pressure", D);
   check_temperature(st.thermal.T, st.params, "the state's temperature");
   check_memory(st.particles.size());
   DynamicOptions opt;
   opt.model = ContactModel::Full;
-  DynamicSolver s(st, opt);
-  const double z0 = s.box().y_max - s.box().y_min, t_start = s.time();
+  DynamicSolverT<D> s(st, opt);
+  const double z0 = D == 2 ? s.box().y_max - s.box().y_min : s.box().z_max - s.box().z_min, t_start = s.time();
   check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps);
   {  // the top wall's travel per contact duration (Eq 6, mean pair) below 0.1 r_min
     double rmin = s.particles().radius[0];
@@ -72,34 +85,40 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   }
   write_common(command, st, out,
                {{"test", "compress"}, {"state_file", a.state_file}, {"strain_rate_per_s", a.strain_rate},
-                {"max_strain", a.max_strain}, {"ramp_time_s", a.ramp_time}, {"pressure_N_per_m", p}, {"top_wall_velocity_m_per_s", -a.strain_rate * z0}},
+                {"max_strain", a.max_strain}, {"ramp_time_s", a.ramp_time}, {D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2", p}, {"top_wall_velocity_m_per_s", -a.strain_rate * z0}},
                a.overwrite, a.state_file);
   const double nu0 = s.density();
 
   /// compress.csv rows, and snapshots at the times of LMM05 Fig 20 (default rate: eps_zz = t)
-  struct Writer final : TestObserver {
+  struct Writer final : TestObserverT<D> {
     double z0, p, t_start;
     const fs::path& out;
     Progress progress;
-    std::string csv = "t,eps_zz,szz,szz_over_p,sxx_over_p,szz_contacts,nu,C\n";
+    std::string csv = D == 2 ? "t,eps_zz,szz,szz_over_p,sxx_over_p,szz_contacts,nu,C\n"
+                             : "t,eps_zz,szz,szz_over_p,sxx_over_p,syy_over_p,szz_contacts,nu,C\n";
     std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     std::vector<ContactInfo> cs;
     const double snap_t[5] = {0.005, 0.02, 0.03, 0.035, 0.04};
     std::size_t next_snap = 0;
     Writer(double z0_, double p_, double t_start_, const fs::path& out_, double steps, bool quiet)
         : z0(z0_), p(p_), t_start(t_start_), out(out_), progress("compress", steps, quiet) {}
-    void sample(const DynamicSolver& s, std::int64_t k) override {
+    void sample(const DynamicSolverT<D>& s, std::int64_t k) override {
       if (k == 0) {
         s.check_health();
         write_snapshot(s, out, "eps0", cs);
       }
       const auto ws = s.wall_stress();
       const double C = count_contacts(s, pairs).coordination(s.particles().size());
-      csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}\n", s.time() - t_start,
-                         vertical_strain(s, z0), ws.yy, ws.yy / p, ws.xx / p, s.contact_stress().yy, s.density(), C);
+      if constexpr (D == 2)
+        csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}\n", s.time() - t_start,
+                           vertical_strain(s, z0), ws.yy, ws.yy / p, ws.xx / p, s.contact_stress().yy, s.density(), C);
+      else
+        csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}\n", s.time() - t_start,
+                           vertical_strain(s, z0), ws.s[2][2], ws.s[2][2] / p, ws.s[0][0] / p, ws.s[1][1] / p,
+                           s.contact_stress().s[2][2], s.density(), C);
       if (k > 0) progress.update(static_cast<double>(k));
     }
-    void stepped(const DynamicSolver& s, std::int64_t) override {
+    void stepped(const DynamicSolverT<D>& s, std::int64_t) override {
       if (next_snap < std::size(snap_t) && s.time() - t_start >= snap_t[next_snap] - 0.5 * s.dt()) {
         s.check_health();
         write_snapshot(s, out, fmt::format("t{}", snap_t[next_snap]), cs);
@@ -128,7 +147,7 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
   const std::size_t ipk = fig.peak;
   nlohmann::json j{{"command", command},
                    {"state_file", a.state_file},
-                   {"pressure_N_per_m", p},
+                   {D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2", p},
                    {"strain_rate_per_s", a.strain_rate},
                    {"ramp_time_s", a.ramp_time},
                    {"peak_szz", run.szz[ipk]},
@@ -143,13 +162,17 @@ int run_compress(const std::string& command, const CompressArgs& a, const fs::pa
                    {"status", "ok"},
                    {"status_reason", warning.empty() ? "every instability check passed"
                                                      : "every instability check passed; warning: " + warning}};
+  if constexpr (D == 3) j["dim"] = 3;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("compress: peak szz = %.4g N/m (%.3f p) at eps_zz = %.4f, stiffness %.4g N/m over eps in [0, 0.005], "
+  std::printf("compress: peak szz = %.4g %s (%.3f p) at eps_zz = %.4f, stiffness %.4g %s over eps in [0, 0.005], "
               "%.1f s -> %s\n",
-              run.szz[ipk], run.szz[ipk] / p, run.eps[ipk], fig.stiffness, wall, out.c_str());
+              run.szz[ipk], D == 2 ? "N/m" : "N/m^2", run.szz[ipk] / p, run.eps[ipk], fig.stiffness,
+              D == 2 ? "N/m" : "N/m^2", wall, out.c_str());
   return 0;
 }
+}  // namespace
+
 
 int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path& out) {
   VibrationTest test;
@@ -163,6 +186,9 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   if (a.gravity > 0.0 && a.gravity < 1e-6)  // accelerations are reported in units of g
     throw UsageError(fmt::format("--gravity must be 0 or at least 1e-6 m/s^2, got {:g}", a.gravity));
   SolverState st = load_state(a.state_file, a.param_overrides);
+  if (st.dim() == 3)
+    throw UsageError(fmt::format("{} is a 3D state: demsolve vibrate is 2D only (prepare, sinter and compress take 3D)",
+                                 quote_input(a.state_file)));
   check_temperature(st.thermal.T, st.params, "the state's temperature");
   check_memory(st.particles.size());
   open_box_for_vibration(st);

@@ -3,6 +3,7 @@
 #include "protocol.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -30,12 +31,15 @@ namespace {
 std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   std::vector<double> ps, z;
   particle_stress(P, cs, ps, z);
-  Field rad{"radius", 1, P.radius}, vel{"velocity", 3, {}}, om{"omega", 1, P.omega};
+  const bool d3 = P.dim == 3;
+  Field rad{"radius", 1, P.radius}, vel{"velocity", 3, {}}, om{"omega", d3 ? 3 : 1, d3 ? std::vector<double>{} : P.omega};
   Field st{"particle_pressure", 1, ps}, co{"contacts", 1, z};
-  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], 0.0});
+  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], d3 ? P.vz[i] : 0.0});
+  if (d3)
+    for (std::size_t i = 0; i < P.size(); ++i) om.values.insert(om.values.end(), {P.wx[i], P.wy[i], P.omega[i]});
   std::vector<Field> f{rad, vel, om, st, co};
   f.insert(f.end(), extra.begin(), extra.end());
-  return vtp_particles(P.x, P.y, f);
+  return d3 ? vtp_particles_3d(P.x, P.y, &P.z, f) : vtp_particles(P.x, P.y, f);
 }
 
 std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs) {
@@ -50,6 +54,7 @@ std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs)
     att.values.push_back(c.f_n < 0.0 ? 1.0 : 0.0);
     sl.values.push_back(c.sliding ? 1.0 : 0.0);
   }
+  if (P.dim == 3) return vtp_network_3d(P.x, P.y, &P.z, ii, jj, {fn, ft, att, sl});
   return vtp_network(P.x, P.y, ii, jj, {fn, ft, att, sl});
 }
 
@@ -71,7 +76,8 @@ std::string contacts_csv(const Particles& P, const std::vector<ContactInfo>& cs)
 
 }  // namespace
 
-void write_snapshot(const DynamicSolver& s, const fs::path& out, const std::string& label,
+template <int D>
+void write_snapshot(const DynamicSolverT<D>& s, const fs::path& out, const std::string& label,
                     std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   s.contacts(cs);
   std::string pv = particles_vtp(s.particles(), cs, extra);
@@ -123,7 +129,24 @@ void check_memory(std::size_t n) {
                                  need / 1e9, n, have / 1e9));
 }
 
-std::string check_loading(double pressure, const LudingParams& p, const std::string& what) {
+std::string check_loading(double pressure, const LudingParams& p, const std::string& what, int dim) {
+  if (dim == 3) {  // p [N/m^2] on a sphere's (2 a0)^2 of wall: overlap / a0 = 4 p a0 / k2
+    const double r = 4.0 * pressure * p.a0 / p.k2;
+    if (!(r >= 1e-9))
+      throw UsageError(fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, below 1e-9: the walls would "
+                                   "not hold the sample (raise the pressure)", what, pressure, r));
+    if (!(r <= 0.1))
+      throw UsageError(fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, above 0.1, beyond the range of "
+                                   "Luding's model (section 4); lower the pressure or raise k2 (= {:g} N/m)",
+                                   what, pressure, r, p.k2));
+    if (r > 0.02) {
+      std::string w = fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, above 0.02 (Luding section 4: "
+                                  "overlaps beyond small deformations)", what, pressure, r);
+      std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+      return w;
+    }
+    return "";
+  }
   const double r = 2.0 * pressure / p.k2;
   if (!(r >= 1e-9))  // a pressure that cannot hold the sample; stresses over p would overflow
     throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, below 1e-9: the walls would not "
@@ -150,7 +173,8 @@ void check_temperature(double T, const LudingParams& p, const std::string& what)
                                  "above 0.05 (Eq 9 is a small-strain law)", what, T, std::fabs(e)));
 }
 
-void check_run_limits(const DynamicSolver& s, double steps, double max_steps) {
+template <int D>
+void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps) {
   const double dt = s.dt();
   if (!(std::isfinite(dt) && dt > 0.0))
     throw UsageError(fmt::format("the time step is {:g} s: check --steps-per-contact, k2 and rho_p", dt));
@@ -168,15 +192,18 @@ void check_run_limits(const DynamicSolver& s, double steps, double max_steps) {
     throw UsageError(fmt::format("normal damping gamma_n = {:g} kg/s with dt = {:.3g} s gives gamma_n dt / m12 = {:.3g} "
                                  "for the lightest pair, above 1: the explicit step is unstable (lower gamma_n or "
                                  "raise --steps-per-contact)", lp.gamma_n, dt, damp));
-  for (const MovingWall* w : {&s.box().right, &s.box().top}) {
+  for (const MovingWall* w : {&s.box().right, &s.box().top, &s.box().back}) {
+    if (D == 2 && w == &s.box().back) continue;
     if (!s.box().enabled || w->mode != WallMode::Stress) continue;
     const double wd = w->damping * dt / w->mass;
     if (!(wd <= 1.0))
       throw UsageError(fmt::format("wall damping {:g} kg/s with wall mass {:g} kg and dt = {:.3g} s gives "
                                    "gamma_wall dt / m_wall = {:.3g}, above 1: the wall is unstable", w->damping, w->mass,
                                    dt, wd));
-    // the wall on the disks along it (about sqrt(N) contacts of stiffness k2): >= 10 steps per period
-    const double k = lp.k2 * std::ceil(std::sqrt(static_cast<double>(P.size())));
+    // the wall on the disks along it (about sqrt(N) contacts of stiffness k2; 3D: N^(2/3)): >= 10 steps per period
+    const double nw = D == 2 ? std::ceil(std::sqrt(static_cast<double>(P.size())))
+                             : std::ceil(std::pow(static_cast<double>(P.size()), 2.0 / 3.0));
+    const double k = lp.k2 * nw;
     const double tc = std::numbers::pi * std::sqrt(w->mass / k);
     if (!(tc >= 10.0 * dt))
       throw UsageError(fmt::format("wall mass {:g} kg gives the wall a contact time of {:.3g} s, fewer than 10 time "
@@ -184,7 +211,8 @@ void check_run_limits(const DynamicSolver& s, double steps, double max_steps) {
   }
 }
 
-int report_unstable(const InstabilityError& e, const DynamicSolver& s, const fs::path& out, nlohmann::json summary) {
+template <int D>
+int report_unstable(const InstabilityError& e, const DynamicSolverT<D>& s, const fs::path& out, nlohmann::json summary) {
   if (const SolverState* good = s.last_good()) {
     write_file_atomic(out / "state_last_good.txt", format_state(*good));
     summary["last_good_time_s"] = good->time;
@@ -209,9 +237,13 @@ SolverState load_state(const std::string& file, const std::vector<std::string>& 
 namespace {
 
 /// The output of a protocol run: timeseries rows, and per phase its state, snapshot and summary.
-class PhaseWriter final : public PhaseObserver {
+std::array<double, 3> diagonal(const Stress2& s) { return {s.xx, s.yy, 0.0}; }
+std::array<double, 3> diagonal(const Stress3& s) { return {s.s[0][0], s.s[1][1], s.s[2][2]}; }
+
+template <int D>
+class PhaseWriter final : public PhaseObserverT<D> {
  public:
-  PhaseWriter(const DynamicSolver& s, const std::vector<SinterPhase>& phases, double pressure, const fs::path& out,
+  PhaseWriter(const DynamicSolverT<D>& s, const std::vector<SinterPhase>& phases, double pressure, const fs::path& out,
               std::int64_t total, bool quiet)
       : phases_(phases),
         pressure_(pressure),
@@ -222,12 +254,17 @@ class PhaseWriter final : public PhaseObserver {
         cpu_start_(cpu_phase_),
         t_start_(std::chrono::steady_clock::now()),
         t_phase_(t_start_) {
-    csv_ =
-        "t,phase,T,k1,nu,C,C_without_walls,sxx,szz,sxx_over_p,szz_over_p,sxx_contacts,szz_contacts,"
-        "Ekin,box_width,box_height\n";
+    if constexpr (D == 2)
+      csv_ =
+          "t,phase,T,k1,nu,C,C_without_walls,sxx,szz,sxx_over_p,szz_over_p,sxx_contacts,szz_contacts,"
+          "Ekin,box_width,box_height\n";
+    else
+      csv_ =
+          "t,phase,T,k1,nu,C,C_without_walls,sxx,syy,szz,sxx_over_p,syy_over_p,szz_over_p,sxx_contacts,syy_contacts,"
+          "szz_contacts,Ekin,box_x,box_y,box_z\n";
   }
 
-  void sample(const DynamicSolver& s, std::size_t phase, std::int64_t steps) override {
+  void sample(const DynamicSolverT<D>& s, std::size_t phase, std::int64_t steps) override {
     if (steps == 0) {
       s.check_health();
       write_snapshot(s, out_, "initial", cs_);
@@ -236,15 +273,25 @@ class PhaseWriter final : public PhaseObserver {
     const auto ws = s.wall_stress();
     const auto cst = s.contact_stress();
     const std::size_t n = s.particles().size();
-    csv_ += fmt::format("{:.9g},{},{:.6g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g}\n",
-                        s.time(), phases_[phase].name, s.thermal().T, s.thermal().k1_Tt / k1c_, s.density(),
-                        c.coordination(n), c.coordination_without_walls(n), ws.xx, ws.yy, ws.xx / pressure_,
-                        ws.yy / pressure_, cst.xx, cst.yy, s.energies().kinetic, s.box().x_max - s.box().x_min,
-                        s.box().y_max - s.box().y_min);
+    if constexpr (D == 2) {
+      csv_ += fmt::format("{:.9g},{},{:.6g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g}\n",
+                          s.time(), phases_[phase].name, s.thermal().T, s.thermal().k1_Tt / k1c_, s.density(),
+                          c.coordination(n), c.coordination_without_walls(n), ws.xx, ws.yy, ws.xx / pressure_,
+                          ws.yy / pressure_, cst.xx, cst.yy, s.energies().kinetic, s.box().x_max - s.box().x_min,
+                          s.box().y_max - s.box().y_min);
+    } else {
+      const auto w = diagonal(ws), k = diagonal(cst);
+      csv_ += fmt::format("{:.9g},{},{:.6g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
+                          "{:.9g},{:.6g},{:.9g},{:.9g},{:.9g}\n",
+                          s.time(), phases_[phase].name, s.thermal().T, s.thermal().k1_Tt / k1c_, s.density(),
+                          c.coordination(n), c.coordination_without_walls(n), w[0], w[1], w[2], w[0] / pressure_,
+                          w[1] / pressure_, w[2] / pressure_, k[0], k[1], k[2], s.energies().kinetic,
+                          s.box().x_max - s.box().x_min, s.box().y_max - s.box().y_min, s.box().z_max - s.box().z_min);
+    }
     if (steps > 0) progress_.update(static_cast<double>(steps));
   }
 
-  void phase_end(const DynamicSolver& s, std::size_t p) override {
+  void phase_end(const DynamicSolverT<D>& s, std::size_t p) override {
     s.check_health();  // nothing unchecked reaches a file
     const auto now = std::chrono::steady_clock::now();
     const std::string& name = phases_[p].name;
@@ -257,7 +304,7 @@ class PhaseWriter final : public PhaseObserver {
   }
 
   /// timeseries.csv, state.txt, the final snapshot and the summary entries.
-  void finish(const DynamicSolver& s, const PhaseRun& run, nlohmann::json& summary) {
+  void finish(const DynamicSolverT<D>& s, const PhaseRun& run, nlohmann::json& summary) {
     s.check_health();
     progress_.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
@@ -281,10 +328,24 @@ class PhaseWriter final : public PhaseObserver {
  private:
   static double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-  nlohmann::json phase_json(const DynamicSolver& s, const std::string& name, double wall_s, double cpu_s) {
+  nlohmann::json phase_json(const DynamicSolverT<D>& s, const std::string& name, double wall_s, double cpu_s) {
     const ContactCounts c = count_contacts(s, buf_);
-    const auto ws = s.wall_stress();
+    const auto ws = diagonal(s.wall_stress());
     const std::size_t n = s.particles().size();
+    if constexpr (D == 3)
+      return nlohmann::json{{"phase", name},
+                            {"t", s.time()},
+                            {"T", s.thermal().T},
+                            {"k1_over_k1", s.thermal().k1_Tt / k1c_},
+                            {"nu", s.density()},
+                            {"C", c.coordination(n)},
+                            {"C_without_walls", c.coordination_without_walls(n)},
+                            {"sxx_over_p", ws[0] / pressure_},
+                            {"syy_over_p", ws[1] / pressure_},
+                            {"szz_over_p", ws[2] / pressure_},
+                            {"Ekin_J", s.energies().kinetic},
+                            {"wall_time_s", wall_s},
+                            {"cpu_time_s", cpu_s}};
     return nlohmann::json{{"phase", name},
                           {"t", s.time()},
                           {"T", s.thermal().T},
@@ -292,8 +353,8 @@ class PhaseWriter final : public PhaseObserver {
                           {"nu", s.density()},
                           {"C", c.coordination(n)},
                           {"C_without_walls", c.coordination_without_walls(n)},
-                          {"sxx_over_p", ws.xx / pressure_},
-                          {"szz_over_p", ws.yy / pressure_},
+                          {"sxx_over_p", ws[0] / pressure_},
+                          {"szz_over_p", ws[1] / pressure_},
                           {"Ekin_J", s.energies().kinetic},
                           {"wall_time_s", wall_s},
                           {"cpu_time_s", cpu_s}};
@@ -313,14 +374,126 @@ class PhaseWriter final : public PhaseObserver {
 
 /// Runs the phases from the solver's current time to the end of the last phase, writing
 /// timeseries.csv, per-phase state/vtp/contact files and filling `summary`.
-void run_and_write_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const RunArgs& a,
+template <int D>
+void run_and_write_phases(DynamicSolverT<D>& s, const std::vector<SinterPhase>& phases, const RunArgs& a,
                           const fs::path& out, nlohmann::json& summary) {
   const double pressure = s.box().right.pressure > 0.0 ? s.box().right.pressure : a.pressure;
-  PhaseWriter writer(s, phases, pressure, out, steps_to_end(s, phases), a.quiet);
+  PhaseWriter<D> writer(s, phases, pressure, out, steps_to_end(s, phases), a.quiet);
   const PhaseRun run = netdem::dem::run_phases(s, phases, {a.mu, a.mu_wall_prepare}, 3000, writer);
   writer.finish(s, run, summary);
 }
 
+}  // namespace
+
+namespace {
+template <int D>
+int run_protocol_body(const std::string& command, const SampleSpec& sample, const RunArgs& args,
+                      const std::vector<SinterPhase>& phases, bool prepare_only, const fs::path& out,
+                      SolverState* state) {
+  DynamicOptions opt;
+  opt.model = ContactModel::Full;
+  opt.steps_per_contact = args.steps_per_contact;
+  opt.temperature = phases.front().T_start;
+  std::unique_ptr<DynamicSolverT<D>> s;
+  nlohmann::json summary;
+  std::string warning;
+  auto check_protocol_T = [&](const LudingParams& lp) {
+    for (const auto& ph : phases) {
+      check_temperature(ph.T_start, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
+      check_temperature(ph.T_end, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
+    }
+  };
+  if (!args.state_file.empty()) {
+    SolverState& st = *state;
+    if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = st.box.back.pressure = args.pressure;
+    // --param m_wall / gamma_wall also apply to the state's stress-controlled walls (Eq 1)
+    for (const auto& it : args.param_overrides)
+      for (MovingWall* w : {&st.box.right, &st.box.top, &st.box.back}) {
+        if (w->mode != WallMode::Stress) continue;
+        if (it.rfind("m_wall=", 0) == 0) w->mass = st.params.m_wall;
+        if (it.rfind("gamma_wall=", 0) == 0) w->damping = st.params.gamma_wall;
+      }
+    check_protocol_T(st.params);
+    check_temperature(st.thermal.T, st.params, "the state's temperature");
+    if (st.box.right.mode == WallMode::Stress || st.box.top.mode == WallMode::Stress ||
+        (D == 3 && st.box.back.mode == WallMode::Stress))
+      warning = check_loading(std::max({st.box.right.pressure, st.box.top.pressure, D == 3 ? st.box.back.pressure : 0.0}),
+                              st.params, args.pressure_given ? "--pressure" : "the state's wall pressure", D);
+    check_memory(st.particles.size());
+    s = std::make_unique<DynamicSolverT<D>>(st, opt);
+    summary["state_file"] = args.state_file;
+    if (s->time() >= phase_end(phases, phases.size() - 1) - 0.5 * s->dt())
+      throw std::invalid_argument(fmt::format("state file time {} is past the end of the protocol ({})", s->time(),
+                                              phase_end(phases, phases.size() - 1)));
+  } else {
+    LudingParams lp;
+    apply_overrides(lp, args.param_overrides);
+    check_protocol_T(lp);
+    // 3D default: 100 N/m over 2 a0 (the 2D default's overlap ratio)
+    const double pressure = D == 3 && !args.pressure_given ? args.pressure / (2.0 * lp.a0) : args.pressure;
+    warning = check_loading(pressure, lp, "--pressure", D);
+    if (sample.packing_file.empty()) check_memory(static_cast<std::size_t>(std::max(sample.n, 1)));
+    Box box;
+    double length_unit = 0.0;
+    Particles P = D == 2 ? make_sample(sample, lp, box, &length_unit) : make_sample3(sample, lp, box, &length_unit);
+    check_memory(P.size());
+    set_stress_walls(box, pressure, lp, D);
+    s = std::make_unique<DynamicSolverT<D>>(std::move(P), lp, box, opt);
+    summary["seed"] = sample.seed;
+    summary["arrangement"] = sample.arrangement;
+    if (!sample.packing_file.empty()) {
+      summary["packing_file"] = sample.packing_file;
+      summary["length_unit_m"] = length_unit;
+    }
+  }
+  check_run_limits(*s, (phase_end(phases, phases.size() - 1) - s->time()) / s->dt(), args.max_steps);
+  RunDirOptions rdo;
+  rdo.overwrite = args.overwrite;
+  rdo.inputs = {args.state_file, sample.packing_file};
+  open_run_dir(out, command, rdo);
+  nlohmann::json params;
+  for (const auto& name : luding_param_names()) params[name] = get_luding_param(s->params(), name);
+  nlohmann::json prot = nlohmann::json::array();
+  for (const auto& ph : phases)
+    prot.push_back({{"phase", ph.name}, {"duration_s", ph.duration}, {"T_start", ph.T_start}, {"T_end", ph.T_end},
+                    {"t0_s", ph.t0}, {"friction", ph.friction}});
+  const double pressure = s->box().right.pressure;
+  nlohmann::json pj{{"command", command},      {"particles", s->particles().size()},
+                    {D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2", pressure}, {"mu", args.mu},
+                    {"mu_wall_prepare", args.mu_wall_prepare}, {"steps_per_contact", args.steps_per_contact},
+                    {"dt_s", s->dt()},          {"steps_per_contact_lightest_pair", s->time_step().steps_per_contact_lightest},
+                    {"contact_params", params}, {"protocol", prot}};
+  if (args.state_file.empty()) pj["seed"] = sample.seed;
+  if constexpr (D == 3) pj["dim"] = 3;
+  write_file_atomic(out / "parameters.json", pj.dump(2) + "\n");
+  if (!args.quiet && args.state_file.empty())
+    std::fprintf(stderr, "demsolve: seed %llu, %zu %s, dt = %.3g s\n", static_cast<unsigned long long>(sample.seed),
+                 s->particles().size(), D == 2 ? "disks" : "spheres", s->dt());
+  summary["command"] = command;
+  summary["particles"] = s->particles().size();
+  summary[D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2"] = pressure;
+  if constexpr (D == 3) summary["dim"] = 3;
+  summary["steps_per_contact_lightest_pair"] = s->time_step().steps_per_contact_lightest;
+  try {
+    run_and_write_phases(*s, phases, args, out, summary);
+  } catch (const InstabilityError& e) {
+    return report_unstable(e, *s, out, summary);
+  }
+  summary["status"] = "ok";
+  summary["status_reason"] = warning.empty() ? "every instability check passed" : "every instability check passed; warning: " + warning;
+  // densification nu(t_f) / nu(t_heat) - 1 (LMM05 section 4.1.3)
+  for (const auto& ph : summary["phases"])
+    if (!prepare_only && ph["phase"] == "prepare") summary["densification"] = summary["final"]["nu"].get<double>() / ph["nu"].get<double>() - 1.0;
+  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
+  const auto& f = summary["final"];
+  std::printf("t = %.4f s: nu = %.4f, C = %.3f (%.3f without walls), sxx/p = %.4f, szz/p = %.4f, k1(T,t)/k1 = %.4f, "
+              "Ekin = %.3e J, %.1f s -> %s\n",
+              f["t"].get<double>(), f["nu"].get<double>(), f["C"].get<double>(), f["C_without_walls"].get<double>(),
+              f["sxx_over_p"].get<double>(), f["szz_over_p"].get<double>(), f["k1_over_k1"].get<double>(),
+              f["Ekin_J"].get<double>(), summary["wall_time_s"].get<double>(), out.c_str());
+  return 0;
+}
 }  // namespace
 
 int run_protocol(const std::string& command, const SampleSpec& sample, const RunArgs& args,
@@ -343,106 +516,27 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
       throw std::invalid_argument(fmt::format("--time must be a positive number of seconds, got {}", protocol.t_heat));
   }
   if (!(phase_end(phases, phases.size() - 1) > 0.0)) throw std::invalid_argument("the protocol has zero length");
-  DynamicOptions opt;
-  opt.model = ContactModel::Full;
-  opt.steps_per_contact = args.steps_per_contact;
-  opt.temperature = phases.front().T_start;
-  std::unique_ptr<DynamicSolver> s;
-  nlohmann::json summary;
-  std::string warning;
-  auto check_protocol_T = [&](const LudingParams& lp) {
-    for (const auto& ph : phases) {
-      check_temperature(ph.T_start, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
-      check_temperature(ph.T_end, lp, "the temperature of phase " + ph.name + " (--T-cold / --T-hot)");
-    }
-  };
   if (!args.state_file.empty() && !sample.packing_file.empty())
     throw std::invalid_argument("--state and --packing both give the sample: use one of them");
+  if (!(args.dim == 2 || args.dim == 3)) throw UsageError(fmt::format("--dim must be 2 or 3, got {}", args.dim));
   if (!args.state_file.empty()) {
     SolverState st = load_state(args.state_file, args.param_overrides);
-    if (args.pressure_given) st.box.right.pressure = st.box.top.pressure = args.pressure;
-    // --param m_wall / gamma_wall also apply to the state's stress-controlled walls (Eq 1)
-    for (const auto& it : args.param_overrides)
-      for (MovingWall* w : {&st.box.right, &st.box.top}) {
-        if (w->mode != WallMode::Stress) continue;
-        if (it.rfind("m_wall=", 0) == 0) w->mass = st.params.m_wall;
-        if (it.rfind("gamma_wall=", 0) == 0) w->damping = st.params.gamma_wall;
-      }
-    check_protocol_T(st.params);
-    check_temperature(st.thermal.T, st.params, "the state's temperature");
-    if (st.box.right.mode == WallMode::Stress || st.box.top.mode == WallMode::Stress)
-      warning = check_loading(std::max(st.box.right.pressure, st.box.top.pressure), st.params,
-                              args.pressure_given ? "--pressure" : "the state's wall pressure");
-    check_memory(st.particles.size());
-    s = std::make_unique<DynamicSolver>(st, opt);
-    summary["state_file"] = args.state_file;
-    if (s->time() >= phase_end(phases, phases.size() - 1) - 0.5 * s->dt())
-      throw std::invalid_argument(fmt::format("state file time {} is past the end of the protocol ({})", s->time(),
-                                              phase_end(phases, phases.size() - 1)));
-  } else {
-    LudingParams lp;
-    apply_overrides(lp, args.param_overrides);
-    check_protocol_T(lp);
-    warning = check_loading(args.pressure, lp, "--pressure");
-    if (sample.packing_file.empty()) check_memory(static_cast<std::size_t>(std::max(sample.n, 1)));
-    Box box;
-    double length_unit = 0.0;
-    Particles P = make_sample(sample, lp, box, &length_unit);
-    check_memory(P.size());
-    set_stress_walls(box, args.pressure, lp);
-    s = std::make_unique<DynamicSolver>(std::move(P), lp, box, opt);
-    summary["seed"] = sample.seed;
-    summary["arrangement"] = sample.arrangement;
-    if (!sample.packing_file.empty()) {
-      summary["packing_file"] = sample.packing_file;
-      summary["length_unit_m"] = length_unit;
-    }
+    if (args.dim_given && st.dim() != args.dim)
+      throw UsageError(fmt::format("--dim {} but the state file {} is {}D", args.dim, quote_input(args.state_file), st.dim()));
+    if (st.dim() == 3) return run_protocol_body<3>(command, sample, args, phases, prepare_only, out, &st);
+    return run_protocol_body<2>(command, sample, args, phases, prepare_only, out, &st);
   }
-  check_run_limits(*s, (phase_end(phases, phases.size() - 1) - s->time()) / s->dt(), args.max_steps);
-  RunDirOptions rdo;
-  rdo.overwrite = args.overwrite;
-  rdo.inputs = {args.state_file, sample.packing_file};
-  open_run_dir(out, command, rdo);
-  nlohmann::json params;
-  for (const auto& name : luding_param_names()) params[name] = get_luding_param(s->params(), name);
-  nlohmann::json prot = nlohmann::json::array();
-  for (const auto& ph : phases)
-    prot.push_back({{"phase", ph.name}, {"duration_s", ph.duration}, {"T_start", ph.T_start}, {"T_end", ph.T_end},
-                    {"t0_s", ph.t0}, {"friction", ph.friction}});
-  const double pressure = s->box().right.pressure;
-  nlohmann::json pj{{"command", command},      {"particles", s->particles().size()},
-                    {"pressure_N_per_m", pressure}, {"mu", args.mu},
-                    {"mu_wall_prepare", args.mu_wall_prepare}, {"steps_per_contact", args.steps_per_contact},
-                    {"dt_s", s->dt()},          {"steps_per_contact_lightest_pair", s->time_step().steps_per_contact_lightest},
-                    {"contact_params", params}, {"protocol", prot}};
-  if (args.state_file.empty()) pj["seed"] = sample.seed;
-  write_file_atomic(out / "parameters.json", pj.dump(2) + "\n");
-  if (!args.quiet && args.state_file.empty())
-    std::fprintf(stderr, "demsolve: seed %llu, %zu disks, dt = %.3g s\n", static_cast<unsigned long long>(sample.seed),
-                 s->particles().size(), s->dt());
-  summary["command"] = command;
-  summary["particles"] = s->particles().size();
-  summary["pressure_N_per_m"] = pressure;
-  summary["steps_per_contact_lightest_pair"] = s->time_step().steps_per_contact_lightest;
-  try {
-    run_and_write_phases(*s, phases, args, out, summary);
-  } catch (const InstabilityError& e) {
-    return report_unstable(e, *s, out, summary);
-  }
-  summary["status"] = "ok";
-  summary["status_reason"] = warning.empty() ? "every instability check passed" : "every instability check passed; warning: " + warning;
-  // densification nu(t_f) / nu(t_heat) - 1 (LMM05 section 4.1.3)
-  for (const auto& ph : summary["phases"])
-    if (!prepare_only && ph["phase"] == "prepare") summary["densification"] = summary["final"]["nu"].get<double>() / ph["nu"].get<double>() - 1.0;
-  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
-  close_run_dir(out);
-  const auto& f = summary["final"];
-  std::printf("t = %.4f s: nu = %.4f, C = %.3f (%.3f without walls), sxx/p = %.4f, szz/p = %.4f, k1(T,t)/k1 = %.4f, "
-              "Ekin = %.3e J, %.1f s -> %s\n",
-              f["t"].get<double>(), f["nu"].get<double>(), f["C"].get<double>(), f["C_without_walls"].get<double>(),
-              f["sxx_over_p"].get<double>(), f["szz_over_p"].get<double>(), f["k1_over_k1"].get<double>(),
-              f["Ekin_J"].get<double>(), summary["wall_time_s"].get<double>(), out.c_str());
-  return 0;
+  if (args.dim == 3) return run_protocol_body<3>(command, sample, args, phases, prepare_only, out, nullptr);
+  return run_protocol_body<2>(command, sample, args, phases, prepare_only, out, nullptr);
 }
+
+template void write_snapshot<2>(const DynamicSolverT<2>&, const fs::path&, const std::string&, std::vector<ContactInfo>&,
+                                 const std::vector<Field>&);
+template void write_snapshot<3>(const DynamicSolverT<3>&, const fs::path&, const std::string&, std::vector<ContactInfo>&,
+                                 const std::vector<Field>&);
+template void check_run_limits<2>(const DynamicSolverT<2>&, double, double);
+template void check_run_limits<3>(const DynamicSolverT<3>&, double, double);
+template int report_unstable<2>(const InstabilityError&, const DynamicSolverT<2>&, const fs::path&, nlohmann::json);
+template int report_unstable<3>(const InstabilityError&, const DynamicSolverT<3>&, const fs::path&, nlohmann::json);
 
 }  // namespace netdem::app::dem

@@ -31,6 +31,8 @@ struct RunArgs {
   bool packing_given = false;  ///< --packing on the command line (refused if empty)
   double max_steps = 1e9;      ///< --max-steps
   bool overwrite = false;      ///< --overwrite
+  int dim = 2;                 ///< --dim: 2 disks, 3 spheres (a state file gives its own)
+  bool dim_given = false;
 };
 
 /// `m` with control characters as spaces (one line on stderr).
@@ -45,20 +47,23 @@ int guarded(const std::function<int()>& body);
 /// the step count `steps` (a double, so that an absurd count is not an overflow) against
 /// max_steps, the normal and wall damping and the wall mass against the time step. Throws
 /// UsageError with the estimate.
-void check_run_limits(const netdem::dem::DynamicSolver& s, double steps, double max_steps);
+template <int D>
+void check_run_limits(const netdem::dem::DynamicSolverT<D>& s, double steps, double max_steps);
 /// The memory estimate of a run of n particles against MemAvailable (/proc/meminfo); throws
 /// UsageError with the estimate. Call it before building the solver.
 void check_memory(std::size_t n);
 /// 2p/k2 (Luding section 4): UsageError above 0.1, a warning line on stderr above 0.02 (returned,
-/// "" if none). `what` names the option.
-std::string check_loading(double pressure, const netdem::dem::LudingParams& p, const std::string& what);
+/// "" if none). `what` names the option. dim 3: p in N/m^2 and the ratio 4 p a0 / k2 (the force on
+/// a sphere's (2 a0)^2 of wall over k2 a0).
+std::string check_loading(double pressure, const netdem::dem::LudingParams& p, const std::string& what, int dim = 2);
 /// T above absolute zero and |da_T (T - T_radius_ref)| <= 0.05; UsageError naming `what`.
 void check_temperature(double T, const netdem::dem::LudingParams& p, const std::string& what);
 
 /// A run stopped by an instability check: writes state_last_good.txt (the solver's last checked
 /// state) and summary.json (`summary` + "status": "unstable", the reason, step and quantity),
 /// closes the run folder, prints the one-line error; returns 3.
-int report_unstable(const netdem::dem::InstabilityError& e, const netdem::dem::DynamicSolver& s,
+template <int D>
+int report_unstable(const netdem::dem::InstabilityError& e, const netdem::dem::DynamicSolverT<D>& s,
                     const std::filesystem::path& out, nlohmann::json summary);
 
 /// Applies NAME=VALUE overrides; throws std::invalid_argument naming the bad item.
@@ -67,7 +72,9 @@ void apply_overrides(netdem::dem::LudingParams& p, const std::vector<std::string
 /// particles_<label>.vtp (radius, velocity, omega, particle_pressure = average particle stress
 /// p_i = sum_c f_n d_i / (2 pi a_i^2) [N/m], contacts, and `extra`), contacts_<label>.vtp (f_n,
 /// f_t, attractive, sliding per contact line) and contacts_<label>.csv (distributions).
-void write_snapshot(const netdem::dem::DynamicSolver& s, const std::filesystem::path& out, const std::string& label,
+/// 3D: the same with z, velocity and spin vectors, p_i in N/m^2 and |f_t|.
+template <int D>
+void write_snapshot(const netdem::dem::DynamicSolverT<D>& s, const std::filesystem::path& out, const std::string& label,
                     std::vector<netdem::dem::ContactInfo>& buffer, const std::vector<Field>& extra = {});
 
 /// Loads a state file with NAME=VALUE overrides applied to its contact parameters.
@@ -102,6 +109,8 @@ struct VibrateArgs {
 };
 int run_vibrate(const std::string& command, const VibrateArgs& a, const std::filesystem::path& out);
 
+/// dim 3: spheres (netdem::dem::place_sample3 / make_sample3, a 3D state file), the right, back and top
+/// walls stress-controlled at p [N/m^2].
 int run_protocol(const std::string& command, const netdem::dem::SampleSpec& sample, const RunArgs& args,
                  const netdem::dem::SinterProtocol& protocol, bool prepare_only,
                  const std::filesystem::path& out);

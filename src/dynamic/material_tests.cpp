@@ -14,7 +14,8 @@ namespace netdem::dem {
 
 namespace {
 /// Keeps the material at temperature T (k1(T, t) keeps relaxing if it still moves).
-void hold_temperature(DynamicSolver& s, double T) { s.advance_temperature(T, s.dt(), s.params().t0); }
+template <int D>
+void hold_temperature(DynamicSolverT<D>& s, double T) { s.advance_temperature(T, s.dt(), s.params().t0); }
 }  // namespace
 
 void CompressionTest::validate() const {
@@ -33,26 +34,42 @@ std::int64_t CompressionTest::steps(double dt) const {
 
 std::int64_t VibrationTest::steps(double dt) const { return static_cast<std::int64_t>(std::ceil(time / dt)); }
 
-double vertical_strain(const DynamicSolver& s, double z0) { return 1.0 - (s.box().y_max - s.box().y_min) / z0; }
+namespace {
+double height(const packing::Box& b, int dim) { return dim == 2 ? b.y_max - b.y_min : b.z_max - b.z_min; }
+double top_stress(const Stress2& s) { return s.yy; }
+double top_stress(const Stress3& s) { return s.s[2][2]; }
+}  // namespace
 
-CompressionRun run_compression(DynamicSolver& s, const CompressionTest& a, double pressure, std::int64_t samples,
-                               TestObserver& obs) {
+template <int D>
+double vertical_strain(const DynamicSolverT<D>& s, double z0) { return 1.0 - height(s.box(), D) / z0; }
+
+template <int D>
+CompressionRun run_compression(DynamicSolverT<D>& s, const CompressionTest& a, double pressure, std::int64_t samples,
+                               TestObserverT<D>& obs) {
   a.validate();
   CompressionRun run;
-  run.z0 = s.box().y_max - s.box().y_min;
+  run.z0 = height(s.box(), D);
   const double z0 = run.z0;
-  MovingWall right = s.box().right, top = s.box().top;
+  MovingWall right = s.box().right, top = s.box().top, back = s.box().back;
   right.mode = WallMode::Stress;  // sigma_xx = p held by the right wall
   right.pressure = pressure;
+  back.mode = WallMode::Stress;  // 3D: sigma_yy = p held by the back wall
+  back.pressure = pressure;
   top.mode = WallMode::Strain;  // eps_zz = 1 - z/z0 = rate (t - t_start)
   top.velocity = a.ramp_time > 0.0 ? 0.0 : -a.strain_rate * z0;
-  s.set_walls(right, top);
+  auto set_walls = [&] {
+    if constexpr (D == 2)
+      s.set_walls(right, top);
+    else
+      s.set_walls(right, back, top);
+  };
+  set_walls();
   const double T = s.thermal().T;
   run.steps = a.steps(s.dt());
   const std::int64_t every = std::max<std::int64_t>(1, run.steps / std::max<std::int64_t>(1, samples));
   auto sample = [&](std::int64_t k) {
     run.eps.push_back(vertical_strain(s, z0));
-    run.szz.push_back(s.wall_stress().yy);
+    run.szz.push_back(top_stress(s.wall_stress()));
     obs.sample(s, k);
   };
   sample(0);
@@ -60,10 +77,10 @@ CompressionRun run_compression(DynamicSolver& s, const CompressionTest& a, doubl
     const double tt = static_cast<double>(k - 1) * s.dt();
     if (tt < a.ramp_time) {  // smooth start, v = v_f (1 - cos(pi t / t_ramp)) / 2
       top.velocity = -a.strain_rate * z0 * 0.5 * (1.0 - std::cos(std::numbers::pi * tt / a.ramp_time));
-      s.set_walls(right, top);
+      set_walls();
     } else if (top.velocity != -a.strain_rate * z0) {
       top.velocity = -a.strain_rate * z0;
-      s.set_walls(right, top);
+      set_walls();
     }
     hold_temperature(s, T);
     s.step();
@@ -169,5 +186,12 @@ std::vector<double> Clusters::rank() const {
   for (std::uint32_t i = 0; i < n; ++i) cid[i] = r[label_[i]];
   return cid;
 }
+
+template double vertical_strain<2>(const DynamicSolverT<2>&, double);
+template double vertical_strain<3>(const DynamicSolverT<3>&, double);
+template CompressionRun run_compression<2>(DynamicSolverT<2>&, const CompressionTest&, double, std::int64_t,
+                                           TestObserverT<2>&);
+template CompressionRun run_compression<3>(DynamicSolverT<3>&, const CompressionTest&, double, std::int64_t,
+                                           TestObserverT<3>&);
 
 }  // namespace netdem::dem

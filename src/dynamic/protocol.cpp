@@ -110,17 +110,81 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
   return particles_from(q, lp);
 }
 
+Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
+  if (a.n < 1 || a.n > 1000000) throw std::invalid_argument(fmt::format("--n must be in [1, 1e6], got {}", a.n));
+  if (a.arrangement != "random")
+    throw std::invalid_argument("--arrangement triangle|line is the 2D three-disk control of LMM05 4.1.3 (--dim 2)");
+  // the cube whose region of the centres, (L - 2 a0)^3, holds the expected solid volume (E[a^3] of
+  // the uniform radii) at kInitialDensity3 (a small box's walls would otherwise crowd the cloud)
+  const double w = lp.w0, a0 = lp.a0;
+  const double mean_r3 = a0 * a0 * a0 * (1.0 + w * w);  // E[(1 + w (2U - 1))^3] = 1 + w^2
+  const double L = 2.0 * a0 * (1.0 + w) +
+                   std::cbrt(static_cast<double>(a.n) * 4.0 / 3.0 * std::numbers::pi * mean_r3 / kInitialDensity3);
+  packing::RandomFill3dOptions o;
+  o.n = static_cast<std::size_t>(a.n);
+  o.mean_radius = a0;
+  o.dispersion = w;
+  o.box = packing::Box{0.0, 0.0, L, L, 0.0, L};
+  o.seed = a.seed;
+  const packing::Packing placed = packing::random_fill_3d(o);
+  box.x_min = box.y_min = box.z_min = 0.0;
+  box.x_max = box.y_max = box.z_max = L;
+  Particles P;
+  std::mt19937_64 rng(a.seed + 1);
+  const double v0 = 0.01;  // [m/s]
+  for (std::size_t i = 0; i < placed.size(); ++i) {
+    const double vx = v0 * (2.0 * uniform01(rng) - 1.0), vy = v0 * (2.0 * uniform01(rng) - 1.0),
+                 vz = v0 * (2.0 * uniform01(rng) - 1.0);
+    P.add_sphere(placed.x[i], placed.y[i], placed.z[i], placed.r[i], lp.rho_p, {vx, vy, vz});
+  }
+  return P;
+}
+
+Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
+  if (spec.packing_file.empty()) return place_sample3(spec, lp, box);
+  const packing::Packing p = packing::read_packing_csv(spec.packing_file);
+  if (p.dim != 3) throw std::invalid_argument(fmt::format("{} is a 2D packing; --dim 3 needs a 3D one (# dim 3)", spec.packing_file));
+  packing::validate(p);
+  const double s = packing_length_unit(p, lp, spec.length_unit);
+  if (length_unit) *length_unit = s;
+  box.x_min = s * p.box.x_min;
+  box.y_min = s * p.box.y_min;
+  box.z_min = s * p.box.z_min;
+  box.x_max = s * p.box.x_max;
+  box.y_max = s * p.box.y_max;
+  box.z_max = s * p.box.z_max;
+  for (std::size_t i = 0; i < p.size(); ++i) box.z_max = std::max(box.z_max, s * (p.z[i] + p.r[i]));
+  Particles P;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double x = s * p.x[i], y = s * p.y[i], z = s * p.z[i], r = s * p.r[i], tol = 1e-9 * r;
+    if (!(r >= 0.01 * lp.a0 && r <= 100.0 * lp.a0))
+      throw std::invalid_argument(fmt::format(
+          "sphere {} has radius {} m after the unit conversion ({} m per file unit), outside [a0 / 100, 100 a0] = "
+          "[{}, {}] m: check --length-unit",
+          i, r, s, 0.01 * lp.a0, 100.0 * lp.a0));
+    if (x - r < box.x_min - tol || x + r > box.x_max + tol || y - r < box.y_min - tol || y + r > box.y_max + tol ||
+        z - r < box.z_min - tol)
+      throw std::invalid_argument(fmt::format(
+          "sphere {} (centre ({}, {}, {}), r = {} in file units) reaches through a side wall or the floor of the box (a "
+          "periodic deposition? demsolve's box has walls)",
+          i, p.x[i], p.y[i], p.z[i], p.r[i]));
+    P.add_sphere(x, y, z, r, lp.rho_p);
+  }
+  return P;
+}
+
 Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
   if (spec.packing_file.empty()) return place_sample(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
-  if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing; demsolve is 2D only", spec.packing_file));
+  if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing: run with --dim 3", spec.packing_file));
   const double unit = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = unit;
   return particles_from_packing(p, lp, unit, box);
 }
 
-void set_stress_walls(Box& box, double pressure, const LudingParams& lp) {
-  for (MovingWall* w : {&box.right, &box.top}) {
+void set_stress_walls(Box& box, double pressure, const LudingParams& lp, int dim) {
+  for (MovingWall* w : {&box.right, &box.top, &box.back}) {
+    if (w == &box.back && dim != 3) continue;
     w->mode = WallMode::Stress;
     w->pressure = pressure;
     w->mass = lp.m_wall;
@@ -128,7 +192,8 @@ void set_stress_walls(Box& box, double pressure, const LudingParams& lp) {
   }
 }
 
-ContactCounts count_contacts(const DynamicSolver& s, std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+template <int D>
+ContactCounts count_contacts(const DynamicSolverT<D>& s, std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
   s.touching_pairs(buffer);
   return {buffer.size(), s.wall_contacts()};
 }
@@ -145,21 +210,27 @@ void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std
       z[c.j] += 1.0;
     }
   }
-  for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
+  if (P.dim == 3)
+    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 4.0 * std::numbers::pi * P.radius[i] * P.radius[i] * P.radius[i];
+  else
+    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
 }
 
 namespace {
 /// The step at whose end time t lies (t / dt rounded up, 1e-6 steps of slack for rounding).
 std::int64_t step_of(double t, double dt) { return static_cast<std::int64_t>(std::ceil(t / dt - 1e-6)); }
-std::int64_t first_step(const DynamicSolver& s) { return static_cast<std::int64_t>(std::llround(s.time() / s.dt())); }
+template <int D>
+std::int64_t first_step(const DynamicSolverT<D>& s) { return static_cast<std::int64_t>(std::llround(s.time() / s.dt())); }
 }  // namespace
 
-std::int64_t steps_to_end(const DynamicSolver& s, const std::vector<SinterPhase>& phases) {
+template <int D>
+std::int64_t steps_to_end(const DynamicSolverT<D>& s, const std::vector<SinterPhase>& phases) {
   return std::max<std::int64_t>(0, step_of(phase_end(phases, phases.size() - 1), s.dt()) - first_step(s));
 }
 
-PhaseRun run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, const PhaseFriction& fr,
-                    std::int64_t samples, PhaseObserver& obs) {
+template <int D>
+PhaseRun run_phases(DynamicSolverT<D>& s, const std::vector<SinterPhase>& phases, const PhaseFriction& fr,
+                    std::int64_t samples, PhaseObserverT<D>& obs) {
   const double dt = s.dt();
   const std::int64_t k0 = first_step(s);
   const std::int64_t K = step_of(phase_end(phases, phases.size() - 1), dt);
@@ -197,5 +268,14 @@ PhaseRun run_phases(DynamicSolver& s, const std::vector<SinterPhase>& phases, co
   if ((K - k0) % run.sample_every != 0 || total == 0) obs.sample(s, cur_phase, run.steps);
   return run;
 }
+
+template ContactCounts count_contacts<2>(const DynamicSolverT<2>&, std::vector<std::pair<std::uint32_t, std::uint32_t>>&);
+template ContactCounts count_contacts<3>(const DynamicSolverT<3>&, std::vector<std::pair<std::uint32_t, std::uint32_t>>&);
+template std::int64_t steps_to_end<2>(const DynamicSolverT<2>&, const std::vector<SinterPhase>&);
+template std::int64_t steps_to_end<3>(const DynamicSolverT<3>&, const std::vector<SinterPhase>&);
+template PhaseRun run_phases<2>(DynamicSolverT<2>&, const std::vector<SinterPhase>&, const PhaseFriction&, std::int64_t,
+                                PhaseObserverT<2>&);
+template PhaseRun run_phases<3>(DynamicSolverT<3>&, const std::vector<SinterPhase>&, const PhaseFriction&, std::int64_t,
+                                PhaseObserverT<3>&);
 
 }  // namespace netdem::dem

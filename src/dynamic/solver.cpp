@@ -1003,9 +1003,7 @@ void DynamicSolverT<D>::step() {
   if (plastic()) update_plastic_time_step();
   impose_affine_motion(ts_.dt);
   const bool checking = opt_.check_every > 0;
-  if constexpr (D == 2) {  // (3D: no state files yet, so no snapshot)
-    if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
-  }
+  if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
   const bool check = checking && ++since_check_ >= opt_.check_every;
   ++since_good_;
   double vmax2 = 0.0;
@@ -1101,11 +1099,9 @@ void DynamicSolverT<D>::step() {
   if (check) {
     since_check_ = 0;
     check_health_with(vmax2);
-    if constexpr (D == 2) {
-      if (since_good_ >= HealthLimits::kLastGoodEvery) {
-        last_good_ = std::make_shared<const SolverState>(state());
-        since_good_ = 0;
-      }
+    if (since_good_ >= HealthLimits::kLastGoodEvery) {
+      last_good_ = std::make_shared<const SolverState>(state());
+      since_good_ = 0;
     }
   }
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -26,31 +27,72 @@ namespace {
 
 std::string quote_input(const std::string& s) { return packing::quote_input(s, 80); }
 
+namespace {
+// The SolverState fields of dimension D (the 2D ones, or the 3D ones of a sphere state).
+template <int D>
+struct StateOf;
+template <>
+struct StateOf<2> {
+  static auto& pair(SolverState& s) { return s.pair_history; }
+  static auto& wall(SolverState& s) { return s.wall_history; }
+  static auto& pl_pair(SolverState& s) { return s.plastic_pair_history; }
+  static auto& pl_wall(SolverState& s) { return s.plastic_wall_history; }
+  static const auto& pair(const SolverState& s) { return s.pair_history; }
+  static const auto& wall(const SolverState& s) { return s.wall_history; }
+  static const auto& pl_pair(const SolverState& s) { return s.plastic_pair_history; }
+  static const auto& pl_wall(const SolverState& s) { return s.plastic_wall_history; }
+  static double* wall_velocity(SolverState& s) { return s.wall_velocity; }
+  static const double* wall_velocity(const SolverState& s) { return s.wall_velocity; }
+  static double* wall_force(SolverState& s) { return s.wall_force; }
+  static const double* wall_force(const SolverState& s) { return s.wall_force; }
+};
+template <>
+struct StateOf<3> {
+  static auto& pair(SolverState& s) { return s.pair_history3; }
+  static auto& wall(SolverState& s) { return s.wall_history3; }
+  static auto& pl_pair(SolverState& s) { return s.plastic_pair_history3; }
+  static auto& pl_wall(SolverState& s) { return s.plastic_wall_history3; }
+  static const auto& pair(const SolverState& s) { return s.pair_history3; }
+  static const auto& wall(const SolverState& s) { return s.wall_history3; }
+  static const auto& pl_pair(const SolverState& s) { return s.plastic_pair_history3; }
+  static const auto& pl_wall(const SolverState& s) { return s.plastic_wall_history3; }
+  static double* wall_velocity(SolverState& s) { return s.wall_velocity3; }
+  static const double* wall_velocity(const SolverState& s) { return s.wall_velocity3; }
+  static double* wall_force(SolverState& s) { return s.wall_force3; }
+  static const double* wall_force(const SolverState& s) { return s.wall_force3; }
+};
+}  // namespace
+
 template <int D>
 DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& options)
     : P_(st.particles), params_(st.params), box_(st.box), opt_(options) {
-  if constexpr (D == 3) {
-    throw std::logic_error("state files and restarts are 2D only (issue 16, 3D first part)");
-  } else {
+  using S = StateOf<D>;
   params_.validate();
   opt_.validate();
   const std::size_t n = P_.size();
+  if (P_.dim != D) fail(fmt::format("state: the particles are {}D, the solver {}D", P_.dim, D));
   auto same = [n](std::size_t m) { return m == n; };
-  if (!(same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
-        same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
-        same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) &&
-        same(P_.torque.size()) && same(st.radius_ref.size()) && same(st.wall_history.size() / 4) &&
-        st.wall_history.size() == 4 * n && st.pair_key.size() == st.pair_history.size()) &&
-      !(options.model == ContactModel::PlasticIndentation && st.plastic_wall_history.size() == 4 * n &&
-        st.plastic_pair_history.size() == st.pair_key.size() && st.wall_history.empty() &&
-        st.pair_history.empty()))
-    fail("state: inconsistent array sizes");
+  const auto& wh = S::wall(st);
+  const auto& pwh = S::pl_wall(st);
+  const std::size_t nw = static_cast<std::size_t>(kWalls);
+  bool sizes = same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
+               same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
+               same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) && same(P_.torque.size()) &&
+               same(st.radius_ref.size());
+  if constexpr (D == 3)
+    sizes = sizes && same(P_.z.size()) && same(P_.vz.size()) && same(P_.fz.size()) && same(P_.wx.size()) &&
+            same(P_.wy.size()) && same(P_.tx.size()) && same(P_.ty.size());
+  const bool luding_h = wh.size() == nw * n && st.pair_key.size() == S::pair(st).size();
+  const bool plastic_h = options.model == ContactModel::PlasticIndentation && pwh.size() == nw * n &&
+                         S::pl_pair(st).size() == st.pair_key.size() && wh.empty() && S::pair(st).empty();
+  if (!sizes || !(luding_h || plastic_h)) fail("state: inconsistent array sizes");
   if (n == 0) fail("state: no particles");
   for (std::size_t i = 0; i < n; ++i)
     if (!(st.radius_ref[i] > 0.0 && P_.radius[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
       fail("state: particle " + std::to_string(i) + " has a non-positive radius or mass");
   if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
     fail("state: box must have x_max > x_min and y_max > y_min");
+  if (D == 3 && box_.enabled && !(box_.z_max > box_.z_min)) fail("state: a 3D box must have z_max > z_min");
   if (!(st.dt > 0.0) || !std::isfinite(st.dt)) fail("state: time step must be positive");
   for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
     const auto i = st.pair_key[k] >> 32, j = st.pair_key[k] & 0xffffffffu;
@@ -65,45 +107,50 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   time_ = st.time;
   radius_ref_ = st.radius_ref;
   radius_scale_ = P_.radius[0] / radius_ref_[0];
-  wall_v_[0] = st.wall_velocity[0];
-  wall_v_[1] = st.wall_velocity[1];
-  std::copy(st.wall_force, st.wall_force + 4, wall_force_);
-  sxx_ = st.stress_sum[0];
-  sxy_ = st.stress_sum[1];
-  syx_ = st.stress_sum[2];
-  syy_ = st.stress_sum[3];
+  std::copy(S::wall_velocity(st), S::wall_velocity(st) + D, wall_v_);
+  std::copy(S::wall_force(st), S::wall_force(st) + 2 * D, wall_force_);
+  if constexpr (D == 2) {
+    sxx_ = st.stress_sum[0];
+    sxy_ = st.stress_sum[1];
+    syx_ = st.stress_sum[2];
+    syy_ = st.stress_sum[3];
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) s3_[a][b] = st.stress_sum3[3 * a + b];
+  }
   elastic_ = st.elastic;
-  wall_hist_ = st.wall_history;
-  pl_wall_hist_ = st.plastic_wall_history;
+  wall_hist_ = wh;
+  pl_wall_hist_ = pwh;
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);  // the affine map starts again at the restart
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   finish_setup();
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).
   pair_key_ = st.pair_key;
-  pair_hist_ = st.pair_history;
-  pl_pair_hist_ = st.plastic_pair_history;
+  pair_hist_ = S::pair(st);
+  pl_pair_hist_ = S::pl_pair(st);
   build_table();
   rebuilds_ = 0;
-  }
 }
 
 template <int D>
 SolverState DynamicSolverT<D>::state() const {
-  if constexpr (D == 3) {
-    throw std::logic_error("state files and restarts are 2D only (issue 16, 3D first part)");
-  } else {
+  using S = StateOf<D>;
   SolverState st;
   st.particles = P_;
   st.radius_ref = radius_ref_;
   st.box = box_;
-  st.wall_velocity[0] = wall_v_[0];
-  st.wall_velocity[1] = wall_v_[1];
-  std::copy(wall_force_, wall_force_ + 4, st.wall_force);
-  st.stress_sum[0] = sxx_;
-  st.stress_sum[1] = sxy_;
-  st.stress_sum[2] = syx_;
-  st.stress_sum[3] = syy_;
+  std::copy(wall_v_, wall_v_ + D, S::wall_velocity(st));
+  std::copy(wall_force_, wall_force_ + 2 * D, S::wall_force(st));
+  if constexpr (D == 2) {
+    st.stress_sum[0] = sxx_;
+    st.stress_sum[1] = sxy_;
+    st.stress_sum[2] = syx_;
+    st.stress_sum[3] = syy_;
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) st.stress_sum3[3 * a + b] = s3_[a][b];
+  }
   st.elastic = elastic_;
   st.time = time_;
   st.dt = ts_.dt;
@@ -112,23 +159,22 @@ SolverState DynamicSolverT<D>::state() const {
   // only the pairs with a live history (touching); the others are rebuilt from positions
   for (std::size_t k = 0; k < pair_key_.size(); ++k) {
     if (plastic()) {
-      const contact::PlasticIndentationHistory& h = pl_pair_hist_[k];
-      if (h.u_max != 0.0 || h.f_t != 0.0 || h.sliding != 0) {
+      const PlasticHist& h = pl_pair_hist_[k];
+      if (h.u_max != 0.0 || !contact::tan_is_zero(h.f_t) || h.sliding != 0) {
         st.pair_key.push_back(pair_key_[k]);
-        st.plastic_pair_history.push_back(h);
+        S::pl_pair(st).push_back(h);
       }
       continue;
     }
-    const LudingHistory& h = pair_hist_[k];
+    const LudingHist& h = pair_hist_[k];
     if (!h.fresh()) {
       st.pair_key.push_back(pair_key_[k]);
-      st.pair_history.push_back(h);
+      S::pair(st).push_back(h);
     }
   }
-  st.wall_history = wall_hist_;
-  st.plastic_wall_history = pl_wall_hist_;
+  S::wall(st) = wall_hist_;
+  S::pl_wall(st) = pl_wall_hist_;
   return st;
-  }
 }
 
 template <int D>
@@ -276,9 +322,14 @@ const char* mode_name(WallMode m) {
   return m == WallMode::Fixed ? "fixed" : m == WallMode::Strain ? "strain" : "stress";
 }
 
-void put_history(std::ostringstream& o, const LudingHistory& h) {
-  o << g17(h.delta_max) << ' ' << g17(h.delta0) << ' ' << g17(h.k2_line) << ' ' << g17(h.k1_seen)
-    << ' ' << g17(h.xi) << ' ' << int(h.fluid) << ' ' << int(h.sliding);
+void put_tan(std::ostringstream& o, double v) { o << g17(v); }
+void put_tan(std::ostringstream& o, const Eigen::Vector3d& v) { o << g17(v.x()) << ' ' << g17(v.y()) << ' ' << g17(v.z()); }
+
+template <int D>
+void put_history(std::ostringstream& o, const contact::LudingHistoryT<D>& h) {
+  o << g17(h.delta_max) << ' ' << g17(h.delta0) << ' ' << g17(h.k2_line) << ' ' << g17(h.k1_seen) << ' ';
+  put_tan(o, h.xi);
+  o << ' ' << int(h.fluid) << ' ' << int(h.sliding);
 }
 
 }  // namespace
@@ -306,53 +357,88 @@ double get_luding_param(const LudingParams& p, const std::string& name) {
   fail("unknown contact parameter '" + name + "'");
 }
 
-std::string format_state(const SolverState& st) {
-  if (!st.plastic_wall_history.empty())
-    throw std::invalid_argument("state files hold the Luding models only (not the plastic-indentation law)");
-  std::ostringstream o;
+namespace {
+// The body of a state file after its first line, for D = 2 (v2 as it always was) or D = 3 (the
+// line "dim 3" first, then z, the back wall, six walls, the 3 x 3 stress sum and the spin vector).
+template <int D>
+void format_state_body(std::ostringstream& o, const SolverState& st) {
+  using S = StateOf<D>;
   const Particles& P = st.particles;
-  o << "# demsolve state v2 (docs/dynamic.md); lengths m, masses kg, times s, forces N\n";
+  if constexpr (D == 3) o << "dim 3\n";
   o << "time " << g17(st.time) << "\ndt " << g17(st.dt) << "\n";
-  o << "box " << int(st.box.enabled) << ' ' << g17(st.box.x_min) << ' ' << g17(st.box.y_min) << ' '
-    << g17(st.box.x_max) << ' ' << g17(st.box.y_max) << "\n";
-  const MovingWall* w[2] = {&st.box.right, &st.box.top};
-  const char* wn[2] = {"wall_right", "wall_top"};
-  for (int k = 0; k < 2; ++k)
+  if constexpr (D == 2)
+    o << "box " << int(st.box.enabled) << ' ' << g17(st.box.x_min) << ' ' << g17(st.box.y_min) << ' '
+      << g17(st.box.x_max) << ' ' << g17(st.box.y_max) << "\n";
+  else
+    o << "box " << int(st.box.enabled) << ' ' << g17(st.box.x_min) << ' ' << g17(st.box.y_min) << ' '
+      << g17(st.box.z_min) << ' ' << g17(st.box.x_max) << ' ' << g17(st.box.y_max) << ' ' << g17(st.box.z_max)
+      << "\n";
+  const MovingWall* w[3] = {&st.box.right, D == 3 ? &st.box.back : &st.box.top, &st.box.top};
+  const char* wn[3] = {"wall_right", D == 3 ? "wall_back" : "wall_top", "wall_top"};
+  for (int k = 0; k < D; ++k)
     o << wn[k] << ' ' << mode_name(w[k]->mode) << ' ' << g17(w[k]->velocity) << ' '
       << g17(w[k]->pressure) << ' ' << g17(w[k]->mass) << ' ' << g17(w[k]->damping) << ' '
-      << g17(st.wall_velocity[k]) << "\n";
-  o << "wall_force " << g17(st.wall_force[0]) << ' ' << g17(st.wall_force[1]) << ' '
-    << g17(st.wall_force[2]) << ' ' << g17(st.wall_force[3]) << "\n";
-  o << "stress_sum " << g17(st.stress_sum[0]) << ' ' << g17(st.stress_sum[1]) << ' '
-    << g17(st.stress_sum[2]) << ' ' << g17(st.stress_sum[3]) << ' ' << g17(st.elastic) << "\n";
+      << g17(S::wall_velocity(st)[k]) << "\n";
+  o << "wall_force";
+  for (int k = 0; k < 2 * D; ++k) o << ' ' << g17(S::wall_force(st)[k]);
+  o << "\nstress_sum";
+  for (int k = 0; k < D * D; ++k) o << ' ' << g17(D == 2 ? st.stress_sum[k] : st.stress_sum3[k]);
+  o << ' ' << g17(st.elastic) << "\n";
   o << "thermal " << g17(st.thermal.T) << ' ' << g17(st.thermal.k1_Tt) << "\n";
   for (const auto& f : kFields) o << "param " << f.name << ' ' << g17(get_luding_param(st.params, f.name)) << "\n";
   o << "particles " << P.size() << "\n";
-  o << "id,x,y,vx,vy,omega,theta,radius,radius_ref,mass,inertia,fx,fy,torque\n";
-  for (std::size_t i = 0; i < P.size(); ++i)
-    o << i << ',' << g17(P.x[i]) << ',' << g17(P.y[i]) << ',' << g17(P.vx[i]) << ',' << g17(P.vy[i])
-      << ',' << g17(P.omega[i]) << ',' << g17(P.theta[i]) << ',' << g17(P.radius[i]) << ','
-      << g17(st.radius_ref[i]) << ',' << g17(P.mass[i]) << ',' << g17(P.inertia[i]) << ','
-      << g17(P.fx[i]) << ',' << g17(P.fy[i]) << ',' << g17(P.torque[i]) << "\n";
+  if constexpr (D == 2) {
+    o << "id,x,y,vx,vy,omega,theta,radius,radius_ref,mass,inertia,fx,fy,torque\n";
+    for (std::size_t i = 0; i < P.size(); ++i)
+      o << i << ',' << g17(P.x[i]) << ',' << g17(P.y[i]) << ',' << g17(P.vx[i]) << ',' << g17(P.vy[i])
+        << ',' << g17(P.omega[i]) << ',' << g17(P.theta[i]) << ',' << g17(P.radius[i]) << ','
+        << g17(st.radius_ref[i]) << ',' << g17(P.mass[i]) << ',' << g17(P.inertia[i]) << ','
+        << g17(P.fx[i]) << ',' << g17(P.fy[i]) << ',' << g17(P.torque[i]) << "\n";
+  } else {
+    o << "id,x,y,z,vx,vy,vz,wx,wy,wz,radius,radius_ref,mass,inertia,fx,fy,fz,tx,ty,tz\n";
+    for (std::size_t i = 0; i < P.size(); ++i)
+      o << i << ',' << g17(P.x[i]) << ',' << g17(P.y[i]) << ',' << g17(P.z[i]) << ',' << g17(P.vx[i]) << ','
+        << g17(P.vy[i]) << ',' << g17(P.vz[i]) << ',' << g17(P.wx[i]) << ',' << g17(P.wy[i]) << ','
+        << g17(P.omega[i]) << ',' << g17(P.radius[i]) << ',' << g17(st.radius_ref[i]) << ','
+        << g17(P.mass[i]) << ',' << g17(P.inertia[i]) << ',' << g17(P.fx[i]) << ',' << g17(P.fy[i]) << ','
+        << g17(P.fz[i]) << ',' << g17(P.tx[i]) << ',' << g17(P.ty[i]) << ',' << g17(P.torque[i]) << "\n";
+  }
   o << "pairs " << st.pair_key.size() << "\n";
-  o << "# i j delta_max delta0 k2_line k1_seen xi fluid sliding\n";
+  o << (D == 2 ? "# i j delta_max delta0 k2_line k1_seen xi fluid sliding\n"
+               : "# i j delta_max delta0 k2_line k1_seen xi_x xi_y xi_z fluid sliding\n");
   for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
     o << (st.pair_key[k] >> 32) << ' ' << (st.pair_key[k] & 0xffffffffu) << ' ';
-    put_history(o, st.pair_history[k]);
+    put_history<D>(o, S::pair(st)[k]);
     o << "\n";
   }
+  const auto& wh = S::wall(st);
   std::size_t nw = 0;
-  for (const auto& h : st.wall_history) nw += !h.fresh();
+  for (const auto& h : wh) nw += !h.fresh();
   o << "wall_contacts " << nw << "\n";
-  o << "# particle wall(0 left, 1 right, 2 bottom, 3 top) delta_max delta0 k2_line k1_seen xi fluid sliding\n";
-  for (std::size_t k = 0; k < st.wall_history.size(); ++k) {
-    const auto& h = st.wall_history[k];
+  o << (D == 2 ? "# particle wall(0 left, 1 right, 2 bottom, 3 top) delta_max delta0 k2_line k1_seen xi fluid sliding\n"
+               : "# particle wall(0 x_min, 1 x_max, 2 y_min, 3 y_max, 4 z_min, 5 z_max) delta_max delta0 k2_line "
+                 "k1_seen xi_x xi_y xi_z fluid sliding\n");
+  constexpr std::size_t W = 2 * D;
+  for (std::size_t k = 0; k < wh.size(); ++k) {
+    const auto& h = wh[k];
     if (h.fresh()) continue;
-    o << k / 4 << ' ' << k % 4 << ' ';
-    put_history(o, h);
+    o << k / W << ' ' << k % W << ' ';
+    put_history<D>(o, h);
     o << "\n";
   }
   o << "end\n";
+}
+}  // namespace
+
+std::string format_state(const SolverState& st) {
+  if (!st.plastic_wall_history.empty() || !st.plastic_wall_history3.empty())
+    throw std::invalid_argument("state files hold the Luding models only (not the plastic-indentation law)");
+  std::ostringstream o;
+  o << "# demsolve state v2 (docs/dynamic.md); lengths m, masses kg, times s, forces N\n";
+  if (st.dim() == 3)
+    format_state_body<3>(o, st);
+  else
+    format_state_body<2>(o, st);
   return o.str();
 }
 
@@ -427,30 +513,29 @@ WallMode parse_mode(Reader& r, const std::string& s) {
   r.error("unknown wall mode '" + quote_input(s) + "'");
 }
 
-LudingHistory get_history(Reader& r, std::istringstream& ls) {
-  LudingHistory h;
+template <int D>
+contact::LudingHistoryT<D> get_history(Reader& r, std::istringstream& ls) {
+  contact::LudingHistoryT<D> h;
   h.delta_max = r.real(ls, "delta_max");
   h.delta0 = r.real(ls, "delta0");
   h.k2_line = r.real(ls, "k2_line");
   h.k1_seen = r.real(ls, "k1_seen");
-  h.xi = r.real(ls, "xi");
+  if constexpr (D == 2) {
+    h.xi = r.real(ls, "xi");
+  } else {
+    h.xi.x() = r.real(ls, "xi_x");
+    h.xi.y() = r.real(ls, "xi_y");
+    h.xi.z() = r.real(ls, "xi_z");
+  }
   h.fluid = static_cast<std::uint8_t>(r.num<int>(ls, "fluid") != 0);
   h.sliding = static_cast<std::uint8_t>(r.num<int>(ls, "sliding") != 0);
   return h;
 }
 
-}  // namespace
-
-SolverState parse_state(std::istream& in, const std::string& name) {
-  Reader r(in, name);
-  SolverState st;
-  {
-    std::string first;
-    if (!std::getline(in, first)) r.error_at(1, "empty file");
-    r.count_line();
-    if (first.rfind("# demsolve state v2", 0) != 0)
-      r.error_at(1, "not a demsolve state file v2 (first line '" + quote_input(first.substr(0, 40)) + "')");
-  }
+// The body of a state file after its first line (and, in 3D, after "dim 3"): format_state_body.
+template <int D>
+void parse_state_body(Reader& r, SolverState& st) {
+  using S = StateOf<D>;
   auto one = [&](const char* key) {
     auto ls = r.keyed(key);
     return r.real(ls, key);
@@ -459,19 +544,21 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   if (!(st.time >= 0.0 && st.time <= StateLimits::kMaxTime)) r.error(fmt::format("time must be in [0, {:g}] s", StateLimits::kMaxTime));
   st.dt = one("dt");
   if (!(st.dt > 0.0 && st.dt <= StateLimits::kMaxDt)) r.error(fmt::format("dt must be in (0, {:g}] s", StateLimits::kMaxDt));
-  std::size_t box_line = 0, wall_line[2] = {0, 0}, thermal_line = 0;
+  std::size_t box_line = 0, wall_line[3] = {0, 0, 0}, thermal_line = 0;
   {
     auto ls = r.keyed("box");
     box_line = r.line_no();
     st.box.enabled = r.num<int>(ls, "box enabled") != 0;
     st.box.x_min = r.real(ls, "x_min");
     st.box.y_min = r.real(ls, "y_min");
+    if constexpr (D == 3) st.box.z_min = r.real(ls, "z_min");
     st.box.x_max = r.real(ls, "x_max");
     st.box.y_max = r.real(ls, "y_max");
+    if constexpr (D == 3) st.box.z_max = r.real(ls, "z_max");
   }
-  MovingWall* w[2] = {&st.box.right, &st.box.top};
-  const char* wn[2] = {"wall_right", "wall_top"};
-  for (int k = 0; k < 2; ++k) {
+  MovingWall* w[3] = {&st.box.right, D == 3 ? &st.box.back : &st.box.top, &st.box.top};
+  const char* wn[3] = {"wall_right", D == 3 ? "wall_back" : "wall_top", "wall_top"};
+  for (int k = 0; k < D; ++k) {
     auto ls = r.keyed(wn[k]);
     wall_line[k] = r.line_no();
     w[k]->mode = parse_mode(r, r.num<std::string>(ls, "wall mode"));
@@ -479,17 +566,17 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     w[k]->pressure = r.real(ls, "wall pressure");
     w[k]->mass = r.real(ls, "wall mass");
     w[k]->damping = r.real(ls, "wall damping");
-    st.wall_velocity[k] = r.real(ls, "wall velocity");
+    S::wall_velocity(st)[k] = r.real(ls, "wall velocity");
     if (w[k]->mode == WallMode::Stress && !(w[k]->mass > 0.0 && w[k]->damping >= 0.0 && w[k]->pressure >= 0.0))
       r.error("a stress-controlled wall needs mass > 0, damping >= 0 and pressure >= 0");
   }
   {
     auto ls = r.keyed("wall_force");
-    for (double& f : st.wall_force) f = r.real(ls, "wall force");
+    for (int k = 0; k < 2 * D; ++k) S::wall_force(st)[k] = r.real(ls, "wall force");
   }
   {
     auto ls = r.keyed("stress_sum");
-    for (double& f : st.stress_sum) f = r.real(ls, "stress");
+    for (int k = 0; k < D * D; ++k) (D == 2 ? st.stress_sum[k] : st.stress_sum3[k]) = r.real(ls, "stress");
     st.elastic = r.real(ls, "elastic energy");
   }
   {
@@ -525,16 +612,20 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   // what needs the parameters: the box, the walls' loading ratio, the temperature
   if (st.box.enabled) {
     const double L = StateLimits::kMaxBox * lp.a0;
-    const double b[4] = {st.box.x_min, st.box.y_min, st.box.x_max, st.box.y_max};
-    for (double q : b)
-      if (!(std::fabs(q) <= L)) r.error_at(box_line, fmt::format("box coordinates must be within +-{:g} a0 = {:g} m", StateLimits::kMaxBox, L));
+    const double b[6] = {st.box.x_min, st.box.y_min, st.box.x_max, st.box.y_max, st.box.z_min, st.box.z_max};
+    for (int k = 0; k < 2 * D; ++k)
+      if (!(std::fabs(b[k]) <= L)) r.error_at(box_line, fmt::format("box coordinates must be within +-{:g} a0 = {:g} m", StateLimits::kMaxBox, L));
     if (!(st.box.x_max > st.box.x_min && st.box.y_max > st.box.y_min))
       r.error_at(box_line, "box must have x_max > x_min and y_max > y_min");
+    if (D == 3 && !(st.box.z_max > st.box.z_min)) r.error_at(box_line, "box must have z_max > z_min");
   }
-  for (int k = 0; k < 2; ++k)
-    if (w[k]->mode == WallMode::Stress && !(2.0 * w[k]->pressure / lp.k2 <= StateLimits::kMaxLoading))
-      r.error_at(wall_line[k], fmt::format("loading ratio 2p/k2 = {:.3g} is above {} (Luding section 4)",
-                                           2.0 * w[k]->pressure / lp.k2, StateLimits::kMaxLoading));
+  // 2D: 2p/k2 (p in N/m); 3D: 4 p a0/k2 (p in N/m^2, the force on a particle's (2 a0)^2 of wall)
+  for (int k = 0; k < D; ++k) {
+    const double ratio = D == 2 ? 2.0 * w[k]->pressure / lp.k2 : 4.0 * w[k]->pressure * lp.a0 / lp.k2;
+    if (w[k]->mode == WallMode::Stress && !(ratio <= StateLimits::kMaxLoading))
+      r.error_at(wall_line[k], fmt::format("loading ratio {} = {:.3g} is above {} (Luding section 4)",
+                                           D == 2 ? "2p/k2" : "4 p a0/k2", ratio, StateLimits::kMaxLoading));
+  }
   if (!(st.thermal.T > StateLimits::kAbsoluteZero))
     r.error_at(thermal_line, fmt::format("T = {:g} deg C is not above absolute zero", st.thermal.T));
   if (!(std::fabs(lp.da_T * (st.thermal.T - lp.T_radius_ref)) <= StateLimits::kMaxThermalStrain))
@@ -548,10 +639,12 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     n = r.num<std::size_t>(ls, "particle count");
     if (n == 0 || n > StateLimits::kMaxParticles) r.error(fmt::format("particle count must be in [1, {}]", StateLimits::kMaxParticles));
   }
-  if (r.line().rfind("id,x,y", 0) != 0) r.error("expected the particle header line");
+  if (r.line().rfind(D == 2 ? "id,x,y," : "id,x,y,z,", 0) != 0) r.error("expected the particle header line");
   Particles& P = st.particles;
+  P.dim = D;
   std::vector<std::size_t> pline;
   const double rlo = lp.a0 / StateLimits::kRadiusRange, rhi = lp.a0 * StateLimits::kRadiusRange;
+  constexpr double kI = contact::Dim<D>::kInertia;
   for (std::size_t i = 0; i < n; ++i) {
     std::string s = r.line();
     pline.push_back(r.line_no());
@@ -559,66 +652,110 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     std::istringstream ls(s);
     const auto id = r.num<std::size_t>(ls, "particle id");
     if (id != i) r.error("particle ids must be 0..N-1 in order");
-    double v[13];
-    for (double& x : v) x = r.real(ls, "particle value");
-    if (!(v[6] > 0.0 && v[7] > 0.0 && v[8] > 0.0 && v[9] > 0.0))
+    // 2D: x y vx vy omega theta | radius radius_ref mass inertia | fx fy torque
+    // 3D: x y z vx vy vz wx wy wz | radius radius_ref mass inertia | fx fy fz tx ty tz
+    constexpr int kKin = D == 2 ? 6 : 9;
+    double v[19];
+    for (int k = 0; k < (D == 2 ? 13 : 19); ++k) v[k] = r.real(ls, "particle value");
+    const double a = v[kKin], a_ref = v[kKin + 1], m = v[kKin + 2], I = v[kKin + 3];
+    if (!(a > 0.0 && a_ref > 0.0 && m > 0.0 && I > 0.0))
       r.error("particle " + std::to_string(i) + ": radius, mass and inertia must be positive");
-    if (!(v[6] >= rlo && v[6] <= rhi && v[7] >= rlo && v[7] <= rhi))
+    if (!(a >= rlo && a <= rhi && a_ref >= rlo && a_ref <= rhi))
       r.error(fmt::format("particle {}: radius and radius_ref must be within [a0 / 100, 100 a0] = [{:g}, {:g}] m", i, rlo, rhi));
-    const double m_ref = contact::luding_mass(lp, v[7]);
-    if (!(v[8] >= 1e-3 * m_ref && v[8] <= 1e3 * m_ref && v[9] >= 0.5e-3 * v[8] * v[6] * v[6] &&
-          v[9] <= 0.5e3 * v[8] * v[6] * v[6]))
-      r.error(fmt::format("particle {}: mass and inertia must be within a factor 1000 of rho_p pi a^2 h and m a^2 / 2", i));
-    st.radius_ref.push_back(v[7]);
+    const double m_ref = D == 2 ? contact::luding_mass(lp, a_ref) : lp.rho_p * 4.0 / 3.0 * std::numbers::pi * a_ref * a_ref * a_ref;
+    if (!(m >= 1e-3 * m_ref && m <= 1e3 * m_ref && I >= 1e-3 * kI * m * a * a && I <= 1e3 * kI * m * a * a))
+      r.error(fmt::format("particle {}: mass and inertia must be within a factor 1000 of {}", i,
+                          D == 2 ? "rho_p pi a^2 h and m a^2 / 2" : "rho_p 4/3 pi a^3 and 2/5 m a^2"));
+    st.radius_ref.push_back(a_ref);
+    P.radius.push_back(a);
+    P.mass.push_back(m);
+    P.inertia.push_back(I);
     P.x.push_back(v[0]);
     P.y.push_back(v[1]);
-    P.vx.push_back(v[2]);
-    P.vy.push_back(v[3]);
-    P.omega.push_back(v[4]);
-    P.theta.push_back(v[5]);
-    P.radius.push_back(v[6]);
-    P.mass.push_back(v[8]);
-    P.inertia.push_back(v[9]);
-    P.fx.push_back(v[10]);
-    P.fy.push_back(v[11]);
-    P.torque.push_back(v[12]);
+    if constexpr (D == 2) {
+      P.vx.push_back(v[2]);
+      P.vy.push_back(v[3]);
+      P.omega.push_back(v[4]);
+      P.theta.push_back(v[5]);
+      P.fx.push_back(v[10]);
+      P.fy.push_back(v[11]);
+      P.torque.push_back(v[12]);
+    } else {
+      P.z.push_back(v[2]);
+      P.vx.push_back(v[3]);
+      P.vy.push_back(v[4]);
+      P.vz.push_back(v[5]);
+      P.wx.push_back(v[6]);
+      P.wy.push_back(v[7]);
+      P.omega.push_back(v[8]);
+      P.theta.push_back(0.0);
+      P.fx.push_back(v[13]);
+      P.fy.push_back(v[14]);
+      P.fz.push_back(v[15]);
+      P.tx.push_back(v[16]);
+      P.ty.push_back(v[17]);
+      P.torque.push_back(v[18]);
+    }
   }
   // geometry and speeds, with the line of the particle (docs/dynamic.md "State file limits")
   double rmin = P.radius[0];
   for (double a : P.radius) rmin = std::min(rmin, a);
   const double travel = StateLimits::kMaxTravel * rmin, dt = st.dt;
+  auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
   for (std::size_t i = 0; i < n; ++i) {
-    if (st.box.enabled && !(P.x[i] >= st.box.x_min && P.x[i] <= st.box.x_max && P.y[i] >= st.box.y_min &&
-                            P.y[i] <= st.box.y_max))
-      r.error_at(pline[i], fmt::format("particle {}: the centre ({:g}, {:g}) is outside the box", i, P.x[i], P.y[i]));
-    if (!st.box.enabled && !(std::fabs(P.x[i]) <= StateLimits::kMaxBox * lp.a0 && std::fabs(P.y[i]) <= StateLimits::kMaxBox * lp.a0))
+    const bool inside = P.x[i] >= st.box.x_min && P.x[i] <= st.box.x_max && P.y[i] >= st.box.y_min &&
+                        P.y[i] <= st.box.y_max && (D == 2 || (zc(i) >= st.box.z_min && zc(i) <= st.box.z_max));
+    if (st.box.enabled && !inside) {
+      if constexpr (D == 2)
+        r.error_at(pline[i], fmt::format("particle {}: the centre ({:g}, {:g}) is outside the box", i, P.x[i], P.y[i]));
+      else
+        r.error_at(pline[i], fmt::format("particle {}: the centre ({:g}, {:g}, {:g}) is outside the box", i, P.x[i],
+                                         P.y[i], P.z[i]));
+    }
+    if (!st.box.enabled && !(std::fabs(P.x[i]) <= StateLimits::kMaxBox * lp.a0 && std::fabs(P.y[i]) <= StateLimits::kMaxBox * lp.a0 &&
+                             std::fabs(zc(i)) <= StateLimits::kMaxBox * lp.a0))
       r.error_at(pline[i], fmt::format("particle {}: the centre must be within +-{:g} a0", i, StateLimits::kMaxBox));
-    const double v = std::hypot(P.vx[i], P.vy[i]) + std::fabs(P.omega[i]) * P.radius[i];
+    double v = 0.0, f = 0.0;
+    if constexpr (D == 2) {
+      v = std::hypot(P.vx[i], P.vy[i]) + std::fabs(P.omega[i]) * P.radius[i];
+      f = std::hypot(P.fx[i], P.fy[i]);
+    } else {
+      v = std::sqrt(P.vx[i] * P.vx[i] + P.vy[i] * P.vy[i] + P.vz[i] * P.vz[i]) +
+          std::sqrt(P.wx[i] * P.wx[i] + P.wy[i] * P.wy[i] + P.omega[i] * P.omega[i]) * P.radius[i];
+      f = std::sqrt(P.fx[i] * P.fx[i] + P.fy[i] * P.fy[i] + P.fz[i] * P.fz[i]);
+    }
     if (!(v * dt < travel))
       r.error_at(pline[i], fmt::format("particle {}: speed {:.3g} m/s moves it {:.3g} m per step, not below 0.1 r_min = {:.3g} m",
                                        i, v, v * dt, travel));
-    const double dv = 0.5 * dt * std::hypot(P.fx[i], P.fy[i]) / P.mass[i];
+    const double dv = 0.5 * dt * f / P.mass[i];
     if (!(dv * dt < travel))
       r.error_at(pline[i], fmt::format("particle {}: force {:.3g} N would move it {:.3g} m in the next step, not below 0.1 r_min",
-                                       i, std::hypot(P.fx[i], P.fy[i]), dv * dt));
+                                       i, f, dv * dt));
   }
-  for (int k = 0; k < 2; ++k)
-    if (!(std::fabs(st.wall_velocity[k]) * dt < travel && std::fabs(w[k]->velocity) * dt < travel))
+  for (int k = 0; k < D; ++k)
+    if (!(std::fabs(S::wall_velocity(st)[k]) * dt < travel && std::fabs(w[k]->velocity) * dt < travel))
       r.error_at(wall_line[k], fmt::format("the wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m",
-                                           std::max(std::fabs(st.wall_velocity[k]), std::fabs(w[k]->velocity)) * dt, travel));
+                                           std::max(std::fabs(S::wall_velocity(st)[k]), std::fabs(w[k]->velocity)) * dt, travel));
   {  // pairs closer than the larger radius, on the shared cell grid
     double rmax = 0.0;
     for (double a : P.radius) rmax = std::max(rmax, a);
-    const packing::CellGrid grid(P.x, P.y, rmax);
-    for (std::size_t i = 0; i < n; ++i)
-      grid.for_each_near(P.x[i], P.y[i], rmax, [&](std::uint32_t j) {
-        if (j <= i) return;
-        const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], lim = std::max(P.radius[i], P.radius[j]);
-        if (dx * dx + dy * dy < lim * lim)
-          r.error_at(pline[j], fmt::format("particles {} (line {}) and {}: centre distance {:.3g} m is below the larger "
-                                           "radius {:.3g} m (a duplicate?)",
-                                           i, pline[i], j, std::sqrt(dx * dx + dy * dy), lim));
-      });
+    auto check = [&](std::size_t i, std::uint32_t j) {
+      if (j <= i) return;
+      const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
+      const double lim = std::max(P.radius[i], P.radius[j]);
+      if (dx * dx + dy * dy + dz * dz < lim * lim)
+        r.error_at(pline[j], fmt::format("particles {} (line {}) and {}: centre distance {:.3g} m is below the larger "
+                                         "radius {:.3g} m (a duplicate?)",
+                                         i, pline[i], j, std::sqrt(dx * dx + dy * dy + dz * dz), lim));
+    };
+    if constexpr (D == 2) {
+      const packing::CellGrid grid(P.x, P.y, rmax);
+      for (std::size_t i = 0; i < n; ++i) grid.for_each_near(P.x[i], P.y[i], rmax, [&](std::uint32_t j) { check(i, j); });
+    } else {
+      const packing::CellGrid3 grid(P.x, P.y, P.z, rmax);
+      for (std::size_t i = 0; i < n; ++i)
+        grid.for_each_near(P.x[i], P.y[i], P.z[i], rmax, [&](std::uint32_t j) { check(i, j); });
+    }
   }
   std::size_t m = 0;
   {
@@ -630,10 +767,11 @@ SolverState parse_state(std::istream& in, const std::string& name) {
     const auto i = r.num<std::uint64_t>(ls, "pair i"), j = r.num<std::uint64_t>(ls, "pair j");
     if (!(i < j && j < n)) r.error("pair indices must satisfy i < j < N");
     st.pair_key.push_back((i << 32) | j);
-    st.pair_history.push_back(get_history(r, ls));
+    S::pair(st).push_back(get_history<D>(r, ls));
     if (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])) r.error("pairs must be sorted by (i, j)");
   }
-  st.wall_history.assign(4 * n, LudingHistory{});
+  constexpr std::size_t W = 2 * D;
+  S::wall(st).assign(W * n, contact::LudingHistoryT<D>{});
   {
     auto ls = r.keyed("wall_contacts");
     m = r.num<std::size_t>(ls, "wall contact count");
@@ -641,10 +779,37 @@ SolverState parse_state(std::istream& in, const std::string& name) {
   for (std::size_t k = 0; k < m; ++k) {
     std::istringstream ls(r.line());
     const auto i = r.num<std::size_t>(ls, "particle"), wall = r.num<std::size_t>(ls, "wall");
-    if (!(i < n && wall < 4)) r.error("wall contact needs particle < N and wall in 0..3");
-    st.wall_history[4 * i + wall] = get_history(r, ls);
+    if (!(i < n && wall < W)) r.error(D == 2 ? "wall contact needs particle < N and wall in 0..3" : "wall contact needs particle < N and wall in 0..5");
+    S::wall(st)[W * i + wall] = get_history<D>(r, ls);
   }
   if (r.line() != "end") r.error("expected 'end' (truncated file?)");
+}
+
+}  // namespace
+
+SolverState parse_state(std::istream& in, const std::string& name) {
+  Reader r(in, name);
+  SolverState st;
+  {
+    std::string first;
+    if (!std::getline(in, first)) r.error_at(1, "empty file");
+    r.count_line();
+    if (first.rfind("# demsolve state v2", 0) != 0)
+      r.error_at(1, "not a demsolve state file v2 (first line '" + quote_input(first.substr(0, 40)) + "')");
+  }
+  // "dim 3": a sphere state; no dim line: 2D (every file before issue 16)
+  const std::string s = r.line();
+  std::istringstream ks(s);
+  std::string key;
+  ks >> key;
+  if (key == "dim") {
+    const auto d = r.num<int>(ks, "dim");
+    if (d != 3) r.error("dim must be 3 (a 2D state file has no dim line)");
+    parse_state_body<3>(r, st);
+  } else {
+    r.unread(s);
+    parse_state_body<2>(r, st);
+  }
   return st;
 }
 
@@ -664,26 +829,39 @@ SolverState read_state_file(const std::string& path) {
 namespace netdem::dem {
 
 namespace {
+void set_tangential(ContactInfo& c, double f_t) { c.f_t = f_t; }
+void set_tangential(ContactInfo& c, const Eigen::Vector3d& f_t) {
+  c.ftx = f_t.x();
+  c.fty = f_t.y();
+  c.ftz = f_t.z();
+  c.f_t = f_t.norm();
+}
+
 // The touching contacts (pairs of the table, then the walls) at the current positions, with the
 // law evaluated on the committed histories with a zero slip increment and the current normal
 // rate. eval(history, kinematics, wall, info) fills the forces of `info` and returns whether the
 // contact is reported.
-template <class H, class Eval>
+template <int D, class H, class Eval>
 void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint64_t>& keys,
                  const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval) {
   out.clear();
+  auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
+  auto vzc = [&](std::size_t i) { return D == 3 ? P.vz[i] : 0.0; };
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
     const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
-    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i];
+    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
     const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
-    const double L2 = dx * dx + dy * dy;
+    const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
     if (!(L2 < s * s)) continue;
-    const double L = std::sqrt(L2), nx = dx / L, ny = dy / L;
+    const double L = std::sqrt(L2), nx = dx / L, ny = dy / L, nz = dz / L;
     const double q = (ri * ri - rj * rj) / (2.0 * L);
-    contact::ContactKinematics in;
+    contact::Kinematics<D> in;
     in.overlap = in.overlap_start = s - L;
-    in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
+    if constexpr (D == 2)
+      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
+    else
+      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny + (vzc(j) - vzc(i)) * nz);
     in.r_eff = ri * rj / s;
     in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
     ContactInfo c;
@@ -694,99 +872,107 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
     c.d_j = 0.5 * L - q;
     c.nx = nx;
     c.ny = ny;
+    if constexpr (D == 3) {
+      c.nz = nz;
+      in.transport.n = Eigen::Vector3d(nx, ny, nz);  // the committed spring lies in this plane already
+    }
     if (!eval(hist[k], in, false, c)) continue;
     c.sliding = hist[k].sliding != 0;
     out.push_back(c);
   }
   if (!(box.enabled && box.contact_walls)) return;
-  const double pos[4] = {box.x_min, box.x_max, box.y_min, box.y_max};
-  const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
+  constexpr int W = 2 * D;
+  const double pos[6] = {box.x_min, box.x_max, box.y_min, box.y_max, box.z_min, box.z_max};
   for (std::size_t i = 0; i < P.size(); ++i)
-    for (int w = 0; w < 4; ++w) {
-      const double dist = w < 2 ? wnx[w] * (P.x[i] - pos[w]) : wny[w] * (P.y[i] - pos[w]);
+    for (int w = 0; w < W; ++w) {
+      const int axis = w / 2;
+      const double sign = (w % 2 == 0) ? 1.0 : -1.0;  // the normal from the wall into the box
+      const double xa = axis == 0 ? P.x[i] : axis == 1 ? P.y[i] : zc(i);
+      const double va = axis == 0 ? P.vx[i] : axis == 1 ? P.vy[i] : vzc(i);
+      const double dist = sign * (xa - pos[w]);
       const double delta = P.radius[i] - dist;
       if (!(delta > 0.0)) continue;
-      contact::ContactKinematics in;
+      contact::Kinematics<D> in;
       in.overlap = in.overlap_start = delta;
-      in.v_n = -(P.vx[i] * wnx[w] + P.vy[i] * wny[w]);
+      in.v_n = -(va * sign);
       in.r_eff = P.radius[i];
       in.m_eff = P.mass[i];
-      const H& h = whist[4 * i + static_cast<std::size_t>(w)];
+      const H& h = whist[static_cast<std::size_t>(W) * i + static_cast<std::size_t>(w)];
       ContactInfo c;
       c.i = static_cast<std::uint32_t>(i);
       c.j = static_cast<std::uint32_t>(w);
       c.wall = w;
       c.overlap = delta;
       c.d_i = dist;
-      c.nx = wnx[w];
-      c.ny = wny[w];
+      c.nx = axis == 0 ? sign : 0.0;
+      c.ny = axis == 1 ? sign : 0.0;
+      if constexpr (D == 3) {
+        c.nz = axis == 2 ? sign : 0.0;
+        in.transport.n = Eigen::Vector3d(c.nx, c.ny, c.nz);
+      }
       if (!eval(h, in, true, c)) continue;
       c.sliding = h.sliding != 0;
       out.push_back(c);
     }
 }
 
-template <contact::LudingFeatures F>
+template <contact::LudingFeatures F, int D>
 void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
-                     const std::vector<std::uint64_t>& keys, const std::vector<LudingHistory>& hist,
-                     const std::vector<LudingHistory>& whist, std::vector<ContactInfo>& out) {
-  contacts_of(P, box, keys, hist, whist, out,
-              [&](const LudingHistory& h, const contact::ContactKinematics& k, bool wall, ContactInfo& c) {
-                contact::LudingInput in;
-                in.delta = k.overlap;
-                in.delta_dot = k.v_n;
-                in.k1_Tt = k1Tt;
-                const auto r = contact::luding_evaluate<F>(wall ? pw : pp, h, in);
-                c.f_n = r.f_n;
-                c.f_t = r.f_t;
-                c.f_min = r.f_min;
-                c.mu = r.mu;
-                return true;
-              });
+                     const std::vector<std::uint64_t>& keys, const std::vector<contact::LudingHistoryT<D>>& hist,
+                     const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+  contacts_of<D>(P, box, keys, hist, whist, out,
+                 [&](const contact::LudingHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall, ContactInfo& c) {
+                   contact::LudingInputT<D> in;
+                   in.delta = k.overlap;
+                   in.delta_dot = k.v_n;
+                   in.k1_Tt = k1Tt;
+                   const auto r = contact::luding_evaluate<F>(wall ? pw : pp, h, in);
+                   c.f_n = r.f_n;
+                   set_tangential(c, r.f_t);
+                   c.f_min = r.f_min;
+                   c.mu = r.mu;
+                   return true;
+                 });
 }
 constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
 
 // The plastic-indentation law: the contacts on their loaded branch.
+template <int D>
 void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
                       const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
-                      const std::vector<contact::PlasticIndentationHistory>& hist,
-                      const std::vector<contact::PlasticIndentationHistory>& whist, std::vector<ContactInfo>& out) {
-  const contact::PlasticIndentationLaw lp(pp), lw(pw);
-  contacts_of(P, box, keys, hist, whist, out,
-              [&](const contact::PlasticIndentationHistory& h, const contact::ContactKinematics& k, bool wall,
-                  ContactInfo& c) {
-                const auto r = (wall ? lw : lp).evaluate(h, k, nullptr);
-                c.f_n = r.f_n;
-                c.f_t = r.f_t;
-                c.mu = (wall ? pw : pp).mu_eff();
-                return r.loaded;
-              });
+                      const std::vector<contact::PlasticIndentationHistoryT<D>>& hist,
+                      const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+  const contact::PlasticIndentationLawT<D> lp(pp), lw(pw);
+  contacts_of<D>(P, box, keys, hist, whist, out,
+                 [&](const contact::PlasticIndentationHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall,
+                     ContactInfo& c) {
+                   const auto r = (wall ? lw : lp).evaluate(h, k, nullptr);
+                   c.f_n = r.f_n;
+                   set_tangential(c, r.f_t);
+                   c.mu = (wall ? pw : pp).mu_eff();
+                   return r.loaded;
+                 });
 }
 }  // namespace
 
 template <int D>
 void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
-  if constexpr (D == 3) {
-    (void)out;
-    throw std::logic_error("contacts() is 2D only (issue 16, 3D first part)");
-  } else {
   switch (opt_.model) {
     case ContactModel::Linear:
-      luding_contacts<contact::kLudingLinear>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
-                                            pair_key_, pair_hist_, wall_hist_, out);
+      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
+                                                 pair_hist_, wall_hist_, out);
       break;
     case ContactModel::Hysteretic:
-      luding_contacts<kHystereticOut>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
-                                    pair_hist_, wall_hist_, out);
+      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, pair_hist_,
+                                         wall_hist_, out);
       break;
     case ContactModel::Full:
-      luding_contacts<contact::kLudingFull>(P_, box_, params_, wall_params_, thermal_.k1_Tt,
-                                          pair_key_, pair_hist_, wall_hist_, out);
+      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
+                                               pair_hist_, wall_hist_, out);
       break;
     case ContactModel::PlasticIndentation:
-      plastic_contacts(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
+      plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
       break;
-  }
   }
 }
 

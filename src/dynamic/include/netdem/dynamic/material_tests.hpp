@@ -15,17 +15,19 @@
 namespace netdem::dem {
 
 /// What the caller records while a test steps.
-class TestObserver {
+template <int D>
+class TestObserverT {
  public:
-  virtual ~TestObserver() = default;
+  virtual ~TestObserverT() = default;
   /// At the start (step 0), every `every` steps and after the last step.
-  virtual void sample(const DynamicSolver& s, std::int64_t step) = 0;
+  virtual void sample(const DynamicSolverT<D>& s, std::int64_t step) = 0;
   /// After every step (after its sample, if any).
-  virtual void stepped(const DynamicSolver& s, std::int64_t step) {
+  virtual void stepped(const DynamicSolverT<D>& s, std::int64_t step) {
     (void)s;
     (void)step;
   }
 };
+using TestObserver = TestObserverT<2>;
 
 /// LMM05 section 4.4.1: eps_zz = 1 - z / z0 at the strain rate, after the top wall's speed rose
 /// as v_f (1 - cos(pi t / ramp_time)) / 2 over ramp_time.
@@ -46,14 +48,18 @@ struct CompressionRun {
   std::vector<double> eps, szz;  ///< eps_zz and the top wall stress at every sample [N/m]
 };
 
-/// Vertical strain 1 - z / z0 of the current box.
-double vertical_strain(const DynamicSolver& s, double z0);
+/// Vertical strain 1 - z / z0 of the current box (the height: y in 2D, z in 3D).
+template <int D>
+double vertical_strain(const DynamicSolverT<D>& s, double z0);
 
 /// Sets the walls of the test (right: stress-controlled at `pressure` [N/m], top: strain-
 /// controlled) and steps max_strain / rate + ramp_time / 2 seconds at the state's temperature
-/// (k1(T, t) keeps relaxing with the parameters' t0); about `samples` samples.
-CompressionRun run_compression(DynamicSolver& s, const CompressionTest& test, double pressure, std::int64_t samples,
-                               TestObserver& observer);
+/// (k1(T, t) keeps relaxing with the parameters' t0); about `samples` samples. 3D: the triaxial
+/// test, sigma_xx = sigma_yy = p [N/m^2] held by the right and back walls, the top (z_max) wall
+/// strain-controlled; szz is the top wall's stress.
+template <int D>
+CompressionRun run_compression(DynamicSolverT<D>& s, const CompressionTest& test, double pressure, std::int64_t samples,
+                               TestObserverT<D>& observer);
 
 struct CompressionFigures {
   std::size_t peak = 0;      ///< sample index of the largest szz (failure)

@@ -208,17 +208,28 @@ struct SolverState {
   std::vector<LudingHistory> wall_history;  ///< 4 per particle: left, right, bottom, top
   /// ContactModel::PlasticIndentation: the histories (pair_history and wall_history stay empty)
   std::vector<contact::PlasticIndentationHistory> plastic_pair_history, plastic_wall_history;
+  // 3D (particles.dim == 3) instead of the 2D arrays above: the moving walls right (x_max), back
+  // (y_max), top (z_max); the six walls x_min, x_max, y_min, y_max, z_min, z_max; sum f (x) l row-major.
+  double wall_velocity3[3] = {0, 0, 0};
+  double wall_force3[6] = {0, 0, 0, 0, 0, 0};
+  double stress_sum3[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  std::vector<contact::LudingHistoryT<3>> pair_history3;  ///< one per pair_key
+  std::vector<contact::LudingHistoryT<3>> wall_history3;  ///< 6 per particle
+  std::vector<contact::PlasticIndentationHistoryT<3>> plastic_pair_history3, plastic_wall_history3;
+  int dim() const { return particles.dim; }
 };
 
 /// One touching contact at the current state, for output (distributions, snapshots).
 struct ContactInfo {
   std::uint32_t i = 0, j = 0;  ///< particles i < j; for a wall contact i = particle, j = wall
-  int wall = -1;               ///< -1 particle pair; 0 left, 1 right, 2 bottom, 3 top
+  int wall = -1;               ///< -1 particle pair; 0 left, 1 right, 2 bottom, 3 top (3D: 0 .. 5 = x_min .. z_max)
   double overlap = 0.0;        ///< delta [m]
   double d_i = 0.0, d_j = 0.0;  ///< centre-to-contact distances [m] (d_j = 0 for a wall)
   double nx = 0.0, ny = 0.0;   ///< unit normal from i to j (from the wall into the box)
+  double nz = 0.0;             ///< 3D: its z component
   double f_n = 0.0;            ///< normal force on j [N], > 0 repulsive (spring + damping)
-  double f_t = 0.0;            ///< tangential force on j along t = perp(n) [N]
+  double f_t = 0.0;            ///< tangential force on j along t = perp(n) [N] (3D: its magnitude)
+  double ftx = 0.0, fty = 0.0, ftz = 0.0;  ///< 3D: the tangential force on j [N]
   double f_min = 0.0;          ///< Eq 15 [N] (<= 0)
   double mu = 0.0;             ///< Eq 24
   bool sliding = false;        ///< the committed step slid
