@@ -33,6 +33,21 @@
 //    T_radius_ref = 80 deg C so that Eq 9 keeps the packing's radii at the constant 80 deg C),
 //    `warmup` untimed steps (the tangential springs build up), then max(min_steps, psteps/N)
 //    timed steps; CPU time of this thread (CLOCK_THREAD_CPUTIME_ID) and wall time.
+//
+// --dim 3 (issue 16): DynamicSolver3 on spheres (defaults --n 10000,100000 --psteps 2e7
+// --warmup 300; CSV columns as 2D with wall_contacts, the contact stress sxx/syy/szz in Pa and the
+// kinetic energy at the end). Scene: radii uniform in a0 [0.5, 1.5] mm, m = rho 4/3 pi r^3,
+// I = 2/5 m r^2, the same k2, k_t = 0.2 k2, gamma_0, gamma_t, mu = 0.5, frictionless walls, skin
+// 0.2 mm, no gravity; dt = t_c/50 of a pair of two a0 SPHERES (2.893e-7 s); a box with six fixed
+// walls. Preparation (untimed, cached in DIR/pack3d_N<N>_s<seed>.txt: a box line and x y z r per
+// sphere, m, %.17g): a 3D ballistic deposition (ballistic3d.hpp, seed, walls; the first N spheres
+// in deposition order, the lid lowered onto the highest), renumbered in 3D Morton order; then
+// frictionless (mu = 0, so that it compacts quickly) with a global viscous drag 2e3/s: affine
+// isotropic compression at 50/s to a mean contact stress > p/4 (p = 4e4 Pa: a mean contact force
+// of ~0.2 N, delta/a0 ~ 1e-3 as in 2D), stress-controlled right/back/top walls at p (Eq 1, m_w
+// = 0.01 kg, gamma_w = p A / (5/s L)) for up to 30 chunks of 1000 steps; friction on (mu = 0.5),
+// 3 more chunks; walls fixed, 2000 steps with and 2000 steps without the drag (prepare3()).
+// Timing: as 2D, on the cached packing at rest (fresh histories).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -320,6 +335,7 @@ constexpr double kDeposit3Density = 0.56;  // expected solid fraction of the dep
 constexpr double kPressure3 = 4.0e4;       // Pa: a mean contact force of ~0.2 N, delta/a0 ~ 1e-3 (as 2D)
 constexpr double kRate3 = 50.0;            // 1/s: strain rate of the affine compression
 constexpr double kDrag3 = 2.0e3;           // 1/s: global viscous drag of the preparation
+constexpr double kWallRate3 = 5.0;         // 1/s: stress-controlled walls: gamma_w = p A / (rate L)
 constexpr std::size_t kSettleDragSteps3 = 2000, kSettleFreeSteps3 = 2000;
 
 /// dt of the 3D scene: t_c/50 of a pair of two a0 spheres (LMM05 Eq 6 with sphere masses).
@@ -390,9 +406,10 @@ Packing deposit3(int n, std::uint64_t seed, const LudingParams& lp) {
 /// (mu = 0: the packing reaches a dense jammed state quickly):
 /// (a) affine isotropic compression at the strain rate kRate3 (right, back and top walls Affine)
 ///     until the mean contact stress exceeds p/4 (p = kPressure3) at nu > 0.58, or nu >= 0.68;
-/// (b) stress-controlled right, back and top walls (Eq 1, p, m_w = 0.01 kg, gamma_w = p A / (0.2
-///     m/s)) in chunks of 1000 steps until the three wall stresses are within 5 % of p and the
-///     density changed by < 2e-4 over a chunk (at most 15 chunks);
+/// (b) stress-controlled right, back and top walls (Eq 1, p, m_w = 0.01 kg, gamma_w = p A / (5/s
+///     L), L the cube root of the box volume: the walls move at most at a strain rate of 5/s) in
+///     chunks of 1000 steps until the three wall stresses are within 5 % of p and the density
+///     changed by < 2e-4 over a chunk (at most 30 chunks);
 /// (c) friction on (mu = 0.5), 3 more chunks of (b);
 /// (d) the walls fixed where they are, kSettleDragSteps3 steps with the drag, kSettleFreeSteps3
 ///     steps without.
@@ -441,11 +458,11 @@ Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
     w[a].mode = WallMode::Stress;
     w[a].pressure = kPressure3;
     w[a].mass = 0.01;
-    w[a].damping = kPressure3 * area[a] / 0.2;
+    w[a].damping = kPressure3 * area[a] / (kWallRate3 * std::cbrt(ex * ey * ez));
   }
   s.set_walls(w[0], w[1], w[2]);
   double nu_prev = s.density();
-  for (int chunk = 0; chunk < 15; ++chunk) {
+  for (int chunk = 0; chunk < 30; ++chunk) {
     s.run(1000);
     steps += 1000;
     report("stress-controlled walls, mu = 0");
