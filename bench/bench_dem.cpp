@@ -33,6 +33,21 @@
 //    T_radius_ref = 80 deg C so that Eq 9 keeps the packing's radii at the constant 80 deg C),
 //    `warmup` untimed steps (the tangential springs build up), then max(min_steps, psteps/N)
 //    timed steps; CPU time of this thread (CLOCK_THREAD_CPUTIME_ID) and wall time.
+//
+// --dim 3 (issue 16): DynamicSolver3 on spheres (defaults --n 10000,100000 --psteps 2e7
+// --warmup 300; CSV columns as 2D with wall_contacts, the contact stress sxx/syy/szz in Pa and the
+// kinetic energy at the end). Scene: radii uniform in a0 [0.5, 1.5] mm, m = rho 4/3 pi r^3,
+// I = 2/5 m r^2, the same k2, k_t = 0.2 k2, gamma_0, gamma_t, mu = 0.5, frictionless walls, skin
+// 0.2 mm, no gravity; dt = t_c/50 of a pair of two a0 SPHERES (2.893e-7 s); a box with six fixed
+// walls. Preparation (untimed, cached in DIR/pack3d_N<N>_s<seed>.txt: a box line and x y z r per
+// sphere, m, %.17g): a 3D ballistic deposition (ballistic3d.hpp, seed, walls; the first N spheres
+// in deposition order, the lid lowered onto the highest), renumbered in 3D Morton order; then
+// frictionless (mu = 0, so that it compacts quickly) with a global viscous drag 2e3/s: affine
+// isotropic compression at 50/s to a mean contact stress > p/4 (p = 4e4 Pa: a mean contact force
+// of ~0.2 N, delta/a0 ~ 1e-3 as in 2D), stress-controlled right/back/top walls at p (Eq 1, m_w
+// = 0.01 kg, gamma_w = p A / (5/s L)) for up to 30 chunks of 1000 steps; friction on (mu = 0.5),
+// 3 more chunks; walls fixed, 2000 steps with and 2000 steps without the drag (prepare3()).
+// Timing: as 2D, on the cached packing at rest (fresh histories).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -50,6 +65,7 @@
 #include <vector>
 
 #include "netdem/dynamic/solver.hpp"
+#include "netdem/packing/ballistic3d.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/random_fill.hpp"
 
@@ -311,6 +327,328 @@ Row time_model(const Packing& pk, const std::string& model, std::size_t warm, st
   return r;
 }
 
+// ---------------------------------------------------------------------------------------------
+// 3D (--dim 3, issue 16): DynamicSolver3 on a dense, jammed, polydisperse, frictional packing of
+// spheres in a box with six frictionless walls. See the comment at the top of the file.
+
+constexpr double kDeposit3Density = 0.56;  // expected solid fraction of the deposition (box size)
+constexpr double kPressure3 = 4.0e4;       // Pa: a mean contact force of ~0.2 N, delta/a0 ~ 1e-3 (as 2D)
+constexpr double kRate3 = 50.0;            // 1/s: strain rate of the affine compression
+constexpr double kDrag3 = 2.0e3;           // 1/s: global viscous drag of the preparation
+constexpr double kWallRate3 = 5.0;         // 1/s: stress-controlled walls: gamma_w = p A / (rate L)
+constexpr std::size_t kSettleDragSteps3 = 2000, kSettleFreeSteps3 = 2000;
+
+/// dt of the 3D scene: t_c/50 of a pair of two a0 spheres (LMM05 Eq 6 with sphere masses).
+double scene_dt3(const LudingParams& p) {
+  const double m0 = p.rho_p * (4.0 / 3.0) * std::numbers::pi * p.a0 * p.a0 * p.a0;
+  return contact_duration(p.k2, p.gamma_n, 0.5 * m0) / 50.0;
+}
+
+std::uint64_t morton3(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  std::uint64_t m = 0;
+  for (int k = 0; k < 21; ++k)
+    m |= (static_cast<std::uint64_t>((a >> k) & 1u) << (3 * k)) |
+         (static_cast<std::uint64_t>((b >> k) & 1u) << (3 * k + 1)) |
+         (static_cast<std::uint64_t>((c >> k) & 1u) << (3 * k + 2));
+  return m;
+}
+
+/// Ballistic deposition (ballistic3d.hpp) of at least n spheres with radii uniform in
+/// a0 [1 - w0, 1 + w0], the first n in deposition order, the lid lowered onto the highest one,
+/// renumbered in Morton order of a grid of cell a_max. Prints the deposition's CPU time.
+Packing deposit3(int n, std::uint64_t seed, const LudingParams& lp) {
+  const double r3 = (std::pow(1.0 + lp.w0, 4) - std::pow(1.0 - lp.w0, 4)) / (8.0 * lp.w0);  // <(r/a0)^3>
+  const double vol = static_cast<double>(n) * (4.0 / 3.0) * std::numbers::pi * r3 / kDeposit3Density;
+  netdem::packing::Deposition3dOptions o;
+  o.radius = lp.a0;
+  o.r_min = 1.0 - lp.w0;
+  o.r_max = 1.0 + lp.w0;
+  o.seed = seed;
+  o.width = std::cbrt(vol);
+  o.height = 1.15 * o.width;
+  netdem::packing::Packing dep;
+  for (int attempt = 0;; ++attempt) {
+    const double c0 = cpu_now();
+    dep = netdem::packing::ballistic_deposition_3d(o);
+    std::fprintf(stderr, "  prepare N=%d: deposition of %zu spheres (W = %.2f a0, H = %.2f a0) in %.2f s CPU\n", n,
+                 dep.size(), o.width, o.box_height(), cpu_now() - c0);
+    if (dep.size() >= static_cast<std::size_t>(n)) break;
+    if (attempt == 5) throw std::runtime_error("deposit3: too few spheres deposited");
+    o.height *= 1.2 * static_cast<double>(n) / static_cast<double>(dep.size());
+  }
+  const std::size_t m = static_cast<std::size_t>(n);
+  double rmax = 0.0, top = 0.0;
+  for (std::size_t i = 0; i < m; ++i) {
+    rmax = std::max(rmax, dep.r[i]);
+    top = std::max(top, dep.z[i] + dep.r[i]);
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(m);
+  for (std::size_t i = 0; i < m; ++i)
+    key[i] = {morton3(static_cast<std::uint32_t>(dep.x[i] / rmax), static_cast<std::uint32_t>(dep.y[i] / rmax),
+                      static_cast<std::uint32_t>(dep.z[i] / rmax)),
+              static_cast<std::uint32_t>(i)};
+  std::sort(key.begin(), key.end());
+  Packing pk;
+  pk.dim = 3;
+  pk.box = dep.box;
+  pk.box.z_max = top;  // the lid on the highest sphere
+  for (const auto& [k, i] : key) {
+    pk.x.push_back(dep.x[i]);
+    pk.y.push_back(dep.y[i]);
+    pk.z.push_back(dep.z[i]);
+    pk.r.push_back(dep.r[i]);
+  }
+  return pk;
+}
+
+/// The 3D preparation (prints progress on stderr): the deposition, then with the linear law
+/// (walls frictionless) and a global viscous drag -c m v, -c I w (c = kDrag3), FRICTIONLESS first
+/// (mu = 0: the packing reaches a dense jammed state quickly):
+/// (a) affine isotropic compression at the strain rate kRate3 (right, back and top walls Affine)
+///     until the mean contact stress exceeds p/4 (p = kPressure3) at nu > 0.58, or nu >= 0.68;
+/// (b) stress-controlled right, back and top walls (Eq 1, p, m_w = 0.01 kg, gamma_w = p A / (5/s
+///     L), L the cube root of the box volume: the walls move at most at a strain rate of 5/s) in
+///     chunks of 1000 steps until the three wall stresses are within 5 % of p and the density
+///     changed by < 2e-4 over a chunk (at most 30 chunks);
+/// (c) friction on (mu = 0.5), 3 more chunks of (b);
+/// (d) the walls fixed where they are, kSettleDragSteps3 steps with the drag, kSettleFreeSteps3
+///     steps without.
+Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
+  Packing pk = deposit3(n, seed, lp);
+  DynamicOptions o;
+  o.model = ContactModel::Linear;
+  o.dt = scene_dt3(lp);
+  o.skin = kSkin;
+  o.affine_drag = kDrag3;
+  Box box(pk.box);
+  for (MovingWall* w : {&box.right, &box.back, &box.top}) w->mode = WallMode::Affine;
+  const double c0 = cpu_now();
+  LudingParams lp0 = lp;
+  lp0.mu = 0.0;
+  DynamicSolver3 s(spheres_from(pk, lp.rho_p), lp0, box, o);
+  std::size_t steps = 0;
+  auto report = [&](const char* what) {
+    const Stress3 cs = s.contact_stress(), ws = s.wall_stress();
+    std::fprintf(stderr,
+                 "  prepare N=%d: %s, %zu steps: nu = %.5f, contact stress %.4g Pa, walls/p %.4f %.4f %.4f, "
+                 "Ekin/N = %.2e J (%.0f s CPU)\n",
+                 n, what, steps, s.density(), (cs.s[0][0] + cs.s[1][1] + cs.s[2][2]) / 3.0, ws.s[0][0] / kPressure3,
+                 ws.s[1][1] / kPressure3, ws.s[2][2] / kPressure3, s.energies().kinetic / static_cast<double>(n),
+                 cpu_now() - c0);
+  };
+  // (a)
+  s.set_strain_rate3(-kRate3, -kRate3, -kRate3);
+  for (int chunk = 0;; ++chunk) {
+    s.run(200);
+    steps += 200;
+    const Stress3 cs = s.contact_stress();
+    const double pc = (cs.s[0][0] + cs.s[1][1] + cs.s[2][2]) / 3.0;
+    if (chunk % 10 == 9) report("affine compression");
+    if ((pc > 0.25 * kPressure3 && s.density() > 0.58) || s.density() >= 0.68) break;
+    if (chunk > 2000) throw std::runtime_error("prepare3: the affine compression did not jam");
+  }
+  report("affine compression done");
+  // (b)
+  s.set_strain_rate3(0.0, 0.0, 0.0);
+  const Box& bx = s.box();
+  const double ex = bx.x_max - bx.x_min, ey = bx.y_max - bx.y_min, ez = bx.z_max - bx.z_min;
+  MovingWall w[3];
+  const double area[3] = {ey * ez, ex * ez, ex * ey};
+  for (int a = 0; a < 3; ++a) {
+    w[a].mode = WallMode::Stress;
+    w[a].pressure = kPressure3;
+    w[a].mass = 0.01;
+    w[a].damping = kPressure3 * area[a] / (kWallRate3 * std::cbrt(ex * ey * ez));
+  }
+  s.set_walls(w[0], w[1], w[2]);
+  double nu_prev = s.density();
+  for (int chunk = 0; chunk < 30; ++chunk) {
+    s.run(1000);
+    steps += 1000;
+    report("stress-controlled walls, mu = 0");
+    const Stress3 ws = s.wall_stress();
+    const double nu = s.density();
+    bool done = std::fabs(nu - nu_prev) < 2e-4;
+    for (int a = 0; a < 3; ++a) done = done && std::fabs(ws.s[a][a] / kPressure3 - 1.0) < 0.05;
+    nu_prev = nu;
+    if (done) break;
+  }
+  // (c)
+  s.set_params(lp);
+  for (int chunk = 0; chunk < 3; ++chunk) {
+    s.run(1000);
+    steps += 1000;
+    report("stress-controlled walls, mu = 0.5");
+  }
+  // (d)
+  const MovingWall fixed;
+  s.set_walls(fixed, fixed, fixed);
+  s.run(kSettleDragSteps3);
+  steps += kSettleDragSteps3;
+  report("walls fixed, drag");
+  s.set_affine_drag(0.0);
+  s.run(kSettleFreeSteps3);
+  steps += kSettleFreeSteps3;
+  report("settled (walls fixed, no drag)");
+  const Particles& q = s.particles();
+  pk.x = q.x;
+  pk.y = q.y;
+  pk.z = q.z;
+  pk.box = s.box();
+  return pk;
+}
+
+/// The 3D cache file: "# box x_min y_min z_min x_max y_max z_max", then "x y z r" per sphere (m, %.17g).
+void write_cache3(const fs::path& f, const Packing& pk) {
+  const fs::path tmp = f.string() + ".tmp";
+  {
+    std::ofstream o(tmp);
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "# box %.17g %.17g %.17g %.17g %.17g %.17g\n", pk.box.x_min, pk.box.y_min,
+                  pk.box.z_min, pk.box.x_max, pk.box.y_max, pk.box.z_max);
+    o << "# bench_dem 3D packing (SI units, m): x y z r\n" << buf;
+    for (std::size_t i = 0; i < pk.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g %.17g\n", pk.x[i], pk.y[i], pk.z[i], pk.r[i]);
+      o << buf;
+    }
+    if (!o) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, f);
+}
+
+Packing read_cache3(const fs::path& f) {
+  std::ifstream in(f);
+  Packing pk;
+  pk.dim = 3;
+  std::string line;
+  bool box = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("# box ", 0) == 0) {
+      std::istringstream s(line.substr(6));
+      s >> pk.box.x_min >> pk.box.y_min >> pk.box.z_min >> pk.box.x_max >> pk.box.y_max >> pk.box.z_max;
+      box = static_cast<bool>(s);
+      continue;
+    }
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    double x, y, z, r;
+    if (!(s >> x >> y >> z >> r) || !std::isfinite(x + y + z + r) || !(r > 0.0))
+      throw std::runtime_error(f.string() + ": bad sphere line: " + line.substr(0, 80));
+    pk.x.push_back(x);
+    pk.y.push_back(y);
+    pk.z.push_back(z);
+    pk.r.push_back(r);
+  }
+  if (!box || pk.size() == 0) throw std::runtime_error(f.string() + ": no box line or no spheres");
+  return pk;
+}
+
+Packing get_packing3(int n, std::uint64_t seed, const fs::path& cache) {
+  const fs::path f = cache / ("pack3d_N" + std::to_string(n) + "_s" + std::to_string(seed) + ".txt");
+  if (fs::exists(f)) return read_cache3(f);
+  const double t0 = cpu_now();
+  const Packing pk = prepare3(n, seed, linear_params());
+  std::fprintf(stderr, "  prepared N=%d in %.1f s CPU -> %s\n", n, cpu_now() - t0, f.c_str());
+  fs::create_directories(cache);
+  write_cache3(f, pk);
+  return pk;
+}
+
+/// LAMMPS data file, 3D (atom_style sphere: id type diameter density x y z; the LAMMPS input sets
+/// mass = rho 4/3 pi r^3 with `set density`).
+void write_lammps_data3(const fs::path& f, const Packing& pk) {
+  std::ofstream o(f);
+  char buf[256];
+  o << "LAMMPS data file written by netdem bench_dem --dim 3 (walls at the box faces)\n\n";
+  o << pk.r.size() << " atoms\n1 atom types\n\n";
+  std::snprintf(buf, sizeof buf, "%.17g %.17g xlo xhi\n%.17g %.17g ylo yhi\n%.17g %.17g zlo zhi\n\nAtoms # sphere\n\n",
+                pk.box.x_min, pk.box.x_max, pk.box.y_min, pk.box.y_max, pk.box.z_min, pk.box.z_max);
+  o << buf;
+  for (std::size_t i = 0; i < pk.r.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%zu 1 %.17g 2000.0 %.17g %.17g %.17g\n", i + 1, 2.0 * pk.r[i], pk.x[i],
+                  pk.y[i], pk.z[i]);
+    o << buf;
+  }
+}
+
+struct Row3 {
+  int n = 0;
+  std::string model;
+  std::size_t steps = 0, rebuilds = 0, table = 0, contacts = 0, wall_contacts = 0;
+  double cpu = 0, wall = 0, nu = 0, s[3] = {0, 0, 0}, ekin = 0;
+};
+
+Row3 time_model3(const Packing& pk, const std::string& model, std::size_t warm, std::size_t steps) {
+  LudingParams lp;  // Table 1 (full law)
+  DynamicOptions o;
+  if (model == "linear") {
+    lp = linear_params();
+    o.model = ContactModel::Linear;
+  } else if (model == "full") {
+    o.model = ContactModel::Full;  // Table 1: k1 = k2/2, k_c = k2/2, 80 deg C constant
+    lp.T_radius_ref = 80.0;
+  } else if (model == "full_linparams") {
+    lp = linear_params();
+    lp.T_radius_ref = 80.0;
+    o.model = ContactModel::Full;
+  } else {
+    throw std::invalid_argument("unknown model " + model);
+  }
+  o.dt = scene_dt3(linear_params());
+  o.skin = kSkin;
+  o.temperature = 80.0;
+  DynamicSolver3 s(spheres_from(pk, lp.rho_p), lp, Box(pk.box), o);
+  s.run(warm);
+  const std::size_t b0 = s.rebuilds();
+  const double c0 = cpu_now(), w0 = wall_now();
+  s.run(steps);
+  Row3 r;
+  r.cpu = cpu_now() - c0;
+  r.wall = wall_now() - w0;
+  r.n = static_cast<int>(pk.r.size());
+  r.model = model;
+  r.steps = steps;
+  r.rebuilds = s.rebuilds() - b0;
+  r.table = s.table_size();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  s.touching_pairs(pairs);
+  r.contacts = pairs.size();
+  r.wall_contacts = s.wall_contacts();
+  r.nu = s.density();
+  const Stress3 cs = s.contact_stress();
+  for (int a = 0; a < 3; ++a) r.s[a] = cs.s[a][a];
+  r.ekin = s.energies().kinetic;
+  return r;
+}
+
+int run3(const std::vector<int>& ns, const std::vector<std::string>& models, double psteps, std::size_t min_steps,
+         std::size_t warm, int reps, std::uint64_t seed, const fs::path& cache, const fs::path& lammps_dir) {
+  std::printf(
+      "N,model,rep,steps,cpu_s,wall_s,psteps_per_cpu_s,psteps_per_wall_s,rebuilds,"
+      "table_per_particle,contacts_per_particle,wall_contacts,nu,sxx_Pa,syy_Pa,szz_Pa,ekin_J\n");
+  std::fflush(stdout);
+  for (int n : ns) {
+    const Packing pk = get_packing3(n, seed, cache);
+    if (!lammps_dir.empty()) {
+      fs::create_directories(lammps_dir);
+      write_lammps_data3(lammps_dir / ("pack3d_N" + std::to_string(n) + ".data"), pk);
+    }
+    const std::size_t steps = std::max(min_steps, static_cast<std::size_t>(psteps / static_cast<double>(n)));
+    for (int rep = 1; rep <= reps; ++rep)
+      for (const auto& m : models) {
+        if (m == "none") continue;
+        const Row3 r = time_model3(pk, m, warm, steps);
+        const double ps = static_cast<double>(r.n) * static_cast<double>(r.steps);
+        std::printf("%d,%s,%d,%zu,%.4f,%.4f,%.6g,%.6g,%zu,%.4f,%.4f,%zu,%.5f,%.6g,%.6g,%.6g,%.4g\n", r.n,
+                    r.model.c_str(), rep, r.steps, r.cpu, r.wall, ps / r.cpu, ps / r.wall, r.rebuilds,
+                    static_cast<double>(r.table) / r.n, 2.0 * static_cast<double>(r.contacts) / r.n,
+                    r.wall_contacts, r.nu, r.s[0], r.s[1], r.s[2], r.ekin);
+        std::fflush(stdout);
+      }
+  }
+  return 0;
+}
+
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> v;
   std::stringstream ss(s);
@@ -330,6 +668,8 @@ int main(int argc, char** argv) {
   int reps = 1;
   std::uint64_t seed = 1;
   fs::path cache = "dem_packings", lammps_dir;
+  int dim = 2;
+  bool ns_given = false, psteps_given = false, warm_given = false;
   try {
     for (int k = 1; k < argc; ++k) {
       const std::string a = argv[k];
@@ -337,17 +677,23 @@ int main(int argc, char** argv) {
         if (k + 1 >= argc) throw std::invalid_argument(a + " needs a value");
         return argv[++k];
       };
-      if (a == "--n") {
+      if (a == "--dim") {
+        dim = std::stoi(val());
+        if (dim != 2 && dim != 3) throw std::invalid_argument("--dim must be 2 or 3");
+      } else if (a == "--n") {
+        ns_given = true;
         ns.clear();
         for (const auto& t : split(val())) ns.push_back(std::stoi(t));
       } else if (a == "--models") {
         models = split(val());
       } else if (a == "--psteps") {
         psteps = std::stod(val());
+        psteps_given = true;
       } else if (a == "--min-steps") {
         min_steps = std::stoul(val());
       } else if (a == "--warmup") {
         warm = std::stoul(val());
+        warm_given = true;
       } else if (a == "--reps") {
         reps = std::stoi(val());
       } else if (a == "--seed") {
@@ -358,14 +704,21 @@ int main(int argc, char** argv) {
         lammps_dir = val();
       } else if (a == "--help" || a == "-h") {
         std::printf(
-            "bench_dem [--n 300,3000,30000] [--models linear,full[,full_linparams]]\n"
+            "bench_dem [--dim 2|3] [--n 300,3000,30000] [--models linear,full[,full_linparams]]\n"
             "          [--psteps 3e7] [--min-steps 200] [--warmup 1000] [--reps 1] [--seed 1]\n"
             "          [--cache DIR] [--lammps-data DIR]\n"
+            "--dim 3: spheres; defaults --n 10000,100000 --psteps 2e7 --warmup 300\n"
             "(see the comment at the top of bench/bench_dem.cpp)\n");
         return 0;
       } else {
         throw std::invalid_argument("unknown option " + a);
       }
+    }
+    if (dim == 3) {
+      if (!ns_given) ns = {10000, 100000};
+      if (!psteps_given) psteps = 2e7;
+      if (!warm_given) warm = 300;
+      return run3(ns, models, psteps, min_steps, warm, reps, seed, cache, lammps_dir);
     }
     std::printf(
         "N,model,rep,steps,cpu_s,wall_s,psteps_per_cpu_s,psteps_per_wall_s,rebuilds,"
