@@ -4,8 +4,12 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <numbers>
 #include <stdexcept>
+#include <vector>
 
 #include "netdem/packing/cell_grid.hpp"
 
@@ -49,6 +53,127 @@ Packing random_fill(std::span<const double> radii, const Box& box, std::mt19937_
     if (!placed)
       throw std::runtime_error(fmt::format("could not place disk {} (r = {}) without overlap in {} attempts", i, r,
                                            max_attempts));
+  }
+  return p;
+}
+
+void RandomFill3dOptions::validate() const {
+  const auto fin = [](double v) { return std::isfinite(v); };
+  if (n == 0 || n > 10000000)
+    throw std::invalid_argument(fmt::format("random_fill_3d: the number of spheres must be in [1, 1e7], got {}", n));
+  if (!(fin(mean_radius) && mean_radius > 0.0))
+    throw std::invalid_argument(fmt::format("random_fill_3d: the mean radius must be positive and finite, got {}", mean_radius));
+  if (!(fin(dispersion) && dispersion >= 0.0 && dispersion < 1.0))
+    throw std::invalid_argument(fmt::format("random_fill_3d: the dispersion must be in [0, 1), got {}", dispersion));
+  if (!(fin(box.x_min) && fin(box.y_min) && fin(box.z_min) && fin(box.x_max) && fin(box.y_max) && fin(box.z_max) &&
+        box.width() > 0.0 && box.height() > 0.0 && box.depth() > 0.0))
+    throw std::invalid_argument("random_fill_3d: the box must be finite with positive extents along x, y and z");
+  if (max_attempts < 1)
+    throw std::invalid_argument(fmt::format("random_fill_3d: max_attempts must be >= 1, got {}", max_attempts));
+  const double rmax = mean_radius * (1.0 + dispersion);
+  const double side = std::min({box.width(), box.height(), box.depth()});
+  if (2.0 * rmax > side)
+    throw std::invalid_argument(fmt::format("random_fill_3d: a sphere of the largest radius {:.6g} (diameter {:.6g}) does "
+                                            "not fit in the box, whose smallest side is {:.6g}",
+                                            rmax, 2.0 * rmax, side));
+  // <(1 + d (2U - 1))^3> = 1 + d^2 for U uniform in [0, 1)
+  const double solid = static_cast<double>(n) * 4.0 / 3.0 * std::numbers::pi * mean_radius * mean_radius * mean_radius *
+                       (1.0 + dispersion * dispersion);
+  const double fraction = solid / box.volume();
+  if (!(fraction <= kMaxCloudFraction))
+    throw std::invalid_argument(fmt::format("random_fill_3d: {} spheres of mean radius {:.6g} fill {:.3g} of the box "
+                                            "{:.6g} x {:.6g} x {:.6g}, above the {} a random cloud can hold; use a larger box",
+                                            n, mean_radius, fraction, box.width(), box.height(), box.depth(),
+                                            kMaxCloudFraction));
+}
+
+namespace {
+
+/// A growing grid of cubic cells (head/next lists) for the sequential placement.
+class CloudGrid {
+ public:
+  CloudGrid(const Box& b, double min_cell, std::size_t n) {
+    // cells of at least the largest diameter, at most about 4 n + 64 of them
+    const double v = b.volume() / (4.0 * static_cast<double>(n) + 64.0);
+    cell_ = std::max(min_cell, std::cbrt(v));
+    origin_ = {b.x_min, b.y_min, b.z_min};
+    const double ext[3] = {b.width(), b.height(), b.depth()};
+    for (int a = 0; a < 3; ++a) count_[a] = std::max(1L, static_cast<long>(std::ceil(ext[a] / cell_)));
+    head_.assign(static_cast<std::size_t>(count_[0] * count_[1] * count_[2]), kNone);
+    next_.reserve(n);
+  }
+  long coord(int a, double v) const {
+    const double c = std::floor((v - origin_[a]) / cell_);
+    if (!(c >= 0)) return 0;
+    return c >= static_cast<double>(count_[a] - 1) ? count_[a] - 1 : static_cast<long>(c);
+  }
+  std::size_t cell(long a, long b, long c) const { return static_cast<std::size_t>((c * count_[1] + b) * count_[0] + a); }
+  void insert(std::uint32_t id, double x, double y, double z) {
+    const std::size_t k = cell(coord(0, x), coord(1, y), coord(2, z));
+    if (next_.size() <= id) next_.resize(id + 1, kNone);
+    next_[id] = head_[k];
+    head_[k] = id;
+  }
+  /// true if f(k) is true for some sphere k in the cells within `reach` of (x, y, z)
+  template <class F>
+  bool any_near(double x, double y, double z, double reach, F&& f) const {
+    const long x0 = coord(0, x - reach), x1 = coord(0, x + reach), y0 = coord(1, y - reach), y1 = coord(1, y + reach),
+               z0 = coord(2, z - reach), z1 = coord(2, z + reach);
+    for (long c = z0; c <= z1; ++c)
+      for (long b = y0; b <= y1; ++b)
+        for (long a = x0; a <= x1; ++a)
+          for (std::uint32_t k = head_[cell(a, b, c)]; k != kNone; k = next_[k])
+            if (f(k)) return true;
+    return false;
+  }
+
+ private:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  std::array<double, 3> origin_{};
+  double cell_ = 1.0;
+  long count_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> head_, next_;
+};
+
+}  // namespace
+
+Packing random_fill_3d(const RandomFill3dOptions& o) {
+  o.validate();
+  std::mt19937_64 rng(o.seed);
+  Packing p;
+  p.dim = 3;
+  p.box = o.box;
+  p.seed = o.seed;
+  p.r.resize(o.n);
+  for (std::size_t i = 0; i < o.n; ++i) p.r[i] = o.mean_radius * (1.0 + o.dispersion * (2.0 * uniform01(rng) - 1.0));
+  const double rmax = *std::max_element(p.r.begin(), p.r.end());
+  p.x.reserve(o.n);
+  p.y.reserve(o.n);
+  p.z.reserve(o.n);
+  const Box& b = o.box;
+  CloudGrid grid(b, 2.0 * rmax, o.n);
+  for (std::size_t i = 0; i < o.n; ++i) {
+    const double r = p.r[i];
+    bool placed = false;
+    for (long attempt = 0; attempt < o.max_attempts && !placed; ++attempt) {
+      const double x = b.x_min + (r + (b.width() - 2 * r) * uniform01(rng));
+      const double y = b.y_min + (r + (b.height() - 2 * r) * uniform01(rng));
+      const double z = b.z_min + (r + (b.depth() - 2 * r) * uniform01(rng));
+      placed = !grid.any_near(x, y, z, r + rmax, [&](std::uint32_t k) {
+        const double dx = x - p.x[k], dy = y - p.y[k], dz = z - p.z[k], s = r + p.r[k];
+        return dx * dx + dy * dy + dz * dz < s * s;
+      });
+      if (placed) {
+        grid.insert(static_cast<std::uint32_t>(i), x, y, z);
+        p.x.push_back(x);
+        p.y.push_back(y);
+        p.z.push_back(z);
+      }
+    }
+    if (!placed)
+      throw std::runtime_error(fmt::format("random_fill_3d: could not place sphere {} of {} (r = {:.6g}) without overlap in "
+                                           "{} attempts: the box is too full for a random cloud; use a larger box",
+                                           i, o.n, r, o.max_attempts));
   }
   return p;
 }
