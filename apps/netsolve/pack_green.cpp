@@ -152,6 +152,10 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
                    {"wall_contacts", ov.wall_contacts}, {"wall_mean", ov.wall_mean}, {"wall_max", ov.wall_max},
                    {"coordination", ov.coordination},   {"compress_max_pair_mean", res.compress_max_mean_overlap}};
   j["compression"] = {{"scale", res.scale},
+                      {"shape", res.exact_aspect ? "aspect" : "equal strains"},
+                      {"aspect", b.depth() / b.width()},
+                      {"limit_density", res.limit_density > 0.0 ? nlohmann::json(res.limit_density) : nlohmann::json(nullptr)},
+                      {"wall_speed_m_per_s", o.wall_speed * std::sqrt(o.gravity * o.mean_radius)},
                       {"wall_velocity", {res.wall_velocity[0], res.wall_velocity[1], res.wall_velocity[2]}},
                       {"strain_rate", res.strain_rate},
                       {"inertial_number", res.inertial_number}};

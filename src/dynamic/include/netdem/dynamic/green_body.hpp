@@ -5,8 +5,9 @@
 //   2. settle   gravity along -z (x3) until the sample is at rest;
 //   3. lid      the z_max wall is moved down onto the uppermost particle (max z + r), not into it;
 //   4. compress the lid (z_max) and the side planes x_max, y_max move inward at constant
-//               velocities, all three reaching the box of the target density at the same time
-//               (equal strains: the settled box scaled by s = (settled density / target)^(1/3));
+//               velocities, all three reaching the box of the target density at the same time:
+//               the box of the intended aspect (height / width) if every wall then moves inward,
+//               else the settled box scaled by s = (settled density / target)^(1/3) (equal strains);
 //   5. rest     the walls stop at the target box, the friction of the final state is restored,
 //               and the sample comes to rest; the result is the packing at rest.
 // Units: SI (metres, kilograms, seconds). The contact law is the linear spring-dashpot with a
@@ -41,7 +42,7 @@ struct GreenBodyOptions {
   double target_density = 0.60;    ///< sum of sphere volumes / wall-box volume at the end
   double aspect = 0.8;             ///< intended final height / width (x = y), the paper's 0.4 / 0.5
   double cloud_fraction = 0.25;    ///< solid fraction of the cloud box (<= packing::kMaxCloudFraction)
-  double settled_guess = 0.55;     ///< expected box density after the lid (sets the cloud's width)
+  double settled_guess = 0.51;     ///< expected box density after the lid (sets the cloud's width; measured 0.511 at mu 0.3)
   // physics
   double gravity = 9.81;           ///< [m/s^2] along -z
   double stiffness_number = 1e4;   ///< kappa = k r / (m g) of the mean sphere
@@ -52,9 +53,9 @@ struct GreenBodyOptions {
   double mu_wall = 0.0;            ///< sphere-wall friction (all phases)
   double steps_per_contact = 25.0; ///< dt = t_c / steps_per_contact for a mean pair (Eq 6)
   // compression and rest
-  double wall_speed = 0.05;        ///< speed of the fastest wall / sqrt(g r)
+  double wall_speed = 0.02;        ///< speed of the fastest wall / sqrt(g r)
   double rest_energy = 1e-6;       ///< rest: translational kinetic energy per sphere < rest_energy m g r at 3 checks in a row
-  double max_mean_overlap = 0.01;  ///< refuse ("unreachable") a mean pair overlap / r above this at rest
+  double max_mean_overlap = 0.0025;  ///< refuse ("unreachable") a mean pair overlap / r above this at rest
   double max_phase_time = 400.0;   ///< cap of the settle and rest phases [sqrt(r / g)]
   std::int64_t check_every = 100;  ///< steps between the rest / progress checks
   /// Throws std::invalid_argument with one line naming the first bad value.
@@ -101,6 +102,10 @@ struct GreenBodyResult {
   double strain_rate = 0.0;        ///< |v| / L of the walls at the start of the compression [1/s]
   double inertial_number = 0.0;    ///< strain_rate d sqrt(rho_s / p_g), p_g = rho_s phi g H / 2
   double compress_max_mean_overlap = 0.0;  ///< the largest mean pair overlap / r seen while compressing
+  /// the wall-box density at which the mean overlap first exceeded max_mean_overlap while
+  /// compressing (0: never): about the densest state the rule admits
+  double limit_density = 0.0;
+  bool exact_aspect = false;       ///< the target box has the intended aspect (else: equal strains)
   double wall_stress[3] = {0, 0, 0};  ///< final stresses of the x_max, y_max, z_max walls [Pa]
   packing::OverlapStats overlaps;  ///< of the final packing
   std::vector<GreenBodyPhase> phases;
