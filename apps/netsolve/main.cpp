@@ -30,6 +30,7 @@
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "output.hpp"
+#include "pack_green.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
 #include "status.hpp"
@@ -381,6 +382,43 @@ int main(int argc, char** argv) {
   auto* o_lateral = pack->add_option("--lateral", pa.lateral, "3D only: side boundary 'walls' (planes x, y = 0, W) or 'periodic' in x and y")
                         ->capture_default_str();
   pack->add_option("--out", out, "output folder")->default_val("results/pack");
+  // --route green-body (3D): the route of Ivannikov et al. (pack_green.hpp), lengths in SI metres
+  netdem::app::netsolve::GreenArgs ga;
+  auto& gb = ga.body;
+  pack->add_option("--route", ga.route, "3D only: 'ballistic' deposition, or 'green-body': a random cloud, gravity, a lid, "
+                                        "triaxial compression to --target-density with the 3D DEM (Ivannikov et al. 3.2; SI metres)")
+      ->check(CLI::IsMember({"ballistic", "green-body"}))
+      ->capture_default_str();
+  std::vector<CLI::Option*> green_opts = {
+      pack->add_option("--n", gb.n, "green-body: number of spheres")->capture_default_str(),
+      pack->add_option("--diameter", ga.diameter, "green-body: mean diameter [m]")->capture_default_str(),
+      pack->add_option("--dispersion", gb.dispersion, "green-body: diameters uniform in mean (1 +- dispersion)")->capture_default_str(),
+      pack->add_option("--target-density", gb.target_density, "green-body: sum of sphere volumes / wall-box volume at the end")
+          ->capture_default_str(),
+      pack->add_option("--aspect", gb.aspect, "green-body: intended final height / width (x = y)")->capture_default_str(),
+      pack->add_option("--solid-density", gb.solid_density, "green-body: particle material density [kg/m^3] (Cu)")->capture_default_str(),
+      pack->add_option("--friction", gb.mu_settle, "green-body: particle friction while settling and at the final rest")
+          ->capture_default_str(),
+      pack->add_option("--compress-friction", gb.mu_compress, "green-body: particle friction during the compression")
+          ->capture_default_str(),
+      pack->add_option("--wall-friction", gb.mu_wall, "green-body: sphere-wall friction")->capture_default_str(),
+      pack->add_option("--gravity", gb.gravity, "green-body: gravity along -z [m/s^2] (at a fixed stiffness number it rescales time only)")
+          ->capture_default_str(),
+      pack->add_option("--stiffness-number", gb.stiffness_number, "green-body: kappa = k r / (m g) of the mean sphere")
+          ->capture_default_str(),
+      pack->add_option("--restitution", gb.restitution, "green-body: normal restitution of a mean pair")->capture_default_str(),
+      pack->add_option("--steps-per-contact", gb.steps_per_contact, "green-body: time step t_c / this (mean pair)")->capture_default_str(),
+      pack->add_option("--wall-speed", gb.wall_speed, "green-body: speed of the fastest compressing wall / sqrt(g r)")
+          ->capture_default_str(),
+      pack->add_option("--rest-energy", gb.rest_energy, "green-body: at rest when the kinetic energy per sphere < this x m g r")
+          ->capture_default_str(),
+      pack->add_option("--max-overlap", gb.max_mean_overlap, "green-body: refuse (unreachable, exit 3) a mean pair overlap / r above this at rest")
+          ->capture_default_str(),
+      pack->add_option("--cloud-fraction", gb.cloud_fraction, "green-body: solid fraction of the initial cloud's box")->capture_default_str(),
+      pack->add_option("--lamina", ga.lamina, "green-body: lamina width q_s of Eq 48 [m] (laminar.csv)")->capture_default_str(),
+      pack->add_option("--bulk-margin", ga.bulk_margin, "green-body: the bulk density's region keeps this many mean diameters from every wall")
+          ->capture_default_str(),
+      pack->add_flag("--quiet", ga.quiet, "green-body: no progress on stderr")};
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
@@ -435,6 +473,19 @@ int main(int argc, char** argv) {
       if (pa.dim == 3 && pack->count("--lid") > 0 && pa.lid != "inside")
         throw netdem::app::UsageError(fmt::format("--lid '{}': the 3D deposition implements only --lid inside (whole spheres below the lid)",
                                                   netdem::packing::quote_input(pa.lid)));
+      if (ga.route == "green-body") {
+        if (pa.dim != 3) throw netdem::app::UsageError("--route green-body is 3D: add --dim 3");
+        for (const char* name : {"--width", "--r-min", "--r-max", "--mono", "--lateral", "--lid"})
+          if (pack->count(name) > 0)
+            throw netdem::app::UsageError(fmt::format("{} is an option of the ballistic deposition, not of --route green-body "
+                                                      "(use --n, --diameter, --dispersion)", name));
+        return netdem::app::netsolve::run_pack_green_body(ga, pa.seed, ra.overwrite, g_command, out);
+      }
+      if (pack->count("--route") > 0 && pa.dim != 3)
+        throw netdem::app::UsageError("--route is for --dim 3 only (the 2D packing is the ballistic deposition)");
+      for (CLI::Option* opt : green_opts)
+        if (opt->count() > 0)
+          throw netdem::app::UsageError(fmt::format("{} is an option of --route green-body", opt->get_name()));
       return run_pack(pa, ra, out);
     }
     if (o_packing->count() > 0 && ca.packing_file.empty())

@@ -1,0 +1,189 @@
+// netsolve pack --dim 3 --route green-body (apps/netsolve/pack_green.hpp).
+#include "pack_green.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "netdem/packing/io.hpp"
+#include "netdem/packing/laminar.hpp"
+#include "output.hpp"
+#include "run_status.hpp"
+
+namespace netdem::app::netsolve {
+
+namespace {
+
+nlohmann::json box_json(const packing::Box& b) { return {b.x_min, b.y_min, b.z_min, b.x_max, b.y_max, b.z_max}; }
+
+}  // namespace
+
+int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, const std::string& command,
+                        const std::filesystem::path& out) {
+  dem::GreenBodyOptions o = a.body;
+  if (!(std::isfinite(a.diameter) && a.diameter > 0.0))
+    throw UsageError(fmt::format("--diameter must be a positive finite length in metres, got {}", a.diameter));
+  if (!(a.diameter <= 1e-2))
+    throw UsageError(fmt::format("--diameter {} m: the route is in SI metres (50e-6 is 50 um); above 1 cm is refused", a.diameter));
+  if (!(std::isfinite(a.lamina) && a.lamina > 0.0))
+    throw UsageError(fmt::format("--lamina must be a positive finite length in metres, got {}", a.lamina));
+  if (!(std::isfinite(a.bulk_margin) && a.bulk_margin >= 0.0))
+    throw UsageError(fmt::format("--bulk-margin must be >= 0 mean diameters, got {}", a.bulk_margin));
+  o.mean_radius = 0.5 * a.diameter;
+  o.seed = seed;
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  RunDirOptions ro;
+  ro.overwrite = overwrite;
+  check_run_dir(out, ro);
+  activity() = "running the green-body route";
+  open_run_dir(out, command, ro);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last = t0;
+  bool printed = false;
+  const auto observer = [&](const dem::GreenBodyProgress& p) {
+    if (a.quiet) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last).count() < 0.5) return;
+    last = now;
+    printed = true;
+    const std::string done = p.fraction >= 0.0 ? fmt::format(" {:5.1f} %", 100.0 * p.fraction) : "";
+    std::fprintf(stderr, "\rgreen body: %-8s%s step %8lld  t = %.4e s  density %.4f  E_kin %.2e m g r   ", p.phase, done.c_str(),
+                 static_cast<long long>(p.steps), p.time, p.density, p.kinetic);
+  };
+  const dem::GreenBodyResult res = dem::make_green_body(o, observer);
+  if (printed) std::fprintf(stderr, "\n");
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  activity() = "measuring and writing the packing";
+  packing::Packing pk = res.packing;
+  pk.comments.emplace_back("green-body route (Ivannikov et al. section 3.2): lengths in metres");
+  pk.comments.emplace_back(fmt::format("target density {} status {}", o.target_density, res.status));
+  packing::write_packing_csv(pk, out / "packing.csv");
+  write_file_atomic(out / "particles.vtp", vtp_particles_3d(pk.x, pk.y, &pk.z, {{"radius", 1, pk.r}, {"z", 1, pk.z}}));
+
+  const packing::Box& b = pk.box;
+  const double vs = pk.solid_volume();
+  const packing::Box bb = packing::bounding_box(pk);
+  const double margin = a.bulk_margin * a.diameter;
+  packing::Box inner{b.x_min + margin, b.y_min + margin, b.x_max - margin, b.y_max - margin, b.z_min + margin, b.z_max - margin};
+  const bool has_bulk = inner.width() > 0.0 && inner.height() > 0.0 && inner.depth() > 0.0;
+  const double bulk = has_bulk ? packing::sampled_density(pk, inner, a.bulk_spacing * o.mean_radius) : -1.0;
+
+  std::string lam = "# Eq 48 of Ivannikov et al.: laminae of width ~q_s along x, y, z; lengths in metres\n";
+  lam += fmt::format("# q_s {:.9g}\n", a.lamina);
+  lam += "axis,lamina,lo,hi,density\n";
+  nlohmann::json jl;
+  jl["q_s"] = a.lamina;
+  jl["interior_margin"] = margin;
+  const char* names[3] = {"x", "y", "z"};
+  const double lo[3] = {b.x_min, b.y_min, b.z_min}, hi[3] = {b.x_max, b.y_max, b.z_max};
+  for (int ax = 0; ax < 3; ++ax) {
+    const packing::LaminarProfile prof = packing::laminar_density(pk, ax, a.lamina);
+    for (std::size_t s = 0; s < prof.density.size(); ++s)
+      lam += fmt::format("{},{},{:.9g},{:.9g},{:.6f}\n", names[ax], s, prof.lo[s], prof.hi[s], prof.density[s]);
+    const auto in = prof.interior(lo[ax], hi[ax], margin);
+    double all_min = 1e300, all_max = -1e300;
+    for (double d : prof.density) {
+      all_min = std::min(all_min, d);
+      all_max = std::max(all_max, d);
+    }
+    jl[names[ax]] = {{"laminae", prof.density.size()}, {"width", prof.width}, {"min", all_min}, {"max", all_max},
+                     {"interior", {{"laminae", in.count}, {"min", in.count ? nlohmann::json(in.min) : nlohmann::json(nullptr)},
+                                   {"max", in.count ? nlohmann::json(in.max) : nlohmann::json(nullptr)},
+                                   {"mean", in.count ? nlohmann::json(in.mean) : nlohmann::json(nullptr)}}}};
+  }
+  write_file_atomic(out / "laminar.csv", lam);
+
+  nlohmann::json j;
+  j["command"] = command;
+  j["dim"] = 3;
+  j["route"] = "green-body";
+  j["units"] = "SI: m, kg, s, Pa";
+  j["seed"] = seed;
+  j["particles"] = pk.size();
+  j["options"] = {{"mean_diameter", a.diameter},
+                  {"dispersion", o.dispersion},
+                  {"target_density", o.target_density},
+                  {"aspect", o.aspect},
+                  {"solid_density", o.solid_density},
+                  {"gravity", o.gravity},
+                  {"stiffness_number", o.stiffness_number},
+                  {"restitution", o.restitution},
+                  {"friction", {{"settle", o.mu_settle}, {"compress", o.mu_compress}, {"final", o.mu_final}, {"wall", o.mu_wall}}},
+                  {"steps_per_contact", o.steps_per_contact},
+                  {"wall_speed", o.wall_speed},
+                  {"rest_energy", o.rest_energy},
+                  {"max_mean_overlap", o.max_mean_overlap},
+                  {"cloud_fraction", o.cloud_fraction},
+                  {"settled_guess", o.settled_guess},
+                  {"max_phase_time", o.max_phase_time}};
+  j["model"] = {{"law", "linear spring-dashpot, Cundall-Strack tangential spring k_t = 2/7 k"},
+                {"stiffness", res.stiffness},
+                {"gamma_n", res.gamma_n},
+                {"gamma_t", res.gamma_t},
+                {"dt", res.dt},
+                {"contact_time", res.contact_time},
+                {"mean_mass", res.mean_mass},
+                {"time_unit_sqrt_r_over_g", res.time_unit}};
+  j["boxes"] = {{"cloud", box_json(res.cloud_box)}, {"settled", box_json(res.settled_box)},
+                {"target", box_json(res.target_box)}, {"final", box_json(b)}, {"bounding", box_json(bb)}};
+  j["final_box_mm"] = {1e3 * b.width(), 1e3 * b.height(), 1e3 * b.depth()};
+  j["density"] = {{"box", vs / b.volume()},
+                  {"bounding_box", vs / bb.volume()},
+                  {"bulk", has_bulk ? nlohmann::json(bulk) : nlohmann::json(nullptr)},
+                  {"bulk_region", has_bulk ? box_json(inner) : nlohmann::json(nullptr)},
+                  {"bulk_spacing", a.bulk_spacing * o.mean_radius},
+                  {"settled", res.settled_density},
+                  {"lens_volume_fraction", res.overlaps.lens_volume / b.volume()}};
+  j["laminar"] = jl;
+  const auto& ov = res.overlaps;
+  j["overlaps"] = {{"pairs", ov.pairs},           {"pair_mean", ov.pair_mean}, {"pair_max", ov.pair_max},
+                   {"wall_contacts", ov.wall_contacts}, {"wall_mean", ov.wall_mean}, {"wall_max", ov.wall_max},
+                   {"coordination", ov.coordination},   {"compress_max_pair_mean", res.compress_max_mean_overlap}};
+  j["compression"] = {{"scale", res.scale},
+                      {"shape", res.exact_aspect ? "aspect" : "equal strains"},
+                      {"aspect", b.depth() / b.width()},
+                      {"limit_density", res.limit_density > 0.0 ? nlohmann::json(res.limit_density) : nlohmann::json(nullptr)},
+                      {"wall_speed_m_per_s", o.wall_speed * std::sqrt(o.gravity * o.mean_radius)},
+                      {"wall_velocity", {res.wall_velocity[0], res.wall_velocity[1], res.wall_velocity[2]}},
+                      {"strain_rate", res.strain_rate},
+                      {"inertial_number", res.inertial_number}};
+  j["wall_stress"] = {res.wall_stress[0], res.wall_stress[1], res.wall_stress[2]};
+  nlohmann::json ph = nlohmann::json::array();
+  std::int64_t steps = 0;
+  for (const auto& p : res.phases) {
+    ph.push_back({{"name", p.name}, {"steps", p.steps}, {"time", p.time}, {"wall_s", p.wall_seconds},
+                  {"density", p.density}, {"kinetic", p.kinetic}, {"at_rest", p.at_rest}});
+    steps += p.steps;
+  }
+  j["phases"] = ph;
+  j["steps"] = steps;
+  j["timing_s"] = {{"total", wall}};
+  j["status"] = res.status;
+  j["status_reason"] = res.ok() ? std::string("every criterion met") : res.reason;
+  write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  close_run_dir(out);
+  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %.4f), mean overlap %.2e r "
+              "(max %.2e), %lld steps, %.1f s -> %s\n",
+              static_cast<unsigned long long>(seed), pk.size(), 1e3 * b.width(), 1e3 * b.height(), 1e3 * b.depth(),
+              vs / b.volume(), bulk, ov.pair_mean, ov.pair_max, static_cast<long long>(steps), wall,
+              (out / "packing.csv").c_str());
+  if (!res.ok()) {
+    std::fprintf(stderr, "netsolve: error: %s: %s\n", res.status.c_str(), res.reason.c_str());
+    return exit_code::untrustworthy;
+  }
+  return exit_code::ok;
+}
+
+}  // namespace netdem::app::netsolve

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# netsolve pack --dim 3 --route green-body (docs/packing.md "The green-body route"): a small run
+# (60 spheres, soft spring, a few seconds) writes packing.csv in the 3D format (SI metres, readable
+# back), laminar.csv (Eq 48 along x, y, z), particles.vtp, summary.json (status, densities,
+# overlaps, phases) and command.txt, deterministically; --quiet silences stderr; an unreachable
+# target exits 3 with the status in summary.json; bad input is one line, exit 2, nothing written.
+# usage: test_pack_green.sh PATH/TO/netsolve
+set -u
+ns="$1"
+tool="$ns"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+ok() {  # name condition-command...
+  local name="$1"
+  shift
+  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
+}
+small=(pack --dim 3 --route green-body --n 60 --target-density 0.45 --stiffness-number 1e3 --wall-speed 0.05 --max-overlap 0.01)
+"$ns" "${small[@]}" --quiet --out "$tmp/g" >"$tmp/stdout" 2>"$tmp/stderr"
+ok green_exit [ $? -eq 0 ]
+ok green_quiet [ ! -s "$tmp/stderr" ]
+g="$tmp/g"
+for f in packing.csv laminar.csv particles.vtp summary.json command.txt; do ok "green_file_$f" [ -s "$g/$f" ]; done
+ok green_no_marker [ ! -e "$g/.incomplete" ]
+ok green_dim grep -qx '# dim 3' "$g/packing.csv"
+ok green_header grep -qx 'id,x,y,z,r' "$g/packing.csv"
+ok green_units grep -q '# green-body route (Ivannikov et al. section 3.2): lengths in metres' "$g/packing.csv"
+ok green_particles [ "$(grep -c '^[0-9]' "$g/packing.csv")" -eq 60 ]
+ok green_laminar_header grep -qx 'axis,lamina,lo,hi,density' "$g/laminar.csv"
+ok green_laminar_axes bash -c "grep -q '^x,0,' '$g/laminar.csv' && grep -q '^y,0,' '$g/laminar.csv' && grep -q '^z,0,' '$g/laminar.csv'"
+ok green_status grep -q '"status": "ok"' "$g/summary.json"
+ok green_route grep -q '"route": "green-body"' "$g/summary.json"
+ok green_density grep -q '"box": 0.4[45]' "$g/summary.json"
+ok green_phases bash -c "grep -q '\"name\": \"settle\"' '$g/summary.json' && grep -q '\"name\": \"compress\"' '$g/summary.json'"
+ok green_no_nan bash -c "! grep -qi 'nan\|inf' '$g/summary.json' '$g/laminar.csv' '$g/packing.csv'"
+# the packing is a valid 3D packing file: the 2D-only compact reads it and refuses it as 3D
+check_bad green_read_back "is a 3D packing; netsolve compact is 2D only" compact --packing "$g/packing.csv"
+# deterministic for a seed
+"$ns" "${small[@]}" --quiet --out "$tmp/g2" >/dev/null 2>&1
+ok green_deterministic cmp -s "$g/packing.csv" "$tmp/g2/packing.csv"
+ok green_laminar_deterministic cmp -s "$g/laminar.csv" "$tmp/g2/laminar.csv"
+# progress on stderr without --quiet is allowed; an unreachable target exits 3 and says so
+"$ns" pack --dim 3 --route green-body --n 60 --target-density 0.62 --stiffness-number 1e3 --wall-speed 0.05 \
+  --max-overlap 0.005 --quiet --out "$tmp/u" >/dev/null 2>"$tmp/stderr_u"
+ok unreachable_exit [ $? -eq 3 ]
+ok unreachable_status grep -q '"status": "unreachable"' "$tmp/u/summary.json"
+ok unreachable_message grep -q 'netsolve: error: unreachable: ' "$tmp/stderr_u"
+ok unreachable_packing_written [ -s "$tmp/u/packing.csv" ]
+# refusals: one line, exit 2, nothing written
+check_bad green_needs_3d "--route green-body is 3D" pack --route green-body
+check_bad green_width "--width is an option of the ballistic deposition" pack --dim 3 --route green-body --width 20
+check_bad green_lateral "--lateral is an option of the ballistic" pack --dim 3 --route green-body --lateral periodic
+check_bad ballistic_n "--n is an option of --route green-body" pack --dim 3 --n 100
+check_bad route_2d "--route is for --dim 3 only" pack --route ballistic
+check_bad route_bad "--route" pack --dim 3 --route sideways
+check_bad green_diameter "--diameter must be a positive" pack --dim 3 --route green-body --diameter -1
+check_bad green_diameter_units "SI metres" pack --dim 3 --route green-body --diameter 50
+check_bad green_target "target density must be in (0, 0.74]" pack --dim 3 --route green-body --target-density 0.9
+check_bad green_dispersion "dispersion must be in" pack --dim 3 --route green-body --dispersion 1
+check_bad green_restitution "restitution must be in (0, 1]" pack --dim 3 --route green-body --restitution 0
+check_bad green_lamina "--lamina must be a positive" pack --dim 3 --route green-body --lamina 0
+check_bad green_n_zero "number of spheres" pack --dim 3 --route green-body --n 0
+finish
