@@ -248,10 +248,15 @@ std::string vtp_particles_3d(const std::vector<double>& x, const std::vector<dou
 
 std::string vtp_network(const std::vector<double>& x, const std::vector<double>& y, const std::vector<int>& i,
                         const std::vector<int>& j, const std::vector<Field>& cd) {
+  return vtp_network_3d(x, y, nullptr, i, j, cd);
+}
+
+std::string vtp_network_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
+                           const std::vector<int>& i, const std::vector<int>& j, const std::vector<Field>& cd) {
   std::string s = "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <PolyData>\n";
   s += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{}\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
                    x.size(), i.size());
-  append_points(s, x, y);
+  append_points(s, x, y, z);
   s += "      <CellData>\n";
   append_fields(s, cd);
   s += "      </CellData>\n      <Lines>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n          ";

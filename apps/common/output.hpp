@@ -83,6 +83,9 @@ std::string vtp_particles_3d(const std::vector<double>& x, const std::vector<dou
 /// Contact network as VTK PolyData lines between centres, with cell data per contact.
 std::string vtp_network(const std::vector<double>& x, const std::vector<double>& y, const std::vector<int>& i,
                         const std::vector<int>& j, const std::vector<Field>& cell_data);
+/// The same with the real z of every point (3D); z == nullptr writes z = 0 (as above).
+std::string vtp_network_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
+                           const std::vector<int>& i, const std::vector<int>& j, const std::vector<Field>& cell_data);
 
 /// Progress on stderr: percent, rate and ETA, at most twice a second; silent if quiet.
 class Progress {
