@@ -206,3 +206,34 @@ TEST(Dynamic3DAffine, ShearRateRefusedWithContactWalls) {
   EXPECT_NO_THROW(sv.set_strain_rate3(-1e-3, -1e-3, -1e-3));
   EXPECT_THROW(sv.set_strain_rate3(-1e-3, -1e-3, -1e-3, std::nan(""), 0.0, 0.0), std::invalid_argument);
 }
+
+// The affine velocity field is the full L (x - x_0): set_affine_velocities() gives it (by hand for
+// a sphere at d = x - x_0 = (3, 2, 1)), and the affine drag, measured by unbalanced_force_rms()
+// (which adds the drag c m (v - L d) back), sees no motion relative to it; against the diagonal
+// field alone the shear part w of the velocity shows as c m |w| (the RMS per sphere of the force and
+// the torque / radius, the spin at rest).
+TEST(Dynamic3DAffine, AffineVelocitiesAndDragUseTheFullField) {
+  Particles P;
+  P.add_sphere(3.0, 2.0, 1.0, 0.5, 1.0);
+  Box box;
+  box.x_max = box.y_max = box.z_max = 6.0;
+  box.contact_walls = false;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.affine_drag = 2.0;
+  DynamicSolver3 sv(P, LudingParams{}, box, o);
+  const double e11 = -1e-3, e22 = -2e-3, e33 = 5e-4, e23 = 3e-4, e13 = -4e-4, e12 = 6e-4;
+  sv.set_strain_rate3(e11, e22, e33, e23, e13, e12);
+  sv.set_affine_velocities();
+  const auto& q = sv.particles();
+  EXPECT_DOUBLE_EQ(q.vx[0], e11 * 3 + e12 * 2 + e13 * 1);
+  EXPECT_DOUBLE_EQ(q.vy[0], e12 * 3 + e22 * 2 + e23 * 1);
+  EXPECT_DOUBLE_EQ(q.vz[0], e13 * 3 + e23 * 2 + e33 * 1);
+  EXPECT_EQ(sv.unbalanced_force_rms(), 0.0);
+  EXPECT_DOUBLE_EQ(sv.strain_rate3(0, 2), e13);
+  EXPECT_DOUBLE_EQ(sv.strain_rate3(2, 1), e23);
+  // the diagonal field alone would leave the shear part of the velocity as relative motion
+  sv.set_strain_rate3(e11, e22, e33);
+  const double m = q.mass[0], w = std::hypot(e12 * 2 + e13, e12 * 3 + e23, e13 * 3 + e23 * 2);
+  EXPECT_NEAR(sv.unbalanced_force_rms(), o.affine_drag * m * w, 1e-12 * m * w);
+}
