@@ -8,6 +8,9 @@
 //   demsolve compact  [--packing FILE | netsolve's pack options] [--affine] [--path hydrostatic|closed-die|E11,E22,0]
 //                     [--friction MU|inf] [--no-rotation] [--to-density 0.85] [--boundary layer|walls]
 //                     [--inertial-number I] [--increments 100] [--out DIR]
+//   demsolve compact --dim 3 [--packing FILE | netsolve pack --dim 3's options] --affine | --boundary walls
+//                     [--path hydrostatic|closed-die|E11,E22,E33|E11,E22,E33,E23,E13,E12 (shear: --affine only)]
+//     spheres, six rigid frictionless walls or every centre affine (docs/dynamic.md "demsolve compact", 3D).
 //   demsolve yield    [netsolve yield's options] [--inertial-number I] [--probe-inertial-number I] [--jobs J]
 //     the yield-surface probes of netsolve yield with the explicit DEM (docs/dynamic.md "demsolve yield").
 //     the plastic-indentation law of Redanz & Fleck on netsolve's compaction scene, in netsolve's
@@ -151,10 +154,18 @@ int main(int argc, char** argv) {
   dcomp->add_option("--seed", dc.pack.seed, "random seed of the deposition")
       ->check(netdem::app::netsolve::seed_validator())
       ->capture_default_str();
-  dcomp->add_option("--lid", dc.pack.lid, "deposition stop rule: centre | inside (netsolve pack)")->capture_default_str();
+  auto* dcomp_lid = dcomp->add_option("--lid", dc.pack.lid, "deposition stop rule: centre | inside (netsolve pack)")->capture_default_str();
+  dcomp->add_option("--dim", dc.pack.dim, "2: disks; 3: spheres (netsolve pack --dim 3's deposition or a 3D --packing; "
+                                          "--boundary walls or --affine)")
+      ->check(CLI::IsMember({2, 3}))
+      ->capture_default_str();
+  auto* dcomp_lateral = dcomp->add_option("--lateral", dc.pack.lateral, "3D only: side boundary of the deposition (walls; "
+                                                                        "the explicit DEM has no periodic boundaries)")
+                            ->capture_default_str();
   dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
   dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
-  dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (E12 = 0 only)")->capture_default_str();
+  dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (walls: E12 = 0 only); "
+                                       "--dim 3: E11,E22,E33[,E23,E13,E12] (closed-die along z)")->capture_default_str();
   dcomp->add_option("--friction", dc.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
   dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
   dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
@@ -247,6 +258,11 @@ int main(int argc, char** argv) {
     if (dcomp->parsed()) {
       if (dcomp->count("--packing") > 0 && dc.packing_file.empty())
         throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
+      if (dc.pack.dim == 2 && dcomp_lateral->count() > 0)
+        throw netdem::app::UsageError("--lateral is for --dim 3 only (the 2D deposition has side walls)");
+      if (dc.pack.dim == 3 && dcomp_lid->count() > 0 && dc.pack.lid != "inside")
+        throw netdem::app::UsageError("--lid '" + quote_input(dc.pack.lid) +
+                                      "': the 3D deposition implements only --lid inside (whole spheres below the lid)");
       return run_dem_compact(command, dc, out_dcompact);
     }
     if (dyield->parsed()) {

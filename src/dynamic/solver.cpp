@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "netdem/contact/luding_law.hpp"
@@ -257,6 +258,7 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   }
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
+  if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
   if (plastic())
     pl_wall_hist_.assign(kWalls * n, PlasticHist{});
   else
@@ -1121,19 +1123,35 @@ void DynamicSolverT<D>::set_strain_rate(double e11, double e22, double e12) {
 }
 
 template <int D>
-void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33) {
+void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33, double e23, double e13, double e12) {
   if constexpr (D == 2) {
-    (void)e11;
-    (void)e22;
-    (void)e33;
+    (void)e11, (void)e22, (void)e33, (void)e23, (void)e13, (void)e12;
     fail("set_strain_rate3: a 2D solver takes set_strain_rate(e11, e22, e12)");
   } else {
-    if (!std::isfinite(e11) || !std::isfinite(e22) || !std::isfinite(e33))
-      fail("set_strain_rate3: the strain rate must be finite");
+    for (double v : {e11, e22, e33, e23, e13, e12})
+      if (!std::isfinite(v)) fail("set_strain_rate3: the strain rate must be finite");
     if (!box_.enabled) fail("set_strain_rate3: the affine field needs a box (its lower corner is x_0)");
+    const bool shear = e23 != 0.0 || e13 != 0.0 || e12 != 0.0;
+    if (shear && walls_active())
+      fail("set_strain_rate3: a shear rate (e23, e13 or e12 != 0) needs a box without contact walls (the walls stay "
+           "axis-aligned)");
     edot3_[0] = e11;
     edot3_[1] = e22;
     edot3_[2] = e33;
+    const double L[3][3] = {{e11, e12, e13}, {e12, e22, e23}, {e13, e23, e33}};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) L3_[a][b] = L[a][b];
+    shear3_ = shear;
+    sheared3_ = sheared3_ || shear;
+    if (shear) {  // exp(L dt) - I = V diag(expm1(lambda dt)) V^T in impose_affine_motion
+      Eigen::Matrix3d M;
+      M << e11, e12, e13, e12, e22, e23, e13, e23, e33;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(M);
+      for (int a = 0; a < 3; ++a) {
+        eig_l3_[a] = es.eigenvalues()(a);
+        for (int b = 0; b < 3; ++b) eig_v3_[3 * a + b] = es.eigenvectors()(a, b);
+      }
+    }
   }
 }
 
@@ -1141,9 +1159,15 @@ template <int D>
 void DynamicSolverT<D>::set_affine_velocities() {
   if constexpr (D == 3) {
     for (std::size_t i = 0; i < P_.size(); ++i) {
-      P_.vx[i] = edot3_[0] * (P_.x[i] - box_.x_min);
-      P_.vy[i] = edot3_[1] * (P_.y[i] - box_.y_min);
-      P_.vz[i] = edot3_[2] * (P_.z[i] - box_.z_min);
+      const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
+      P_.vx[i] = edot3_[0] * d[0];
+      P_.vy[i] = edot3_[1] * d[1];
+      P_.vz[i] = edot3_[2] * d[2];
+      if (shear3_) {
+        P_.vx[i] += L3_[0][1] * d[1] + L3_[0][2] * d[2];
+        P_.vy[i] += L3_[1][0] * d[0] + L3_[1][2] * d[2];
+        P_.vz[i] += L3_[2][0] * d[0] + L3_[2][1] * d[1];
+      }
       P_.wx[i] = P_.wy[i] = P_.omega[i] = 0.0;
     }
     return;
@@ -1253,19 +1277,49 @@ std::array<double, 4> expm1_sym2(double a, double b, double c, double t) {
 
 template <int D>
 void DynamicSolverT<D>::impose_affine_motion(double dt) {
-  if constexpr (D == 3) {  // diagonal E' (set_strain_rate3): x_0 + exp(E' dt)(x - x_0) exactly
-    double g[3];
+  if constexpr (D == 3) {  // x_0 + exp(L dt)(x - x_0) exactly (set_strain_rate3)
+    double g[3], md[3];
     for (int a = 0; a < 3; ++a) {
       const double m = std::expm1(edot3_[a] * dt);
       F3_[static_cast<std::size_t>(a)] *= 1.0 + m;
       g[a] = m / dt;
+      md[a] = m;
     }
-    for (std::uint32_t p : prescribed_) {
-      P_.vx[p] = g[0] * (P_.x[p] - box_.x_min);
-      P_.vy[p] = g[1] * (P_.y[p] - box_.y_min);
-      P_.vz[p] = g[2] * (P_.z[p] - box_.z_min);
-      if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+    if (!shear3_) {  // diagonal: expm1 of each rate
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) F3m_[static_cast<std::size_t>(3 * a + b)] *= 1.0 + md[a];
+      for (std::uint32_t p : prescribed_) {
+        P_.vx[p] = g[0] * (P_.x[p] - box_.x_min);
+        P_.vy[p] = g[1] * (P_.y[p] - box_.y_min);
+        P_.vz[p] = g[2] * (P_.z[p] - box_.z_min);
+        if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+      }
+    } else {  // G = exp(L dt) - I = V diag(expm1(lambda dt)) V^T
+      double G[3][3] = {}, m[3];
+      for (int k = 0; k < 3; ++k) m[k] = std::expm1(eig_l3_[k] * dt);
+      for (int a = 0; a < 3; ++a)
+        for (int b = a; b < 3; ++b) {
+          double v = 0.0;
+          for (int k = 0; k < 3; ++k) v += eig_v3_[3 * a + k] * m[k] * eig_v3_[3 * b + k];
+          G[a][b] = G[b][a] = v;
+        }
+      const auto F = F3m_;  // F <- (I + G) F
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          double v = F[static_cast<std::size_t>(3 * a + b)];
+          for (int k = 0; k < 3; ++k) v += G[a][k] * F[static_cast<std::size_t>(3 * k + b)];
+          F3m_[static_cast<std::size_t>(3 * a + b)] = v;
+        }
+      const double inv = 1.0 / dt;
+      for (std::uint32_t p : prescribed_) {
+        const double d[3] = {P_.x[p] - box_.x_min, P_.y[p] - box_.y_min, P_.z[p] - box_.z_min};
+        P_.vx[p] = (G[0][0] * d[0] + G[0][1] * d[1] + G[0][2] * d[2]) * inv;
+        P_.vy[p] = (G[1][0] * d[0] + G[1][1] * d[1] + G[1][2] * d[2]) * inv;
+        P_.vz[p] = (G[2][0] * d[0] + G[2][1] * d[1] + G[2][2] * d[2]) * inv;
+        if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+      }
     }
+    // the box: the axis-aligned box of the diagonal rates
     const double L[3] = {box_.x_max - box_.x_min, box_.y_max - box_.y_min, box_.z_max - box_.z_min};
     for (int a = 0; a < 3; ++a)
       if (moving_wall(a).mode == WallMode::Affine) wall_v_[a] = g[a] * L[a];
@@ -1301,6 +1355,24 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
 }
 
+// 3D: the affine velocity L (x_i - x_0) of particle i (diagonal L: the products of before the shear rates)
+template <int D>
+void DynamicSolverT<D>::affine_velocity3(std::size_t i, double* a) const {
+  if constexpr (D == 3) {
+    const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
+    a[0] = edot3_[0] * d[0];
+    a[1] = edot3_[1] * d[1];
+    a[2] = edot3_[2] * d[2];
+    if (shear3_) {
+      a[0] += L3_[0][1] * d[1] + L3_[0][2] * d[2];
+      a[1] += L3_[1][0] * d[0] + L3_[1][2] * d[2];
+      a[2] += L3_[2][0] * d[0] + L3_[2][1] * d[1];
+    }
+  } else {
+    (void)i, (void)a;
+  }
+}
+
 template <int D>
 void DynamicSolverT<D>::set_affine_drag(double drag) {
   if (!(std::isfinite(drag) && drag >= 0.0)) fail(fmt::format("set_affine_drag: the drag must be finite and >= 0, got {}", drag));
@@ -1324,9 +1396,11 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
       }
       if (pres) continue;
       const double m = P_.mass[i];
-      const double fx = P_.fx[i] + c * m * (P_.vx[i] - edot3_[0] * (P_.x[i] - box_.x_min));
-      const double fy = P_.fy[i] + c * m * (P_.vy[i] - edot3_[1] * (P_.y[i] - box_.y_min));
-      const double fz = P_.fz[i] + c * m * (P_.vz[i] - edot3_[2] * (P_.z[i] - box_.z_min));
+      double a[3];
+      affine_velocity3(i, a);
+      const double fx = P_.fx[i] + c * m * (P_.vx[i] - a[0]);
+      const double fy = P_.fy[i] + c * m * (P_.vy[i] - a[1]);
+      const double fz = P_.fz[i] + c * m * (P_.vz[i] - a[2]);
       sum += fx * fx + fy * fy + fz * fz;
       if (!rotations_) ++n;
     }
@@ -1366,9 +1440,11 @@ void DynamicSolverT<D>::apply_affine_drag() {
         P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
       }
       if (pres) continue;
-      P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - edot3_[0] * (P_.x[i] - box_.x_min));
-      P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - edot3_[1] * (P_.y[i] - box_.y_min));
-      P_.fz[i] -= c * P_.mass[i] * (P_.vz[i] - edot3_[2] * (P_.z[i] - box_.z_min));
+      double a[3];
+      affine_velocity3(i, a);
+      P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - a[0]);
+      P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - a[1]);
+      P_.fz[i] -= c * P_.mass[i] * (P_.vz[i] - a[2]);
     }
     return;
   }
@@ -1392,11 +1468,18 @@ void DynamicSolverT<D>::apply_affine_drag() {
 
 template <int D>
 auto DynamicSolverT<D>::boundary_stress() const -> Stress {
-  if constexpr (D == 3) {  // about the box centre (diagonal E': the box is the deformed domain)
+  if constexpr (D == 3) {  // about the box centre (diagonal L: the box is the deformed domain)
     Stress s;
     if (!box_.enabled) return s;
-    const double c[3] = {0.5 * (box_.x_min + box_.x_max), 0.5 * (box_.y_min + box_.y_max),
-                         0.5 * (box_.z_min + box_.z_max)};
+    double c[3] = {0.5 * (box_.x_min + box_.x_max), 0.5 * (box_.y_min + box_.y_max), 0.5 * (box_.z_min + box_.z_max)};
+    if (sheared3_) {  // the centre of the deformed parallelepiped x_0 + F (c_0 - x_0)
+      const double x0[3] = {box_.x_min, box_.y_min, box_.z_min};
+      const double X[3] = {centre0_[0] - x0[0], centre0_[1] - x0[1], centre0z_ - x0[2]};
+      for (int a = 0; a < 3; ++a) {
+        c[a] = x0[a];
+        for (int b = 0; b < 3; ++b) c[a] += F3m_[static_cast<std::size_t>(3 * a + b)] * X[b];
+      }
+    }
     for (std::uint32_t p : prescribed_) {
       const double f[3] = {P_.fx[p], P_.fy[p], P_.fz[p]};
       const double l[3] = {P_.x[p] - c[0], P_.y[p] - c[1], P_.z[p] - c[2]};

@@ -123,6 +123,7 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   pl_wall_hist_ = pwh;
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);  // the affine map starts again at the restart
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
+  if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
   finish_setup();
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).

@@ -17,9 +17,10 @@
 // walls (x_min .. z_max; gravity usually along -z), the right (x_max), back (y_max) and top (z_max)
 // walls moving (strain- or stress-controlled, Eq 1 with the wall's current area), the laws through
 // the interface in 3D (law.hpp: the tangential history carried into the current plane every step
-// by contact::step_transport). Not yet in 3D (they throw std::logic_error with one line): state
-// files and restarts (so no last_good() snapshot), contacts(), the affine field (set_strain_rate,
-// prescribed particles, the affine drag, boundary_stress).
+// by contact::step_transport), the affine field with the full symmetric 3 x 3 strain rate
+// (set_strain_rate3: prescribed particles, Affine walls, the affine drag, boundary_stress). Not yet
+// in 3D (they throw std::logic_error with one line): state files and restarts (so no last_good()
+// snapshot), contacts().
 #include <cstddef>
 #include <array>
 #include <cstdint>
@@ -340,12 +341,23 @@ class DynamicSolverT {
   /// is exactly the deformed domain's, det exp(L t) = exp(tr L t)), and box_deformation() holds the
   /// accumulated map, whose parallelogram is the deformed domain.
   void set_strain_rate(double e11, double e22, double e12 = 0.0);
-  /// 3D: the diagonal strain rate E' = diag(e11, e22, e33) about the box's lower corner
-  /// (x_min, y_min, z_min): prescribed particles, Affine walls and the affine drag follow it, over a
-  /// step exactly x_0 + exp(E' dt)(x - x_0). (3D shear rates: not yet.)
-  void set_strain_rate3(double e11, double e22, double e33);
-  /// 3D: the accumulated diagonal map exp(E' t) since construction.
+  /// 3D: the symmetric strain rate L = E' (e11, e22, e33 on the diagonal; e23, e13, e12 the shear
+  /// rates, 0 by default) about the box's lower corner x_0 = (x_min, y_min, z_min): prescribed
+  /// particles, Affine walls and the affine drag follow it, over a step exactly x_0 + exp(L dt)(x -
+  /// x_0) (exp(L dt) - I = V diag(expm1(lambda dt)) V^T from the eigen-decomposition of L, no
+  /// cancellation for small rates; diagonal L: expm1 of each rate, as before the shear rates came).
+  /// Shear rates only without contact walls (std::invalid_argument: the walls stay axis-aligned).
+  /// The box stays the axis-aligned box of the diagonal rates: its volume, and so density() and the
+  /// stresses' V, is exactly the deformed domain's (det exp(L t) = exp(tr L t)); affine_map3()
+  /// holds the accumulated map, whose parallelepiped is the deformed domain.
+  void set_strain_rate3(double e11, double e22, double e33, double e23 = 0.0, double e13 = 0.0, double e12 = 0.0);
+  /// 3D: the accumulated stretch of the box, exp(L_aa t) along each axis (the diagonal of
+  /// affine_map3() when no shear rate was ever set).
   const std::array<double, 3>& box_deformation3() const { return F3_; }
+  /// 3D: the accumulated affine map F (row-major, 9 entries) since construction: x_0 + F (X - x_0).
+  const std::array<double, 9>& affine_map3() const { return F3m_; }
+  /// 3D: the component (a, b) of the strain rate L (symmetric; a, b in 0..2).
+  double strain_rate3(int a, int b) const { return L3_[a][b]; }
   double strain_rate_11() const { return edot_[0]; }
   double strain_rate_22() const { return edot_[1]; }
   double strain_rate_12() const { return edot_[2]; }
@@ -460,6 +472,14 @@ class DynamicSolverT {
   std::array<double, 4> F_ = {1.0, 0.0, 0.0, 1.0};
   double edot3_[3] = {0.0, 0.0, 0.0};  ///< 3D: e11, e22, e33
   std::array<double, 3> F3_ = {1.0, 1.0, 1.0};
+  // 3D shear rates (set_strain_rate3): the full L, its eigen-decomposition (V row-major, lambda),
+  // the accumulated map; sheared3_: a shear rate was ever set (boundary_stress about x_0 + F (c_0 - x_0))
+  double L3_[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  bool shear3_ = false;  ///< the current L has a shear rate
+  double eig_v3_[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, eig_l3_[3] = {0, 0, 0};
+  std::array<double, 9> F3m_ = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  bool sheared3_ = false;
+  double centre0z_ = 0.0;  ///< 3D: the z of the box centre at construction (x, y: centre0_)
   bool sheared_ = false;  ///< e12 was ever non-zero (boundary_stress takes the parallelogram's centre)
   double centre0_[2] = {0.0, 0.0};  ///< the box centre at construction
   std::vector<std::uint32_t> prescribed_;
@@ -469,6 +489,7 @@ class DynamicSolverT {
   bool walls_active() const { return box_.enabled && box_.contact_walls; }
   void impose_affine_motion(double dt);
   void apply_affine_drag();
+  void affine_velocity3(std::size_t i, double* a) const;  ///< 3D: L (x_i - x_0)
   /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
