@@ -130,34 +130,22 @@ void check_memory(std::size_t n) {
 }
 
 std::string check_loading(double pressure, const LudingParams& p, const std::string& what, int dim) {
-  if (dim == 3) {  // p [N/m^2] on a sphere's (2 a0)^2 of wall: overlap / a0 = 4 p a0 / k2
-    const double r = 4.0 * pressure * p.a0 / p.k2;
-    if (!(r >= 1e-9))
-      throw UsageError(fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, below 1e-9: the walls would "
-                                   "not hold the sample (raise the pressure)", what, pressure, r));
-    if (!(r <= 0.1))
-      throw UsageError(fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, above 0.1, beyond the range of "
-                                   "Luding's model (section 4); lower the pressure or raise k2 (= {:g} N/m)",
-                                   what, pressure, r, p.k2));
-    if (r > 0.02) {
-      std::string w = fmt::format("{} = {:g} N/m^2 gives the loading ratio 4 p a0/k2 = {:.3g}, above 0.02 (Luding section 4: "
-                                  "overlaps beyond small deformations)", what, pressure, r);
-      std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
-      return w;
-    }
-    return "";
-  }
-  const double r = 2.0 * pressure / p.k2;
+  // 2D: p [N/m] on a disk's 2 a of wall, overlap / a = 2p/k2; 3D: p [N/m^2] on a sphere's (2 a0)^2,
+  // overlap / a0 = 4 p a0 / k2
+  const bool d3 = dim == 3;
+  const double r = d3 ? 4.0 * pressure * p.a0 / p.k2 : 2.0 * pressure / p.k2;
+  const char* unit = d3 ? "N/m^2" : "N/m";
+  const char* ratio = d3 ? "4 p a0/k2" : "2p/k2";
   if (!(r >= 1e-9))  // a pressure that cannot hold the sample; stresses over p would overflow
-    throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, below 1e-9: the walls would not "
-                                 "hold the sample (raise the pressure)", what, pressure, r));
+    throw UsageError(fmt::format("{} = {:g} {} gives the loading ratio {} = {:.3g}, below 1e-9: the walls would not "
+                                 "hold the sample (raise the pressure)", what, pressure, unit, ratio, r));
   if (!(r <= 0.1))
-    throw UsageError(fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, above 0.1, beyond the range of "
+    throw UsageError(fmt::format("{} = {:g} {} gives the loading ratio {} = {:.3g}, above 0.1, beyond the range of "
                                  "Luding's model (section 4); lower the pressure or raise k2 (= {:g} N/m)",
-                                 what, pressure, r, p.k2));
+                                 what, pressure, unit, ratio, r, p.k2));
   if (r > 0.02) {
-    std::string w = fmt::format("{} = {:g} N/m gives the loading ratio 2p/k2 = {:.3g}, above 0.02 (Luding section 4: "
-                                "overlaps beyond small deformations)", what, pressure, r);
+    std::string w = fmt::format("{} = {:g} {} gives the loading ratio {} = {:.3g}, above 0.02 (Luding section 4: "
+                                "overlaps beyond small deformations)", what, pressure, unit, ratio, r);
     std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
     return w;
   }
