@@ -26,11 +26,12 @@ check_bad pressure_3d_too_high "4 p a0/k2" prepare --dim 3 --pressure 1e7
 good() {  # out-dir time
   "$ds" prepare --dim 3 --n 40 --time "$2" --seed 5 --quiet --out "$1" >/dev/null 2>"$tmp/stderr"
 }
-# determinism on a short run; the pressure held after 0.1 s (the walls of a 40-sphere sample ring
-# for about 0.05 s: sigma/p 0.63-0.75 at 0.05 s, 1.00-1.04 at 0.1 s)
+# determinism on a short run; the pressure held after 0.15 s (the walls of a 40-sphere sample ring:
+# sigma/p 0.63-0.75 at 0.05 s; at 0.1 s still 0.92-1.15 over seeds 5-7 with the second-order
+# spring transport of law.hpp, 0.95-1.03 at 0.15 s)
 good "$tmp/d1" 0.004 && good "$tmp/d2" 0.004 && cmp -s "$tmp/d1/state.txt" "$tmp/d2/state.txt"
 result prepare_3d_deterministic $?
-good "$tmp/a" 0.1 &&
+good "$tmp/a" 0.15 &&
   grep -q '^dim 3$' "$tmp/a/state.txt" &&
   has_columns "$tmp/a/timeseries.csv" t nu C sxx syy szz syy_over_p szz_contacts box_z &&
   grep -q '"dim": 3' "$tmp/a/summary.json" && grep -q '"pressure_N_per_m2": 50000' "$tmp/a/summary.json" &&

@@ -287,9 +287,13 @@ std::vector<typename Fx::Kin> load_path(unsigned seed, int n) {
       k.v_t = vt;
     } else {
       const Eigen::Vector3d w(0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
-      k.transport.R = rotation_of(w);
-      normal = (k.transport.R * normal).normalized();
-      k.transport.n = normal;
+      normal = (rotation_of(w) * normal).normalized();
+      if (i % 2 == 0) {  // a quasi-static increment's finite rotation
+        k.transport.R = rotation_of(w);
+        k.transport.n = normal;
+      } else {  // an explicit step's small rotation (the DEM's transport, law.hpp transport_small)
+        k.transport = step_transport(normal, w);
+      }
       phi += 0.3 * u(rng);
       const auto ax = plane_axes<3>(k);
       const Eigen::Vector3d dir = std::cos(phi) * ax[0] + std::sin(phi) * ax[1];

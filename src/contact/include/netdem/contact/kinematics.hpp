@@ -150,17 +150,16 @@ inline PairIncrement3 pair_increment(const PairGeometry3& g0, const PairGeometry
 
 /// The Transport of one explicit time step of a pair of spheres (or of a sphere and a wall) from
 /// its rotation vector over the step, theta = (n x v_rel / L + (W . n / L) n) dt (v_rel = v_j - v_i,
-/// W = d_i w_i + d_j w_j: the rates of pair_increment(); a wall: theta = (w_i . n) n dt): to first
-/// order in dt, R = I + [theta]x, with the length of the carried vector kept (as LAMMPS `pair
-/// granular` and MercuryDPM rescale the projected spring). A rigid rotation at w carries the spring
-/// with the pair to O(dt^2) per step.
+/// W = d_i w_i + d_j w_j: the rates of pair_increment(); a wall: theta = (w_i . n) n dt), applied
+/// to second order (law.hpp transport_small(): the length of the carried vector is kept to
+/// O(theta^4) without a rescale; LAMMPS `pair granular` and MercuryDPM project the spring and
+/// rescale it, which is this rotation to first order without the twist). A rigid rotation at w
+/// carries the spring with the pair to O((w dt)^3) per step.
 inline Transport<3> step_transport(const Eigen::Vector3d& n, const Eigen::Vector3d& theta) {
   Transport<3> t;
   t.n = n;
-  t.preserve_length = true;
-  t.R << 1.0, -theta.z(), theta.y(),  //
-      theta.z(), 1.0, -theta.x(),     //
-      -theta.y(), theta.x(), 1.0;
+  t.theta = theta;
+  t.small = true;
   return t;
 }
 

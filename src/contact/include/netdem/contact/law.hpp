@@ -50,22 +50,45 @@ struct Transport {
 /// 3D: the rigid rotation of the pair over the step (the lever-arm weighted mean rotation of the
 /// two particles, then the rotation of the normal relative to it), followed by the projection onto
 /// the current tangent plane (LMM05 Eq 16), which only removes rounding.
+///  * a quasi-static increment (pair_increment(), finite rotations): the matrix R;
+///  * an explicit step (step_transport(), `small` = true): the rotation vector theta of the step,
+///    applied as exp([theta]x) to second order, v + theta x v + (theta x (theta x v))/2, which
+///    keeps |v| to O(theta^4) (no rescale), then projected (transport_small()).
 template <>
 struct Transport<3> {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  ///< the current normal
-  /// true (an explicit step's first-order R, step_transport()): the result is rescaled to |v|
-  bool preserve_length = false;
-  Eigen::Vector3d apply(const Eigen::Vector3d& v) const {
-    Eigen::Vector3d w = R * v;
-    w -= n * n.dot(w);
-    if (preserve_length) {
-      const double a = w.squaredNorm();
-      if (a > 0.0) w *= std::sqrt(v.squaredNorm() / a);
-    }
-    return w;
-  }
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  ///< the finite rotation (small = false)
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();     ///< the current normal
+  Eigen::Vector3d theta = Eigen::Vector3d::Zero();  ///< the rotation vector of one step (small = true)
+  bool small = false;
+  Eigen::Vector3d apply(const Eigen::Vector3d& v) const;
 };
+
+/// The explicit step's transport of a tangential vector v (in the last tangent plane) by the small
+/// rotation theta into the plane of the unit normal n, in place, in scalars: w = v + theta x v +
+/// theta x (theta x v) / 2 (exp([theta]x) to second order: |w| = |v| (1 + O(theta^4))), then
+/// w - n (n . w). A rigid rotation at rate w_r carries a spring with the pair to O((w_r dt)^3)
+/// per step.
+inline void transport_small(double th0, double th1, double th2, double n0, double n1, double n2, double& v0,
+                            double& v1, double& v2) {
+  const double c0 = th1 * v2 - th2 * v1, c1 = th2 * v0 - th0 * v2, c2 = th0 * v1 - th1 * v0;  // theta x v
+  const double d0 = th1 * c2 - th2 * c1, d1 = th2 * c0 - th0 * c2, d2 = th0 * c1 - th1 * c0;  // theta x (theta x v)
+  const double w0 = v0 + c0 + 0.5 * d0, w1 = v1 + c1 + 0.5 * d1, w2 = v2 + c2 + 0.5 * d2;
+  const double a = n0 * w0 + n1 * w1 + n2 * w2;
+  v0 = w0 - n0 * a;
+  v1 = w1 - n1 * a;
+  v2 = w2 - n2 * a;
+}
+
+inline Eigen::Vector3d Transport<3>::apply(const Eigen::Vector3d& v) const {
+  if (small) {
+    double w0 = v.x(), w1 = v.y(), w2 = v.z();
+    transport_small(theta.x(), theta.y(), theta.z(), n.x(), n.y(), n.z(), w0, w1, w2);
+    return Eigen::Vector3d(w0, w1, w2);
+  }
+  Eigen::Vector3d w = R * v;
+  w -= n * n.dot(w);
+  return w;
+}
 
 /// One contact over one step (explicit) or one increment (quasi-static), in the contact frame.
 /// Tangential quantities are `Dim<D>::Tan`: the component along t in 2D, a vector in the current

@@ -111,43 +111,50 @@ class LudingLaw {
   /// history to the last bit (tests/contact/test_law_conformance.cpp). For the linear feature sets
   /// (no hysteresis, cohesion or temperature) it is luding_evaluate<F> written out for the linear
   /// spring-dashpot with the Cundall-Strack spring, operation for operation, without the tangent
-  /// and the result struct.
+  /// and the result struct (3D: the spring transported first, as evaluate()).
   void update(History& h, const Kin& k, double& f_n, Tan& f_t) const {
     const Params& p = *p_;
-    if constexpr (D == 2 && !F.hysteresis && !F.cohesion && !F.thermal) {
+    if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
       const double delta = k.overlap;
       if (!(delta > 0.0)) {  // open (rounding at L = a_i + a_j): no force, history reset
         h = History{};
-        f_n = f_t = 0.0;
+        f_n = 0.0;
+        f_t = tan_zero<Tan>();
         return;
       }
       h.k1_seen = p.k1();
       h.delta_max = h.delta_max < delta ? delta : h.delta_max;  // fmax (both finite, >= 0)
       h.k2_line = p.k2;
       double fn = p.k2 * delta + p.gamma_n * k.v_n;  // LMM05 Eq 4 (k1 = k2) and Eq 5
-      double ft = 0.0;
+      Tan ft = tan_zero<Tan>();
       std::uint8_t sliding = 0;
       if constexpr (F.friction) {
         const double fc = p.mu * (fn - 0.0);  // LMM05 Eq 14 with f_min = 0
         if (fc > 0.0) {
-          const double kt = p.alpha * p.k2;                         // LMM05 Eq 23
-          const double xi_trial = h.xi + k.dslip;                   // LMM05 Eq 20
-          const double ft0 = -kt * xi_trial - p.gamma_t * k.v_t;    // LMM05 Eq 19
-          if (std::fabs(ft0) <= fc) {
+          const double kt = p.alpha * p.k2;  // LMM05 Eq 23
+          Tan xi_trial;                      // LMM05 Eq 16 (3D: transported), Eq 20
+          if constexpr (D == 2) {
+            xi_trial = h.xi + k.dslip;
+          } else {
+            xi_trial = k.transport.apply(h.xi) + k.dslip;
+          }
+          const Tan ft0 = -kt * xi_trial - p.gamma_t * k.v_t;  // LMM05 Eq 19
+          const double ft0_norm = tan_norm(ft0);
+          if (ft0_norm <= fc) {
             ft = ft0;
             h.xi = xi_trial;
           } else {
-            const double sg = ft0 > 0.0 ? 1.0 : -1.0;
-            ft = sg * fc;                                  // LMM05 Eq 22
-            h.xi = -(fc * sg + p.gamma_t * k.v_t) / kt;    // LMM05 Eq 21
+            const Tan sg = tan_direction(ft0);
+            ft = sg * fc;                                // LMM05 Eq 22
+            h.xi = -(fc * sg + p.gamma_t * k.v_t) / kt;  // LMM05 Eq 21
             sliding = 1;
             if (p.sliding_breaks_cohesion && fn < 0.0) fn = 0.0;
           }
         } else {
-          h.xi = 0.0;
+          h.xi = tan_zero<Tan>();
         }
       } else {
-        h.xi = 0.0;
+        h.xi = tan_zero<Tan>();
       }
       h.sliding = sliding;
       f_n = fn;
