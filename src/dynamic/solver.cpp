@@ -596,13 +596,30 @@ template <class Law, bool InPlace>
   // particle-particle contacts from the Verlet table
   const std::size_t n_pairs = pair_key_.size();
   if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
+  // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
+  const double* const p_x = P_.x.data();
+  const double* const p_y = P_.y.data();
+  const double* const p_z = P_.z.data();
+  const double* const p_vx = P_.vx.data();
+  const double* const p_vy = P_.vy.data();
+  const double* const p_vz = P_.vz.data();
+  const double* const p_wx = P_.wx.data();
+  const double* const p_wy = P_.wy.data();
+  const double* const p_omega = P_.omega.data();
+  const double* const p_radius = P_.radius.data();
+  double* const p_fx = P_.fx.data();
+  double* const p_fy = P_.fy.data();
+  double* const p_fz = P_.fz.data();
+  double* const p_tx = P_.tx.data();
+  double* const p_ty = P_.ty.data();
+  double* const p_torque = P_.torque.data();
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
     const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
-    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
-    const double ri = P_.radius[i], rj = P_.radius[j];
+    const double dx = p_x[j] - p_x[i], dy = p_y[j] - p_y[i];
+    const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
-    if constexpr (D == 3) dz = P_.z[j] - P_.z[i];
+    if constexpr (D == 3) dz = p_z[j] - p_z[i];
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
@@ -622,9 +639,9 @@ template <class Law, bool InPlace>
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
-      const double rvx = P_.vx[j] - P_.vx[i], rvy = P_.vy[j] - P_.vy[i];
+      const double rvx = p_vx[j] - p_vx[i], rvy = p_vy[j] - p_vy[i];
       const double vn = rvx * nx + rvy * ny;
-      const double vt = rvx * tx + rvy * ty - P_.omega[i] * di - P_.omega[j] * dj;
+      const double vt = rvx * tx + rvy * ty - p_omega[i] * di - p_omega[j] * dj;
       contact::ContactKinematics in;
       in.overlap = s - L;
       in.v_n = -vn;
@@ -641,12 +658,12 @@ template <class Law, bool InPlace>
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-      P_.fx[j] += fx;
-      P_.fy[j] += fy;
-      P_.fx[i] -= fx;
-      P_.fy[i] -= fy;
-      P_.torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-      P_.torque[j] -= dj * f_t;
+      p_fx[j] += fx;
+      p_fy[j] += fy;
+      p_fx[i] -= fx;
+      p_fy[i] -= fy;
+      p_torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
+      p_torque[j] -= dj * f_t;
       sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
       sxy += fx * dy;
       syx += fy * dx;
@@ -657,8 +674,8 @@ template <class Law, bool InPlace>
       const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
-      const Eigen::Vector3d vrel(P_.vx[j] - P_.vx[i], P_.vy[j] - P_.vy[i], P_.vz[j] - P_.vz[i]);
-      const Eigen::Vector3d wi(P_.wx[i], P_.wy[i], P_.omega[i]), wj(P_.wx[j], P_.wy[j], P_.omega[j]);
+      const Eigen::Vector3d vrel(p_vx[j] - p_vx[i], p_vy[j] - p_vy[i], p_vz[j] - p_vz[i]);
+      const Eigen::Vector3d wi(p_wx[i], p_wy[i], p_omega[i]), wj(p_wx[j], p_wy[j], p_omega[j]);
       const Eigen::Vector3d W = di * wi + dj * wj;  // L x the pair's rotation rate (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
       const double vn = vrel.dot(n);
@@ -682,19 +699,19 @@ template <class Law, bool InPlace>
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const Eigen::Vector3d f = f_n * n + f_t;  // on j
-      P_.fx[j] += f.x();
-      P_.fy[j] += f.y();
-      P_.fz[j] += f.z();
-      P_.fx[i] -= f.x();
-      P_.fy[i] -= f.y();
-      P_.fz[i] -= f.z();
+      p_fx[j] += f.x();
+      p_fy[j] += f.y();
+      p_fz[j] += f.z();
+      p_fx[i] -= f.x();
+      p_fy[i] -= f.y();
+      p_fz[i] -= f.z();
       const Eigen::Vector3d m = n.cross(f_t);  // M_i = -d_i n x f_t, M_j = -d_j n x f_t
-      P_.tx[i] -= di * m.x();
-      P_.ty[i] -= di * m.y();
-      P_.torque[i] -= di * m.z();
-      P_.tx[j] -= dj * m.x();
-      P_.ty[j] -= dj * m.y();
-      P_.torque[j] -= dj * m.z();
+      p_tx[i] -= di * m.x();
+      p_ty[i] -= di * m.y();
+      p_torque[i] -= di * m.z();
+      p_tx[j] -= dj * m.x();
+      p_ty[j] -= dj * m.y();
+      p_torque[j] -= dj * m.z();
       const double l[3] = {dx, dy, dz};
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) s3[r][c] += f(r) * l[c];
