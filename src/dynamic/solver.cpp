@@ -712,11 +712,29 @@ template <class Law, bool InPlace>
       p_tx[j] -= dj * m.x();
       p_ty[j] -= dj * m.y();
       p_torque[j] -= dj * m.z();
-      const double l[3] = {dx, dy, dz};
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) s3[r][c] += f(r) * l[c];
       if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
     }
+  }
+  if constexpr (D == 3) {
+    // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
+    // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
+    // contact. F_i is the accumulator less the m g it started from (the same product), and x_i is
+    // taken from the first particle (exactly translation invariant, and no cancellation of large
+    // coordinates).
+    const double* const p_mass = P_.mass.data();
+    const double gx = opt_.gravity_x, gy = opt_.gravity_y, gz = opt_.gravity_z;
+    const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_y[0] : 0.0, z0 = n > 0 ? p_z[0] : 0.0;
+    double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double Fx = p_fx[i] - p_mass[i] * gx, Fy = p_fy[i] - p_mass[i] * gy, Fz = p_fz[i] - p_mass[i] * gz;
+      const double X = p_x[i] - x0, Y = p_y[i] - y0, Z = p_z[i] - z0;
+      s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
+      s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
+      s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
+    }
+    s3[0][0] = s00, s3[0][1] = s01, s3[0][2] = s02;
+    s3[1][0] = s10, s3[1][1] = s11, s3[1][2] = s12;
+    s3[2][0] = s20, s3[2][1] = s21, s3[2][2] = s22;
   }
   // walls: the pair (wall, particle), n from the wall into the box
   double wf[2 * D] = {};
