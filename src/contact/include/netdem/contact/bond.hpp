@@ -1,0 +1,144 @@
+#pragma once
+// The bond element of the staggered sintering scheme of Ivannikov et al. (section 2.4, Eqs 18-40;
+// issue 17): the Potyondy-Cundall link between two bonded spheres A and B, each a node with 6 DOF
+// (3 displacements, a rotation vector), for one step of the quasi-static scheme (small increments,
+// Eq 25: the linear form; the finite-rotation form of Eq 20 with Euler-Rodrigues, Eqs 23-24, is the
+// next part of issue 17).
+//
+// Element frame: e3 from the centre of A to the centre of B, e1, e2 completing a right-handed
+// orthonormal triad. l_A0 = y40 e3 and l_B0 = -y70 e3 run from the centres to the grain-boundary
+// centre (Eq 21), with y40 + y70 = L0 = the centre distance at the start of the step (the link of
+// a pair whose shrinkage was corrected, Eqs 41-44).
+//
+// Nodal vector y = (u_A, theta_A, u_B, theta_B) (Eq 28); the link deformation y_link = (eps, gamma)
+// = H y (Eqs 25-29): eps = u_A - u_B - L_A0 theta_A + L_B0 theta_B, gamma = theta_A - theta_B, with
+// L = skew(l). The link is a zero-length spring on rigid arms, P_link = K_link y_link (Eq 32),
+// K_link = diag(K_F, K_M), K_F = diag(GA, GA, EA)/L0, K_M = diag(EI, EI, GJ)/L0 in the element
+// frame (Eqs 33-34), A = pi R_m^2, I = pi R_m^4/4, J = pi R_m^4/2 (Eq 36), G = E/(2(1 + nu)) (Eq
+// 35). Its shear stiffness is GA/L0, not the 12 EI/L^3 of an Euler-Bernoulli beam.
+//
+// Nodal forces P = H^T K_link H y (Eq 40), the internal force vector of a finite element: the
+// forces and moments the nodes must receive to hold the deformation y (the element pushes back
+// with -P), and K_e = H^T K_link H its symmetric positive semi-definite stiffness. Eq 40 is used,
+// not Eq 37: Eq 37b/d as printed give M_A + M_B = -d e3 x F_link, which together with the couple of
+// F_A = -F_B = F_link, (x_A - x_B) x F_link = -d e3 x F_link, leaves a net moment; H^T gives
+// M_A = M_link + l_A0 x F_link, M_B = -M_link - l_B0 x F_link, so M_A + M_B = +d e3 x F_link, and
+// the element is in moment balance (tests/contact/test_bond.cpp).
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace netdem::contact {
+
+using BondVec12 = Eigen::Matrix<double, 12, 1>;
+using BondMat12 = Eigen::Matrix<double, 12, 12>;
+using BondVec6 = Eigen::Matrix<double, 6, 1>;
+using BondMat6 = Eigen::Matrix<double, 6, 6>;
+using BondH = Eigen::Matrix<double, 6, 12>;
+
+/// The bond's elastic constants (Eq 35).
+struct BondMaterial {
+  double E = 0.0;   ///< Young's modulus [Pa]
+  double nu = 0.0;  ///< Poisson's ratio
+  double G() const { return E / (2.0 * (1.0 + nu)); }
+};
+
+/// One bond over one step: the element frame and the lengths of Eqs 16, 21 and 34.
+struct BondElement {
+  Eigen::Vector3d e1 = Eigen::Vector3d::UnitX(), e2 = Eigen::Vector3d::UnitY(), e3 = Eigen::Vector3d::UnitZ();
+  double lA0 = 0.0;  ///< y40: centre of A to the grain-boundary centre, along +e3 [m]
+  double lB0 = 0.0;  ///< y70: centre of B to the grain-boundary centre, along -e3 [m]
+  double Rm = 0.0;   ///< R_m = (R_A + R_B)/2 (Eq 16) [m]
+  double L0() const { return lA0 + lB0; }  ///< Eq 14: L0 = y40 + y70
+};
+
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0.0, -v.z(), v.y(),  //
+      v.z(), 0.0, -v.x(),   //
+      -v.y(), v.x(), 0.0;
+  return S;
+}
+
+/// The element of the pair A-B at centres xA, xB with y40 = lA, y70 = lB (their sum must be the
+/// centre distance to 1e-9, as after the shrinkage correction; lB0 is then set to the exact rest,
+/// so that a rigid rotation gives no force) and the radii RA, RB. Throws std::invalid_argument for
+/// coincident centres, non-positive or non-finite lengths, or y40 + y70 != |xB - xA|.
+inline BondElement make_bond(const Eigen::Vector3d& xA, const Eigen::Vector3d& xB, double lA, double lB, double RA,
+                             double RB) {
+  const Eigen::Vector3d d = xB - xA;
+  const double L = d.norm();
+  if (!(L > 0.0) || !std::isfinite(L)) throw std::invalid_argument("make_bond: the centres coincide or are not finite");
+  if (!(lA > 0.0 && lB > 0.0 && std::isfinite(lA + lB)))
+    throw std::invalid_argument("make_bond: the centre-to-grain-boundary distances must be > 0 and finite");
+  if (!(RA > 0.0 && RB > 0.0 && std::isfinite(RA + RB)))
+    throw std::invalid_argument("make_bond: the radii must be > 0 and finite");
+  BondElement b;
+  b.e3 = d / L;
+  // e1: the coordinate axis least aligned with e3, made orthogonal to it; e2 = e3 x e1
+  Eigen::Vector3d a = Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d ab = b.e3.cwiseAbs();
+  if (ab.y() <= ab.x() && ab.y() <= ab.z())
+    a = Eigen::Vector3d::UnitY();
+  else if (ab.z() <= ab.x() && ab.z() <= ab.y())
+    a = Eigen::Vector3d::UnitZ();
+  b.e1 = (a - b.e3 * b.e3.dot(a)).normalized();
+  b.e2 = b.e3.cross(b.e1);
+  if (!(std::fabs(lA + lB - L) <= 1e-9 * L))
+    throw std::invalid_argument("make_bond: y40 + y70 must be the centre distance (the shrinkage correction, Eqs 41-44)");
+  b.lA0 = lA;
+  b.lB0 = L - lA;
+  b.Rm = 0.5 * (RA + RB);
+  return b;
+}
+
+/// H of Eq 29 in global coordinates: y_link = H y (Eq 27), y = (u_A, theta_A, u_B, theta_B).
+inline BondH bond_H(const BondElement& b) {
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d LA = skew(b.lA0 * b.e3), LB = skew(-b.lB0 * b.e3);  // L_A0, L_B0 (Eq 25)
+  BondH H = BondH::Zero();
+  H.block<3, 3>(0, 0) = I;
+  H.block<3, 3>(0, 3) = -LA;
+  H.block<3, 3>(0, 6) = -I;
+  H.block<3, 3>(0, 9) = LB;
+  H.block<3, 3>(3, 3) = I;
+  H.block<3, 3>(3, 9) = -I;
+  return H;
+}
+
+/// K_link of Eqs 33-36 in global coordinates: blocks R diag(GA, GA, EA) R^T / L0 and
+/// R diag(EI, EI, GJ) R^T / L0, R = [e1 e2 e3].
+inline BondMat6 bond_K_link(const BondElement& b, const BondMaterial& m) {
+  const double pi = 3.14159265358979323846;
+  const double A = pi * b.Rm * b.Rm, Ib = 0.25 * pi * b.Rm * b.Rm * b.Rm * b.Rm, J = 2.0 * Ib;  // Eq 36
+  const double L0 = b.L0(), G = m.G();
+  Eigen::Matrix3d R;
+  R.col(0) = b.e1;
+  R.col(1) = b.e2;
+  R.col(2) = b.e3;
+  const Eigen::Vector3d kF(G * A / L0, G * A / L0, m.E * A / L0), kM(m.E * Ib / L0, m.E * Ib / L0, G * J / L0);
+  BondMat6 K = BondMat6::Zero();
+  K.block<3, 3>(0, 0) = R * kF.asDiagonal() * R.transpose();
+  K.block<3, 3>(3, 3) = R * kM.asDiagonal() * R.transpose();
+  return K;
+}
+
+/// The element stiffness K_e = H^T K_link H (Eq 40), 12 x 12, symmetric positive semi-definite
+/// with the six rigid-body motions of the step as its null space.
+inline BondMat12 bond_stiffness(const BondElement& b, const BondMaterial& m) {
+  const BondH H = bond_H(b);
+  return H.transpose() * bond_K_link(b, m) * H;
+}
+
+/// The link deformation y_link = (eps, gamma) = H y (Eq 27).
+inline BondVec6 bond_deformation(const BondElement& b, const BondVec12& y) { return bond_H(b) * y; }
+
+/// The nodal forces and moments P = H^T K_link H y (Eq 40): (F_A, M_A, F_B, M_B).
+inline BondVec12 bond_forces(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
+  const BondH H = bond_H(b);
+  return H.transpose() * (bond_K_link(b, m) * (H * y));
+}
+
+}  // namespace netdem::contact
