@@ -180,3 +180,99 @@ TEST(Bond, ScalesExactlyWithE) {
   const BondVec12 P18 = 8.0 * P1;
   EXPECT_EQ(std::memcmp(P18.data(), P8.data(), sizeof(double) * 12), 0);
 }
+
+// ---- the finite-rotation form (Eq 20, Euler-Rodrigues Eqs 23-24) ---------------------------------
+
+// Eq 23-24 against Eigen's AngleAxis, across the series boundary |theta|^2 = 1e-4 and at 0.
+TEST(BondFinite, RodriguesIsTheRotation) {
+  for (double t : {0.0, 1e-9, 1e-5, 9.99e-3, 1.001e-2, 0.3, 1.5, 3.0}) {
+    const V3 axis = V3(0.2, -0.9, 0.4).normalized(), th = t * axis;
+    const Eigen::Matrix3d Q = rotation_rodrigues<double>(th);
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(t, axis).toRotationMatrix();
+    EXPECT_LT((Q - R).cwiseAbs().maxCoeff(), 2e-16 * 8) << "theta " << t;
+    // the left Jacobian: Q(theta + h d) l - Q(theta - h d) l = 2h (J_l d) x (Q l) + O(h^3)
+    const V3 l(0.3, 0.1, -0.7), d = V3(0.5, 0.5, -0.2).normalized();
+    const double h = 1e-6;
+    const V3 fd = (rotation_rodrigues<double>(V3(th + h * d)) * l - rotation_rodrigues<double>(V3(th - h * d)) * l) / (2 * h);
+    const V3 an = (left_jacobian<double>(th) * d).cross(Q * l);
+    EXPECT_LT((fd - an).norm(), 1e-9) << "theta " << t;
+  }
+}
+
+namespace {
+BondVec12 finite_state(const Pair& p, double rot, double stretch) {
+  // finite rotations of both nodes (different), a stretch and a lateral offset of B
+  const BondElement b = p.bond();
+  return nodal(V3(1e-8, -2e-8, 0.5e-8), rot * V3(0.3, -0.2, 0.5), stretch * b.e3 + 0.3 * stretch * b.e1 + V3(1e-8, -2e-8, 0.5e-8),
+               rot * V3(-0.1, 0.4, 0.2));
+}
+}  // namespace
+
+// A rigid motion of any angle (0.5 rad) gives no force in the finite form; Eq 40 gives one of order
+// |w|^2 EA/L0 L0 there. At small y both forms agree to O(|theta|).
+TEST(BondFinite, RigidFiniteRotationAndTheSmallLimit) {
+  const Pair p;
+  const BondElement b = p.bond();
+  const V3 w(0.3, -0.25, 0.3), c(3e-5, 1e-5, -2e-5), t(1e-7, 0.0, -3e-8);
+  const Eigen::Matrix3d Q = rotation_rodrigues<double>(w);
+  const BondVec12 y = nodal((Q - Eigen::Matrix3d::Identity()) * (p.xA - c) + t, w,
+                            (Q - Eigen::Matrix3d::Identity()) * (p.xB() - c) + t, w);
+  const double fscale = kCu.E * kPi * b.Rm * b.Rm / b.L0() * p.L;  // EA/L0 times L
+  EXPECT_LT(bond_deformation_finite<double>(b, y).head<3>().norm(), 1e-15 * p.L);
+  EXPECT_LT(bond_forces_finite(b, kCu, y).norm(), 1e-13 * fscale);
+  EXPECT_GT(bond_forces(b, kCu, y).norm(), 1e-3 * fscale);  // the small-rotation form is not objective
+  for (double sc : {1e-3, 1e-4}) {
+    const BondVec12 ys = finite_state(p, sc, 1e-9 * sc / 1e-3);
+    const BondVec12 Pf = bond_forces_finite(b, kCu, ys), Pl = bond_forces(b, kCu, ys);
+    const double rel = (Pf - Pl).norm() / Pl.norm();
+    std::printf("  |theta| ~ %.0e: |P_finite - P_Eq40| / |P| = %.2e\n", sc, rel);
+    EXPECT_LT(rel, 3.0 * sc);
+  }
+}
+
+// P is the gradient of the link energy W, and the AD tangent is the Hessian of W: both against
+// central finite differences at a state with 0.2 rad rotations and a stretched link, where the
+// geometric part of the tangent matters (the Gauss-Newton part B^T K B alone misses it).
+TEST(BondFinite, ForcesAndTangentAgainstFiniteDifferences) {
+  const Pair p;
+  const BondElement b = p.bond();
+  const BondVec12 y = finite_state(p, 0.4, 2e-7);
+  const BondVec12 P = bond_forces_finite(b, kCu, y);
+  const BondMat12 Kt = bond_tangent_finite(b, kCu, y);
+  BondVec12 scale;  // per DOF: a length for displacements, 1 for rotations
+  for (int i = 0; i < 12; ++i) scale(i) = i % 6 < 3 ? p.L : 1.0;
+  double errP = 0.0, errK = 0.0, errGN = 0.0;
+  const double Pn = P.cwiseProduct(scale).cwiseAbs().maxCoeff();
+  BondMat12 Kfd;
+  for (int i = 0; i < 12; ++i) {
+    const double h = 1e-6 * scale(i);
+    BondVec12 yp = y, ym = y;
+    yp(i) += h;
+    ym(i) -= h;
+    const double dW = (bond_energy_finite(b, kCu, yp) - bond_energy_finite(b, kCu, ym)) / (2 * h);
+    errP = std::fmax(errP, std::fabs(dW - P(i)) * scale(i) / Pn);
+    Kfd.col(i) = (bond_forces_finite(b, kCu, yp) - bond_forces_finite(b, kCu, ym)) / (2 * h);
+  }
+  // the Gauss-Newton tangent B^T K B, B = d y_link / d y by differences of the deformation
+  Eigen::Matrix<double, 6, 12> B;
+  for (int i = 0; i < 12; ++i) {
+    const double h = 1e-6 * scale(i);
+    BondVec12 yp = y, ym = y;
+    yp(i) += h;
+    ym(i) -= h;
+    B.col(i) = (bond_deformation_finite<double>(b, yp) - bond_deformation_finite<double>(b, ym)) / (2 * h);
+  }
+  const BondMat12 KGN = B.transpose() * bond_K_link(b, kCu) * B;
+  const BondMat12 S = scale.asDiagonal();
+  const double Kn = (S * Kt * S).cwiseAbs().maxCoeff();
+  errK = (S * (Kt - Kfd) * S).cwiseAbs().maxCoeff() / Kn;
+  errGN = (S * (KGN - Kfd) * S).cwiseAbs().maxCoeff() / Kn;
+  std::printf("  P vs dW/dy: %.2e; tangent vs dP/dy: %.2e; Gauss-Newton part alone: %.2e\n", errP, errK, errGN);
+  EXPECT_LT(errP, 1e-7);
+  EXPECT_LT(errK, 1e-7);
+  EXPECT_GT(errGN, 100.0 * errK);  // the geometric stiffness is there and is right
+  EXPECT_LT((S * (Kt - Kt.transpose()) * S).cwiseAbs().maxCoeff(), 1e-12 * Kn);  // a Hessian
+  // at y = 0 the finite form's tangent is K_e of Eq 40
+  const BondMat12 K0 = bond_tangent_finite(b, kCu, BondVec12::Zero()), Ke = bond_stiffness(b, kCu);
+  EXPECT_LT((S * (K0 - Ke) * S).cwiseAbs().maxCoeff(), 1e-13 * (S * Ke * S).cwiseAbs().maxCoeff());
+}

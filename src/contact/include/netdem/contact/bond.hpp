@@ -1,9 +1,9 @@
 #pragma once
 // The bond element of the staggered sintering scheme of Ivannikov et al. (section 2.4, Eqs 18-40;
 // issue 17): the Potyondy-Cundall link between two bonded spheres A and B, each a node with 6 DOF
-// (3 displacements, a rotation vector), for one step of the quasi-static scheme (small increments,
-// Eq 25: the linear form; the finite-rotation form of Eq 20 with Euler-Rodrigues, Eqs 23-24, is the
-// next part of issue 17).
+// (3 displacements, a rotation vector), for one step of the quasi-static scheme: the small-increment
+// form of Eq 25 (linear, Eq 40), and the finite-rotation form of Eq 20 with Euler-Rodrigues (Eqs
+// 23-24) and its consistent tangent (bond_forces_finite, bond_tangent_finite; see there).
 //
 // Element frame: e3 from the centre of A to the centre of B, e1, e2 completing a right-handed
 // orthonormal triad. l_A0 = y40 e3 and l_B0 = -y70 e3 run from the centres to the grain-boundary
@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <unsupported/Eigen/AutoDiff>
 
 namespace netdem::contact {
 
@@ -139,6 +140,125 @@ inline BondVec6 bond_deformation(const BondElement& b, const BondVec12& y) { ret
 inline BondVec12 bond_forces(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
   const BondH H = bond_H(b);
   return H.transpose() * (bond_K_link(b, m) * (H * y));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The finite-rotation form (Eq 20 with Eqs 22-24). The arms turn with the nodes, l_A = Q_A l_A0 and
+// l_B = Q_B l_B0, so eps = u_A - u_B + (Q_A - I) l_A0 - (Q_B - I) l_B0: a rigid motion of any angle
+// (theta_A = theta_B = w, u = (Q(w) - I)(x - c) + t) gives eps = 0 and gamma = 0, where Eq 25 gives
+// a force of order |w|^2. The relative rotation stays gamma = theta_A - theta_B (the paper gives no
+// finite form of it: this is where the small-rotation form is kept), and the link's frame and
+// K_link are those of the start of the step. The nodal forces are the gradient of the link energy
+// W = 1/2 y_link^T K_link y_link, P = dW/dy = B^T K_link y_link with B = d y_link / d y, which
+// needs d(Q l)/d theta = -skew(Q l) J_l(theta), J_l the left Jacobian of SO(3); the tangent is the
+// Hessian of W, obtained exactly by forward-mode automatic differentiation of P (Eigen's
+// AutoDiffScalar). Tested against finite differences of W and of P (tests/contact/test_bond.cpp).
+
+/// h1 = sin t / t, h2 = (1 - cos t) / t^2 = (sin(t/2) / (t/2))^2 / 2 (Eq 24), h3 = (t - sin t) / t^3,
+/// t = sqrt(s), s = |theta|^2; written in s, with their series for s < 1e-4 (error < 1e-21), so
+/// that they and their derivatives are smooth at theta = 0.
+template <class T>
+void rodrigues_coefficients(const T& s, T& h1, T& h2, T& h3) {
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  if (s < 1e-4) {
+    h1 = 1.0 - s / 6.0 + s * s / 120.0 - s * s * s / 5040.0;
+    h2 = 0.5 - s / 24.0 + s * s / 720.0 - s * s * s / 40320.0;
+    h3 = 1.0 / 6.0 - s / 120.0 + s * s / 5040.0 - s * s * s / 362880.0;
+  } else {
+    const T t = sqrt(s), st = sin(t);
+    h1 = st / t;
+    h2 = (1.0 - cos(t)) / s;
+    h3 = (t - st) / (s * t);
+  }
+}
+
+template <class T>
+Eigen::Matrix<T, 3, 3> skew_t(const Eigen::Matrix<T, 3, 1>& v) {
+  Eigen::Matrix<T, 3, 3> S;
+  S << T(0.0), -v.z(), v.y(),  //
+      v.z(), T(0.0), -v.x(),   //
+      -v.y(), v.x(), T(0.0);
+  return S;
+}
+
+/// Q of Eq 23: I + h1 Theta + h2 Theta^2 (Euler-Rodrigues), Theta = skew(theta).
+template <class T>
+Eigen::Matrix<T, 3, 3> rotation_rodrigues(const Eigen::Matrix<T, 3, 1>& theta) {
+  T h1, h2, h3;
+  rodrigues_coefficients(theta.squaredNorm(), h1, h2, h3);
+  const Eigen::Matrix<T, 3, 3> Th = skew_t(theta);
+  return Eigen::Matrix<T, 3, 3>::Identity() + h1 * Th + h2 * (Th * Th);
+}
+
+/// The left Jacobian of SO(3): d(Q(theta) l) = (J_l(theta) d theta) x (Q l), J_l = I + h2 Theta +
+/// h3 Theta^2.
+template <class T>
+Eigen::Matrix<T, 3, 3> left_jacobian(const Eigen::Matrix<T, 3, 1>& theta) {
+  T h1, h2, h3;
+  rodrigues_coefficients(theta.squaredNorm(), h1, h2, h3);
+  const Eigen::Matrix<T, 3, 3> Th = skew_t(theta);
+  return Eigen::Matrix<T, 3, 3>::Identity() + h2 * Th + h3 * (Th * Th);
+}
+
+/// The link deformation of the finite-rotation form, (eps, gamma) (Eq 20; gamma as Eq 26).
+template <class T>
+Eigen::Matrix<T, 6, 1> bond_deformation_finite(const BondElement& b, const Eigen::Matrix<T, 12, 1>& y) {
+  using V = Eigen::Matrix<T, 3, 1>;
+  const V a = (b.lA0 * b.e3).template cast<T>(), c = (-b.lB0 * b.e3).template cast<T>();
+  const V uA = y.template segment<3>(0), tA = y.template segment<3>(3), uB = y.template segment<3>(6),
+          tB = y.template segment<3>(9);
+  Eigen::Matrix<T, 6, 1> out;
+  out.template head<3>() = uA - uB + (rotation_rodrigues<T>(tA) * a - a) - (rotation_rodrigues<T>(tB) * c - c);
+  out.template tail<3>() = tA - tB;
+  return out;
+}
+
+/// The link energy W = 1/2 y_link^T K_link y_link of the finite-rotation form.
+inline double bond_energy_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
+  const BondVec6 yl = bond_deformation_finite<double>(b, y);
+  return 0.5 * yl.dot(bond_K_link(b, m) * yl);
+}
+
+/// The nodal forces of the finite-rotation form, P = dW/dy = B^T K_link y_link: (F_A, M_A, F_B, M_B)
+/// with F_A = -F_B = K_F eps, M_A = J_A^T K_F eps + K_M gamma, M_B = -J_B^T K_F eps - K_M gamma,
+/// J_A = -skew(Q_A l_A0) J_l(theta_A), J_B = -skew(Q_B l_B0) J_l(theta_B). T: double, or an
+/// AutoDiffScalar for the tangent.
+template <class T>
+Eigen::Matrix<T, 12, 1> bond_forces_finite_t(const BondElement& b, const BondMat6& K, const Eigen::Matrix<T, 12, 1>& y) {
+  using V = Eigen::Matrix<T, 3, 1>;
+  using M3 = Eigen::Matrix<T, 3, 3>;
+  const V a = (b.lA0 * b.e3).template cast<T>(), c = (-b.lB0 * b.e3).template cast<T>();
+  const V tA = y.template segment<3>(3), tB = y.template segment<3>(9);
+  const M3 QA = rotation_rodrigues<T>(tA), QB = rotation_rodrigues<T>(tB);
+  const V eps = y.template segment<3>(0) - y.template segment<3>(6) + (QA * a - a) - (QB * c - c);
+  const V gam = tA - tB;
+  const M3 KF = K.block<3, 3>(0, 0).template cast<T>(), KM = K.block<3, 3>(3, 3).template cast<T>();
+  const V f = KF * eps, mm = KM * gam;
+  const M3 JA = -skew_t<T>(QA * a) * left_jacobian<T>(tA), JB = -skew_t<T>(QB * c) * left_jacobian<T>(tB);
+  Eigen::Matrix<T, 12, 1> P;
+  P.template segment<3>(0) = f;
+  P.template segment<3>(3) = JA.transpose() * f + mm;
+  P.template segment<3>(6) = -f;
+  P.template segment<3>(9) = -(JB.transpose() * f) - mm;
+  return P;
+}
+
+inline BondVec12 bond_forces_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
+  return bond_forces_finite_t<double>(b, bond_K_link(b, m), y);
+}
+
+/// The consistent tangent dP/dy of the finite-rotation form (the Hessian of W, symmetric): forward-
+/// mode automatic differentiation of bond_forces_finite_t. At y = 0 it is K_e of Eq 40.
+inline BondMat12 bond_tangent_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
+  using AD = Eigen::AutoDiffScalar<BondVec12>;
+  Eigen::Matrix<AD, 12, 1> ya;
+  for (int i = 0; i < 12; ++i) ya(i) = AD(y(i), 12, i);
+  const Eigen::Matrix<AD, 12, 1> P = bond_forces_finite_t<AD>(b, bond_K_link(b, m), ya);
+  BondMat12 Kt;
+  for (int i = 0; i < 12; ++i) Kt.row(i) = P(i).derivatives().transpose();
+  return Kt;
 }
 
 }  // namespace netdem::contact
