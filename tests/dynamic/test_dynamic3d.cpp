@@ -3,7 +3,9 @@
 
 #include "test_scale.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <numbers>
@@ -34,6 +36,24 @@ LudingParams linear_params() {  // k1 = k2, k_c = 0
 }
 
 double sphere_mass(double a) { return kRho * 4.0 / 3.0 * std::numbers::pi * a * a * a; }
+
+// side^3 spheres on a cubic lattice of the given pitch (centres at (i + 1/2) pitch), radii
+// a0 (1 + dr u) and velocity components v u (u uniform in [-1, 1), seed), drawn in that order.
+Particles cubic_sample(int side, double pitch, double a0, double dr, double v, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Particles P;
+  for (int a = 0; a < side; ++a)
+    for (int b = 0; b < side; ++b)
+      for (int c = 0; c < side; ++c) {
+        const double r = a0 * (1.0 + dr * u(rng));
+        std::array<double, 3> vel{0.0, 0.0, 0.0};
+        if (v > 0.0)
+          for (double& q : vel) q = v * u(rng);
+        P.add_sphere((a + 0.5) * pitch, (b + 0.5) * pitch, (c + 0.5) * pitch, r, kRho, vel);
+      }
+  return P;
+}
 
 struct Collision {
   double e = 0.0, tc = 0.0;
@@ -250,13 +270,7 @@ TEST(Dynamic3D, StressControlledWallsSettleToPressure) {
   p.gamma_n = 1.0;
   const int side = netdem::test::small_scale() ? 3 : 4;
   const double pitch = 2.2 * p.a0;
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles P;
-  for (int a = 0; a < side; ++a)
-    for (int b = 0; b < side; ++b)
-      for (int c = 0; c < side; ++c)
-        P.add_sphere((a + 0.5) * pitch, (b + 0.5) * pitch, (c + 0.5) * pitch, p.a0 * (1.0 + 0.2 * u(rng)), kRho);
+  Particles P = cubic_sample(side, pitch, p.a0, 0.2, 0.0, 5);
   Box box;
   box.x_max = box.y_max = box.z_max = side * pitch;
   const double pressure = 1e5;  // N/m^2
@@ -296,14 +310,7 @@ TEST(Dynamic3D, InPlaceUpdateIsBitIdentical) {
     p.mu_wall = 0.3;
     const int side = netdem::test::small_scale() ? 3 : 4;
     const double pitch = 2.02 * p.a0;
-    std::mt19937_64 rng(9);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Particles P0;
-    for (int a = 0; a < side; ++a)
-      for (int b = 0; b < side; ++b)
-        for (int c = 0; c < side; ++c)
-          P0.add_sphere((a + 0.5) * pitch, (b + 0.5) * pitch, (c + 0.5) * pitch, p.a0 * (1.0 + 0.05 * u(rng)), kRho,
-                        {0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)});
+    const Particles P0 = cubic_sample(side, pitch, p.a0, 0.05, 0.05, 9);
     Box box;
     box.x_max = box.y_max = box.z_max = side * pitch;
     for (MovingWall* w : {&box.right, &box.back, &box.top}) {
