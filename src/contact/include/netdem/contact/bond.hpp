@@ -25,6 +25,7 @@
 // M_A = M_link + l_A0 x F_link, M_B = -M_link - l_B0 x F_link, so M_A + M_B = +d e3 x F_link, and
 // the element is in moment balance (tests/contact/test_bond.cpp).
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Core>
@@ -55,11 +56,13 @@ struct BondElement {
   double L0() const { return lA0 + lB0; }  ///< Eq 14: L0 = y40 + y70
 };
 
-inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0.0, -v.z(), v.y(),  //
-      v.z(), 0.0, -v.x(),   //
-      -v.y(), v.x(), 0.0;
+/// skew(v) w = v x w. T: double, or an AutoDiffScalar (the finite-rotation form's tangent).
+template <class T>
+Eigen::Matrix<T, 3, 3> skew(const Eigen::Matrix<T, 3, 1>& v) {
+  Eigen::Matrix<T, 3, 3> S;
+  S << T(0.0), -v.z(), v.y(),  //
+      v.z(), T(0.0), -v.x(),   //
+      -v.y(), v.x(), T(0.0);
   return S;
 }
 
@@ -98,7 +101,7 @@ inline BondElement make_bond(const Eigen::Vector3d& xA, const Eigen::Vector3d& x
 /// H of Eq 29 in global coordinates: y_link = H y (Eq 27), y = (u_A, theta_A, u_B, theta_B).
 inline BondH bond_H(const BondElement& b) {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d LA = skew(b.lA0 * b.e3), LB = skew(-b.lB0 * b.e3);  // L_A0, L_B0 (Eq 25)
+  const Eigen::Matrix3d LA = skew<double>(b.lA0 * b.e3), LB = skew<double>(-b.lB0 * b.e3);  // L_A0, L_B0 (Eq 25)
   BondH H = BondH::Zero();
   H.block<3, 3>(0, 0) = I;
   H.block<3, 3>(0, 3) = -LA;
@@ -112,7 +115,7 @@ inline BondH bond_H(const BondElement& b) {
 /// K_link of Eqs 33-36 in global coordinates: blocks R diag(GA, GA, EA) R^T / L0 and
 /// R diag(EI, EI, GJ) R^T / L0, R = [e1 e2 e3].
 inline BondMat6 bond_K_link(const BondElement& b, const BondMaterial& m) {
-  const double pi = 3.14159265358979323846;
+  const double pi = std::numbers::pi;
   const double A = pi * b.Rm * b.Rm, Ib = 0.25 * pi * b.Rm * b.Rm * b.Rm * b.Rm, J = 2.0 * Ib;  // Eq 36
   const double L0 = b.L0(), G = m.G();
   Eigen::Matrix3d R;
@@ -174,32 +177,26 @@ void rodrigues_coefficients(const T& s, T& h1, T& h2, T& h3) {
   }
 }
 
+/// I + a Theta + b Theta^2, Theta = skew(theta), with (a, b) = (h1, h2) (which = 0) or (h2, h3).
 template <class T>
-Eigen::Matrix<T, 3, 3> skew_t(const Eigen::Matrix<T, 3, 1>& v) {
-  Eigen::Matrix<T, 3, 3> S;
-  S << T(0.0), -v.z(), v.y(),  //
-      v.z(), T(0.0), -v.x(),   //
-      -v.y(), v.x(), T(0.0);
-  return S;
-}
-
-/// Q of Eq 23: I + h1 Theta + h2 Theta^2 (Euler-Rodrigues), Theta = skew(theta).
-template <class T>
-Eigen::Matrix<T, 3, 3> rotation_rodrigues(const Eigen::Matrix<T, 3, 1>& theta) {
+Eigen::Matrix<T, 3, 3> rodrigues_series(const Eigen::Matrix<T, 3, 1>& theta, int which) {
   T h1, h2, h3;
   rodrigues_coefficients(theta.squaredNorm(), h1, h2, h3);
-  const Eigen::Matrix<T, 3, 3> Th = skew_t(theta);
-  return Eigen::Matrix<T, 3, 3>::Identity() + h1 * Th + h2 * (Th * Th);
+  const Eigen::Matrix<T, 3, 3> Th = skew<T>(theta);
+  return Eigen::Matrix<T, 3, 3>::Identity() + (which == 0 ? h1 : h2) * Th + (which == 0 ? h2 : h3) * (Th * Th);
+}
+
+/// Q of Eq 23: I + h1 Theta + h2 Theta^2 (Euler-Rodrigues).
+template <class T>
+Eigen::Matrix<T, 3, 3> rotation_rodrigues(const Eigen::Matrix<T, 3, 1>& theta) {
+  return rodrigues_series<T>(theta, 0);
 }
 
 /// The left Jacobian of SO(3): d(Q(theta) l) = (J_l(theta) d theta) x (Q l), J_l = I + h2 Theta +
 /// h3 Theta^2.
 template <class T>
 Eigen::Matrix<T, 3, 3> left_jacobian(const Eigen::Matrix<T, 3, 1>& theta) {
-  T h1, h2, h3;
-  rodrigues_coefficients(theta.squaredNorm(), h1, h2, h3);
-  const Eigen::Matrix<T, 3, 3> Th = skew_t(theta);
-  return Eigen::Matrix<T, 3, 3>::Identity() + h2 * Th + h3 * (Th * Th);
+  return rodrigues_series<T>(theta, 1);
 }
 
 /// The link deformation of the finite-rotation form, (eps, gamma) (Eq 20; gamma as Eq 26).
@@ -236,7 +233,7 @@ Eigen::Matrix<T, 12, 1> bond_forces_finite_t(const BondElement& b, const BondMat
   const V gam = tA - tB;
   const M3 KF = K.block<3, 3>(0, 0).template cast<T>(), KM = K.block<3, 3>(3, 3).template cast<T>();
   const V f = KF * eps, mm = KM * gam;
-  const M3 JA = -skew_t<T>(QA * a) * left_jacobian<T>(tA), JB = -skew_t<T>(QB * c) * left_jacobian<T>(tB);
+  const M3 JA = -skew<T>(QA * a) * left_jacobian<T>(tA), JB = -skew<T>(QB * c) * left_jacobian<T>(tB);
   Eigen::Matrix<T, 12, 1> P;
   P.template segment<3>(0) = f;
   P.template segment<3>(3) = JA.transpose() * f + mm;
