@@ -12,7 +12,6 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -274,6 +273,8 @@ struct Staggered::Impl {
   std::vector<Particle> p, p0;
   std::vector<Contact> c;
   std::vector<std::vector<int>> adj;  // particle -> contact indices
+  std::vector<long> cell_of;          // detect(): the cell grid (reused)
+  std::vector<int> cell_start, cell_ids;
   std::vector<std::uint8_t> fixed_user, fixed_plane, fixed;  // 6N flags
   double t = 0.0, dt = 0.0;
   long nsteps = 0;
@@ -395,28 +396,39 @@ struct Staggered::Impl {
       lo = lo.cwiseMin(q.x);
       hi = hi.cwiseMax(q.x);
     }
-    const double cell = 2.0 * rmax;
+    // cells of side >= 2 r_max (a touching pair is in neighbouring cells), at most 200 per axis
+    const double cell = std::max(2.0 * rmax, (hi - lo).maxCoeff() / 199.0);
     std::array<long, 3> cnt{};
-    for (int k = 0; k < 3; ++k) cnt[k] = std::max(1L, std::min(1000L, static_cast<long>((hi[k] - lo[k]) / cell) + 1));
+    for (int k = 0; k < 3; ++k) cnt[k] = std::max(1L, static_cast<long>((hi[k] - lo[k]) / cell) + 1);
     auto coord = [&](int k, double v) {
       return std::clamp(static_cast<long>((v - lo[k]) / cell), 0L, cnt[k] - 1);
     };
-    std::unordered_map<long, std::vector<int>> grid;
-    grid.reserve(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i)
-      grid[(coord(2, p[i].x[2]) * cnt[1] + coord(1, p[i].x[1])) * cnt[0] + coord(0, p[i].x[0])].push_back(i);
+    // counting sort of the particles by cell (flat arrays, reused)
+    const long ncell = cnt[0] * cnt[1] * cnt[2];
+    cell_of.resize(n);
+    cell_start.assign(static_cast<std::size_t>(ncell) + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      cell_of[i] = (coord(2, p[i].x[2]) * cnt[1] + coord(1, p[i].x[1])) * cnt[0] + coord(0, p[i].x[0]);
+      ++cell_start[cell_of[i] + 1];
+    }
+    for (long k = 0; k < ncell; ++k) cell_start[k + 1] += cell_start[k];
+    cell_ids.resize(n);
+    {
+      std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+      for (int i = 0; i < n; ++i) cell_ids[fill[cell_of[i]]++] = i;
+    }
     std::vector<std::pair<int, int>> found;
     for (int i = 0; i < n; ++i) {
       const long cx = coord(0, p[i].x[0]), cy = coord(1, p[i].x[1]), cz = coord(2, p[i].x[2]);
       for (long z = std::max(0L, cz - 1); z <= std::min(cnt[2] - 1, cz + 1); ++z)
         for (long y = std::max(0L, cy - 1); y <= std::min(cnt[1] - 1, cy + 1); ++y)
           for (long x = std::max(0L, cx - 1); x <= std::min(cnt[0] - 1, cx + 1); ++x) {
-            const auto it = grid.find((z * cnt[1] + y) * cnt[0] + x);
-            if (it == grid.end()) continue;
-            for (int j : it->second) {
+            const long cell_k = (z * cnt[1] + y) * cnt[0] + x;
+            for (int q = cell_start[cell_k]; q < cell_start[cell_k + 1]; ++q) {
+              const int j = cell_ids[q];
               if (j <= i) continue;
-              const double d = (p[j].x - p[i].x).norm();
-              if (d < kTouch * (p[i].r + p[j].r) && !bonded(i, j)) found.emplace_back(i, j);
+              const double rr = kTouch * (p[i].r + p[j].r);
+              if ((p[j].x - p[i].x).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
             }
           }
     }
@@ -613,8 +625,10 @@ struct Staggered::Impl {
     StepRecord rec;
     auto t0 = Clock::now();
     if (opt.new_contacts) rec.new_contacts = detect();  // (the initial contacts were made at construction)
-    if (pattern_dirty) build_pattern();
     timers.detect += seconds_since(t0);
+    t0 = Clock::now();
+    if (pattern_dirty) build_pattern();
+    timers.assemble += seconds_since(t0);
 
     const double seg_end = prof.segment_at(t).t1;
     RhsCtx f{&mat, &cache, prof.segment_at(t), &rhs_evals};
