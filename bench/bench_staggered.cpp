@@ -1,7 +1,7 @@
 // The Cu benchmark of the staggered scheme (issue 17, "Speed"): a packing.csv (SI metres) sintered
 // at T for t_end with strategy 1 or 2; prints the run time and its split. Not a test.
 //   bench_staggered PACKING.csv [--strategy 1|2] [--time T_END] [--dt-max S] [--temperature T]
-//                   [--new-contacts 0|1] [--eps-lim E]
+//                   [--new-contacts 0|1] [--eps-lim E] [--material cu|ti] [--E PA]
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -21,15 +21,21 @@ int main(int argc, char** argv) {
   }
   st::StaggeredOptions o;
   double t_end = 5000.0, T = 1293.0;
+  std::string material = "cu";
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
     const double v = std::atof(argv[i + 1]);
+    if (k == "--material") {
+      material = argv[i + 1];
+      continue;
+    }
     if (k == "--strategy") o.strategy = static_cast<int>(v);
     else if (k == "--time") t_end = v;
     else if (k == "--dt-max") o.dt_max = v;
     else if (k == "--temperature") T = v;
     else if (k == "--new-contacts") o.new_contacts = v != 0.0;
     else if (k == "--eps-lim") o.eps_lim = v;
+    else if (k == "--E") o.E = v;
     else {
       std::fprintf(stderr, "bench_staggered: unknown option %s\n", k.c_str());
       return 2;
@@ -39,7 +45,7 @@ int main(int argc, char** argv) {
   std::vector<st::Particle> p(pk.size());
   for (std::size_t i = 0; i < pk.size(); ++i) p[i] = {Eigen::Vector3d(pk.x[i], pk.y[i], pk.z[i]), pk.r[i]};
   const auto t0 = std::chrono::steady_clock::now();
-  st::Staggered s(p, cs::builtin_sinter_material("cu"), cs::TemperatureProfile::constant(T), o);
+  st::Staggered s(p, cs::builtin_sinter_material(material), cs::TemperatureProfile::constant(T), o);
   const std::size_t c0 = s.contacts().size();
   long substeps = 0, refactor = 0, gmres = 0, rejected = 0;
   while (s.time() < t_end) {

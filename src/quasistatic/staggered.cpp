@@ -290,7 +290,8 @@ struct Staggered::Impl {
   int nfree = 0;
   SpMat K;
   std::vector<int> slots;  // 144 per contact: index into K's values, -1 for a fixed DOF
-  std::vector<contact::BondElement> ref;  // the elements of the last factorisation
+  std::vector<contact::BondElement> ref;  // the elements of the last factorisation (its contacts)
+  std::vector<std::uint8_t> ref_fixed;    // and its constraints
   std::vector<std::vector<int>> floating;  // clusters held at their first particle
   std::unique_ptr<LinearSolver> solver;
 
@@ -557,30 +558,40 @@ struct Staggered::Impl {
     }
   }
 
+  // The pattern of the current contacts and constraints. The factor of an earlier contact set is
+  // kept (as the preconditioner of GMRES) when the constraints, and so the DOF numbering, did not
+  // change: new bonds are a low-rank change of K, and the iteration count decides when to
+  // refactorise.
   void build_pattern() {
     update_constraints();
+    build_pattern_for(c.size(), fixed);
+    need_factor = !(solver->has_factor() && fixed == ref_fixed);
+  }
+
+  // dof, nfree, K and slots for the first nc contacts and the constraints fx
+  void build_pattern_for(std::size_t nc, const std::vector<std::uint8_t>& fx) {
     const int n = N();
     dof.assign(6 * n, -1);
     nfree = 0;
     for (int i = 0; i < 6 * n; ++i)
-      if (!fixed[i]) dof[i] = nfree++;
+      if (!fx[i]) dof[i] = nfree++;
     std::vector<Eigen::Triplet<double, int>> tr;
-    tr.reserve(c.size() * 144 + static_cast<std::size_t>(nfree));
+    tr.reserve(nc * 144 + static_cast<std::size_t>(nfree));
     for (int i = 0; i < nfree; ++i) tr.emplace_back(i, i, 0.0);
     auto gdof = [&](const Contact& k, int l) { return 6 * (l < 6 ? k.a : k.b) + (l % 6); };
-    for (const auto& k : c)
+    for (std::size_t kc = 0; kc < nc; ++kc)
       for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 12; ++j) {
-          const int gi = dof[gdof(k, i)], gj = dof[gdof(k, j)];
+          const int gi = dof[gdof(c[kc], i)], gj = dof[gdof(c[kc], j)];
           if (gi >= 0 && gj >= 0) tr.emplace_back(gi, gj, 0.0);
         }
     K.resize(nfree, nfree);
     K.setFromTriplets(tr.begin(), tr.end());
     K.makeCompressed();
-    slots.assign(c.size() * 144, -1);
+    slots.assign(nc * 144, -1);
     const int* outer = K.outerIndexPtr();
     const int* inner = K.innerIndexPtr();
-    for (std::size_t kc = 0; kc < c.size(); ++kc)
+    for (std::size_t kc = 0; kc < nc; ++kc)
       for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 12; ++j) {
           const int gi = dof[gdof(c[kc], i)], gj = dof[gdof(c[kc], j)];
@@ -595,16 +606,15 @@ struct Staggered::Impl {
       if (dof[i] >= 0) blocks[dof[i]] = i / 6;
     solver->set_row_blocks(std::move(blocks));
     pattern_dirty = false;
-    need_factor = true;
   }
 
   double dof_scale(int l) const { return (l % 6) < 3 ? 1.0 : 1.0 / ell; }
 
-  // K^ = c S K S from the elements e (one per contact, in order)
+  // K^ = c S K S from the elements e (one per contact of the pattern, in order)
   void assemble(const std::vector<contact::BondElement>& e) {
     double* v = K.valuePtr();
     std::fill(v, v + K.nonZeros(), 0.0);
-    for (std::size_t kc = 0; kc < c.size(); ++kc) {
+    for (std::size_t kc = 0; kc < e.size(); ++kc) {
       const contact::BondMat12 Ke = contact::bond_stiffness(e[kc], bmat);
       const int* s = &slots[kc * 144];
       for (int i = 0; i < 12; ++i)
@@ -746,6 +756,7 @@ struct Staggered::Impl {
                                                t, part, d, fs.message));
         }
         ref = el;
+        ref_fixed = fixed;
         need_factor = false;
         rec.refactorised = true;
       }
@@ -755,6 +766,7 @@ struct Staggered::Impl {
         const LinearStatus fs = solver->factorise(K, false);
         if (!fs.ok) throw std::runtime_error("staggered: the bond network became singular: " + fs.message);
         ref = el;
+        ref_fixed = fixed;
         rec.refactorised = true;
         ss = solver->solve(K, fhat, uhat);
         if (!ss.ok) throw std::runtime_error("staggered: the network solve failed: " + ss.message);
@@ -954,7 +966,12 @@ std::string Staggered::save() const {
       << k.pair.rhs_evals << ' ' << k.pair.restarts << ' ' << hex(k.t_created) << ' ' << hex(k.L_created) << ' '
       << hex(k.dL_bar) << ' ' << hex(k.x_start) << '\n';
   }
-  o << "factor " << m.ref.size() << '\n';
+  o << "factor " << m.ref.size() << ' ' << m.ref_fixed.size() << '\n';
+  for (std::size_t i = 0; i < m.ref_fixed.size(); i += 6) {
+    int flags = 0;
+    for (int k = 0; k < 6; ++k) flags |= (m.ref_fixed[i + k] ? 1 : 0) << k;
+    o << flags << (i + 6 < m.ref_fixed.size() ? ' ' : '\n');
+  }
   for (const auto& e : m.ref) {
     for (const auto* v : {&e.e1, &e.e2, &e.e3})
       for (int k = 0; k < 3; ++k) o << hex((*v)[k]) << ' ';
@@ -1098,6 +1115,13 @@ Staggered Staggered::load(const std::string& text, const std::string& origin) {
   }
   r.expect("factor");
   if (r.integer() != nref || nref > nc) r.fail("bad factor size");
+  const long nfix = r.integer();
+  if (nfix != 0 && nfix != 6 * n) r.fail("bad factor constraints");
+  m.ref_fixed.assign(static_cast<std::size_t>(nfix), 0);
+  for (long i = 0; i < nfix; i += 6) {
+    const long flags = r.integer();
+    for (int k = 0; k < 6; ++k) m.ref_fixed[i + k] = (flags >> k) & 1;
+  }
   m.ref.resize(nref);
   for (auto& e : m.ref) {
     for (auto* v : {&e.e1, &e.e2, &e.e3})
@@ -1109,15 +1133,19 @@ Staggered Staggered::load(const std::string& text, const std::string& origin) {
   r.expect("end");
   m.init_solver();
   m.pattern_dirty = true;
-  if (nc > 0) {
-    m.build_pattern();
-    // the factor of the saved run: the same contacts, the same elements, the same bits
-    if (nref == nc && !need_factor && m.nfree > 0) {
+  // the factor of the saved run, rebuilt from its contacts, constraints and elements: the same
+  // pattern, the same values, the same bits
+  if (!need_factor && nref > 0 && nfix > 0) {
+    m.build_pattern_for(static_cast<std::size_t>(nref), m.ref_fixed);
+    if (m.nfree > 0) {
       m.assemble(m.ref);
       const LinearStatus fs = m.solver->factorise(m.K, false);
       if (!fs.ok) r.fail("the saved factor geometry is singular: " + fs.message);
-      m.need_factor = false;
     }
+  }
+  if (nc > 0) {
+    m.build_pattern();
+    if (need_factor) m.need_factor = true;
   }
   m.last_iterations = last_iterations;
   return s;
