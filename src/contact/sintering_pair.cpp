@@ -114,6 +114,15 @@ void SinterMaterial::validate() const {
        "in (-1, 0.5) (or absent)", poisson_ratio);
   need(D_vol0 > 0.0 || deltaD_gb0 > 0.0 || deltaD_s0 > 0.0, "one of D_vol0, deltaD_gb0, deltaD_s0",
        "positive", 0.0);
+  need(nonneg(T_transus), "T_transus", ">= 0 [K]", T_transus);
+  if (T_transus > 0.0) {
+    for (const auto& [v, k] : {std::pair{D_vol0_low, "D_vol0_low"}, {Q_vol_low, "Q_vol_low"},
+                               {deltaD_gb0_low, "deltaD_gb0_low"}, {Q_gb_low, "Q_gb_low"},
+                               {deltaD_s0_low, "deltaD_s0_low"}, {Q_s_low, "Q_s_low"}})
+      need(nonneg(v), k, ">= 0", v);
+    need(D_vol0_low > 0.0 || deltaD_gb0_low > 0.0 || deltaD_s0_low > 0.0,
+         "one of D_vol0_low, deltaD_gb0_low, deltaD_s0_low (T_transus is set)", "positive", 0.0);
+  }
 }
 
 SinterMaterial parse_sinter_material(const std::string& text, const std::string& origin) {
@@ -124,6 +133,8 @@ SinterMaterial parse_sinter_material(const std::string& text, const std::string&
   int lineno = 0;
   static const char* const known[] = {"Omega",  "gamma_s",    "gamma_gb", "D_vol0",    "Q_vol",
                                       "Q_gb",   "Q_s",        "c_III",    "c_IV",      "E",        "nu",
+                                      "T_transus", "D_vol0_low", "Q_vol_low", "Q_gb_low", "Q_s_low",
+                                      "D_gb0_low", "deltaD_gb0_low", "D_s0_low", "deltaD_s0_low",
                                       "D_gb0",  "deltaD_gb0", "delta_gb", "D_s0",      "deltaD_s0",
                                       "delta_s", "delta"};
   while (std::getline(in, line)) {
@@ -185,6 +196,17 @@ SinterMaterial parse_sinter_material(const std::string& text, const std::string&
   };
   m.deltaD_gb0 = interface("deltaD_gb0", "D_gb0", "delta_gb");
   m.deltaD_s0 = interface("deltaD_s0", "D_s0", "delta_s");
+  m.T_transus = get("T_transus", 0.0);
+  m.D_vol0_low = get("D_vol0_low", 0.0);
+  m.Q_vol_low = get("Q_vol_low", 0.0);
+  m.Q_gb_low = get("Q_gb_low", 0.0);
+  m.Q_s_low = get("Q_s_low", 0.0);
+  m.deltaD_gb0_low = interface("deltaD_gb0_low", "D_gb0_low", "delta_gb");
+  m.deltaD_s0_low = interface("deltaD_s0_low", "D_s0_low", "delta_s");
+  if (m.T_transus == 0.0)
+    for (const char* k : {"D_vol0_low", "Q_vol_low", "Q_gb_low", "Q_s_low", "D_gb0_low", "deltaD_gb0_low", "D_s0_low",
+                          "deltaD_s0_low"})
+      if (v.count(k)) throw std::invalid_argument(origin + ": '" + k + "' needs T_transus");
   m.validate();
   return m;
 }
@@ -206,6 +228,12 @@ Diffusivities diffusivities(const SinterMaterial& m, double T) {
   d.T = T;
   d.kT = kBoltzmann * T;
   const double rt = kGasConstant * T;  // Eq 5: D = D0 exp(-Q / (R T))
+  if (m.T_transus > 0.0 && T < m.T_transus) {  // the low-temperature phase
+    d.deltaD_gb = m.deltaD_gb0_low > 0.0 ? m.deltaD_gb0_low * std::exp(-m.Q_gb_low / rt) : 0.0;
+    d.deltaD_s = m.deltaD_s0_low > 0.0 ? m.deltaD_s0_low * std::exp(-m.Q_s_low / rt) : 0.0;
+    d.D_vol = m.D_vol0_low > 0.0 ? m.D_vol0_low * std::exp(-m.Q_vol_low / rt) : 0.0;
+    return d;
+  }
   d.deltaD_gb = m.deltaD_gb0 > 0.0 ? m.deltaD_gb0 * std::exp(-m.Q_gb / rt) : 0.0;
   d.deltaD_s = m.deltaD_s0 > 0.0 ? m.deltaD_s0 * std::exp(-m.Q_s / rt) : 0.0;
   d.D_vol = m.D_vol0 > 0.0 ? m.D_vol0 * std::exp(-m.Q_vol / rt) : 0.0;

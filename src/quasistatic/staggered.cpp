@@ -937,7 +937,9 @@ std::string Staggered::save() const {
   o << "material " << (name.empty() ? "_" : name) << ' ' << hex(a.omega) << ' ' << hex(a.gamma_s) << ' '
     << hex(a.gamma_gb) << ' ' << hex(a.D_vol0) << ' ' << hex(a.Q_vol) << ' ' << hex(a.deltaD_gb0) << ' '
     << hex(a.Q_gb) << ' ' << hex(a.deltaD_s0) << ' ' << hex(a.Q_s) << ' ' << hex(a.c_III) << ' ' << hex(a.c_IV) << ' '
-    << hex(a.youngs_modulus) << ' ' << hex(a.poisson_ratio) << '\n';
+    << hex(a.youngs_modulus) << ' ' << hex(a.poisson_ratio) << ' ' << hex(a.T_transus) << ' ' << hex(a.D_vol0_low)
+    << ' ' << hex(a.Q_vol_low) << ' ' << hex(a.deltaD_gb0_low) << ' ' << hex(a.Q_gb_low) << ' ' << hex(a.deltaD_s0_low)
+    << ' ' << hex(a.Q_s_low) << '\n';
   const auto& pt = m.prof.times();
   const auto& pT = m.prof.temperatures();
   o << "profile " << pt.size();
@@ -1027,6 +1029,13 @@ Staggered Staggered::load(const std::string& text, const std::string& origin) {
   a.c_IV = r.num();
   a.youngs_modulus = r.num();
   a.poisson_ratio = r.num();
+  a.T_transus = r.num();
+  a.D_vol0_low = r.num();
+  a.Q_vol_low = r.num();
+  a.deltaD_gb0_low = r.num();
+  a.Q_gb_low = r.num();
+  a.deltaD_s0_low = r.num();
+  a.Q_s_low = r.num();
   r.expect("profile");
   const long np = r.integer();
   if (np < 0 || np > 10'000'000) r.fail("bad profile size");

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <numbers>
 #include <vector>
 
@@ -591,4 +593,72 @@ TEST(SinteringPair, MaterialFiles) {
   EXPECT_NE(msg(base + "gamma_gb = 5\n").find("gamma_gb"), std::string::npos);
   EXPECT_EQ(msg(base), "");
   EXPECT_THROW(sp::builtin_sinter_material("unobtainium"), std::invalid_argument);
+}
+
+// A two-phase material (alpha-Ti below the beta transus, say): below T_transus the low phase's
+// Arrhenius parameters hold, above the others. Synthetic low phase: every D0 / 100, the same Q.
+namespace {
+sp::SinterMaterial two_phase_ti(double T_transus) {
+  const std::string ti = sp::builtin_sinter_material_text("ti");
+  const sp::SinterMaterial b = sp::builtin_sinter_material("ti");
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "\nT_transus = %.17g\nD_vol0_low = %.17g\nQ_vol_low = %.17g\ndeltaD_gb0_low = %.17g\nQ_gb_low = %.17g\n"
+                "deltaD_s0_low = %.17g\nQ_s_low = %.17g\n",
+                T_transus, b.D_vol0 / 100, b.Q_vol, b.deltaD_gb0 / 100, b.Q_gb, b.deltaD_s0 / 100, b.Q_s);
+  return sp::parse_sinter_material(ti + buf, "two-phase");
+}
+}  // namespace
+
+TEST(SinteringPair, PhaseSwitchAtTheTransus) {
+  const double Ttr = 1155.0;  // the alpha -> beta transus of Ti [K]
+  const sp::SinterMaterial m = two_phase_ti(Ttr), beta = sp::builtin_sinter_material("ti");
+  // above: the beta set, bit for bit; below: the low set
+  const sp::Diffusivities up = sp::diffusivities(m, 1200.0), upb = sp::diffusivities(beta, 1200.0);
+  EXPECT_EQ(up.D_vol, upb.D_vol);
+  EXPECT_EQ(up.deltaD_gb, upb.deltaD_gb);
+  EXPECT_EQ(up.deltaD_s, upb.deltaD_s);
+  const sp::Diffusivities lo = sp::diffusivities(m, Ttr - 1e-9), hi = sp::diffusivities(m, Ttr);
+  EXPECT_NEAR(lo.D_vol / hi.D_vol, 0.01, 1e-10);
+  EXPECT_NEAR(lo.deltaD_gb / hi.deltaD_gb, 0.01, 1e-10);
+  // the pair's rates are linear in the diffusivities: 100 times slower just below the transus
+  const sp::State q = sp::initial_state(30e-6, 30e-6, 0.05);
+  sp::State dlo{}, dhi{};
+  ASSERT_TRUE(sp::pair_rhs(q, lo, 0.0, m, {}, dlo));
+  ASSERT_TRUE(sp::pair_rhs(q, hi, 0.0, m, {}, dhi));
+  for (int i = 0; i < 5; ++i)
+    if (dhi[i] != 0.0) {
+      EXPECT_NEAR(dlo[i] / dhi[i], 0.01, 1e-6) << i;
+    }
+  // a synthetic profile: 1100 K for 600 s, a ramp to 1300 K at 1200 s; before the transus the run
+  // is that of the low phase alone, after it the beta set takes over
+  sp::SinterMaterial low = beta;
+  low.D_vol0 = m.D_vol0_low;
+  low.deltaD_gb0 = m.deltaD_gb0_low;
+  low.deltaD_s0 = m.deltaD_s0_low;
+  const sp::TemperatureProfile prof({0.0, 600.0, 1200.0}, {1100.0, 1100.0, 1300.0});
+  sp::IntegratorOptions io;
+  io.rtol = 1e-9;
+  sp::PairContact a = sp::make_contact(30e-6, 30e-6), b = a;
+  ASSERT_EQ(sp::advance(a, {&m, &prof, {}, 0.0}, 600.0, io), sp::PairStatus::Ok);
+  ASSERT_EQ(sp::advance(b, {&low, &prof, {}, 0.0}, 600.0, io), sp::PairStatus::Ok);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(a.q[i], b.q[i]);
+  // the ramp reaches 1155 K at t = 600 + 600 * 55 / 200 = 765 s; from then on beta alone
+  const double t_tr = 600.0 + 600.0 * (Ttr - 1100.0) / 200.0;
+  sp::PairContact slow = a;
+  ASSERT_EQ(sp::advance(slow, {&low, &prof, {}, 0.0}, 3000.0, io), sp::PairStatus::Ok);
+  ASSERT_EQ(sp::advance(a, {&m, &prof, {}, 0.0}, t_tr, io), sp::PairStatus::Ok);
+  sp::PairContact c = a, d = a;
+  c.h = d.h = 0.0;
+  ASSERT_EQ(sp::advance(c, {&m, &prof, {}, 0.0}, 3000.0, io), sp::PairStatus::Ok);
+  ASSERT_EQ(sp::advance(d, {&beta, &prof, {}, 0.0}, 3000.0, io), sp::PairStatus::Ok);
+  EXPECT_NEAR(sp::shrinkage(c.q, c.q0), sp::shrinkage(d.q, d.q0), 1e-6 * sp::shrinkage(d.q, d.q0));
+  EXPECT_GT(sp::shrinkage(c.q, c.q0), 3.0 * sp::shrinkage(slow.q, slow.q0));  // the switch matters
+  std::printf("two-phase Ti: shrinkage at 3000 s %.6e (beta after the transus %.6e, low phase throughout %.6e)\n",
+              sp::shrinkage(c.q, c.q0), sp::shrinkage(d.q, d.q0), sp::shrinkage(slow.q, slow.q0));
+  // the material file refuses a low phase without its transus, and a transus without a low phase
+  const std::string ti = sp::builtin_sinter_material_text("ti");
+  EXPECT_THROW(sp::parse_sinter_material(ti + "\nD_vol0_low = 1e-9\n", "x"), std::invalid_argument);
+  EXPECT_THROW(sp::parse_sinter_material(ti + "\nT_transus = 1155\n", "x"), std::invalid_argument);
+  EXPECT_THROW(sp::parse_sinter_material(ti + "\nT_transus = -3\nD_vol0_low = 1e-9\n", "x"), std::invalid_argument);
 }

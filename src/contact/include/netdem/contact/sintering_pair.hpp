@@ -61,13 +61,19 @@ struct SinterMaterial {
   double c_IV = 1.0;        ///< geometric factor of path IV (note §3), calibratable
   double youngs_modulus = 0.0;  ///< E [Pa] for the equivalent bar (Eqs 10, 17); 0 = not given
   double poisson_ratio = -1.0;  ///< nu of the bond element (Eq 35, G = E / (2 (1 + nu))); -1 = not given
+  /// A second, low-temperature phase (alpha-Ti below the beta transus, say): below T_transus [K]
+  /// the *_low Arrhenius parameters replace the ones above (Omega and the energies stay). 0 = one
+  /// phase. The switch is a jump of the rates at T_transus; the integrators' error control sees it.
+  double T_transus = 0.0;
+  double D_vol0_low = 0.0, Q_vol_low = 0.0, deltaD_gb0_low = 0.0, Q_gb_low = 0.0, deltaD_s0_low = 0.0, Q_s_low = 0.0;
   /// Throws std::invalid_argument (one line) unless every value is finite and in range.
   void validate() const;
 };
 
 /// Parses the material file format of docs/sintering_pair.md: `key = value` lines, `#` comments,
 /// SI units; later assignments override earlier ones. `origin` names the source in messages.
-/// Keys: name, Omega, gamma_s, gamma_gb, D_vol0, Q_vol, Q_gb, Q_s, c_III, c_IV, E, nu, and for each
+/// Keys: name, Omega, gamma_s, gamma_gb, D_vol0, Q_vol, Q_gb, Q_s, c_III, c_IV, E, nu, T_transus (with
+/// the low phase's D_vol0_low, Q_vol_low, Q_gb_low, Q_s_low and its interfaces), and for each
 /// interface either deltaD_gb0 / deltaD_s0 directly, or D_gb0 / D_s0 with a width delta_gb /
 /// delta_s (or `delta` for both). Throws std::invalid_argument (one line) on any error.
 SinterMaterial parse_sinter_material(const std::string& text, const std::string& origin);
@@ -79,7 +85,7 @@ std::string builtin_sinter_material_text(const std::string& name);
 /// builtin_sinter_material_text + parse. The shipped sets are NOT the paper's tables (note §5).
 SinterMaterial builtin_sinter_material(const std::string& name);
 
-/// Diffusivities at one temperature (Eq 5).
+/// Diffusivities at one temperature (Eq 5), of the low phase below m.T_transus.
 struct Diffusivities {
   double T = 0.0;       ///< [K]
   double kT = 0.0;      ///< k_B T [J]
