@@ -110,6 +110,8 @@ void SinterMaterial::validate() const {
   need(nonneg(c_III), "c_III", ">= 0", c_III);
   need(nonneg(c_IV), "c_IV", ">= 0", c_IV);
   need(nonneg(youngs_modulus), "E", ">= 0", youngs_modulus);
+  need(poisson_ratio == -1.0 || (std::isfinite(poisson_ratio) && poisson_ratio > -1.0 && poisson_ratio < 0.5), "nu",
+       "in (-1, 0.5) (or absent)", poisson_ratio);
   need(D_vol0 > 0.0 || deltaD_gb0 > 0.0 || deltaD_s0 > 0.0, "one of D_vol0, deltaD_gb0, deltaD_s0",
        "positive", 0.0);
 }
@@ -121,7 +123,7 @@ SinterMaterial parse_sinter_material(const std::string& text, const std::string&
   std::string line;
   int lineno = 0;
   static const char* const known[] = {"Omega",  "gamma_s",    "gamma_gb", "D_vol0",    "Q_vol",
-                                      "Q_gb",   "Q_s",        "c_III",    "c_IV",      "E",
+                                      "Q_gb",   "Q_s",        "c_III",    "c_IV",      "E",        "nu",
                                       "D_gb0",  "deltaD_gb0", "delta_gb", "D_s0",      "deltaD_s0",
                                       "delta_s", "delta"};
   while (std::getline(in, line)) {
@@ -167,6 +169,7 @@ SinterMaterial parse_sinter_material(const std::string& text, const std::string&
   m.c_III = get("c_III", 1.0);
   m.c_IV = get("c_IV", 1.0);
   m.youngs_modulus = get("E", 0.0);
+  m.poisson_ratio = get("nu", -1.0);
   // an interface: deltaD0 given directly, or D0 times a width (delta_x, or the common delta)
   auto interface = [&](const char* dd, const char* d0, const char* width) {
     const bool has_dd = v.count(dd) != 0, has_d0 = v.count(d0) != 0;

@@ -112,6 +112,14 @@ inline BondH bond_H(const BondElement& b) {
   return H;
 }
 
+/// The axial stiffness E A / L0 of the link (Eqs 33, 36), the same expression as K_link's (3,3)
+/// entry in the element frame. The sintering element's load is this times the step's shrinkage,
+/// so that a free pair shortens by exactly that shrinkage (Eq 10 with the bond's own L0).
+inline double bond_axial_stiffness(const BondElement& b, const BondMaterial& m) {
+  const double A = std::numbers::pi * b.Rm * b.Rm;
+  return m.E * A / b.L0();
+}
+
 /// K_link of Eqs 33-36 in global coordinates: blocks R diag(GA, GA, EA) R^T / L0 and
 /// R diag(EI, EI, GJ) R^T / L0, R = [e1 e2 e3].
 inline BondMat6 bond_K_link(const BondElement& b, const BondMaterial& m) {

@@ -60,13 +60,14 @@ struct SinterMaterial {
   double c_III = 1.0;       ///< geometric factor of path III (note §3), calibratable
   double c_IV = 1.0;        ///< geometric factor of path IV (note §3), calibratable
   double youngs_modulus = 0.0;  ///< E [Pa] for the equivalent bar (Eqs 10, 17); 0 = not given
+  double poisson_ratio = -1.0;  ///< nu of the bond element (Eq 35, G = E / (2 (1 + nu))); -1 = not given
   /// Throws std::invalid_argument (one line) unless every value is finite and in range.
   void validate() const;
 };
 
 /// Parses the material file format of docs/sintering_pair.md: `key = value` lines, `#` comments,
 /// SI units; later assignments override earlier ones. `origin` names the source in messages.
-/// Keys: name, Omega, gamma_s, gamma_gb, D_vol0, Q_vol, Q_gb, Q_s, c_III, c_IV, E, and for each
+/// Keys: name, Omega, gamma_s, gamma_gb, D_vol0, Q_vol, Q_gb, Q_s, c_III, c_IV, E, nu, and for each
 /// interface either deltaD_gb0 / deltaD_s0 directly, or D_gb0 / D_s0 with a width delta_gb /
 /// delta_s (or `delta` for both). Throws std::invalid_argument (one line) on any error.
 SinterMaterial parse_sinter_material(const std::string& text, const std::string& origin);

@@ -1,0 +1,1126 @@
+// The staggered quasi-static sintering scheme of Ivannikov et al. (staggered.hpp; docs/staggered.md).
+#include "netdem/quasistatic/staggered.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "netdem/quasistatic/linear_solver.hpp"
+
+namespace netdem::qs::staggered {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+using cs::kHA;
+using cs::kHB;
+using cs::kRA;
+using cs::kRB;
+using cs::kX;
+using cs::State;
+
+// Spheres touch when their centre distance is below (1 + 1e-12) (r_a + r_b): a lattice of touching
+// spheres is in contact whatever the rounding of its coordinates.
+constexpr double kTouch = 1.0 + 1e-12;
+
+[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument(what); }
+
+// Arrhenius values for the few temperatures of one step (the stage times of RK4).
+struct DiffCache {
+  const cs::SinterMaterial* m = nullptr;
+  std::array<cs::Diffusivities, 4> d{};
+  int next = 0;
+  const cs::Diffusivities& at(double T) {
+    for (const auto& e : d)
+      if (e.T == T) return e;
+    cs::Diffusivities& e = d[next];
+    next = (next + 1) % 4;
+    e = cs::diffusivities(*m, T);
+    return e;
+  }
+};
+
+struct RhsCtx {
+  const cs::SinterMaterial* m;
+  DiffCache* cache;
+  cs::TemperatureProfile::Segment seg;
+  long* evals;
+  bool operator()(double t, const State& q, State& dq) const {
+    ++*evals;
+    return cs::pair_rhs(q, cache->at(seg(t)), 0.0, *m, cs::PathSwitches{}, dq);
+  }
+};
+
+bool finite_state(const State& q) {
+  for (double v : q)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+// One classical RK4 step (the paper's integrator) from q at t over h; k1 = f(t, q) given.
+bool rk4(const RhsCtx& f, double t, double h, const State& q, const State& k1, State& out) {
+  State y{}, k2{}, k3{}, k4{};
+  for (int i = 0; i < 5; ++i) y[i] = q[i] + 0.5 * h * k1[i];
+  if (!f(t + 0.5 * h, y, k2)) return false;
+  for (int i = 0; i < 5; ++i) y[i] = q[i] + 0.5 * h * k2[i];
+  if (!f(t + 0.5 * h, y, k3)) return false;
+  for (int i = 0; i < 5; ++i) y[i] = q[i] + h * k3[i];
+  if (!f(t + h, y, k4)) return false;
+  for (int i = 0; i < 5; ++i) out[i] = q[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+  return finite_state(out);
+}
+
+// A trial step with its step-doubling estimate: one RK4 step of h against two of h/2; the error of
+// the two half steps is their difference / (2^4 - 1), relative to x and to y4 + y7. ok = false when
+// a stage left the model's domain.
+struct Trial {
+  bool ok = false;
+  double error = std::numeric_limits<double>::infinity();  // relative, not yet divided by eps_lim
+  State q{};
+};
+Trial trial_step(const RhsCtx& f, double t, double h, const State& q) {
+  Trial r;
+  State k1{};
+  if (!f(t, q, k1)) return r;
+  State full{}, half{}, two{};
+  if (!rk4(f, t, h, q, k1, full)) return r;
+  if (!rk4(f, t, 0.5 * h, q, k1, half)) return r;
+  State k1h{};
+  if (!f(t + 0.5 * h, half, k1h)) return r;
+  if (!rk4(f, t + 0.5 * h, 0.5 * h, half, k1h, two)) return r;
+  const double sf = full[kHA] + full[kHB], s2 = two[kHA] + two[kHB];
+  const double ex = std::fabs(two[kX] - full[kX]) / std::fabs(two[kX]);
+  const double es = std::fabs(s2 - sf) / std::fabs(s2);
+  r.error = std::max(ex, es) / 15.0;
+  r.ok = std::isfinite(r.error);
+  r.q = two;
+  return r;
+}
+
+// Strategy 2: the sub-steps of one contact over [t0, t1] (RK4 with step doubling; a failed
+// sub-step is divided by alpha, a sub-step well within eps_lim (0.1) lets the next one grow by
+// alpha). ok = false when a sub-step would fall below dt_min: domain = true if it failed because
+// a stage left the model's domain (the caller freezes the contact), else because of accuracy.
+struct ContactResult {
+  State q{};
+  long substeps = 0;
+  double max_error = 0.0;
+  bool ok = true, domain = false;
+};
+ContactResult advance_substeps(const State& q0, double R_min0, const RhsCtx& f, double t0, double t1,
+                               const StaggeredOptions& opt, double x_max) {
+  ContactResult r;
+  r.q = q0;
+  double tl = t0, h = t1 - t0;
+  bool cut = false;
+  while (tl < t1) {
+    const double remaining = t1 - tl;
+    bool last = false;
+    if (h >= remaining * (1.0 - 1e-12)) {
+      h = remaining;
+      last = true;
+    }
+    const Trial tr = trial_step(f, tl, h, r.q);
+    if (!tr.ok || tr.error > opt.eps_lim) {
+      h /= opt.alpha;
+      cut = true;
+      if (h < opt.dt_min) {
+        r.ok = false;
+        r.domain = !tr.ok;
+        return r;
+      }
+      continue;
+    }
+    r.q = tr.q;
+    tl = last ? t1 : tl + h;
+    ++r.substeps;
+    r.max_error = std::max(r.max_error, tr.error / opt.eps_lim);
+    if (cut && tr.error < 0.1 * opt.eps_lim) h *= opt.alpha;
+    // the neck reached the freeze limit: the contact stops here (frozen after this step)
+    if (cs::check_state(r.q, R_min0, x_max) == cs::PairStatus::NeckLimit) break;
+  }
+  return r;
+}
+
+// Hexadecimal floating point (bit-exact text).
+std::string hex(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%a", v);
+  return buf;
+}
+
+struct Reader {
+  std::istringstream in;
+  std::string origin;
+  explicit Reader(const std::string& text, std::string o) : in(text), origin(std::move(o)) {}
+  [[noreturn]] void fail(const std::string& what) { bad(origin + ": " + what); }
+  std::string word() {
+    std::string w;
+    if (!(in >> w)) fail("unexpected end of file");
+    return w;
+  }
+  void expect(const char* w) {
+    const std::string got = word();
+    if (got != w) fail(fmt::format("expected '{}', got '{}'", w, got));
+  }
+  double num() {
+    const std::string w = word();
+    char* end = nullptr;
+    const double v = std::strtod(w.c_str(), &end);
+    if (end == w.c_str() || *end != '\0') fail("'" + w + "' is not a number");
+    return v;
+  }
+  long integer() {
+    const double v = num();
+    if (!(std::fabs(v) < 9e15) || v != std::floor(v)) fail("expected an integer");
+    return static_cast<long>(v);
+  }
+};
+
+}  // namespace
+
+// ================================================================================================
+
+void StaggeredOptions::validate() const {
+  auto need = [](bool ok, const std::string& what) {
+    if (!ok) bad("staggered: " + what);
+  };
+  auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
+  need(strategy == 1 || strategy == 2, fmt::format("strategy must be 1 or 2, got {}", strategy));
+  need(pos(dt_initial), fmt::format("dt_initial must be positive [s], got {}", dt_initial));
+  need(pos(dt_max), fmt::format("dt_max must be positive [s], got {}", dt_max));
+  need(pos(dt_min) && dt_min <= dt_initial && dt_min <= dt_max,
+       fmt::format("dt_min must be positive and at most dt_initial and dt_max [s], got {}", dt_min));
+  need(std::isfinite(alpha) && alpha > 1.0 && alpha <= 100.0, fmt::format("alpha must be in (1, 100], got {}", alpha));
+  need(std::isfinite(eps_lim) && eps_lim > 0.0 && eps_lim < 1.0, fmt::format("eps_lim must be in (0, 1), got {}", eps_lim));
+  need(std::isfinite(grow_below) && std::isfinite(shrink_above) && grow_below >= 0.0 && grow_below <= shrink_above &&
+           shrink_above <= 1.0,
+       fmt::format("the sub-step fractions must satisfy 0 <= grow ({}) <= shrink ({}) <= 1", grow_below, shrink_above));
+  need(std::isfinite(x0_over_R) && x0_over_R > 0.0 && x0_over_R < 0.5,
+       fmt::format("x0/R must be in (0, 0.5), got {}", x0_over_R));
+  need(x_max_over_R == 0.0 || (std::isfinite(x_max_over_R) && x_max_over_R > x0_over_R && x_max_over_R <= 1.0),
+       fmt::format("x_max/R must be 0 (the dihedral limit) or in (x0/R, 1], got {}", x_max_over_R));
+  need(std::isfinite(boundary_factor) && boundary_factor >= 0.0 && boundary_factor < 10.0,
+       fmt::format("boundary_factor must be in [0, 10), got {}", boundary_factor));
+  need(E == 0.0 || pos(E), fmt::format("E must be positive [Pa] (or 0: the material's), got {}", E));
+  need(nu < 0.0 ? nu == -1.0 || (std::isfinite(nu) && nu > -1.0) : std::isfinite(nu) && nu < 0.5,
+       fmt::format("nu must be in (-1, 0.5) (or -1: the material's), got {}", nu));
+  need(std::isfinite(gmres_tolerance) && gmres_tolerance > 0.0 && gmres_tolerance < 1e-3,
+       fmt::format("gmres_tolerance must be in (0, 1e-3), got {}", gmres_tolerance));
+  need(refactor_iterations >= 1, fmt::format("refactor_iterations must be >= 1, got {}", refactor_iterations));
+}
+
+std::pair<double, double> corrected_split(double y4_prev, double y7_prev, double y4_free, double y7_free, double d_new,
+                                          double R_A, double R_B) {
+  const double dy4 = y4_prev - y4_free, dy7 = y7_prev - y7_free;  // Eq 43
+  const double s = dy4 + dy7;
+  // Eq 41 with the sign mended: the centre distance changed by D = d_new - (y4_prev + y7_prev),
+  // negative when the particles approach; D is split as the free model split its own change.
+  const double w4 = std::fabs(s) < 1e-14 * std::min(R_A, R_B) ? R_A / (R_A + R_B) : dy4 / s;
+  const double D = d_new - (y4_prev + y7_prev);
+  const double y4 = y4_prev + w4 * D;
+  return {y4, d_new - y4};
+}
+
+double freeze_limit(const cs::SinterMaterial& m, const StaggeredOptions& o) {
+  if (o.x_max_over_R > 0.0) return o.x_max_over_R;
+  const double cpsi = m.gamma_gb / (2.0 * m.gamma_s);  // cos(psi/2), the dihedral angle psi
+  return std::sqrt(std::max(0.0, 1.0 - cpsi * cpsi));
+}
+
+bool advance_free(cs::PairContact& c, const cs::SinterMaterial& m, const cs::TemperatureProfile& T, double t1,
+                  const StaggeredOptions& o, long* substeps) {
+  const double x_max = freeze_limit(m, o);
+  DiffCache cache;
+  cache.m = &m;
+  while (c.t < t1) {
+    long evals = 0;
+    const auto seg = T.segment_at(c.t);
+    const double te = std::min(t1, seg.t1);
+    RhsCtx f{&m, &cache, seg, &evals};
+    const ContactResult r = advance_substeps(c.q, c.R_min0(), f, c.t, te, o, x_max);
+    if (!r.ok) return false;
+    c.q = r.q;
+    c.t = te;
+    c.rhs_evals += evals;
+    if (substeps != nullptr) *substeps += r.substeps;
+    if (cs::check_state(c.q, c.R_min0(), x_max) != cs::PairStatus::Ok) return false;
+  }
+  return true;
+}
+
+// ================================================================================================
+
+struct Staggered::Impl {
+  StaggeredOptions opt;
+  cs::SinterMaterial mat;
+  cs::TemperatureProfile prof = cs::TemperatureProfile::constant(1000.0);
+  contact::BondMaterial bmat;
+  double x_max = 0.0;
+  std::vector<Particle> p, p0;
+  std::vector<Contact> c;
+  std::vector<std::vector<int>> adj;  // particle -> contact indices
+  std::vector<long> cell_of;          // detect(): the cell grid (reused)
+  std::vector<int> cell_start, cell_ids;
+  std::vector<std::uint8_t> fixed_user, fixed_plane, fixed;  // 6N flags
+  double t = 0.0, dt = 0.0;
+  long nsteps = 0;
+  Timers timers;
+  long rhs_evals = 0;
+  DiffCache cache;
+  // scaling of the linear system (powers of two: exact): K^ = c S K S, S = 1 (u), 1/ell (theta)
+  double cscale = 1.0, ell = 1.0;
+  // the network system
+  bool pattern_dirty = true, need_factor = true;
+  int last_iterations = 0;
+  std::vector<int> dof;    // 6N -> free index or -1
+  int nfree = 0;
+  SpMat K;
+  std::vector<int> slots;  // 144 per contact: index into K's values, -1 for a fixed DOF
+  std::vector<contact::BondElement> ref;  // the elements of the last factorisation
+  std::vector<std::vector<int>> floating;  // clusters held at their first particle
+  std::unique_ptr<LinearSolver> solver;
+
+  void init_solver() {
+    LinearSolverOptions lo;
+    lo.gmres_tolerance = opt.gmres_tolerance;
+    lo.gmres_max_iterations = 200;
+    solver = std::make_unique<LinearSolver>(lo);
+  }
+
+  void setup_material() {
+    mat.validate();
+    bmat.E = opt.E > 0.0 ? opt.E : mat.youngs_modulus;
+    bmat.nu = opt.nu != -1.0 ? opt.nu : mat.poisson_ratio;
+    if (!(bmat.E > 0.0))
+      bad("staggered: the bond needs Young's modulus: the material '" + mat.name + "' has no E (set E or --E)");
+    if (bmat.nu == -1.0)
+      bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (set nu or --nu)");
+    x_max = freeze_limit(mat, opt);
+    if (!(x_max > opt.x0_over_R)) bad(fmt::format("staggered: the freeze limit x_max/R = {} is below x0/R", x_max));
+    cache.m = &mat;
+    cscale = std::ldexp(1.0, -std::ilogb(bmat.E));
+  }
+
+  int N() const { return static_cast<int>(p.size()); }
+
+  void setup_particles() {
+    if (p.empty()) bad("staggered: no particles");
+    double rsum = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const auto& q = p[i];
+      if (!q.x.allFinite()) bad(fmt::format("staggered: particle {} has a non-finite centre", i));
+      if (!(std::isfinite(q.r) && q.r > 0.0)) bad(fmt::format("staggered: particle {} has radius {} (must be positive)", i, q.r));
+      rsum += q.r;
+    }
+    ell = std::ldexp(1.0, std::ilogb(rsum / static_cast<double>(p.size())));
+    const int n = N();
+    adj.assign(n, {});
+    fixed_user.assign(6 * n, 0);
+    fixed_plane.assign(6 * n, 0);
+    if (opt.boundary_planes) {
+      for (int k = 0; k < 3; ++k) {
+        double lo = std::numeric_limits<double>::infinity();
+        for (const auto& q : p) lo = std::min(lo, q.x[k] - q.r);
+        for (int i = 0; i < n; ++i)
+          if (p[i].x[k] - lo <= opt.boundary_factor * p[i].r) fixed_plane[6 * i + k] = 1;
+      }
+    }
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // contacts
+
+  void add_contact(int a, int b, double d) {
+    const double ra = p[a].r, rb = p[b].r;
+    const double hA = (d * d + ra * ra - rb * rb) / (2.0 * d);  // the radical plane of the two spheres
+    const double hB = d - hA;
+    if (!(hA > 0.0 && hB > 0.0))
+      throw std::runtime_error(fmt::format(
+          "staggered: particles {} and {} overlap too far (centre distance {:.4g} m, radii {:.4g}, {:.4g})", a, b, d, ra, rb));
+    const double Rmin = std::min(ra, rb);
+    const double a2 = std::max(0.0, ra * ra - hA * hA);  // lens radius^2 (the same from either side)
+    Contact k;
+    k.a = a;
+    k.b = b;
+    // x0 = 0.01 R_min (the paper), raised above the lens radius of an overlapping pair so that the
+    // cap-cone geometry exists (x^2 + h^2 > R^2 needs x > the lens radius)
+    const double x0 = std::max(opt.x0_over_R * Rmin, 1.02 * std::sqrt(a2));
+    k.pair.q = k.pair.q0 = State{x0, ra, hA, rb, hB};
+    k.pair.t = t;
+    k.t_created = t;
+    k.L_created = d;
+    k.x_start = x0;
+    const cs::PairStatus s = cs::check_state(k.pair.q, Rmin, x_max);
+    if (s == cs::PairStatus::NeckLimit) {
+      k.frozen = true;
+      k.pair.status = s;
+    } else if (s != cs::PairStatus::Ok) {
+      throw std::runtime_error(fmt::format("staggered: the new contact {}-{} has no valid geometry ({})", a, b,
+                                           cs::to_string(s)));
+    }
+    adj[a].push_back(static_cast<int>(c.size()));
+    adj[b].push_back(static_cast<int>(c.size()));
+    c.push_back(k);
+    pattern_dirty = true;
+  }
+
+  bool bonded(int a, int b) const {
+    const auto& la = adj[a].size() <= adj[b].size() ? adj[a] : adj[b];
+    for (int k : la)
+      if ((c[k].a == a && c[k].b == b) || (c[k].a == b && c[k].b == a)) return true;
+    return false;
+  }
+
+  // New contacts: spheres closer than r_a + r_b without a bond. A uniform grid of cells of side
+  // 2 r_max; pairs in index order, so the contact order does not depend on the grid.
+  int detect() {
+    const int n = N();
+    double rmax = 0.0;
+    Eigen::Vector3d lo = p[0].x, hi = p[0].x;
+    for (const auto& q : p) {
+      rmax = std::max(rmax, q.r);
+      lo = lo.cwiseMin(q.x);
+      hi = hi.cwiseMax(q.x);
+    }
+    // cells of side >= 2 r_max (a touching pair is in neighbouring cells), at most 200 per axis
+    const double cell = std::max(2.0 * rmax, (hi - lo).maxCoeff() / 199.0);
+    std::array<long, 3> cnt{};
+    for (int k = 0; k < 3; ++k) cnt[k] = std::max(1L, static_cast<long>((hi[k] - lo[k]) / cell) + 1);
+    auto coord = [&](int k, double v) {
+      return std::clamp(static_cast<long>((v - lo[k]) / cell), 0L, cnt[k] - 1);
+    };
+    // counting sort of the particles by cell (flat arrays, reused)
+    const long ncell = cnt[0] * cnt[1] * cnt[2];
+    cell_of.resize(n);
+    cell_start.assign(static_cast<std::size_t>(ncell) + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      cell_of[i] = (coord(2, p[i].x[2]) * cnt[1] + coord(1, p[i].x[1])) * cnt[0] + coord(0, p[i].x[0]);
+      ++cell_start[cell_of[i] + 1];
+    }
+    for (long k = 0; k < ncell; ++k) cell_start[k + 1] += cell_start[k];
+    cell_ids.resize(n);
+    {
+      std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+      for (int i = 0; i < n; ++i) cell_ids[fill[cell_of[i]]++] = i;
+    }
+    std::vector<std::pair<int, int>> found;
+    for (int i = 0; i < n; ++i) {
+      const long cx = coord(0, p[i].x[0]), cy = coord(1, p[i].x[1]), cz = coord(2, p[i].x[2]);
+      for (long z = std::max(0L, cz - 1); z <= std::min(cnt[2] - 1, cz + 1); ++z)
+        for (long y = std::max(0L, cy - 1); y <= std::min(cnt[1] - 1, cy + 1); ++y)
+          for (long x = std::max(0L, cx - 1); x <= std::min(cnt[0] - 1, cx + 1); ++x) {
+            const long cell_k = (z * cnt[1] + y) * cnt[0] + x;
+            for (int q = cell_start[cell_k]; q < cell_start[cell_k + 1]; ++q) {
+              const int j = cell_ids[q];
+              if (j <= i) continue;
+              const double rr = kTouch * (p[i].r + p[j].r);
+              if ((p[j].x - p[i].x).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
+            }
+          }
+    }
+    std::sort(found.begin(), found.end());
+    for (const auto& [i, j] : found) add_contact(i, j, (p[j].x - p[i].x).norm());
+    return static_cast<int>(found.size());
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // constraints and the pattern of the network system
+
+  void update_constraints() {
+    const int n = N();
+    fixed.assign(6 * n, 0);
+    for (int i = 0; i < 6 * n; ++i) fixed[i] = fixed_user[i] | fixed_plane[i];
+    // connected clusters (union-find over the bonds)
+    std::vector<int> root(n);
+    std::iota(root.begin(), root.end(), 0);
+    auto find = [&](int i) {
+      while (root[i] != i) i = root[i] = root[root[i]];
+      return i;
+    };
+    for (const auto& k : c) {
+      const int ra = find(k.a), rb = find(k.b);
+      if (ra != rb) root[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    std::vector<std::vector<int>> members(n);
+    for (int i = 0; i < n; ++i) members[find(i)].push_back(i);
+    floating.clear();
+    for (int r = 0; r < n; ++r) {
+      const auto& m = members[r];
+      if (m.empty()) continue;
+      if (m.size() == 1) {  // no bond: nothing holds it
+        for (int k = 0; k < 6; ++k) fixed[6 * m[0] + k] = 1;
+        continue;
+      }
+      // the rigid motions that the cluster's constraints leave: anchor the cluster at its first
+      // particle to make the system regular; after the solve these motions are removed again by
+      // a least-squares fit over the cluster (remove_rigid_motions), which does not depend on the
+      // particle that was anchored (nor on the numbering)
+      const Eigen::MatrixXd Nm = rigid_null_space(m);
+      if (Nm.cols() > 0) {
+        // fix as many DOFs of the first particle as there are free motions, chosen so that they
+        // stop exactly those motions (rows of the particle's DOFs on the null space, greedily
+        // independent): the cluster is then held, not over-constrained
+        Eigen::Vector3d xc = Eigen::Vector3d::Zero();
+        for (int i : m) xc += p[i].x;
+        xc /= static_cast<double>(m.size());
+        const Eigen::Vector3d rel = (p[m[0]].x - xc) / ell;
+        std::array<Eigen::VectorXd, 6> v;  // each DOF's motion under the free modes
+        for (int k = 0; k < 6; ++k) {
+          Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
+          row[k] = 1.0;
+          if (k < 3) row.tail<3>() = rel.cross(Eigen::Vector3d::Unit(k));
+          v[k] = Nm.transpose() * row;
+        }
+        for (Eigen::Index pick = 0; pick < Nm.cols(); ++pick) {  // pivoted Gram-Schmidt
+          int best = -1;
+          double bn = 0.0;
+          for (int k = 0; k < 6; ++k)
+            if (!fixed[6 * m[0] + k] && v[k].norm() > bn) {
+              bn = v[k].norm();
+              best = k;
+            }
+          if (best < 0 || bn < 1e-8) break;
+          fixed[6 * m[0] + best] = 1;
+          const Eigen::VectorXd b = v[best] / bn;
+          for (auto& w : v) w -= b * b.dot(w);
+        }
+        floating.push_back(m);
+      }
+    }
+  }
+
+  // The rigid motions (t, w) of a cluster that leave its own constraints (planes and fix(); not
+  // the anchor) unmoved: the null space of C, one row per constrained DOF; a motion displaces x by
+  // t + w x (x - x_c) / ell and turns every node by w / ell.
+  Eigen::MatrixXd rigid_null_space(const std::vector<int>& m) const {
+    Eigen::Vector3d xc = Eigen::Vector3d::Zero();
+    for (int i : m) xc += p[i].x;
+    xc /= static_cast<double>(m.size());
+    Eigen::Matrix<double, 6, 6> CtC = Eigen::Matrix<double, 6, 6>::Zero();
+    for (int i : m)
+      for (int k = 0; k < 6; ++k) {
+        if (!(fixed_user[6 * i + k] | fixed_plane[6 * i + k])) continue;
+        Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
+        row[k] = 1.0;
+        if (k < 3) row.tail<3>() = ((p[i].x - xc) / ell).cross(Eigen::Vector3d::Unit(k));  // e_k . (w x rel)
+        CtC += row * row.transpose();
+      }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(CtC);
+    const double top = std::max(1.0, es.eigenvalues().maxCoeff());
+    int k = 0;
+    while (k < 6 && es.eigenvalues()[k] <= 1e-10 * top) ++k;
+    return es.eigenvectors().leftCols(k);
+  }
+
+  // u: 3 translations per particle. For each anchored cluster, subtract the least-squares fit of
+  // its free rigid motions to the cluster's displacements.
+  void remove_rigid_motions(std::vector<Eigen::Vector3d>& u) const {
+    for (const auto& m : floating) {
+      const Eigen::MatrixXd Nm = rigid_null_space(m);
+      const int k = static_cast<int>(Nm.cols());
+      if (k == 0) continue;
+      Eigen::Vector3d xc = Eigen::Vector3d::Zero();
+      for (int i : m) xc += p[i].x;
+      xc /= static_cast<double>(m.size());
+      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(k, k);
+      Eigen::VectorXd b = Eigen::VectorXd::Zero(k);
+      std::vector<Eigen::MatrixXd> M(m.size());
+      for (std::size_t j = 0; j < m.size(); ++j) {
+        Eigen::Matrix<double, 3, 6> T;
+        T.leftCols<3>().setIdentity();
+        T.rightCols<3>() = -contact::skew<double>((p[m[j]].x - xc) / ell);  // w x rel = -rel x w
+        M[j] = T * Nm;
+        A += M[j].transpose() * M[j];
+        b += M[j].transpose() * u[m[j]];
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A);
+      const double top = std::max(es.eigenvalues().maxCoeff(), 1e-300);
+      Eigen::VectorXd alpha = Eigen::VectorXd::Zero(k);
+      for (int l = 0; l < k; ++l)
+        if (es.eigenvalues()[l] > 1e-12 * top)
+          alpha += es.eigenvectors().col(l) * (es.eigenvectors().col(l).dot(b) / es.eigenvalues()[l]);
+      for (std::size_t j = 0; j < m.size(); ++j) u[m[j]] -= M[j] * alpha;
+    }
+  }
+
+  void build_pattern() {
+    update_constraints();
+    const int n = N();
+    dof.assign(6 * n, -1);
+    nfree = 0;
+    for (int i = 0; i < 6 * n; ++i)
+      if (!fixed[i]) dof[i] = nfree++;
+    std::vector<Eigen::Triplet<double, int>> tr;
+    tr.reserve(c.size() * 144 + static_cast<std::size_t>(nfree));
+    for (int i = 0; i < nfree; ++i) tr.emplace_back(i, i, 0.0);
+    auto gdof = [&](const Contact& k, int l) { return 6 * (l < 6 ? k.a : k.b) + (l % 6); };
+    for (const auto& k : c)
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) {
+          const int gi = dof[gdof(k, i)], gj = dof[gdof(k, j)];
+          if (gi >= 0 && gj >= 0) tr.emplace_back(gi, gj, 0.0);
+        }
+    K.resize(nfree, nfree);
+    K.setFromTriplets(tr.begin(), tr.end());
+    K.makeCompressed();
+    slots.assign(c.size() * 144, -1);
+    const int* outer = K.outerIndexPtr();
+    const int* inner = K.innerIndexPtr();
+    for (std::size_t kc = 0; kc < c.size(); ++kc)
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) {
+          const int gi = dof[gdof(c[kc], i)], gj = dof[gdof(c[kc], j)];
+          if (gi < 0 || gj < 0) continue;
+          const int* b = inner + outer[gj];
+          const int* e = inner + outer[gj + 1];
+          const int* it = std::lower_bound(b, e, gi);
+          slots[kc * 144 + 12 * i + j] = static_cast<int>(it - inner);
+        }
+    std::vector<int> blocks(static_cast<std::size_t>(nfree));
+    for (int i = 0; i < 6 * n; ++i)
+      if (dof[i] >= 0) blocks[dof[i]] = i / 6;
+    solver->set_row_blocks(std::move(blocks));
+    pattern_dirty = false;
+    need_factor = true;
+  }
+
+  double dof_scale(int l) const { return (l % 6) < 3 ? 1.0 : 1.0 / ell; }
+
+  // K^ = c S K S from the elements e (one per contact, in order)
+  void assemble(const std::vector<contact::BondElement>& e) {
+    double* v = K.valuePtr();
+    std::fill(v, v + K.nonZeros(), 0.0);
+    for (std::size_t kc = 0; kc < c.size(); ++kc) {
+      const contact::BondMat12 Ke = contact::bond_stiffness(e[kc], bmat);
+      const int* s = &slots[kc * 144];
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j)
+          if (s[12 * i + j] >= 0) v[s[12 * i + j]] += cscale * dof_scale(i) * dof_scale(j) * Ke(i, j);
+    }
+  }
+
+  contact::BondElement element(const Contact& k) const {
+    return contact::make_bond(p[k.a].x, p[k.b].x, k.pair.q[kHA], k.pair.q[kHB], p[k.a].r, p[k.b].r);
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // integration of the contacts over [t, t + h]
+
+  StepRecord step(double t_end) {
+    if (!(t_end > t)) throw std::runtime_error(fmt::format("staggered: step to t_end = {} is not after t = {}", t_end, t));
+    StepRecord rec;
+    auto t0 = Clock::now();
+    if (opt.new_contacts) rec.new_contacts = detect();  // (the initial contacts were made at construction)
+    timers.detect += seconds_since(t0);
+    t0 = Clock::now();
+    if (pattern_dirty) build_pattern();
+    timers.assemble += seconds_since(t0);
+
+    const double seg_end = prof.segment_at(t).t1;
+    RhsCtx f{&mat, &cache, prof.segment_at(t), &rhs_evals};
+    std::vector<State> qnew(c.size());
+    std::vector<int> active;
+    for (std::size_t i = 0; i < c.size(); ++i)
+      if (!c[i].frozen) active.push_back(static_cast<int>(i));
+    double h = 0.0;
+    std::vector<std::uint8_t> freeze(c.size(), 0);
+    t0 = Clock::now();
+    for (;;) {
+      h = std::min({dt, t_end - t, seg_end - t});
+      if (h >= (std::min(t_end, seg_end) - t) * (1.0 - 1e-12)) h = std::min(t_end, seg_end) - t;
+      bool accepted = true;
+      rec.max_error = 0.0;
+      rec.substeps = 0;
+      rec.contacts_substepped = 0;
+      if (opt.strategy == 1) {
+        std::vector<int> domain_fail;
+        for (int i : active) {
+          const Trial tr = trial_step(f, t, h, c[i].pair.q);
+          if (!tr.ok) domain_fail.push_back(i);
+          if (!tr.ok || tr.error > opt.eps_lim) {
+            accepted = false;
+            continue;
+          }
+          qnew[i] = tr.q;
+          rec.max_error = std::max(rec.max_error, tr.error / opt.eps_lim);
+        }
+        rec.substeps = static_cast<long>(active.size());
+        if (!accepted) {
+          ++rec.rejected;
+          dt = h / opt.alpha;  // Eq 45
+          if (dt < opt.dt_min) {
+            if (!domain_fail.empty()) {  // these contacts left the model's domain: freeze them
+              for (int i : domain_fail) {
+                c[i].frozen = true;
+                c[i].pair.status = cs::PairStatus::ConeDegenerate;
+                ++rec.newly_frozen;
+              }
+              active.erase(std::remove_if(active.begin(), active.end(), [&](int i) { return c[i].frozen; }),
+                           active.end());
+              dt = opt.dt_min;
+              continue;
+            }
+            throw std::runtime_error(fmt::format(
+                "staggered: strategy 1 needs a step below dt_min = {:.3g} s at t = {:.6g} s", opt.dt_min, t));
+          }
+          continue;
+        }
+        if (rec.max_error < 0.1) dt = std::min(opt.dt_max, opt.alpha * dt);  // Eqs 46-47
+      } else {
+        for (int i : active) {
+          const ContactResult r = advance_substeps(c[i].pair.q, c[i].pair.R_min0(), f, t, t + h, opt, x_max);
+          if (!r.ok) {
+            if (r.domain) {
+              freeze[i] = 2;  // leaves the domain: frozen, no load this step
+              qnew[i] = c[i].pair.q;
+              continue;
+            }
+            throw std::runtime_error(fmt::format(
+                "staggered: contact {}-{} needs a sub-step below dt_min = {:.3g} s at t = {:.6g} s", c[i].a, c[i].b,
+                opt.dt_min, t));
+          }
+          qnew[i] = r.q;
+          rec.substeps += r.substeps;
+          if (r.substeps > 1) ++rec.contacts_substepped;
+          rec.max_error = std::max(rec.max_error, r.max_error);
+        }
+        const double frac =
+            active.empty() ? 0.0 : static_cast<double>(rec.contacts_substepped) / static_cast<double>(active.size());
+        if (frac < opt.grow_below)
+          dt = std::min(opt.dt_max, opt.alpha * dt);
+        else if (frac > opt.shrink_above)
+          dt = std::max(opt.dt_min, dt / opt.alpha);
+      }
+      if (accepted) break;
+    }
+    timers.integrate += seconds_since(t0);
+
+    // the sintering loads and the network
+    t0 = Clock::now();
+    std::vector<contact::BondElement> el(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i) el[i] = element(c[i]);
+    VecX fhat = VecX::Zero(nfree);
+    for (int i : active) {
+      if (freeze[i] == 2) continue;
+      const double dL = (c[i].pair.q[kHA] - qnew[i][kHA]) + (c[i].pair.q[kHB] - qnew[i][kHB]);  // Delta(y4 + y7)
+      const double F = contact::bond_axial_stiffness(el[i], bmat) * dL;  // Eq 10, compressive positive
+      for (int k = 0; k < 3; ++k) {
+        const int ia = dof[6 * c[i].a + k], ib = dof[6 * c[i].b + k];
+        if (ia >= 0) fhat[ia] += cscale * F * el[i].e3[k];
+        if (ib >= 0) fhat[ib] -= cscale * F * el[i].e3[k];
+      }
+    }
+    if (need_factor || last_iterations > opt.refactor_iterations) need_factor = true;
+    assemble(el);
+    timers.assemble += seconds_since(t0);
+    VecX uhat = VecX::Zero(nfree);
+    if (nfree > 0) {
+      if (need_factor) {
+        t0 = Clock::now();
+        const LinearStatus fs = solver->factorise(K, false);
+        timers.factorise += seconds_since(t0);
+        if (!fs.ok) {
+          const int col = fs.column;
+          int part = -1, d = -1;
+          for (int g = 0; g < static_cast<int>(dof.size()); ++g)
+            if (dof[g] == col) {
+              part = g / 6;
+              d = g % 6;
+            }
+          throw std::runtime_error(fmt::format("staggered: the bond network is singular at t = {:.6g} s (particle {}, "
+                                               "DOF {}): {}",
+                                               t, part, d, fs.message));
+        }
+        ref = el;
+        need_factor = false;
+        rec.refactorised = true;
+      }
+      t0 = Clock::now();
+      LinearStatus ss = solver->solve(K, fhat, uhat);
+      if (!ss.ok) {  // the reused factor is too far off: refactorise now
+        const LinearStatus fs = solver->factorise(K, false);
+        if (!fs.ok) throw std::runtime_error("staggered: the bond network became singular: " + fs.message);
+        ref = el;
+        rec.refactorised = true;
+        ss = solver->solve(K, fhat, uhat);
+        if (!ss.ok) throw std::runtime_error("staggered: the network solve failed: " + ss.message);
+      }
+      timers.solve += seconds_since(t0);
+      last_iterations = ss.iterations;
+      rec.gmres_iterations = ss.iterations;
+      rec.solves = 1;
+    }
+
+    // move the nodes, then correct the shrinkage (Eqs 41-44)
+    t0 = Clock::now();
+    std::vector<Eigen::Vector3d> u(N(), Eigen::Vector3d::Zero());
+    for (int i = 0; i < N(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int g = dof[6 * i + k];
+        if (g >= 0) u[i][k] = uhat[g];  // translations are not scaled
+      }
+    remove_rigid_motions(u);
+    for (int i = 0; i < N(); ++i) p[i].x += u[i];
+    const double t_new = (h == std::min(t_end, seg_end) - t) ? std::min(t_end, seg_end) : t + h;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      Contact& k = c[i];
+      const State qold = k.pair.q;
+      const State qf = (k.frozen || freeze[i] == 2) ? qold : qnew[i];
+      const double d = (p[k.b].x - p[k.a].x).norm();
+      const auto [y4, y7] = corrected_split(qold[kHA], qold[kHB], qf[kHA], qf[kHB], d, qold[kRA], qold[kRB]);
+      k.dL_bar = (y4 + y7) - (qf[kHA] + qf[kHB]);  // Eq 44
+      k.pair.q = qf;
+      k.pair.q[kHA] = y4;
+      k.pair.q[kHB] = y7;
+      rec.max_shrink_error = std::max(rec.max_shrink_error, std::fabs(y4 + y7 - d) / d);
+      if (!k.frozen) {
+        k.pair.t = t_new;
+        ++k.pair.steps;
+        if (freeze[i] == 2) {
+          k.frozen = true;
+          k.pair.status = cs::PairStatus::ConeDegenerate;
+          ++rec.newly_frozen;
+          continue;
+        }
+        const cs::PairStatus s = cs::check_state(k.pair.q, k.pair.R_min0(), x_max);
+        if (s != cs::PairStatus::Ok) {
+          k.frozen = true;
+          k.pair.status = s;
+          ++rec.newly_frozen;
+        }
+      }
+    }
+    timers.correct += seconds_since(t0);
+    t = t_new;
+    ++nsteps;
+    rec.t = t;
+    rec.T = prof(t);
+    rec.dt = h;
+    return rec;
+  }
+};
+
+// ================================================================================================
+
+Staggered::Staggered() : impl_(std::make_unique<Impl>()) {}
+Staggered::~Staggered() = default;
+Staggered::Staggered(Staggered&&) noexcept = default;
+Staggered& Staggered::operator=(Staggered&&) noexcept = default;
+
+Staggered::Staggered(std::vector<Particle> particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
+                     StaggeredOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  options.validate();
+  m.opt = options;
+  m.mat = std::move(material);
+  m.prof = std::move(temperature);
+  m.setup_material();
+  m.p = std::move(particles);
+  m.setup_particles();
+  m.p0 = m.p;
+  m.dt = m.opt.dt_initial;
+  m.init_solver();
+  m.detect();  // the initial contacts
+}
+
+void Staggered::fix(int particle, int d) {
+  if (particle < 0 || particle >= impl_->N() || d < 0 || d > 5)
+    bad(fmt::format("staggered: fix({}, {}): no such particle or DOF", particle, d));
+  impl_->fixed_user[6 * particle + d] = 1;
+  impl_->pattern_dirty = true;
+}
+
+StepRecord Staggered::step(double t_end) { return impl_->step(t_end); }
+double Staggered::time() const { return impl_->t; }
+double Staggered::dt() const { return impl_->dt; }
+long Staggered::steps() const { return impl_->nsteps; }
+const std::vector<Particle>& Staggered::particles() const { return impl_->p; }
+const std::vector<Particle>& Staggered::initial_particles() const { return impl_->p0; }
+const std::vector<Contact>& Staggered::contacts() const { return impl_->c; }
+const StaggeredOptions& Staggered::options() const { return impl_->opt; }
+const cs::SinterMaterial& Staggered::material() const { return impl_->mat; }
+const cs::TemperatureProfile& Staggered::temperature() const { return impl_->prof; }
+const Timers& Staggered::timers() const { return impl_->timers; }
+double Staggered::x_max_over_R() const { return impl_->x_max; }
+int Staggered::fixed_dofs() const {
+  if (impl_->pattern_dirty) impl_->build_pattern();
+  return static_cast<int>(std::count(impl_->fixed.begin(), impl_->fixed.end(), std::uint8_t{1}));
+}
+
+Eigen::Matrix3d Staggered::homogeneous_strain() const {
+  const auto& p = impl_->p;
+  const auto& p0 = impl_->p0;
+  const double n = static_cast<double>(p.size());
+  Eigen::Vector3d xm = Eigen::Vector3d::Zero(), Xm = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    xm += p[i].x;
+    Xm += p0[i].x;
+  }
+  xm /= n;
+  Xm /= n;
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero(), B = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector3d dX = p0[i].x - Xm, u = (p[i].x - xm) - dX;  // the displacement about the mean
+    A += u * dX.transpose();
+    B += dX * dX.transpose();
+  }
+  // x - xm = (I + F)(X - Xm): F = A B^-1 (least squares); B is singular for a planar or linear set
+  Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(B);
+  const double top = es.eigenvalues().maxCoeff();
+  Eigen::Matrix3d Binv = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const double l = es.eigenvalues()[k];
+    if (l > 1e-12 * top) Binv += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose() / l;
+  }
+  F = A * Binv;
+  return F;
+}
+
+double Staggered::density() const {
+  const auto& p = impl_->p;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double V = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    lo = lo.cwiseMin(p[i].x - Eigen::Vector3d::Constant(p[i].r));
+    hi = hi.cwiseMax(p[i].x + Eigen::Vector3d::Constant(p[i].r));
+    const double r0 = impl_->p0[i].r;
+    V += 4.0 / 3.0 * std::numbers::pi * r0 * r0 * r0;
+  }
+  return V / (hi - lo).prod();
+}
+
+// ================================================================================================
+// save / load
+
+std::string Staggered::save() const {
+  const Impl& m = *impl_;
+  std::ostringstream o;
+  const auto& q = m.opt;
+  o << "netdem-staggered-state 1\n";
+  o << "options " << q.strategy << ' ' << hex(q.dt_initial) << ' ' << hex(q.dt_max) << ' ' << hex(q.dt_min) << ' '
+    << hex(q.alpha) << ' ' << hex(q.eps_lim) << ' ' << hex(q.grow_below) << ' ' << hex(q.shrink_above) << ' '
+    << (q.new_contacts ? 1 : 0) << ' ' << hex(q.x0_over_R) << ' ' << hex(q.x_max_over_R) << ' '
+    << (q.boundary_planes ? 1 : 0) << ' ' << hex(q.boundary_factor) << ' ' << hex(q.E) << ' ' << hex(q.nu) << ' '
+    << hex(q.gmres_tolerance) << ' ' << q.refactor_iterations << '\n';
+  const auto& a = m.mat;
+  std::string name = a.name;
+  for (char& ch : name)
+    if (ch == ' ' || ch == '\n' || ch == '\t') ch = '_';
+  o << "material " << (name.empty() ? "_" : name) << ' ' << hex(a.omega) << ' ' << hex(a.gamma_s) << ' '
+    << hex(a.gamma_gb) << ' ' << hex(a.D_vol0) << ' ' << hex(a.Q_vol) << ' ' << hex(a.deltaD_gb0) << ' '
+    << hex(a.Q_gb) << ' ' << hex(a.deltaD_s0) << ' ' << hex(a.Q_s) << ' ' << hex(a.c_III) << ' ' << hex(a.c_IV) << ' '
+    << hex(a.youngs_modulus) << ' ' << hex(a.poisson_ratio) << '\n';
+  const auto& pt = m.prof.times();
+  const auto& pT = m.prof.temperatures();
+  o << "profile " << pt.size();
+  for (std::size_t i = 0; i < pt.size(); ++i) o << ' ' << hex(pt[i]) << ' ' << hex(pT[i]);
+  if (pt.empty()) o << ' ' << hex(m.prof(0.0));
+  o << '\n';
+  o << "clock " << hex(m.t) << ' ' << hex(m.dt) << ' ' << m.nsteps << ' ' << (m.need_factor ? 1 : 0) << ' '
+    << m.last_iterations << ' ' << m.ref.size() << ' ' << m.rhs_evals << '\n';
+  o << "timers " << hex(m.timers.detect) << ' ' << hex(m.timers.integrate) << ' ' << hex(m.timers.assemble) << ' '
+    << hex(m.timers.factorise) << ' ' << hex(m.timers.solve) << ' ' << hex(m.timers.correct) << '\n';
+  o << "particles " << m.p.size() << '\n';
+  for (std::size_t i = 0; i < m.p.size(); ++i) {
+    o << hex(m.p[i].x[0]) << ' ' << hex(m.p[i].x[1]) << ' ' << hex(m.p[i].x[2]) << ' ' << hex(m.p[i].r) << ' '
+      << hex(m.p0[i].x[0]) << ' ' << hex(m.p0[i].x[1]) << ' ' << hex(m.p0[i].x[2]) << ' ' << hex(m.p0[i].r);
+    int flags = 0;
+    for (int k = 0; k < 6; ++k) flags |= (m.fixed_user[6 * i + k] ? 1 : 0) << k;
+    for (int k = 0; k < 6; ++k) flags |= (m.fixed_plane[6 * i + k] ? 1 : 0) << (6 + k);
+    o << ' ' << flags << '\n';
+  }
+  o << "contacts " << m.c.size() << '\n';
+  for (const auto& k : m.c) {
+    o << k.a << ' ' << k.b << ' ' << (k.frozen ? 1 : 0) << ' ' << static_cast<int>(k.pair.status);
+    for (double v : k.pair.q) o << ' ' << hex(v);
+    for (double v : k.pair.q0) o << ' ' << hex(v);
+    o << ' ' << hex(k.pair.t) << ' ' << hex(k.pair.h) << ' ' << k.pair.steps << ' ' << k.pair.rejected << ' '
+      << k.pair.rhs_evals << ' ' << k.pair.restarts << ' ' << hex(k.t_created) << ' ' << hex(k.L_created) << ' '
+      << hex(k.dL_bar) << ' ' << hex(k.x_start) << '\n';
+  }
+  o << "factor " << m.ref.size() << '\n';
+  for (const auto& e : m.ref) {
+    for (const auto* v : {&e.e1, &e.e2, &e.e3})
+      for (int k = 0; k < 3; ++k) o << hex((*v)[k]) << ' ';
+    o << hex(e.lA0) << ' ' << hex(e.lB0) << ' ' << hex(e.Rm) << '\n';
+  }
+  o << "end\n";
+  return o.str();
+}
+
+Staggered Staggered::load(const std::string& text, const std::string& origin) {
+  Reader r(text, origin);
+  r.expect("netdem-staggered-state");
+  if (r.integer() != 1) r.fail("unknown state version");
+  Staggered s;
+  Impl& m = *s.impl_;
+  auto& q = m.opt;
+  r.expect("options");
+  q.strategy = static_cast<int>(r.integer());
+  q.dt_initial = r.num();
+  q.dt_max = r.num();
+  q.dt_min = r.num();
+  q.alpha = r.num();
+  q.eps_lim = r.num();
+  q.grow_below = r.num();
+  q.shrink_above = r.num();
+  q.new_contacts = r.integer() != 0;
+  q.x0_over_R = r.num();
+  q.x_max_over_R = r.num();
+  q.boundary_planes = r.integer() != 0;
+  q.boundary_factor = r.num();
+  q.E = r.num();
+  q.nu = r.num();
+  q.gmres_tolerance = r.num();
+  q.refactor_iterations = static_cast<int>(r.integer());
+  try {
+    q.validate();
+  } catch (const std::invalid_argument& e) {
+    r.fail(e.what());
+  }
+  r.expect("material");
+  auto& a = m.mat;
+  a.name = r.word();
+  a.omega = r.num();
+  a.gamma_s = r.num();
+  a.gamma_gb = r.num();
+  a.D_vol0 = r.num();
+  a.Q_vol = r.num();
+  a.deltaD_gb0 = r.num();
+  a.Q_gb = r.num();
+  a.deltaD_s0 = r.num();
+  a.Q_s = r.num();
+  a.c_III = r.num();
+  a.c_IV = r.num();
+  a.youngs_modulus = r.num();
+  a.poisson_ratio = r.num();
+  r.expect("profile");
+  const long np = r.integer();
+  if (np < 0 || np > 10'000'000) r.fail("bad profile size");
+  try {
+    if (np == 0) {
+      m.prof = cs::TemperatureProfile::constant(r.num());
+    } else {
+      std::vector<double> tt(np), TT(np);
+      for (long i = 0; i < np; ++i) {
+        tt[i] = r.num();
+        TT[i] = r.num();
+      }
+      m.prof = cs::TemperatureProfile(tt, TT);
+    }
+    m.setup_material();
+  } catch (const std::invalid_argument& e) {
+    r.fail(e.what());
+  }
+  r.expect("clock");
+  m.t = r.num();
+  m.dt = r.num();
+  m.nsteps = r.integer();
+  const bool need_factor = r.integer() != 0;
+  const int last_iterations = static_cast<int>(r.integer());
+  const long nref = r.integer();
+  m.rhs_evals = r.integer();
+  r.expect("timers");
+  m.timers.detect = r.num();
+  m.timers.integrate = r.num();
+  m.timers.assemble = r.num();
+  m.timers.factorise = r.num();
+  m.timers.solve = r.num();
+  m.timers.correct = r.num();
+  r.expect("particles");
+  const long n = r.integer();
+  if (n <= 0 || n > 100'000'000) r.fail("bad particle count");
+  m.p.resize(n);
+  m.p0.resize(n);
+  std::vector<int> flags(n);
+  for (long i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) m.p[i].x[k] = r.num();
+    m.p[i].r = r.num();
+    for (int k = 0; k < 3; ++k) m.p0[i].x[k] = r.num();
+    m.p0[i].r = r.num();
+    flags[i] = static_cast<int>(r.integer());
+  }
+  try {
+    m.setup_particles();
+  } catch (const std::invalid_argument& e) {
+    r.fail(e.what());
+  }
+  for (long i = 0; i < n; ++i)
+    for (int k = 0; k < 6; ++k) {
+      m.fixed_user[6 * i + k] = (flags[i] >> k) & 1;
+      m.fixed_plane[6 * i + k] = (flags[i] >> (6 + k)) & 1;
+    }
+  r.expect("contacts");
+  const long nc = r.integer();
+  if (nc < 0 || nc > 1'000'000'000) r.fail("bad contact count");
+  m.c.reserve(nc);
+  for (long i = 0; i < nc; ++i) {
+    Contact k;
+    k.a = static_cast<int>(r.integer());
+    k.b = static_cast<int>(r.integer());
+    if (k.a < 0 || k.b < 0 || k.a >= n || k.b >= n || k.a == k.b) r.fail(fmt::format("contact {}: bad particles", i));
+    k.frozen = r.integer() != 0;
+    const long st = r.integer();
+    if (st < 0 || st > 5) r.fail(fmt::format("contact {}: bad status", i));
+    k.pair.status = static_cast<cs::PairStatus>(st);
+    for (double& v : k.pair.q) v = r.num();
+    for (double& v : k.pair.q0) v = r.num();
+    k.pair.t = r.num();
+    k.pair.h = r.num();
+    k.pair.steps = r.integer();
+    k.pair.rejected = r.integer();
+    k.pair.rhs_evals = r.integer();
+    k.pair.restarts = r.integer();
+    k.t_created = r.num();
+    k.L_created = r.num();
+    k.dL_bar = r.num();
+    k.x_start = r.num();
+    if (!finite_state(k.pair.q) || !finite_state(k.pair.q0)) r.fail(fmt::format("contact {}: non-finite state", i));
+    m.adj[k.a].push_back(static_cast<int>(m.c.size()));
+    m.adj[k.b].push_back(static_cast<int>(m.c.size()));
+    m.c.push_back(k);
+  }
+  r.expect("factor");
+  if (r.integer() != nref || nref > nc) r.fail("bad factor size");
+  m.ref.resize(nref);
+  for (auto& e : m.ref) {
+    for (auto* v : {&e.e1, &e.e2, &e.e3})
+      for (int k = 0; k < 3; ++k) (*v)[k] = r.num();
+    e.lA0 = r.num();
+    e.lB0 = r.num();
+    e.Rm = r.num();
+  }
+  r.expect("end");
+  m.init_solver();
+  m.pattern_dirty = true;
+  if (nc > 0) {
+    m.build_pattern();
+    // the factor of the saved run: the same contacts, the same elements, the same bits
+    if (nref == nc && !need_factor && m.nfree > 0) {
+      m.assemble(m.ref);
+      const LinearStatus fs = m.solver->factorise(m.K, false);
+      if (!fs.ok) r.fail("the saved factor geometry is singular: " + fs.message);
+      m.need_factor = false;
+    }
+  }
+  m.last_iterations = last_iterations;
+  return s;
+}
+
+}  // namespace netdem::qs::staggered

@@ -1,0 +1,312 @@
+// The staggered sintering scheme (netdem/quasistatic/staggered.hpp; issue 17, docs/staggered.md):
+// a free pair in the network follows the two-particle model, its shrinkage is counted once, a chain
+// and a lattice shrink like the pair, E drops out bit for bit, the shrinkage correction is exact,
+// and a restart is bit-identical.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "netdem/contact/sintering_pair.hpp"
+#include "netdem/quasistatic/staggered.hpp"
+
+namespace {
+
+namespace cs = netdem::contact::sinter;
+namespace st = netdem::qs::staggered;
+using Eigen::Vector3d;
+
+const cs::SinterMaterial& cu() {
+  static const cs::SinterMaterial m = cs::builtin_sinter_material("cu");
+  return m;
+}
+constexpr double kT = 1293.0;  // the Cu benchmark's temperature [K]
+
+double centre_distance(const st::Staggered& s, int a, int b) {
+  return (s.particles()[b].x - s.particles()[a].x).norm();
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// spheres on a simple cubic grid of spacing 2 r, radii r (1 +- jitter), seeded
+std::vector<st::Particle> cubic(int n, double r, double jitter, unsigned seed) {
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<st::Particle> p;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        st::Particle q;
+        q.r = r * (1.0 + jitter * u(gen));
+        q.x = Vector3d(r + 2.0 * r * i, r + 2.0 * r * j, r + 2.0 * r * k);
+        p.push_back(q);
+      }
+  return p;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+TEST(StaggeredSplit, SumIsTheNewDistanceAndTheSignApproaches) {
+  const double RA = 24e-6, RB = 27e-6;
+  // the free model moved y4 by 3 and y7 by 1 (units of 1e-9 m); the network let the centres
+  // approach by 2: y4 takes 3/4 of it, y7 1/4, both decrease
+  const double y4p = 23.9e-6, y7p = 26.8e-6, d_prev = y4p + y7p;
+  const double y4f = y4p - 3e-9, y7f = y7p - 1e-9;
+  const double d_new = d_prev - 2e-9;
+  const auto [y4, y7] = st::corrected_split(y4p, y7p, y4f, y7f, d_new, RA, RB);
+  EXPECT_NEAR(y4 + y7, d_new, 1e-12 * d_new);
+  EXPECT_LT(y4, y4p);
+  EXPECT_LT(y7, y7p);
+  EXPECT_NEAR((y4p - y4) / (y7p - y7), 3.0, 1e-6);
+  // a free pair (the network moved the centres by the free shrinkage): Eq 44 gives 0
+  const auto [z4, z7] = st::corrected_split(y4p, y7p, y4f, y7f, d_prev - 4e-9, RA, RB);
+  EXPECT_NEAR(z4, y4f, 1e-12 * y4f);
+  EXPECT_NEAR(z7, y7f, 1e-12 * y7f);
+  // no free shrinkage: the change is split by the radii
+  const auto [w4, w7] = st::corrected_split(y4p, y7p, y4p, y7p, d_prev - 5.1e-9, RA, RB);
+  EXPECT_NEAR((y4p - w4) / 5.1e-9, RA / (RA + RB), 1e-6);
+  EXPECT_NEAR(w4 + w7, d_prev - 5.1e-9, 1e-12 * d_prev);
+}
+
+// Two particles, A fixed in full: the network must give the two-particle model's Delta L / L0 to
+// 1e-10, step by step, with the model integrated alone over the same steps (advance_free). The
+// load of a step is that step's Delta(y4 + y7); if it were the total since t0 (Eq 13) the
+// shrinkage would grow with the number of steps.
+void two_particles(int strategy, const Vector3d& axis, double RA, double RB) {
+  st::StaggeredOptions o;
+  o.strategy = strategy;
+  o.boundary_planes = false;
+  o.dt_initial = 1e-2;
+  o.dt_max = 10.0;
+  const Vector3d e = axis.normalized();
+  const Vector3d xA(3e-5, -2e-5, 1e-5);
+  std::vector<st::Particle> p{{xA, RA}, {xA + (RA + RB) * e, RB}};
+  st::Staggered s(p, cu(), cs::TemperatureProfile::constant(kT), o);
+  ASSERT_EQ(s.contacts().size(), 1u);
+  for (int k = 0; k < 6; ++k) s.fix(0, k);
+  EXPECT_EQ(s.fixed_dofs(), 6);
+  cs::PairContact ref;
+  ref.q = ref.q0 = s.contacts()[0].pair.q;
+  const double L0 = RA + RB;
+  double worst = 0.0, worst_bar = 0.0, worst_sum = 0.0;
+  int steps = 0;
+  while (s.time() < 600.0) {
+    const st::StepRecord rec = s.step(600.0);
+    ++steps;
+    if (strategy == 2) {
+      ASSERT_TRUE(st::advance_free(ref, cu(), s.temperature(), rec.t, o));
+    }
+    const auto& c = s.contacts()[0];
+    const double d = centre_distance(s, 0, 1);
+    EXPECT_TRUE(same_bits(s.particles()[0].x[0], xA[0]));
+    worst_sum = std::max(worst_sum, std::fabs(c.pair.q[cs::kHA] + c.pair.q[cs::kHB] - d) / d);
+    worst_bar = std::max(worst_bar, std::fabs(c.dL_bar) / L0);
+    if (strategy == 2) {
+      const double shrink_ref = 1.0 - (ref.q[cs::kHA] + ref.q[cs::kHB]) / L0;
+      worst = std::max(worst, std::fabs((1.0 - d / L0) - shrink_ref));
+      EXPECT_NEAR(c.pair.q[cs::kX], ref.q[cs::kX], 1e-10 * ref.q[cs::kX]);
+    }
+  }
+  EXPECT_GT(steps, 20);
+  const double shrink = 1.0 - centre_distance(s, 0, 1) / L0;
+  EXPECT_GT(shrink, 1e-3);  // it did sinter
+  EXPECT_LT(worst_sum, 1e-12) << "y4 + y7 against the centre distance";
+  EXPECT_LT(worst_bar, 1e-12) << "Eq 44 for a free pair";
+  if (strategy == 2) {
+    EXPECT_LT(worst, 1e-10) << "network against the two-particle model, " << steps << " steps";
+  }
+  // against an independent integration of the model (DP45 at rtol 1e-10): the RK4 step-doubling
+  // error of eps_lim = 1e-6 per step is what remains
+  cs::PairContact dp = cs::make_contact(RA, RB, 0.01);
+  dp.q = dp.q0 = s.contacts()[0].pair.q0;
+  cs::IntegratorOptions io;
+  io.rtol = 1e-10;
+  const cs::TemperatureProfile T = cs::TemperatureProfile::constant(kT);
+  cs::PairProblem prob{&cu(), &T, {}, 0.0};
+  ASSERT_EQ(cs::advance(dp, prob, 600.0, io), cs::PairStatus::Ok);
+  const double shrink_dp = 1.0 - (dp.q[cs::kHA] + dp.q[cs::kHB]) / L0;
+  EXPECT_NEAR(shrink, shrink_dp, 1e-4 * shrink_dp) << "strategy " << strategy;
+  std::printf("strategy %d: %d steps, shrinkage %.9e (DP45 %.9e, rel. diff %.2e), network vs model %.2e, "
+              "|sum - d|/d %.2e\n",
+              strategy, steps, shrink, shrink_dp, std::fabs(shrink / shrink_dp - 1.0), worst, worst_sum);
+}
+
+TEST(Staggered, TwoParticlesFollowThePairModelStrategy2) {
+  two_particles(2, Vector3d(0, 0, 1), 25e-6, 25e-6);
+  two_particles(2, Vector3d(1.0, -0.7, 0.4), 24e-6, 27e-6);
+}
+
+TEST(Staggered, TwoParticlesStrategy1) { two_particles(1, Vector3d(0.3, 1.0, -0.2), 24e-6, 27e-6); }
+
+// A straight chain of equal spheres (A anchored) shrinks, bond by bond and as a whole, like the pair.
+TEST(Staggered, ChainShrinksLikeThePair) {
+  const double r = 25e-6;
+  const int n = 6;
+  std::vector<st::Particle> p;
+  for (int i = 0; i < n; ++i) p.push_back({Vector3d(2.0 * r * i, 0.0, 0.0), r});
+  st::StaggeredOptions o;
+  o.boundary_planes = false;
+  st::Staggered s(p, cu(), cs::TemperatureProfile::constant(kT), o);
+  ASSERT_EQ(s.contacts().size(), static_cast<std::size_t>(n - 1));
+  cs::PairContact ref;
+  ref.q = ref.q0 = s.contacts()[0].pair.q;
+  double worst = 0.0;
+  while (s.time() < 300.0) {
+    const auto rec = s.step(300.0);
+    ASSERT_TRUE(st::advance_free(ref, cu(), s.temperature(), rec.t, o));
+    const double shrink_ref = 1.0 - (ref.q[cs::kHA] + ref.q[cs::kHB]) / (2.0 * r);
+    for (int i = 0; i + 1 < n; ++i)
+      worst = std::max(worst, std::fabs(1.0 - centre_distance(s, i, i + 1) / (2.0 * r) - shrink_ref));
+    worst = std::max(worst, std::fabs(-s.homogeneous_strain()(0, 0) - shrink_ref));
+    EXPECT_NEAR(s.homogeneous_strain()(1, 1), 0.0, 1e-14);
+  }
+  EXPECT_LT(worst, 1e-10);
+}
+
+// A simple cubic lattice of equal spheres with the boundary planes of section 3.3: every bond
+// shrinks freely, so the sample shrinks homogeneously by the pair's Delta L / L0 along x, y, z.
+TEST(Staggered, LatticeShrinksLikeThePair) {
+  const double r = 25e-6;
+  const auto p = cubic(4, r, 0.0, 1);
+  st::StaggeredOptions o;
+  st::Staggered s(p, cu(), cs::TemperatureProfile::constant(kT), o);
+  ASSERT_EQ(s.contacts().size(), 3u * 3u * 16u);
+  // the planes hold the 3 lower faces: 16 particles each, one normal DOF
+  EXPECT_EQ(s.fixed_dofs(), 3 * 16);
+  cs::PairContact ref;
+  ref.q = ref.q0 = s.contacts()[0].pair.q;
+  double worst = 0.0, worst_bar = 0.0;
+  while (s.time() < 300.0) {
+    const auto rec = s.step(300.0);
+    ASSERT_TRUE(st::advance_free(ref, cu(), s.temperature(), rec.t, o));
+    const double shrink_ref = 1.0 - (ref.q[cs::kHA] + ref.q[cs::kHB]) / (2.0 * r);
+    const Eigen::Matrix3d F = s.homogeneous_strain();
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::fabs(-F(k, k) - shrink_ref));
+    for (const auto& c : s.contacts()) worst_bar = std::max(worst_bar, std::fabs(c.dL_bar) / (2.0 * r));
+    EXPECT_EQ(rec.new_contacts, 0);
+  }
+  EXPECT_LT(worst, 1e-10);
+  EXPECT_LT(worst_bar, 1e-12);
+  EXPECT_GT(-s.homogeneous_strain()(0, 0), 1e-3);
+}
+
+// A polydisperse sample: some neighbours touch, some only later (new contacts), the bonds pull
+// against each other (Eq 44 is not zero).
+st::Staggered jittered(double E, int strategy = 2) {
+  st::StaggeredOptions o;
+  o.strategy = strategy;
+  o.E = E;
+  return st::Staggered(cubic(3, 25e-6, 0.01, 7), cu(), cs::TemperatureProfile::constant(kT), o);
+}
+
+void expect_same(const st::Staggered& a, const st::Staggered& b) {
+  ASSERT_EQ(a.particles().size(), b.particles().size());
+  ASSERT_EQ(a.contacts().size(), b.contacts().size());
+  EXPECT_TRUE(same_bits(a.time(), b.time()));
+  EXPECT_TRUE(same_bits(a.dt(), b.dt()));
+  for (std::size_t i = 0; i < a.particles().size(); ++i)
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.particles()[i].x[k], b.particles()[i].x[k])) << i << " " << k;
+  for (std::size_t i = 0; i < a.contacts().size(); ++i) {
+    const auto &ca = a.contacts()[i], &cb = b.contacts()[i];
+    ASSERT_EQ(ca.a, cb.a);
+    ASSERT_EQ(ca.b, cb.b);
+    ASSERT_EQ(ca.frozen, cb.frozen);
+    for (int k = 0; k < 5; ++k) ASSERT_TRUE(same_bits(ca.pair.q[k], cb.pair.q[k])) << "contact " << i;
+    ASSERT_TRUE(same_bits(ca.dL_bar, cb.dL_bar));
+  }
+}
+
+TEST(Staggered, YoungsModulusDropsOutBitForBit) {
+  st::Staggered a = jittered(120e9), b = jittered(8.0 * 120e9);
+  int newc = 0;
+  double bar = 0.0;
+  while (a.time() < 400.0) {
+    const auto ra = a.step(400.0);
+    const auto rb = b.step(400.0);
+    newc += ra.new_contacts;
+    EXPECT_EQ(ra.gmres_iterations, rb.gmres_iterations);
+    expect_same(a, b);
+  }
+  for (const auto& c : a.contacts()) bar = std::max(bar, std::fabs(c.dL_bar));
+  EXPECT_GT(bar, 1e-12) << "the sample must load its bonds against each other";
+  std::printf("E x 8: %ld steps, %zu contacts (%d new), max |dL_bar| %.3e m\n", a.steps(), a.contacts().size(), newc,
+              bar);
+}
+
+TEST(Staggered, RestartIsBitIdentical) {
+  for (int strategy : {1, 2}) {
+    st::Staggered a = jittered(120e9, strategy);
+    std::string saved;
+    int refactors_after = 0;
+    while (a.time() < 400.0) {
+      const auto rec = a.step(400.0);
+      if (saved.empty() && a.time() >= 40.0) saved = a.save();
+      else if (!saved.empty() && rec.refactorised) ++refactors_after;
+    }
+    ASSERT_FALSE(saved.empty());
+    st::Staggered b = st::Staggered::load(saved, "saved");
+    while (b.time() < 400.0) b.step(400.0);
+    expect_same(a, b);
+    EXPECT_EQ(a.steps(), b.steps());
+    EXPECT_EQ(a.save().substr(0, 200), b.save().substr(0, 200));
+    std::printf("strategy %d: restart from t = 40 s, %ld steps to 400 s, %d refactorisations after it\n", strategy,
+                a.steps(), refactors_after);
+  }
+}
+
+// A rigid translation of the input and a renumbering of the particles change nothing but rounding.
+TEST(Staggered, InvariantUnderTranslationAndNumbering) {
+  const auto p = cubic(3, 25e-6, 0.01, 11);
+  st::StaggeredOptions o;
+  auto run = [&](const std::vector<st::Particle>& q) {
+    st::Staggered s(q, cu(), cs::TemperatureProfile::constant(kT), o);
+    while (s.time() < 300.0) s.step(300.0);
+    return s;
+  };
+  const st::Staggered a = run(p);
+  std::vector<st::Particle> moved = p;
+  for (auto& q : moved) q.x += Vector3d(1.3e-3, -2.1e-3, 0.7e-3);
+  std::vector<int> perm(p.size());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), std::mt19937(3));
+  std::vector<st::Particle> shuffled(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) shuffled[perm[i]] = p[i];
+  const st::Staggered b = run(moved), c = run(shuffled);
+  const Eigen::Matrix3d Fa = a.homogeneous_strain(), Fb = b.homogeneous_strain(), Fc = c.homogeneous_strain();
+  ASSERT_GT(-Fa(0, 0), 1e-4);
+  EXPECT_LT((Fa - Fb).norm(), 1e-9 * Fa.norm());
+  EXPECT_LT((Fa - Fc).norm(), 1e-9 * Fa.norm());
+  EXPECT_EQ(a.contacts().size(), c.contacts().size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_LT((a.particles()[i].x + Vector3d(1.3e-3, -2.1e-3, 0.7e-3) - b.particles()[i].x).norm(), 1e-9 * 25e-6);
+    EXPECT_LT((a.particles()[i].x - c.particles()[perm[i]].x).norm(), 1e-9 * 25e-6);
+  }
+}
+
+TEST(Staggered, RefusesBadInput) {
+  const auto T = cs::TemperatureProfile::constant(kT);
+  st::StaggeredOptions o;
+  std::vector<st::Particle> p{{Vector3d::Zero(), 25e-6}, {Vector3d(50e-6, 0, 0), -1.0}};
+  EXPECT_THROW(st::Staggered(p, cu(), T, o), std::invalid_argument);
+  p[1].r = 25e-6;
+  p[1].x[0] = std::nan("");
+  EXPECT_THROW(st::Staggered(p, cu(), T, o), std::invalid_argument);
+  p[1].x[0] = 50e-6;
+  st::StaggeredOptions bad = o;
+  bad.strategy = 3;
+  EXPECT_THROW(st::Staggered(p, cu(), T, bad), std::invalid_argument);
+  bad = o;
+  bad.dt_max = -1.0;
+  EXPECT_THROW(st::Staggered(p, cu(), T, bad), std::invalid_argument);
+  cs::SinterMaterial m = cu();
+  m.poisson_ratio = -1.0;
+  EXPECT_THROW(st::Staggered(p, m, T, o), std::invalid_argument);
+  EXPECT_THROW(st::Staggered::load("netdem-staggered-state 1\noptions 2 nonsense", "x"), std::invalid_argument);
+}
+
+}  // namespace
