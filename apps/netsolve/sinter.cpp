@@ -4,7 +4,7 @@
 //   netsolve sinter [--packing FILE | --generate cu [--green-density 0.58] [--seed S]] [--material cu|ti|FILE] [--set KEY=VALUE]...
 //                   [--temperature T | --profile FILE] [--time T_END] [--strategy 1|2] [--dt-max S] [--dt-initial S]
 //                   [--eps-lim E] [--alpha A] [--new-contacts on|off] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--E PA] [--nu NU]
-//                   [--snapshots N] [--restart STATE] [--checkpoints T1,T2,...] [--max-steps N] [--out DIR] [--quiet] [--overwrite] [--allow-unconverged]
+//                   [--planes box|spheres] [--snapshots N] [--restart STATE] [--checkpoints T1,T2,...] [--max-steps N] [--out DIR] [--quiet] [--overwrite] [--allow-unconverged]
 //
 // SI units everywhere (m, s, K, N, Pa). Defaults: the Cu benchmark (the green-body packing of 805
 // spheres made in-process, Cu, 1293 K, 5000 s, strategy 2, dt_max = 10 s, new contacts on).
@@ -18,6 +18,7 @@
 // reach --time ("unstable": a step failed or gave non-finite values; "incomplete": --max-steps, or
 // a green-body packing that missed its target) exits 3 (README.md "Exit status").
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -58,7 +59,7 @@ using netdem::app::write_file_atomic;
 using nlohmann::json;
 
 struct Args {
-  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", restart, checkpoints, out = "results/sinter";
+  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", planes = "box", restart, checkpoints, out = "results/sinter";
   std::vector<std::string> set;
   double green_density = 0.58, temperature = 1293.0, t_end = 5000.0, dt_max = 10.0, dt_initial = st::StaggeredOptions{}.dt_initial,
          eps_lim = st::StaggeredOptions{}.eps_lim, alpha = st::StaggeredOptions{}.alpha, x0 = st::StaggeredOptions{}.x0_over_R,
@@ -278,6 +279,26 @@ std::vector<st::Particle> particles_of(const netdem::packing::Packing& pk) {
   return p;
 }
 
+/// --planes box: the boundary planes of section 3.3 are the lower faces of the packing's box (the
+/// planes Oxy, Oxz, Oyz of a box at the origin; the walls of the green-body route), not those of
+/// the spheres' bounding box that the library uses on its own: a sphere pressed into a wall
+/// (overlap up to ~1 % r at rest) sits below the wall, and the bounding box's face is the deepest
+/// one, which leaves a handful of spheres on the planes (3, 4, 2 of the Cu packing instead of 57,
+/// 63, 88). A centre within boundary_factor * r of a box face gets its normal displacement fixed
+/// through Staggered::fix (saved in the state). Returns the fixed count per axis.
+std::array<int, 3> fix_box_planes(st::Staggered& s, const netdem::packing::Box& box) {
+  std::array<int, 3> n{0, 0, 0};
+  const double lo[3] = {box.x_min, box.y_min, box.z_min};
+  const auto& P = s.particles();
+  for (std::size_t i = 0; i < P.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (P[i].x[k] - lo[k] <= s.options().boundary_factor * P[i].r) {
+        s.fix(static_cast<int>(i), k);
+        ++n[static_cast<std::size_t>(k)];
+      }
+  return n;
+}
+
 // ---- snapshots
 void write_snapshot(const fs::path& out, int k, const st::Staggered& s) {
   const auto& P = s.particles();
@@ -343,7 +364,7 @@ json material_json(const sp::SinterMaterial& m, const std::string& source) {
 /// The options that a restart state fixes: given with --restart they are refused.
 const char* const kFixedByState[] = {"--packing", "--generate", "--green-density", "--seed", "--material", "--set",
                                      "--temperature", "--profile", "--strategy", "--dt-max", "--dt-initial", "--eps-lim",
-                                     "--alpha", "--new-contacts", "--x0", "--x-max", "--E", "--nu"};
+                                     "--alpha", "--new-contacts", "--x0", "--x-max", "--E", "--nu", "--planes"};
 
 int run(const Args& a, const CLI::App& app, const std::string& command) {
   namespace na = netdem::app;
@@ -467,6 +488,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
         throw UsageError(fmt::format("--checkpoints: {} s is not between the start ({} s) and --time ({} s)", c, t0, a.t_end));
   }
   st::StaggeredOptions so;
+  std::array<int, 3> box_fixed{-1, -1, -1};  // particles fixed on the box planes (-1: --planes spheres, or a restart)
   sp::TemperatureProfile prof = sp::TemperatureProfile::constant(restart ? 1.0 : a.temperature);
   if (!restart) {
     so.strategy = a.strategy;
@@ -488,6 +510,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     if (!generate) {
       try {
         sim.emplace(particles_of(pk), *mat, prof, so);  // bad particles or options: exit 2, nothing written
+        if (a.planes == "box") box_fixed = fix_box_planes(*sim, pk.box);
       } catch (const std::invalid_argument& e) {
         throw UsageError(fmt::format("--packing {}: {}", netdem::packing::quote_input(a.packing, 200), e.what()));
       }
@@ -549,6 +572,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     } else {
       na::activity() = "setting up the network";
       sim.emplace(particles_of(pk), *mat, prof, so);
+      if (a.planes == "box") box_fixed = fix_box_planes(*sim, pk.box);
     }
   }
 
@@ -689,6 +713,12 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     j["t_stop_s"] = s.time();
     j["x_max_over_R_in_use"] = s.x_max_over_R();
     j["fixed_dofs"] = s.fixed_dofs();
+    j["boundary_planes"] = restart ? json("as in the restart state")
+                           : a.planes == "box"
+                               ? json({{"planes", "lower faces of the packing's box"},
+                                       {"box_lower_corner", {pk.box.x_min, pk.box.y_min, pk.box.z_min}},
+                                       {"particles_on_x_y_z_planes", {box_fixed[0], box_fixed[1], box_fixed[2]}}})
+                               : json({{"planes", "lower faces of the spheres' bounding box (the library's own)"}});
     j["final"] = {{"t", f.t},
                   {"T", f.T},
                   {"shrink_x", f.sx},
@@ -830,6 +860,10 @@ int run_sinter_command(int argc, char** argv) {
   app.add_option("--x-max", a.x_max, "a contact freezes at x / R_min = this (0: the dihedral limit sin(psi/2))")->capture_default_str();
   app.add_option("--E", a.E, "Young's modulus of the bonds [Pa] (0: the material's E)")->capture_default_str();
   app.add_option("--nu", a.nu, "Poisson's ratio of the bonds (-1: the material's nu)")->capture_default_str();
+  app.add_option("--planes", a.planes, "boundary planes (section 3.3): box = the lower faces of the packing's box (the "
+                                      "walls), spheres = those of the spheres' bounding box only")
+      ->check(CLI::IsMember({"box", "spheres"}))
+      ->capture_default_str();
   app.add_option("--snapshots", a.snapshots, "particles_K.vtp / bonds_K.vtp at N equally spaced times, plus the last")->capture_default_str();
   app.add_option("--restart", a.restart, "continue from a state.txt of an earlier run to --time, into a new --out folder");
   app.add_option("--checkpoints", a.checkpoints, "comma list of times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
