@@ -39,6 +39,7 @@ namespace fs = std::filesystem;
 using netdem::app::Field;
 int run_yield_command(int argc, char** argv);  // apps/netsolve/yield.cpp: netsolve yield | yield-merge
 int run_sinter_pair_command(int argc, char** argv);  // apps/netsolve/sinter_pair.cpp: netsolve sinter-pair
+int run_sinter_command(int argc, char** argv);       // apps/netsolve/sinter.cpp: netsolve sinter
 
 namespace {
 
@@ -347,10 +348,11 @@ int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
   if (argc > 1 && std::string(argv[1]) == "sinter-pair") return run_sinter_pair_command(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "sinter") return run_sinter_command(argc, argv);
   if (argc > 1 && argv[1][0] != '-' && std::string(argv[1]) != "pack" && std::string(argv[1]) != "compact") {
     std::string word;
     for (const char* c = argv[1]; *c != '\0' && word.size() < 80; ++c) word += std::isprint(static_cast<unsigned char>(*c)) ? *c : '?';
-    std::fprintf(stderr, "netsolve: error: unknown subcommand '%s': use pack, compact, yield, yield-merge or sinter-pair (see --help)\n",
+    std::fprintf(stderr, "netsolve: error: unknown subcommand '%s': use pack, compact, yield, yield-merge, sinter-pair or sinter (see --help)\n",
                  word.c_str());
     return netdem::app::exit_code::usage;
   }
@@ -359,6 +361,7 @@ int main(int argc, char** argv) {
   app.add_subcommand("yield", "yield surface probes after precompaction (docs/yield.md; own --help)");
   app.add_subcommand("yield-merge", "assemble yield_points.csv from the probe files of several yield runs");
   app.add_subcommand("sinter-pair", "one two-particle sintering contact against time (docs/sintering_pair.md; own --help)");
+  app.add_subcommand("sinter", "the staggered sintering scheme of Ivannikov et al. in 3D (docs/staggered.md; own --help)");
   PackArgs pa;
   CompactArgs ca;
   RunArgs ra;

@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# Command-line checks of `netsolve sinter` (docs/staggered.md "netsolve sinter"): a 3x3x3 cubic
+# lattice of spheres of radius 25e-6 m (spacing 0.999 of a diameter, so that every neighbour pair
+# is an initial contact; the lower corner of the spheres at the origin, on the boundary planes)
+# sintered for 100 s writes the documented files and headers, finite rows with t increasing,
+# equal shrinkage along x, y and z, the same history.csv twice, and a run to t1 = 50 s continued
+# from its state.txt to 100 s ends on the last row of an uninterrupted run whose steps end at t1
+# (--checkpoints 50), bit for bit. Bad input gives
+# one line on stderr, exit 2 and no output folder.
+# usage: test_netsolve_sinter.sh PATH/TO/netsolve
+set -u
+tool="$1"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+ok() {  # name condition-command...
+  local name="$1"
+  shift
+  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
+}
+
+# the lattice: centres at 25e-6 + k * 49.95e-6, k = 0, 1, 2
+lat="$tmp/lattice.csv"
+awk 'BEGIN {
+  s = 49.95e-6; r = 25e-6; L = 2 * r + 2 * s
+  printf "# box 0 0 0 %.17g %.17g %.17g\n# dim 3\n# seed 7\nid,x,y,z,r\n", L, L, L
+  n = 0
+  for (i = 0; i < 3; i++) for (j = 0; j < 3; j++) for (k = 0; k < 3; k++)
+    printf "%d,%.17g,%.17g,%.17g,%.17g\n", n++, r + i * s, r + j * s, r + k * s, r
+}' >"$lat"
+
+# ---- refusals: one line naming the problem, exit 2, no folder
+check_bad_rc() {  # like check_bad, and the exit status must be 2
+  local name="$1"
+  check_bad "$@"
+  "$tool" "${@:3}" --out "$tmp/$name" >/dev/null 2>&1
+  local rc=$?
+  if [ "$rc" -ne 2 ]; then fail=$((fail + 1)); echo "FAIL $name: exit $rc, not 2"; fi
+  rm -rf "${tmp:?}/$name"
+}
+check_bad_rc sn_missing_packing "no_such.csv" sinter --packing "$tmp/no_such.csv" --time 100 --quiet
+check_bad_rc sn_negative_time "time" sinter --packing "$lat" --time -5 --quiet
+check_bad_rc sn_strategy "strategy" sinter --packing "$lat" --time 100 --strategy 3 --quiet
+check_bad_rc sn_nan_temperature "temperature" sinter --packing "$lat" --time 100 --temperature nan --quiet
+check_bad_rc sn_material "material" sinter --packing "$lat" --material unobtainium --quiet
+check_bad_rc sn_new_contacts "new-contacts" sinter --packing "$lat" --new-contacts maybe --quiet
+check_bad_rc sn_both "excludes" sinter --packing "$lat" --generate cu --quiet
+check_bad_rc sn_restart_missing "no_state.txt" sinter --restart "$tmp/no_state.txt" --quiet
+printf 'id,x,y,r\n' >"$tmp/flat.csv"
+check_bad_rc sn_2d_packing "flat.csv" sinter --packing "$tmp/flat.csv" --quiet
+
+# ---- a run
+hist_header="t,T,dt,shrink_x,shrink_y,shrink_z,density,neck_mean,neck_std,contacts,newton,substeps"
+steps_header="step,t,dt,rejected,contacts_substepped,new_contacts,newly_frozen,gmres_iterations,refactorised,max_error,max_shrink_error"
+run() {  # OUT ARGS...: a quiet run of the lattice
+  local out="$1"
+  shift
+  "$tool" sinter --packing "$lat" --quiet --out "$out" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+}
+a="$tmp/a"
+run "$a" --time 100
+ok sn_exit [ $? -eq 0 ]
+ok sn_quiet [ ! -s "$tmp/stderr" ]
+for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json report.md history.svg snapshots.pvd \
+         particles_000.vtp bonds_000.vtp particles_005.vtp bonds_005.vtp; do
+  ok "sn_file_$f" [ -s "$a/$f" ]
+done
+ok sn_no_marker [ ! -e "$a/.incomplete" ]
+ok sn_history_header [ "$(head -1 "$a/history.csv")" = "$hist_header" ]
+ok sn_steps_header [ "$(head -1 "$a/steps.csv")" = "$steps_header" ]
+ok sn_dlbar_header [ "$(head -1 "$a/dL_bar.csv")" = "a,b,L0,dL_bar,dL_bar_over_L0,neck" ]
+ok sn_status grep -q '"status": "ok"' "$a/summary.json"
+ok sn_seed grep -q '"seed": 7' "$a/summary.json"
+ok sn_no_nan bash -c "! grep -qi 'nan\|inf' '$a/history.csv' '$a/steps.csv' '$a/dL_bar.csv'"
+# a row at t = 0, then one per step with t increasing to 100, 12 fields each, 54 initial contacts
+ok sn_first_row awk -F, 'NR == 2 { exit !($1 == 0 && $10 == 54) }' "$a/history.csv"
+ok sn_rows awk -F, 'NR > 1 { if (NF != 12) exit 1; if (NR > 2 && !($1 > t)) exit 1; t = $1 } END { exit !(NR > 3 && t == 100) }' "$a/history.csv"
+ok sn_steps_rows [ "$(($(wc -l <"$a/history.csv") - 1))" -eq "$(wc -l <"$a/steps.csv")" ]
+ok sn_dlbar_rows [ "$(($(wc -l <"$a/dL_bar.csv") - 1))" -eq "$(tail -1 "$a/history.csv" | cut -d, -f10)" ]
+# the lattice shrinks, and alike along x, y and z
+ok sn_shrinks awk -F, 'END { exit !($4 > 0 && $5 > 0 && $6 > 0) }' "$a/history.csv"
+ok sn_isotropic awk -F, 'NR > 2 { d1 = $4 - $5; d2 = $4 - $6; if (d1 < 0) d1 = -d1; if (d2 < 0) d2 = -d2;
+  if (d1 > 1e-6 * $4 + 1e-15 || d2 > 1e-6 * $4 + 1e-15) exit 1 }' "$a/history.csv"
+# deterministic
+b="$tmp/b"
+run "$b" --time 100
+ok sn_deterministic cmp -s "$a/history.csv" "$b/history.csv"
+# restart: an uninterrupted run to 100 s whose steps end at t1 = 50 s (--checkpoints 50, which
+# also writes state_1.txt there), against a run to t1 continued from its state.txt to 100 s
+c="$tmp/c"
+run "$c" --time 100 --checkpoints 50
+ok sn_checkpoint_exit [ $? -eq 0 ]
+ok sn_checkpoint_file [ -s "$c/state_1.txt" ]
+ok sn_checkpoint_row grep -q '^50,' "$c/history.csv"
+run "$tmp/r1" --time 50
+ok sn_restart_first [ $? -eq 0 ]
+ok sn_restart_t1 [ "$(tail -1 "$tmp/r1/history.csv")" = "$(grep '^50,' "$c/history.csv")" ]
+"$tool" sinter --restart "$tmp/r1/state.txt" --time 100 --quiet --out "$tmp/r2" >/dev/null 2>"$tmp/stderr"
+ok sn_restart_exit [ $? -eq 0 ]
+ok sn_restart_last [ "$(tail -1 "$tmp/r2/history.csv")" = "$(tail -1 "$c/history.csv")" ]
+ok sn_restart_rows [ "$(awk -F, 'NR > 2' "$tmp/r2/history.csv")" = "$(awk -F, 'NR > 1 && $1 > 50' "$c/history.csv")" ]
+ok sn_restart_start awk -F, 'NR == 2 { exit !($1 == 50) }' "$tmp/r2/history.csv"
+ok sn_restart_seed grep -q '"seed": 7' "$tmp/r2/summary.json"
+ok sn_restart_old_untouched [ "$(tail -1 "$tmp/r1/history.csv")" = "$(grep '^50,' "$c/history.csv")" ]
+# the same from the checkpoint's state
+"$tool" sinter --restart "$c/state_1.txt" --time 100 --quiet --out "$tmp/r3" >/dev/null 2>&1
+ok sn_restart_checkpoint [ "$(tail -1 "$tmp/r3/history.csv")" = "$(tail -1 "$c/history.csv")" ]
+# the state fixes the options: one given with --restart is refused
+check_bad_rc sn_restart_option "strategy" sinter --restart "$tmp/r1/state.txt" --strategy 1 --quiet
+check_bad_rc sn_restart_time "time" sinter --restart "$tmp/r1/state.txt" --time 1 --quiet
+# a folder that holds a run is refused
+cp "$a/history.csv" "$tmp/a_history.csv"
+"$tool" sinter --packing "$lat" --time 100 --quiet --out "$a" >/dev/null 2>"$tmp/stderr"
+rc=$?
+ok sn_foreign_out bash -c "[ $rc -eq 2 ] && [ \$(grep -c . '$tmp/stderr') -eq 1 ] && grep -q 'holds the files of' '$tmp/stderr'"
+ok sn_foreign_out_untouched cmp -s "$a/history.csv" "$tmp/a_history.csv"
+finish
