@@ -281,21 +281,16 @@ std::vector<st::Particle> particles_of(const netdem::packing::Packing& pk) {
 
 /// --planes box: the boundary planes of section 3.3 are the lower faces of the packing's box (the
 /// planes Oxy, Oxz, Oyz of a box at the origin; the walls of the green-body route), not those of
-/// the spheres' bounding box that the library uses on its own: a sphere pressed into a wall
-/// (overlap up to ~1 % r at rest) sits below the wall, and the bounding box's face is the deepest
-/// one, which leaves a handful of spheres on the planes (3, 4, 2 of the Cu packing instead of 57,
-/// 63, 88). A centre within boundary_factor * r of a box face gets its normal displacement fixed
-/// through Staggered::fix (saved in the state). Returns the fixed count per axis.
-std::array<int, 3> fix_box_planes(st::Staggered& s, const netdem::packing::Box& box) {
+/// the spheres' bounding box: a sphere pressed into a wall (overlap up to ~1 % r at rest) sits
+/// below the wall, and the bounding box's face is the deepest one, which leaves a handful of
+/// spheres on the planes (3, 4, 2 of the Cu packing instead of 57, 63, 88). Sets
+/// StaggeredOptions::plane_origin; returns the count of spheres on each plane (the library's rule).
+std::array<int, 3> box_plane_counts(const std::vector<st::Particle>& P, const netdem::packing::Box& box, double factor) {
   std::array<int, 3> n{0, 0, 0};
   const double lo[3] = {box.x_min, box.y_min, box.z_min};
-  const auto& P = s.particles();
   for (std::size_t i = 0; i < P.size(); ++i)
     for (int k = 0; k < 3; ++k)
-      if (P[i].x[k] - lo[k] <= s.options().boundary_factor * P[i].r) {
-        s.fix(static_cast<int>(i), k);
-        ++n[static_cast<std::size_t>(k)];
-      }
+      if (P[i].x[k] - lo[k] <= factor * P[i].r) ++n[static_cast<std::size_t>(k)];
   return n;
 }
 
@@ -348,6 +343,8 @@ json options_json(const st::StaggeredOptions& o) {
           {"x_max_over_R", o.x_max_over_R},
           {"boundary_planes", o.boundary_planes},
           {"boundary_factor", o.boundary_factor},
+          {"plane_origin", std::isnan(o.plane_origin[0]) ? json("bounding box of the spheres")
+                                                         : json({o.plane_origin[0], o.plane_origin[1], o.plane_origin[2]})},
           {"E", o.E},
           {"nu", o.nu},
           {"gmres_tolerance", o.gmres_tolerance},
@@ -509,8 +506,11 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     if (!a.profile.empty()) prof = sp::TemperatureProfile::read_csv(a.profile);
     if (!generate) {
       try {
+        if (a.planes == "box") {
+          so.plane_origin = {pk.box.x_min, pk.box.y_min, pk.box.z_min};
+          box_fixed = box_plane_counts(particles_of(pk), pk.box, so.boundary_factor);
+        }
         sim.emplace(particles_of(pk), *mat, prof, so);  // bad particles or options: exit 2, nothing written
-        if (a.planes == "box") box_fixed = fix_box_planes(*sim, pk.box);
       } catch (const std::invalid_argument& e) {
         throw UsageError(fmt::format("--packing {}: {}", netdem::packing::quote_input(a.packing, 200), e.what()));
       }
@@ -571,8 +571,11 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
       status.add("incomplete", fmt::format("the green-body packing is {}: {}; not sintered (packing.csv is kept)", res.status, res.reason));
     } else {
       na::activity() = "setting up the network";
+      if (a.planes == "box") {
+        so.plane_origin = {pk.box.x_min, pk.box.y_min, pk.box.z_min};
+        box_fixed = box_plane_counts(particles_of(pk), pk.box, so.boundary_factor);
+      }
       sim.emplace(particles_of(pk), *mat, prof, so);
-      if (a.planes == "box") box_fixed = fix_box_planes(*sim, pk.box);
     }
   }
 

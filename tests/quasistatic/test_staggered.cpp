@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -309,4 +310,29 @@ TEST(Staggered, RefusesBadInput) {
   EXPECT_THROW(st::Staggered::load("netdem-staggered-state 1\noptions 2 nonsense", "x"), std::invalid_argument);
 }
 
+}  // namespace
+
+namespace {
+// The planes of section 3.3 at the packing box (plane_origin) or at the spheres' bounding box: a
+// sphere pressed 0.7 % r into the x wall moves the bounding-box face and leaves the others off it.
+TEST(Staggered, BoundaryPlanesAtTheBoxOrTheBoundingBox) {
+  const double r = 25e-6;
+  auto p = cubic(4, r, 0.0, 1);
+  p[0].x[0] -= 0.007 * r;
+  st::StaggeredOptions o;
+  const auto T = cs::TemperatureProfile::constant(kT);
+  const st::Staggered bbox(p, cu(), T, o);
+  o.plane_origin = {0.0, 0.0, 0.0};
+  const st::Staggered box(p, cu(), T, o);
+  // the pressed sphere loses its 3 bonds (2.007 r and more) and is fixed in full (6). Bounding box:
+  // the x plane holds no other sphere, so the 63-sphere cluster keeps its x translation and is
+  // held at one DOF (1); y and z hold 15 others each: 6 + 1 + 30 = 37. The box: 15 others on each
+  // of the three planes: 6 + 45 = 51.
+  EXPECT_EQ(bbox.fixed_dofs(), 37);
+  EXPECT_EQ(box.fixed_dofs(), 51);
+  o.plane_origin = {0.0, std::nan(""), 0.0};  // per axis: y from the bounding box (the same here)
+  EXPECT_EQ(st::Staggered(p, cu(), T, o).fixed_dofs(), 51);
+  o.plane_origin = {std::numeric_limits<double>::infinity(), 0.0, 0.0};
+  EXPECT_THROW(st::Staggered(p, cu(), T, o), std::invalid_argument);
+}
 }  // namespace

@@ -18,7 +18,9 @@
 // contact's step is a step-doubling estimate of RK4.
 //
 // Units: SI (m, s, K, N). Documentation: docs/staggered.md.
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -48,14 +50,21 @@ struct StaggeredOptions {
   /// dihedral limit sin(psi/2) with cos(psi/2) = gamma_gb / (2 gamma_s) (notes §4.6).
   double x_max_over_R = 0.0;
   /// Boundary conditions of section 3.3: a centre within boundary_factor * r of one of the three
-  /// lower faces of the packing's bounding box (the planes Oxy, Oxz, Oyz of a packing whose box
-  /// starts at the origin) stays on that plane (its normal displacement is fixed).
+  /// planes (the planes Oxy, Oxz, Oyz of a packing whose box starts at the origin; see
+  /// plane_origin) stays on that plane (its normal displacement is fixed).
   bool boundary_planes = true;
   double boundary_factor = 1.001;
+  /// Where the three planes are: x = plane_origin[0], y = [1], z = [2] (the lower corner of the
+  /// packing's box: the walls of the green-body route, where a sphere pressed into a wall sits up
+  /// to ~1 % r beyond it). NaN (the default): the lower faces of the spheres' bounding box.
+  std::array<double, 3> plane_origin{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+                                     std::numeric_limits<double>::quiet_NaN()};
   double E = 0.0;   ///< Young's modulus of the bond [Pa]; 0: the material's E
   double nu = -1.0; ///< Poisson's ratio of the bond; -1: the material's nu
   double gmres_tolerance = 1e-12;  ///< relative residual of the network solve with a reused factor
-  int refactor_iterations = 12;    ///< refactorise for the next step when a solve took more GMRES iterations
+  /// Refactorise for the next step once the solves since the last factorisation took more GMRES
+  /// iterations than this, or than a factorisation costs (0.1 nnz(L) / n iterations), the larger.
+  int refactor_iterations = 12;
   /// Throws std::invalid_argument (one line) naming the first bad value.
   void validate() const;
 };

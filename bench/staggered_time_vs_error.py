@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Run time against error of the staggered scheme's two time-marching strategies (issue 17, "Strategy 1 against
+strategy 2 at equal accuracy").
+
+usage: /usr/bin/python3 bench/staggered_time_vs_error.py PACKING.csv [--bench build/bench/bench_staggered]
+           [--time 1000] [--eps 1e-4,1e-5,1e-6,1e-7] [--ref-eps 1e-10] [--out bench/results/staggered_time_vs_error]
+
+Every run sinters the same packing (Cu set, 1293 K, new contacts on, dt_max = 10 s). The reference is strategy 2 at
+--ref-eps. The error is that of the mean shrinkage (the three axes' average) and of the mean neck at --time, relative
+to the reference. Writes OUT.csv and OUT.md (with the machine). One run per setting: the run times are single
+measurements (this machine varies by about 10 %).
+"""
+import argparse
+import os
+import platform
+import re
+import subprocess
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.abspath(os.path.join(HERE, ".."))
+
+
+def run(bench, packing, strategy, eps, t_end):
+    out = subprocess.run([bench, packing, "--strategy", str(strategy), "--eps-lim", str(eps), "--time", str(t_end)],
+                         check=True, capture_output=True, text=True).stdout
+    sh = [float(v) for v in re.search(r"shrink (\S+) (\S+) (\S+)", out).groups()]
+    neck = float(re.search(r"neck (\S+)", out).group(1))
+    wall = float(re.search(r"wall (\S+) s", out).group(1))
+    steps = int(re.search(r"steps (\d+)", out).group(1))
+    sub = int(re.search(r"substeps (\d+)", out).group(1))
+    return {"shrink": sum(sh) / 3, "neck": neck, "wall": wall, "steps": steps, "substeps": sub}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("packing")
+    ap.add_argument("--bench", default=os.path.join(REPO, "build", "bench", "bench_staggered"))
+    ap.add_argument("--time", type=float, default=1000.0)
+    ap.add_argument("--eps", default="1e-4,1e-5,1e-6,1e-7")
+    ap.add_argument("--ref-eps", type=float, default=1e-10)
+    ap.add_argument("--out", default=os.path.join(REPO, "bench", "results", "staggered_time_vs_error"))
+    a = ap.parse_args()
+    ref = run(a.bench, a.packing, 2, a.ref_eps, a.time)
+    rows = []
+    for s in (1, 2):
+        for e in [float(x) for x in a.eps.split(",")]:
+            r = run(a.bench, a.packing, s, e, a.time)
+            r.update(strategy=s, eps=e, err_shrink=abs(r["shrink"] / ref["shrink"] - 1), err_neck=abs(r["neck"] / ref["neck"] - 1))
+            rows.append(r)
+            print(f"strategy {s} eps {e:g}: {r['wall']:.2f} s, error {r['err_shrink']:.2e} (shrink) {r['err_neck']:.2e} (neck)",
+                  flush=True)
+    with open(a.out + ".csv", "w") as f:
+        f.write("strategy,eps_lim,wall_s,steps,substeps,shrink_mean,neck_mean,rel_error_shrink,rel_error_neck\n")
+        for r in rows:
+            f.write(f"{r['strategy']},{r['eps']:g},{r['wall']:.3f},{r['steps']},{r['substeps']},{r['shrink']:.9e},"
+                    f"{r['neck']:.9e},{r['err_shrink']:.3e},{r['err_neck']:.3e}\n")
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    with open(a.out + ".md", "w") as f:
+        f.write(f"# Staggered scheme: run time against error of strategies 1 and 2\n\n"
+                f"`{' '.join(['bench/staggered_time_vs_error.py', a.packing, '--time', str(a.time), '--eps', a.eps])}`; "
+                f"machine: {cpu}, one core. Reference: strategy 2 at eps_lim = {a.ref_eps:g} "
+                f"({ref['wall']:.2f} s, {ref['steps']} steps; shrinkage {ref['shrink']:.9e}, neck {ref['neck']:.9e}).\n\n"
+                "| strategy | eps_lim | run time [s] | steps | sub-steps | error of the mean shrinkage | error of the mean neck |\n"
+                "|---|---|---|---|---|---|---|\n")
+        for r in rows:
+            f.write(f"| {r['strategy']} | {r['eps']:g} | {r['wall']:.2f} | {r['steps']} | {r['substeps']} | {r['err_shrink']:.2e} | "
+                    f"{r['err_neck']:.2e} |\n")
+
+
+if __name__ == "__main__":
+    main()
