@@ -86,7 +86,7 @@ struct Row {
 constexpr const char* kHistoryHeader = "t,T,dt,shrink_x,shrink_y,shrink_z,density,neck_mean,neck_std,contacts,newton,substeps";
 constexpr const char* kStepsHeader =
     "step,t,dt,rejected,contacts_substepped,new_contacts,newly_frozen,gmres_iterations,refactorised,max_error,max_shrink_error";
-constexpr const char* kDLbarHeader = "a,b,L0,dL_bar,dL_bar_over_L0,neck";
+constexpr const char* kDLbarHeader = "a,b,L0,dL_bar,dL_bar_over_L0,neck,t_created";
 
 // t and dt with 17 digits: a t read back from history.csv is the same double (--time t1 of a
 // restart test stops exactly at a step of the uninterrupted run)
@@ -709,7 +709,8 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
       const double L0 = c.L_created;
       dl.push_back(c.dL_bar);
       dlr.push_back(L0 > 0.0 ? c.dL_bar / L0 : 0.0);
-      dcsv += fmt::format("{},{},{:.17g},{:.17g},{:.17g},{:.10g}\n", c.a, c.b, L0, c.dL_bar, dlr.back(), c.pair.x_over_R());
+      dcsv += fmt::format("{},{},{:.17g},{:.17g},{:.17g},{:.10g},{:.17g}\n", c.a, c.b, L0, c.dL_bar, dlr.back(), c.pair.x_over_R(),
+                          c.t_created);
     }
     write_file_atomic(out / "dL_bar.csv", dcsv);
     j["completed"] = completed;

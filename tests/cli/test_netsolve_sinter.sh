@@ -67,7 +67,7 @@ done
 ok sn_no_marker [ ! -e "$a/.incomplete" ]
 ok sn_history_header [ "$(head -1 "$a/history.csv")" = "$hist_header" ]
 ok sn_steps_header [ "$(head -1 "$a/steps.csv")" = "$steps_header" ]
-ok sn_dlbar_header [ "$(head -1 "$a/dL_bar.csv")" = "a,b,L0,dL_bar,dL_bar_over_L0,neck" ]
+ok sn_dlbar_header [ "$(head -1 "$a/dL_bar.csv")" = "a,b,L0,dL_bar,dL_bar_over_L0,neck,t_created" ]
 ok sn_status grep -q '"status": "ok"' "$a/summary.json"
 ok sn_seed grep -q '"seed": 7' "$a/summary.json"
 ok sn_no_nan bash -c "! grep -qi 'nan\|inf' '$a/history.csv' '$a/steps.csv' '$a/dL_bar.csv'"
