@@ -122,7 +122,9 @@ class Staggered {
 
   /// One accepted step, ending at most at t_end (and never across a breakpoint of T(t)).
   /// Throws std::runtime_error (one line) when a step cannot be made (dt below dt_min, a singular
-  /// network, a failed solve).
+  /// network, a failed solve). The state is then that of the last accepted step (positions, time
+  /// and pair states untouched), with the new contacts detected at its time and a smaller dt
+  /// proposal: save() of it is a valid restart state.
   StepRecord step(double t_end);
 
   double time() const;
