@@ -88,9 +88,14 @@ fi
 
 # ---- exit 3, unstable: pure Newton (no drag) on a frictionless packing with Eq 2 down to first
 # touch (--first-touch 0: infinite stiffness at u = 0) diverges; the run stops with one line naming
-# the first bad increment and keeps what it wrote, marked
+# the first bad increment and keeps what it wrote, marked.
+# Whether and where this chaotic run diverges depends on the BLAS kernels that OpenBLAS picks for
+# the CPU (measured 2026-12-02 with OPENBLAS_CORETYPE: Haswell diverges from increment 2; SkylakeX,
+# Sandybridge and Nehalem stay unconverged for 20 increments without diverging), so the diverging
+# cases pin the kernels (an OpenBLAS without DYNAMIC_ARCH ignores the variable).
+export_kernels() { OPENBLAS_CORETYPE=Haswell "$@"; }
 s="$tmp/unstable"
-"$ns" compact --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --quiet --out "$s" >/dev/null 2>"$tmp/stderr"
+export_kernels "$ns" compact --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --quiet --out "$s" >/dev/null 2>"$tmp/stderr"
 rc=$?
 if [ "$rc" -eq 3 ] && status_is "$s" unstable && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] &&
    grep -q "diverges from increment 2" "$tmp/stderr" && grep -q '^# stopped: ' "$s/history.csv" &&
@@ -101,7 +106,7 @@ else
   ko "unstable_stop rc=$rc"
 fi
 # --allow-unconverged does not hide a stopped run
-"$ns" compact --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --quiet --allow-unconverged --out "$tmp/unstable2" >/dev/null 2>"$tmp/stderr"
+export_kernels "$ns" compact --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --quiet --allow-unconverged --out "$tmp/unstable2" >/dev/null 2>"$tmp/stderr"
 rc=$?
 if [ "$rc" -eq 3 ] && status_is "$tmp/unstable2" unstable; then ok; else ko "unstable_not_allowed rc=$rc"; fi
 
@@ -118,7 +123,7 @@ else
 fi
 # a diverging precompaction stops the yield run before unloading: unstable, exit 3
 yu="$tmp/yield_unstable"
-"$ns" yield --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --directions 4 --jobs 1 --quiet --out "$yu" >/dev/null 2>"$tmp/stderr"
+export_kernels "$ns" yield --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --directions 4 --jobs 1 --quiet --out "$yu" >/dev/null 2>"$tmp/stderr"
 rc=$?
 if [ "$rc" -eq 3 ] && status_is "$yu" unstable && grep -q "diverges from increment 2" "$tmp/stderr" &&
    grep -q '^# stopped: ' "$yu/history.csv" && [ ! -e "$yu/unload.csv" ] && [ ! -e "$yu/.incomplete" ]; then
