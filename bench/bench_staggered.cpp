@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   std::printf("particles %zu contacts %zu -> %zu (frozen %d) steps %ld rejected %ld substeps %ld refactorisations %ld "
               "gmres %ld\n",
               p.size(), c0, s.contacts().size(), frozen, s.steps(), rejected, substeps, refactor, gmres);
-  std::printf("shrink %.6e %.6e %.6e density %.5f neck %.5f\n", -F(0, 0), -F(1, 1), -F(2, 2), s.density(), neck);
+  std::printf("shrink %.9e %.9e %.9e density %.7f neck %.9f\n", -F(0, 0), -F(1, 1), -F(2, 2), s.density(), neck);
   std::printf("wall %.3f s: detect %.3f integrate %.3f assemble %.3f factorise %.3f solve %.3f correct %.3f\n", wall,
               tm.detect, tm.integrate, tm.assemble, tm.factorise, tm.solve, tm.correct);
   return 0;
