@@ -42,6 +42,7 @@
 #include "netdem/packing/laminar.hpp"
 #include "netdem/quasistatic/staggered.hpp"
 #include "output.hpp"
+#include "sinter_material.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
 #include "status.hpp"
@@ -225,25 +226,7 @@ std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
 
 // ---- inputs
 sp::SinterMaterial load_material(const Args& a, std::string& source) {
-  std::string text;
-  if (a.material == "cu" || a.material == "ti") {
-    text = sp::builtin_sinter_material_text(a.material);
-    source = "built-in " + a.material + " (src/contact/materials/" + a.material + ".txt)";
-  } else {
-    if (!fs::is_regular_file(a.material))
-      throw UsageError(fmt::format("--material '{}' is not cu, ti or a readable file", netdem::packing::quote_input(a.material)));
-    sp::read_sinter_material(a.material);  // reports file errors with the file's line numbers
-    std::ostringstream o;
-    o << std::ifstream(a.material).rdbuf();
-    text = o.str();
-    source = a.material;
-  }
-  for (const auto& kv : a.set) {
-    if (kv.find('=') == std::string::npos)
-      throw UsageError(fmt::format("--set '{}' is not KEY=VALUE", netdem::packing::quote_input(kv)));
-    text += "\n" + kv + "\n";
-  }
-  return sp::parse_sinter_material(text, a.set.empty() ? source : source + " with --set");
+  return netdem::app::netsolve::load_sinter_material(a.material, a.set, source);
 }
 
 std::string read_text(const fs::path& p, const char* what) {

@@ -31,6 +31,7 @@
 #include "netdem/contact/sintering_pair.hpp"
 #include "netdem/contact/sintering_pair_sundials.hpp"
 #include "output.hpp"
+#include "sinter_material.hpp"
 #include "parse.hpp"
 #include "status.hpp"
 
@@ -132,24 +133,7 @@ sp::PathSwitches parse_paths(const std::string& s) {
 }
 
 sp::SinterMaterial load_material(const Args& a, std::string& source) {
-  std::string text;
-  if (a.material == "cu" || a.material == "ti") {
-    text = sp::builtin_sinter_material_text(a.material);
-    source = "built-in " + a.material + " (src/contact/materials/" + a.material + ".txt)";
-  } else {
-    if (!fs::is_regular_file(a.material))
-      throw std::invalid_argument(fmt::format("--material '{}' is not cu, ti or a readable file", a.material));
-    sp::read_sinter_material(a.material);  // reports file errors with the file's line numbers
-    std::ostringstream o;
-    o << std::ifstream(a.material).rdbuf();
-    text = o.str();
-    source = a.material;
-  }
-  for (const auto& kv : a.set) {
-    if (kv.find('=') == std::string::npos) throw std::invalid_argument(fmt::format("--set '{}' is not KEY=VALUE", kv));
-    text += "\n" + kv + "\n";
-  }
-  return sp::parse_sinter_material(text, a.set.empty() ? source : source + " with --set");
+  return netdem::app::netsolve::load_sinter_material(a.material, a.set, source);
 }
 
 int run(const Args& a, const std::string& command) {
