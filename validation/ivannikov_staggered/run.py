@@ -351,7 +351,8 @@ def main():
                 fn = nn["summary"]["final"]
                 note = (f"the experiment: without new contacts the ratio is {fn['shrink_mean'] / ps:.3f} "
                         f"(contacts {fn['contacts_start']} → {fn['contacts']}); with them {f['contacts_start']} → "
-                        f"{f['contacts']}: the new contacts add the densification, as for Cu (ratio 1.01 with, 0.96 without)")
+                        f"{f['contacts']}: the new contacts add the densification, as for Cu (ratio {ratio_on:.3f} with, "
+                        f"{ratio_off:.3f} without)")
             F.add(f"Ti, {lab}: the packing shrinks less than the pair (new contacts on)", f"ratio {f['shrink_mean'] / ps:.3f}",
                   "< 1 (as the paper finds for Cu without new contacts)", f["shrink_mean"] < ps, "no", note)
             w = R[key]["summary"]["timers_s"]["sinter_loop_wall"]
