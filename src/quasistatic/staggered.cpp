@@ -295,6 +295,12 @@ struct Staggered::Impl {
   std::vector<contact::BondElement> ref;  // the elements of the last factorisation (its contacts)
   std::vector<std::uint8_t> ref_fixed;    // and its constraints
   std::vector<std::vector<int>> floating;  // clusters held at their first particle
+  // work arrays of step()
+  std::vector<State> qnew;
+  std::vector<int> active;
+  std::vector<std::uint8_t> freeze;
+  std::vector<contact::BondElement> el;
+  std::vector<Eigen::Vector3d> u;
   std::unique_ptr<LinearSolver> solver;
 
   void init_solver() {
@@ -647,12 +653,13 @@ struct Staggered::Impl {
 
     const double seg_end = prof.segment_at(t).t1;
     RhsCtx f{&mat, &cache, prof.segment_at(t), &rhs_evals};
-    std::vector<State> qnew(c.size());
-    std::vector<int> active;
+    // per-step work arrays, kept in Impl (no allocation once the contact count has settled)
+    qnew.resize(c.size());
+    active.clear();
     for (std::size_t i = 0; i < c.size(); ++i)
       if (!c[i].frozen) active.push_back(static_cast<int>(i));
     double h = 0.0;
-    std::vector<std::uint8_t> freeze(c.size(), 0);
+    freeze.assign(c.size(), 0);
     t0 = Clock::now();
     for (;;) {
       h = std::min({dt, t_end - t, seg_end - t});
@@ -726,7 +733,7 @@ struct Staggered::Impl {
 
     // the sintering loads and the network
     t0 = Clock::now();
-    std::vector<contact::BondElement> el(c.size());
+    el.resize(c.size());
     for (std::size_t i = 0; i < c.size(); ++i) el[i] = element(c[i]);
     VecX fhat = VecX::Zero(nfree);
     for (int i : active) {
@@ -793,7 +800,7 @@ struct Staggered::Impl {
 
     // move the nodes, then correct the shrinkage (Eqs 41-44)
     t0 = Clock::now();
-    std::vector<Eigen::Vector3d> u(N(), Eigen::Vector3d::Zero());
+    u.assign(N(), Eigen::Vector3d::Zero());
     for (int i = 0; i < N(); ++i)
       for (int k = 0; k < 3; ++k) {
         const int g = dof[6 * i + k];
