@@ -118,7 +118,7 @@ class Depositor {
   /// below relies on the rows starting at y = 0).
   static GridLayout layout(double w, double h, double cell) {
     GridLayout g;
-    g.cell = cell;
+    g.cell = {cell, cell};
     g.count = {std::max(1L, static_cast<long>(std::ceil(w / cell))), std::max(1L, static_cast<long>(std::ceil(h / cell)))};
     return g;
   }

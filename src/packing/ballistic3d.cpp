@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "netdem/packing/cell_grid.hpp"
+
 #include "netdem/packing/random_fill.hpp"
 
 namespace netdem::packing {
@@ -117,7 +119,10 @@ class Depositor3 {
     c_xy_ = w / static_cast<double>(n_xy_);
     c_z_ = 2 * rmax;
     n_z_ = std::max(1L, static_cast<long>(std::ceil(h / c_z_)) + 1);
-    cells_.resize(static_cast<std::size_t>(n_xy_ * n_xy_ * n_z_));
+    GridLayout3 g;  // square columns that tile the periodic width, layers of 2 r_max
+    g.cell = {c_xy_, c_xy_, c_z_};
+    g.count = {n_xy_, n_xy_, n_z_};
+    grid_ = GrowingCellGrid3(g);
   }
 
   void insert(V3 c, double r) {
@@ -126,11 +131,9 @@ class Depositor3 {
     out_.y.push_back(c.y);
     out_.z.push_back(c.z);
     out_.r.push_back(r);
-    const long ix = std::clamp(static_cast<long>(std::floor(c.x / c_xy_)), 0L, n_xy_ - 1);
-    const long iy = std::clamp(static_cast<long>(std::floor(c.y / c_xy_)), 0L, n_xy_ - 1);
     const long iz = layer(c.z);
     top_z_ = std::max(top_z_, c.z + r);
-    cells_[static_cast<std::size_t>((iz * n_xy_ + iy) * n_xy_ + ix)].push_back(id);
+    grid_.insert(id, {c.x, c.y, c.z});
     top_layer_ = std::max(top_layer_, iz);
   }
 
@@ -158,11 +161,7 @@ class Depositor3 {
   }
 
  private:
-  long layer(double z) const {
-    const double f = std::floor(z / c_z_);
-    if (!(f >= 0)) return 0;
-    return f >= static_cast<double>(n_z_ - 1) ? n_z_ - 1 : static_cast<long>(f);
-  }
+  long layer(double z) const { return grid_.layout().coord(2, z); }
 
   /// Calls f(obstacle) for every fixed sphere image in the cells overlapping the box of half side
   /// `reach` (x, y) around q and z in [z_lo, z_hi].
@@ -178,7 +177,7 @@ class Depositor3 {
         for (long bx = x0; bx <= x1; ++bx) {
           const long wx = ((bx % n_xy_) + n_xy_) % n_xy_, wy = ((by % n_xy_) + n_xy_) % n_xy_;
           const double sx = static_cast<double>((bx - wx) / n_xy_) * w_, sy = static_cast<double>((by - wy) / n_xy_) * w_;
-          for (std::uint32_t k : cells_[static_cast<std::size_t>((iz * n_xy_ + wy) * n_xy_ + wx)]) {
+          for (std::uint32_t k : grid_.cell(grid_.layout().index({wx, wy, iz}))) {
             Obstacle o;
             o.id = static_cast<int>(k);
             o.p = {out_.x[k] + sx, out_.y[k] + sy, out_.z[k]};
@@ -504,7 +503,7 @@ class Depositor3 {
   long n_xy_ = 1, n_z_ = 1, top_layer_ = 0;
   double top_z_ = 0;  // highest top of a fixed sphere
   double c_xy_ = 1, c_z_ = 1;
-  std::vector<std::vector<std::uint32_t>> cells_;
+  GrowingCellGrid3 grid_{GridLayout3{}};
   std::vector<Contact> contacts_;
   std::vector<Obstacle> cand_;
 };

@@ -89,51 +89,18 @@ void RandomFill3dOptions::validate() const {
 
 namespace {
 
-/// A growing grid of cubic cells (head/next lists) for the sequential placement.
-class CloudGrid {
- public:
-  CloudGrid(const Box& b, double min_cell, std::size_t n) {
-    // cells of at least the largest diameter, at most about 4 n + 64 of them
-    const double v = b.volume() / (4.0 * static_cast<double>(n) + 64.0);
-    cell_ = std::max(min_cell, std::cbrt(v));
-    origin_ = {b.x_min, b.y_min, b.z_min};
-    const double ext[3] = {b.width(), b.height(), b.depth()};
-    for (int a = 0; a < 3; ++a) count_[a] = std::max(1L, static_cast<long>(std::ceil(ext[a] / cell_)));
-    head_.assign(static_cast<std::size_t>(count_[0] * count_[1] * count_[2]), kNone);
-    next_.reserve(n);
-  }
-  long coord(int a, double v) const {
-    const double c = std::floor((v - origin_[a]) / cell_);
-    if (!(c >= 0)) return 0;
-    return c >= static_cast<double>(count_[a] - 1) ? count_[a] - 1 : static_cast<long>(c);
-  }
-  std::size_t cell(long a, long b, long c) const { return static_cast<std::size_t>((c * count_[1] + b) * count_[0] + a); }
-  void insert(std::uint32_t id, double x, double y, double z) {
-    const std::size_t k = cell(coord(0, x), coord(1, y), coord(2, z));
-    if (next_.size() <= id) next_.resize(id + 1, kNone);
-    next_[id] = head_[k];
-    head_[k] = id;
-  }
-  /// true if f(k) is true for some sphere k in the cells within `reach` of (x, y, z)
-  template <class F>
-  bool any_near(double x, double y, double z, double reach, F&& f) const {
-    const long x0 = coord(0, x - reach), x1 = coord(0, x + reach), y0 = coord(1, y - reach), y1 = coord(1, y + reach),
-               z0 = coord(2, z - reach), z1 = coord(2, z + reach);
-    for (long c = z0; c <= z1; ++c)
-      for (long b = y0; b <= y1; ++b)
-        for (long a = x0; a <= x1; ++a)
-          for (std::uint32_t k = head_[cell(a, b, c)]; k != kNone; k = next_[k])
-            if (f(k)) return true;
-    return false;
-  }
-
- private:
-  static constexpr std::uint32_t kNone = 0xffffffffu;
-  std::array<double, 3> origin_{};
-  double cell_ = 1.0;
-  long count_[3] = {1, 1, 1};
-  std::vector<std::uint32_t> head_, next_;
-};
+/// The layout of the sequential 3D placement: cubic cells of at least the largest diameter from
+/// the box's lower corner, at most about 4 n + 64 of them.
+GridLayout3 cloud_layout(const Box& b, double min_cell, std::size_t n) {
+  const double v = b.volume() / (4.0 * static_cast<double>(n) + 64.0);
+  const double cell = std::max(min_cell, std::cbrt(v));
+  GridLayout3 g;
+  g.origin = {b.x_min, b.y_min, b.z_min};
+  g.cell = {cell, cell, cell};
+  const double ext[3] = {b.width(), b.height(), b.depth()};
+  for (std::size_t a = 0; a < 3; ++a) g.count[a] = std::max(1L, static_cast<long>(std::ceil(ext[a] / cell)));
+  return g;
+}
 
 }  // namespace
 
@@ -151,7 +118,7 @@ Packing random_fill_3d(const RandomFill3dOptions& o) {
   p.y.reserve(o.n);
   p.z.reserve(o.n);
   const Box& b = o.box;
-  CloudGrid grid(b, 2.0 * rmax, o.n);
+  GrowingCellGrid3 grid(cloud_layout(b, 2.0 * rmax, o.n));
   for (std::size_t i = 0; i < o.n; ++i) {
     const double r = p.r[i];
     bool placed = false;

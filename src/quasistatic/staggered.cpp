@@ -2,6 +2,7 @@
 #include "netdem/quasistatic/staggered.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 
 namespace netdem::qs::staggered {
@@ -275,8 +277,9 @@ struct Staggered::Impl {
   std::vector<Particle> p, p0;
   std::vector<Contact> c;
   std::vector<std::vector<int>> adj;  // particle -> contact indices
-  std::vector<long> cell_of;          // detect(): the cell grid (reused)
-  std::vector<int> cell_start, cell_ids;
+  packing::CellGrid3 grid;                        // detect(): the cell grid,
+  std::array<std::vector<double>, 3> grid_xyz;    // the centres it sorts
+  std::vector<std::pair<int, int>> found;         // and the new pairs (all reused)
   std::vector<std::uint8_t> fixed_user, fixed_plane, fixed;  // 6N flags
   double t = 0.0, dt = 0.0;
   long nsteps = 0;
@@ -397,52 +400,28 @@ struct Staggered::Impl {
     return false;
   }
 
-  // New contacts: spheres closer than r_a + r_b without a bond. A uniform grid of cells of side
-  // 2 r_max; pairs in index order, so the contact order does not depend on the grid.
+  // New contacts: spheres closer than r_a + r_b without a bond, found through the toolkit's cell
+  // grid (cells of at least 2 r_max); pairs in index order, so the contact order does not depend
+  // on the grid. The grid, the coordinate arrays and the list are reused (no allocation per step
+  // once their sizes settle).
   int detect() {
     const int n = N();
     double rmax = 0.0;
-    Eigen::Vector3d lo = p[0].x, hi = p[0].x;
-    for (const auto& q : p) {
-      rmax = std::max(rmax, q.r);
-      lo = lo.cwiseMin(q.x);
-      hi = hi.cwiseMax(q.x);
-    }
-    // cells of side >= 2 r_max (a touching pair is in neighbouring cells), at most 200 per axis
-    const double cell = std::max(2.0 * rmax, (hi - lo).maxCoeff() / 199.0);
-    std::array<long, 3> cnt{};
-    for (int k = 0; k < 3; ++k) cnt[k] = std::max(1L, static_cast<long>((hi[k] - lo[k]) / cell) + 1);
-    auto coord = [&](int k, double v) {
-      return std::clamp(static_cast<long>((v - lo[k]) / cell), 0L, cnt[k] - 1);
-    };
-    // counting sort of the particles by cell (flat arrays, reused)
-    const long ncell = cnt[0] * cnt[1] * cnt[2];
-    cell_of.resize(n);
-    cell_start.assign(static_cast<std::size_t>(ncell) + 1, 0);
+    for (int k = 0; k < 3; ++k) grid_xyz[k].resize(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
-      cell_of[i] = (coord(2, p[i].x[2]) * cnt[1] + coord(1, p[i].x[1])) * cnt[0] + coord(0, p[i].x[0]);
-      ++cell_start[cell_of[i] + 1];
+      rmax = std::max(rmax, p[i].r);
+      for (int k = 0; k < 3; ++k) grid_xyz[k][static_cast<std::size_t>(i)] = p[i].x[k];
     }
-    for (long k = 0; k < ncell; ++k) cell_start[k + 1] += cell_start[k];
-    cell_ids.resize(n);
-    {
-      std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
-      for (int i = 0; i < n; ++i) cell_ids[fill[cell_of[i]]++] = i;
-    }
-    std::vector<std::pair<int, int>> found;
+    grid.rebuild(grid_xyz[0], grid_xyz[1], grid_xyz[2], 2.0 * kTouch * rmax);
+    found.clear();
     for (int i = 0; i < n; ++i) {
-      const long cx = coord(0, p[i].x[0]), cy = coord(1, p[i].x[1]), cz = coord(2, p[i].x[2]);
-      for (long z = std::max(0L, cz - 1); z <= std::min(cnt[2] - 1, cz + 1); ++z)
-        for (long y = std::max(0L, cy - 1); y <= std::min(cnt[1] - 1, cy + 1); ++y)
-          for (long x = std::max(0L, cx - 1); x <= std::min(cnt[0] - 1, cx + 1); ++x) {
-            const long cell_k = (z * cnt[1] + y) * cnt[0] + x;
-            for (int q = cell_start[cell_k]; q < cell_start[cell_k + 1]; ++q) {
-              const int j = cell_ids[q];
-              if (j <= i) continue;
-              const double rr = kTouch * (p[i].r + p[j].r);
-              if ((p[j].x - p[i].x).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
-            }
-          }
+      const Eigen::Vector3d& xi = p[i].x;
+      grid.for_each_near(xi[0], xi[1], xi[2], kTouch * (p[i].r + rmax), [&](std::uint32_t jj) {
+        const int j = static_cast<int>(jj);
+        if (j <= i) return;
+        const double rr = kTouch * (p[i].r + p[j].r);
+        if ((p[j].x - xi).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
+      });
     }
     std::sort(found.begin(), found.end());
     for (const auto& [i, j] : found) add_contact(i, j, (p[j].x - p[i].x).norm());

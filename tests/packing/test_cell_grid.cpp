@@ -191,7 +191,7 @@ TEST(CellGrid, SparseSetsAreCapped) {
   const std::vector<double> x{0.0, 1e6, 5e5}, y{0.0, 1e6, 3.0};
   const CellGrid g(x, y, 1.0);
   EXPECT_LE(g.layout().cells(), 4 * 3 + 64);
-  EXPECT_GE(g.layout().cell, 1.0);
+  EXPECT_GE(g.layout().cell[0], 1.0);
   std::vector<std::uint32_t> near;
   g.for_each_near(5e5, 3.0, 1.0, [&](std::uint32_t j) { near.push_back(j); });
   EXPECT_NE(std::find(near.begin(), near.end(), 2u), near.end());
@@ -215,7 +215,7 @@ TEST(CellGrid, NonFiniteCoordinatesDoNotCrash) {
     g.for_each_near(nan, nan, nan, [](std::uint32_t) {});  // a NaN query visits some cell, no crash
   }
   const CellGrid bad(std::vector<double>{0, 1}, std::vector<double>{0, 1}, nan);  // NaN cell size: cell 1
-  EXPECT_EQ(bad.layout().cell, 1.0);
+  EXPECT_EQ(bad.layout().cell[0], 1.0);
 }
 
 TEST(CellGrid, VisitsRowsThenColumnsThenIndexOrder) {
