@@ -5,6 +5,7 @@ pkgs=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libsuitesparse-dev libsundials-dev libgtest-dev libfmt-dev
   libcli11-dev nlohmann-json3-dev libbenchmark-dev
+  libboost-dev                       # Boost.Math (Carlson's elliptic integrals), header-only
   libopenblas0-serial                # optimised serial BLAS for CHOLMOD's supernodal factorisation
   clang libclang-rt-14-dev           # the fuzz build (tests/fuzz, .ci/run): libFuzzer + ASan/UBSan runtimes;
                                      # libclang-rt-14-dev is only a Recommends of clang-14, hence listed

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <boost/math/special_functions/ellint_rd.hpp>
+#include <boost/math/special_functions/ellint_rf.hpp>
 #include <fmt/format.h>
 
 namespace netdem::qs {
@@ -112,51 +114,20 @@ double affine_stress_scale(const AffineYieldInput& in) {
 
 namespace detail {
 
-// Carlson, Numer. Algorithms 10 (1995) 13, Algorithm 1 (R_F) and 4 (R_J with p = z, i.e. R_D),
-// stopping rule with r = 1e-16 (relative error below ~1e-15).
+// Carlson's symmetric integrals from Boost.Math (duplication algorithm, relative error ~1e-15); the
+// argument checks are ours, so that a bad argument is one std::invalid_argument naming the values.
 double carlson_rf(double x, double y, double z) {
-  if (!(x >= 0.0 && y >= 0.0 && z >= 0.0) || (x == 0.0) + (y == 0.0) + (z == 0.0) > 1)
+  if (!(x >= 0.0 && y >= 0.0 && z >= 0.0) || (x == 0.0) + (y == 0.0) + (z == 0.0) > 1 || !std::isfinite(x + y + z))
     throw std::invalid_argument(
-        fmt::format("carlson_rf({}, {}, {}): arguments must be >= 0, at most one zero", x, y, z));
-  const double a0 = (x + y + z) / 3.0;
-  double a = a0, q = std::pow(3e-16, -1.0 / 6.0) * std::max({std::abs(a0 - x), std::abs(a0 - y), std::abs(a0 - z)});
-  double xm = x, ym = y, zm = z, f = 1.0;  // f = 4^-n
-  while (f * q > std::abs(a)) {
-    const double sx = std::sqrt(xm), sy = std::sqrt(ym), sz = std::sqrt(zm);
-    const double lam = sx * sy + sy * sz + sz * sx;
-    a = (a + lam) / 4.0;
-    xm = (xm + lam) / 4.0;
-    ym = (ym + lam) / 4.0;
-    zm = (zm + lam) / 4.0;
-    f /= 4.0;
-  }
-  const double X = (a0 - x) * f / a, Y = (a0 - y) * f / a, Z = -(X + Y);
-  const double e2 = X * Y - Z * Z, e3 = X * Y * Z;
-  return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / std::sqrt(a);
+        fmt::format("carlson_rf({}, {}, {}): arguments must be finite, >= 0, at most one zero", x, y, z));
+  return boost::math::ellint_rf(x, y, z);
 }
 
 double carlson_rd(double x, double y, double z) {
-  if (!(x >= 0.0 && y >= 0.0 && z > 0.0) || (x == 0.0 && y == 0.0))
-    throw std::invalid_argument(fmt::format("carlson_rd({}, {}, {}): need x, y >= 0 not both zero, z > 0", x, y, z));
-  const double a0 = (x + y + 3.0 * z) / 5.0;
-  double a = a0, q = std::pow(0.25e-16, -1.0 / 6.0) * std::max({std::abs(a0 - x), std::abs(a0 - y), std::abs(a0 - z)});
-  double xm = x, ym = y, zm = z, f = 1.0, sum = 0.0;
-  while (f * q > std::abs(a)) {
-    const double sx = std::sqrt(xm), sy = std::sqrt(ym), sz = std::sqrt(zm);
-    const double lam = sx * sy + sy * sz + sz * sx;
-    sum += f / (sz * (zm + lam));
-    a = (a + lam) / 4.0;
-    xm = (xm + lam) / 4.0;
-    ym = (ym + lam) / 4.0;
-    zm = (zm + lam) / 4.0;
-    f /= 4.0;
-  }
-  const double X = (a0 - x) * f / a, Y = (a0 - y) * f / a, Z = -(X + Y) / 3.0;
-  const double xy = X * Y, z2 = Z * Z;
-  const double e2 = xy - 6.0 * z2, e3 = (3.0 * xy - 8.0 * z2) * Z, e4 = 3.0 * (xy - z2) * z2, e5 = xy * z2 * Z;
-  const double series = 1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0 - 3.0 * e4 / 22.0 -
-                        9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0;
-  return f * series / (a * std::sqrt(a)) + 3.0 * sum;
+  if (!(x >= 0.0 && y >= 0.0 && z > 0.0) || (x == 0.0 && y == 0.0) || !std::isfinite(x + y + z))
+    throw std::invalid_argument(
+        fmt::format("carlson_rd({}, {}, {}): need finite x, y >= 0 not both zero, z > 0", x, y, z));
+  return boost::math::ellint_rd(x, y, z);
 }
 
 std::array<double, 2> overlap_moments(double a, double b, double phi0, double phi1, bool force_elliptic) {

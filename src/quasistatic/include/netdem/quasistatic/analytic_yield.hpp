@@ -70,8 +70,9 @@ double affine_switch_angle(double E11dot, double E22dot);
 
 namespace detail {
 
-/// Carlson's symmetric elliptic integrals R_F(x, y, z) and R_D(x, y, z) (duplication algorithm,
-/// Carlson 1995; relative error ~1e-15). x, y, z >= 0, at most one of them zero (z > 0 for R_D).
+/// Carlson's symmetric elliptic integrals R_F(x, y, z) and R_D(x, y, z) (Boost.Math's
+/// ellint_rf/ellint_rd; relative error ~1e-15). x, y, z >= 0, at most one of them zero (z > 0 for
+/// R_D); a bad argument throws std::invalid_argument.
 double carlson_rf(double x, double y, double z);
 double carlson_rd(double x, double y, double z);
 
