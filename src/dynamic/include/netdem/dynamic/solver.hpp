@@ -495,7 +495,7 @@ class DynamicSolverT {
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_, z_build_;
   /// over the positions of the last table build (storage reused)
-  std::conditional_t<D == 2, packing::CellGrid, packing::CellGrid3> grid_;
+  packing::CellGridT<D> grid_;
   // wall histories: 2D per particle (2D: left, right, bottom, top; 3D: x_min .. z_max); wall state
   std::vector<LudingHist> wall_hist_;
   /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force

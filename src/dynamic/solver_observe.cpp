@@ -1,0 +1,245 @@
+// Explicit DEM solver: instability checks and observables (solver.hpp, docs/dynamic.md).
+#include "netdem/dynamic/solver.hpp"
+#include "solver_detail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "netdem/contact/luding_law.hpp"
+
+namespace netdem::dem {
+
+using detail::displacement_limit;
+using detail::fail;
+
+// ---- instability checks (docs/dynamic.md "Instability detection") -------------------------------
+namespace {
+const char* const kCauseStep =
+    "the time step is too large for the stiffness, the damping or the masses (--steps-per-contact, k2, "
+    "gamma_n, rho_p, m_wall, gamma_wall)";
+const char* const kCauseWall =
+    "a stress-controlled wall is unstable or driven too hard (m_wall, gamma_wall, --pressure, --strain-rate)";
+const char* const kCauseLoad =
+    "the load is too high for the stiffness (2p/k2, k1_ratio, k2, --strain-rate) or the time step too large "
+    "(--steps-per-contact)";
+}  // namespace
+
+template <int D>
+void DynamicSolverT<D>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const {
+  const std::int64_t step = ts_.dt > 0.0 ? static_cast<std::int64_t>(std::llround(time_ / ts_.dt)) : 0;
+  throw InstabilityError(fmt::format("unstable at step {} (t = {:.6g} s): {}; likely cause: {}", step, time_, what,
+                                     cause),
+                         quantity, step, time_);
+}
+
+template <int D>
+void DynamicSolverT<D>::check_health() const { check_health_with(-1.0); }
+
+template <int D>
+void DynamicSolverT<D>::check_health_with(double vmax2) const {
+  const std::size_t n = P_.size();
+  const bool track = vmax2 < 0.0;  // (NaN: not negative, the pass below reports it)
+  if (track) vmax2 = 0.0;
+  double rmin = std::numeric_limits<double>::infinity(), area = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v[7] = {P_.x[i], P_.y[i], P_.vx[i], P_.vy[i], P_.omega[i], P_.fx[i], P_.fy[i]};
+    bool fin = std::isfinite(P_.radius[i]) && std::isfinite(P_.torque[i]);
+    for (double q : v) fin = fin && std::isfinite(q);
+    if constexpr (D == 3) {
+      const double v3[7] = {P_.z[i], P_.vz[i], P_.wx[i], P_.wy[i], P_.fz[i], P_.tx[i], P_.ty[i]};
+      for (double q : v3) fin = fin && std::isfinite(q);
+    }
+    if (!fin)
+      breach("finite", fmt::format("particle {} has a non-finite position, velocity or force", i), kCauseStep);
+    rmin = std::min(rmin, P_.radius[i]);
+    if constexpr (D == 2) {
+      area += P_.radius[i] * P_.radius[i];
+      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]);
+    } else {
+      area += P_.radius[i] * P_.radius[i] * P_.radius[i];
+      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]);
+    }
+  }
+  if (!(std::isfinite(vmax2))) breach("finite", "a particle velocity is not finite", kCauseStep);
+  bool wall_finite = true;
+  for (int a = 0; a < D; ++a) wall_finite = wall_finite && std::isfinite(wall_v_[a]) && std::isfinite(wall_force_[2 * a + 1]);
+  if (!wall_finite) breach("finite", "a wall velocity or force is not finite", kCauseWall);
+  const double dt = ts_.dt, travel = HealthLimits::kMaxTravel * rmin;
+  if (!(std::sqrt(vmax2) * dt < travel))
+    breach("velocity", fmt::format("max|v| dt = {:.3g} m is not below 0.1 r_min = {:.3g} m", std::sqrt(vmax2) * dt, travel),
+           kCauseStep);
+  if (box_.enabled) {
+    const double b[6] = {box_.x_min, box_.x_max, box_.y_min, box_.y_max, box_.z_min, box_.z_max};
+    for (double q : b)
+      if (!std::isfinite(q)) breach("finite", "the box is not finite", kCauseWall);
+    if (!(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
+      breach("box", fmt::format("the box extents {:.3g} x {:.3g} m are not positive", box_.x_max - box_.x_min,
+                                box_.y_max - box_.y_min),
+             kCauseWall);
+    if constexpr (D == 3) {
+      if (!(box_.z_max > box_.z_min))
+        breach("box", fmt::format("the box extent {:.3g} m along z is not positive", box_.z_max - box_.z_min), kCauseWall);
+    }
+    double wv = std::max(std::fabs(wall_v_[0]), std::fabs(wall_v_[1]));
+    if constexpr (D == 3) wv = std::max(wv, std::fabs(wall_v_[2]));
+    if (!(wv * dt < travel))
+      breach("velocity", fmt::format("a wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m", wv * dt, travel),
+             kCauseWall);
+    for (std::size_t i = 0; i < n && box_.contact_walls; ++i) {
+      bool inside = P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max;
+      if constexpr (D == 3) inside = inside && P_.z[i] >= box_.z_min && P_.z[i] <= box_.z_max;
+      if (!inside)
+        breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
+               kCauseLoad);
+    }
+  }
+  // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
+  // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
+  for (std::uint64_t key : pair_key_) {
+    const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
+    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i], s = P_.radius[i] + P_.radius[j];
+    double L2 = dx * dx + dy * dy;
+    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+    if (!(L2 < s * s)) continue;
+    const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
+    if (!(d < lim))
+      breach("overlap", fmt::format("the overlap {:.3g} m of particles {} and {} is not below half the smaller radius, "
+                                    "{:.3g} m", d, i, j, lim),
+             kCauseLoad);
+  }
+  if (walls_active()) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double r = P_.radius[i];
+      double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
+                          std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
+      if constexpr (D == 3) d = std::max(d, std::max(r - (P_.z[i] - box_.z_min), r - (box_.z_max - P_.z[i])));
+      if (!(d < HealthLimits::kMaxOverlap * r))
+        breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below half its radius, {:.3g} m", i, d,
+                                      HealthLimits::kMaxOverlap * r),
+               kCauseLoad);
+    }
+    const double nu = D == 2 ? std::numbers::pi * area / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min))
+                             : (4.0 / 3.0) * std::numbers::pi * area / box_measure();
+    if (!(nu <= HealthLimits::kMaxDensity))
+      breach("density", fmt::format("nu = {:.4g} is above 1.25", nu),
+             "overlaps beyond the model's range: the pressure is too high for the stiffness (2p/k2, k1_ratio) or a "
+             "wall is unstable (m_wall, gamma_wall)");
+  }
+}
+
+template <int D>
+void DynamicSolverT<D>::run(std::size_t n_steps) {
+  for (std::size_t s = 0; s < n_steps; ++s) step();
+}
+
+// ---- observables --------------------------------------------------------------------------------
+template <int D>
+double DynamicSolverT<D>::box_measure() const {
+  const double a = (box_.x_max - box_.x_min) * (box_.y_max - box_.y_min);
+  if constexpr (D == 2) {
+    return a;
+  } else {
+    return a * (box_.z_max - box_.z_min);
+  }
+}
+
+template <int D>
+auto DynamicSolverT<D>::wall_stress() const -> Stress {
+  Stress s;
+  if (!box_.enabled) return s;
+  if constexpr (D == 2) {
+    s.xx = wall_force_[1] / (box_.y_max - box_.y_min);
+    s.yy = wall_force_[3] / (box_.x_max - box_.x_min);
+  } else {
+    const double e[3] = {box_.x_max - box_.x_min, box_.y_max - box_.y_min, box_.z_max - box_.z_min};
+    for (int a = 0; a < 3; ++a) s.s[a][a] = wall_force_[2 * a + 1] / (e[(a + 1) % 3] * e[(a + 2) % 3]);
+  }
+  return s;
+}
+
+template <int D>
+auto DynamicSolverT<D>::contact_stress() const -> Stress {
+  Stress s;
+  if (!box_.enabled) return s;
+  const double V = box_measure();
+  if constexpr (D == 2) {
+    s.xx = sxx_ / V;
+    s.xy = sxy_ / V;
+    s.yx = syx_ / V;
+    s.yy = syy_ / V;
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) s.s[a][b] = s3_[a][b] / V;
+  }
+  return s;
+}
+
+template <int D>
+double DynamicSolverT<D>::density() const {
+  if (!box_.enabled) return 0.0;
+  double a = 0.0;
+  if constexpr (D == 2) {
+    for (double r : P_.radius) a += std::numbers::pi * r * r;
+    return a / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
+  } else {
+    for (double r : P_.radius) a += (4.0 / 3.0) * std::numbers::pi * r * r * r;
+    return a / box_measure();
+  }
+}
+
+template <int D>
+Energies DynamicSolverT<D>::energies() const {
+  Energies e;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    if constexpr (D == 2) {
+      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]) +
+                   0.5 * P_.inertia[i] * P_.omega[i] * P_.omega[i];
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i]);
+    } else {
+      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]) +
+                   0.5 * P_.inertia[i] * (P_.wx[i] * P_.wx[i] + P_.wy[i] * P_.wy[i] + P_.omega[i] * P_.omega[i]);
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i] + opt_.gravity_z * P_.z[i]);
+    }
+  }
+  e.elastic = elastic_;
+  if (box_.enabled) {
+    if (box_.right.mode == WallMode::Stress)
+      e.wall_kinetic += 0.5 * box_.right.mass * wall_v_[0] * wall_v_[0];
+    if (box_.top.mode == WallMode::Stress)
+      e.wall_kinetic += 0.5 * box_.top.mass * wall_v_[D - 1] * wall_v_[D - 1];
+    if constexpr (D == 3) {
+      if (box_.back.mode == WallMode::Stress) e.wall_kinetic += 0.5 * box_.back.mass * wall_v_[1] * wall_v_[1];
+    }
+  }
+  return e;
+}
+
+template void DynamicSolverT<2>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
+template void DynamicSolverT<2>::check_health() const;
+template void DynamicSolverT<2>::check_health_with(double vmax2) const;
+template void DynamicSolverT<2>::run(std::size_t n_steps);
+template double DynamicSolverT<2>::box_measure() const;
+template auto DynamicSolverT<2>::wall_stress() const -> Stress;
+template auto DynamicSolverT<2>::contact_stress() const -> Stress;
+template double DynamicSolverT<2>::density() const;
+template Energies DynamicSolverT<2>::energies() const;
+
+template void DynamicSolverT<3>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
+template void DynamicSolverT<3>::check_health() const;
+template void DynamicSolverT<3>::check_health_with(double vmax2) const;
+template void DynamicSolverT<3>::run(std::size_t n_steps);
+template double DynamicSolverT<3>::box_measure() const;
+template auto DynamicSolverT<3>::wall_stress() const -> Stress;
+template auto DynamicSolverT<3>::contact_stress() const -> Stress;
+template double DynamicSolverT<3>::density() const;
+template Energies DynamicSolverT<3>::energies() const;
+
+}  // namespace netdem::dem

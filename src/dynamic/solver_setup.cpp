@@ -1,0 +1,302 @@
+// Explicit DEM solver: particles, time step rule, construction (see solver.hpp, docs/dynamic.md).
+#include "netdem/dynamic/solver.hpp"
+#include "solver_detail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "netdem/contact/luding_law.hpp"
+
+namespace netdem::dem {
+
+using detail::displacement_limit;
+using detail::fail;
+
+std::size_t Particles::add_with_mass(double px, double py, double r, double m, double pvx, double pvy,
+                                     double pomega) {
+  if (dim != 2) fail("Particles: a disk cannot join spheres");
+  x.push_back(px);
+  y.push_back(py);
+  vx.push_back(pvx);
+  vy.push_back(pvy);
+  omega.push_back(pomega);
+  theta.push_back(0.0);
+  radius.push_back(r);
+  mass.push_back(m);
+  inertia.push_back(0.5 * m * r * r);
+  fx.push_back(0.0);
+  fy.push_back(0.0);
+  torque.push_back(0.0);
+  return x.size() - 1;
+}
+
+std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx, double pvy,
+                           double pomega) {
+  return add_with_mass(px, py, r, contact::luding_mass(p, r), pvx, pvy, pomega);
+}
+
+std::size_t Particles::add_disk(double px, double py, double r, double rho, double pvx, double pvy,
+                                double pomega) {
+  return add_with_mass(px, py, r, rho * std::numbers::pi * r * r, pvx, pvy, pomega);
+}
+
+std::size_t Particles::add_sphere_with_mass(double px, double py, double pz, double r, double m,
+                                            const std::array<double, 3>& v, const std::array<double, 3>& w) {
+  if (dim != 3 && !x.empty()) fail("Particles: a sphere cannot join disks");
+  dim = 3;
+  x.push_back(px);
+  y.push_back(py);
+  z.push_back(pz);
+  vx.push_back(v[0]);
+  vy.push_back(v[1]);
+  vz.push_back(v[2]);
+  wx.push_back(w[0]);
+  wy.push_back(w[1]);
+  omega.push_back(w[2]);
+  theta.push_back(0.0);
+  radius.push_back(r);
+  mass.push_back(m);
+  inertia.push_back(contact::Dim<3>::kInertia * m * r * r);
+  fx.push_back(0.0);
+  fy.push_back(0.0);
+  fz.push_back(0.0);
+  tx.push_back(0.0);
+  ty.push_back(0.0);
+  torque.push_back(0.0);
+  return x.size() - 1;
+}
+
+std::size_t Particles::add_sphere(double px, double py, double pz, double r, double rho,
+                                  const std::array<double, 3>& v) {
+  return add_sphere_with_mass(px, py, pz, r, rho * (4.0 / 3.0) * std::numbers::pi * r * r * r, v);
+}
+
+Particles spheres_from(const packing::Packing& pk, double rho) {
+  if (pk.dim != 3) fail("spheres_from: the packing is 2D");
+  if (!(rho > 0.0) || !std::isfinite(rho)) fail("spheres_from: the density must be positive and finite");
+  Particles P;
+  P.dim = 3;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], rho);
+  return P;
+}
+
+Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
+  if (pk.dim != 2) throw std::invalid_argument("dem: the packing is 3D (dim 3); the DEM is 2D only");
+  Particles P;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
+  return P;
+}
+
+Particles particles_from(const packing::Packing& pk, double rho) {
+  if (!(rho > 0.0) || !std::isfinite(rho)) fail("particles_from: the density must be positive and finite");
+  Particles P;
+  for (std::size_t i = 0; i < pk.size(); ++i) P.add_disk(pk.x[i], pk.y[i], pk.r[i], rho);
+  return P;
+}
+
+packing::Packing to_packing(const Particles& P, const packing::Box& box) {
+  packing::Packing pk;
+  pk.x = P.x;
+  pk.y = P.y;
+  pk.r = P.radius;
+  pk.box = box;
+  return pk;
+}
+
+void DynamicOptions::validate() const {
+  if (!(steps_per_contact > 0.0)) fail("DynamicOptions: steps_per_contact must be > 0");
+  if (!(min_steps_per_contact >= 0.0)) fail("DynamicOptions: min_steps_per_contact must be >= 0");
+  if (!(dt >= 0.0)) fail("DynamicOptions: dt must be >= 0 (0 = from the rule)");
+  if (!(skin >= 0.0)) fail("DynamicOptions: skin must be >= 0 (0 = 0.3 mean radius)");
+  if (check_every < 0) fail("DynamicOptions: check_every must be >= 0 (0 = no instability checks)");
+}
+
+double contact_duration(double k2, double gamma0, double m12) {
+  const double eta0 = gamma0 / (2.0 * m12);
+  double w2 = k2 / m12 - eta0 * eta0;       // LMM05 Eq 6
+  if (!(w2 > 0.0)) w2 = k2 / m12;           // over-damped: undamped omega (stricter)
+  return std::numbers::pi / std::sqrt(w2);  // LMM05 Eq 6: t_c = pi / omega
+}
+
+namespace {
+// The two lightest masses (m_lo <= m_lo2) of the particles.
+void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
+  m_lo = m_lo2 = P.mass[0];
+  if (P.size() < 2) return;
+  m_lo = std::min(P.mass[0], P.mass[1]);
+  m_lo2 = std::max(P.mass[0], P.mass[1]);
+  for (std::size_t i = 2; i < P.size(); ++i) {
+    const double m = P.mass[i];
+    if (m < m_lo) {
+      m_lo2 = m_lo;
+      m_lo = m;
+    } else if (m < m_lo2) {
+      m_lo2 = m;
+    }
+  }
+}
+}  // namespace
+
+TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o) {
+  o.validate();
+  const std::size_t n = P.size();
+  if (n == 0) fail("choose_time_step: no particles");
+  double mean = 0.0, m_lo = 0.0, m_lo2 = 0.0;
+  for (double m : P.mass) mean += m;
+  mean /= static_cast<double>(n);
+  lightest_pair(P, m_lo, m_lo2);
+  TimeStepInfo ts;
+  // k2 is the largest stiffness of the law (cap of Eq 7); gamma_0 of Eq 5.
+  ts.tc_mean = contact_duration(p.k2, p.gamma_n, 0.5 * mean);
+  ts.tc_lightest = contact_duration(p.k2, p.gamma_n, m_lo * m_lo2 / (m_lo + m_lo2));
+  if (o.dt > 0.0) {
+    ts.dt = o.dt;
+  } else {
+    const double tc = o.rule == TimeStepRule::MeanPair ? ts.tc_mean : ts.tc_lightest;
+    ts.dt = tc / o.steps_per_contact;  // LMM05 section 3.1.2: t_MD = pi / (50 omega)
+  }
+  ts.steps_per_contact_lightest = ts.tc_lightest / ts.dt;
+  if (ts.steps_per_contact_lightest < o.min_steps_per_contact) {
+    std::ostringstream s;
+    s << "time step " << ts.dt << " s gives the lightest pair " << ts.steps_per_contact_lightest
+      << " steps per contact (t_c = " << ts.tc_lightest << " s), fewer than "
+      << o.min_steps_per_contact;
+    fail(s.str());
+  }
+  return ts;
+}
+
+TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
+                               const DynamicOptions& o, double area_max) {
+  o.validate();
+  law.validate();
+  if (P.size() == 0) fail("plastic_time_step: no particles");
+  if (!(law.first_touch > 0.0))
+    fail("the explicit solver needs the plastic law's first-touch overlap > 0 (Eq 2 has an infinite stiffness "
+         "at first touch)");
+  double m_lo, m_lo2, mean = 0.0;
+  lightest_pair(P, m_lo, m_lo2);
+  for (double m : P.mass) mean += m;
+  mean /= static_cast<double>(P.size());
+  const double m12 = m_lo * m_lo2 / (m_lo + m_lo2);
+  // the stiffest normal branch: the first-touch chord, times unload_ratio on the elastic branch
+  // (3D: the loading stiffness 6 pi sigma_y R* with the largest R*, a wall contact's r_max)
+  double r_max = 0.0;
+  for (double r : P.radius) r_max = std::max(r_max, r);
+  const double kn = (P.dim == 3 ? law.chord_stiffness_3d(r_max) : law.chord_stiffness()) *
+                    (law.reversible ? 1.0 : law.unload_ratio);
+  TimeStepInfo ts;
+  ts.tc_mean = std::numbers::pi * std::sqrt(0.5 * mean / kn);
+  ts.tc_lightest = std::numbers::pi * std::sqrt(m12 / kn);
+  const double kt = law.frictional() ? law.shear_stiffness() * area_max : 0.0;
+  ts.tc_tangential = kt > 0.0 ? (P.dim == 3 ? std::numbers::pi * std::sqrt(m12 * contact::kTangentialMassRatio<3> / kt)
+                                            : std::numbers::pi * std::sqrt(m12 / 3.0 / kt))
+                              : 0.0;
+  const double tc = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
+  ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;
+  ts.steps_per_contact_lightest = tc / ts.dt;
+  if (ts.steps_per_contact_lightest < o.min_steps_per_contact)
+    fail(fmt::format("time step {:.6g} gives the stiffest contact {:.3g} steps per period (t_c = {:.6g}), fewer "
+                     "than {:g}",
+                     ts.dt, ts.steps_per_contact_lightest, tc, o.min_steps_per_contact));
+  return ts;
+}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                                  const DynamicOptions& options)
+    : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
+  params_.validate();
+  opt_.validate();
+  const std::size_t n = P_.size();
+  if (n >= (std::size_t{1} << 32)) fail("DynamicSolver: too many particles");
+  if (P_.dim != D) fail(fmt::format("DynamicSolver: the particles are {}D, the solver {}D", P_.dim, D));
+  if constexpr (D == 3) {
+    if (box_.enabled && !(box_.z_max > box_.z_min)) fail("DynamicSolver: a 3D box must have z_max > z_min");
+    if (!(P_.z.size() == n && P_.vz.size() == n && P_.fz.size() == n && P_.wx.size() == n && P_.wy.size() == n &&
+          P_.tx.size() == n && P_.ty.size() == n))
+      fail("DynamicSolver: inconsistent 3D particle arrays");
+  }
+  if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
+    fail("DynamicSolver: box must have x_max > x_min and y_max > y_min");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(P_.radius[i] > 0.0) || !(P_.mass[i] > 0.0) || !(P_.inertia[i] > 0.0))
+      fail("DynamicSolver: particle " + std::to_string(i) + " has a non-positive radius or mass");
+  for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
+    if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
+      fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
+  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, opt_, 0.0) : choose_time_step(P_, params_, opt_);
+  thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
+  // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
+  radius_ref_ = P_.radius;
+  if (opt_.model == ContactModel::Full) {
+    radius_scale_ = contact::luding_radius(params_, 1.0, thermal_.T);
+    for (std::size_t i = 0; i < n; ++i) {
+      P_.radius[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
+    }
+  }
+  for (int a = 0; a < D; ++a) {
+    const MovingWall& w = moving_wall(a);
+    wall_v_[a] = w.mode == WallMode::Strain ? w.velocity : 0.0;
+  }
+  centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
+  centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
+  if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
+  if (plastic())
+    pl_wall_hist_.assign(kWalls * n, PlasticHist{});
+  else
+    wall_hist_.assign(kWalls * n, LudingHist{});
+  finish_setup();
+  build_table();
+  compute_forces_dispatch();
+}
+
+template <int D>
+void DynamicSolverT<D>::finish_setup() {
+  const std::size_t n = P_.size();
+  wall_params_ = params_.wall_params();
+  pl_wall_params_ = opt_.plastic;
+  pl_wall_params_.mu = opt_.plastic_wall_mu;
+  if (plastic() && n > 0) {
+    double m_lo = 0.0, m_lo2 = 0.0;
+    lightest_pair(P_, m_lo, m_lo2);
+    pl_m12_ = m_lo * m_lo2 / (m_lo + m_lo2);
+  }
+  choose_friction();
+  double rmean = 0.0;
+  radius_ref_max_ = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    rmean += radius_ref_[i];
+    radius_ref_max_ = std::max(radius_ref_max_, radius_ref_[i]);
+  }
+  rmean /= static_cast<double>(std::max<std::size_t>(n, 1));
+  skin_ = opt_.skin > 0.0 ? opt_.skin : 0.3 * rmean;
+  radius_scale_build_ = radius_scale_;
+}
+
+template <int D>
+void DynamicSolverT<D>::choose_friction() {
+  if (plastic())
+    friction_ = opt_.plastic.mu > 0.0 || (walls_active() && opt_.plastic_wall_mu > 0.0);
+  else
+    friction_ = params_.mu > 0.0 || (walls_active() && params_.mu_wall > 0.0);
+}
+
+template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template void DynamicSolverT<2>::finish_setup();
+template void DynamicSolverT<2>::choose_friction();
+
+template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template void DynamicSolverT<3>::finish_setup();
+template void DynamicSolverT<3>::choose_friction();
+
+}  // namespace netdem::dem

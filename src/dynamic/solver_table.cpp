@@ -1,0 +1,259 @@
+// Explicit DEM solver: the history stores and the Verlet table on the cell grid (solver.hpp).
+#include "netdem/dynamic/solver.hpp"
+#include "solver_detail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "netdem/contact/luding_law.hpp"
+
+namespace netdem::dem {
+
+using detail::displacement_limit;
+using detail::fail;
+
+// ---- the history stores: one per law family; the model's is used, the other stays empty --------
+namespace {
+template <int D>
+inline bool is_fresh(const contact::LudingHistoryT<D>& h) { return h.fresh(); }
+template <int D>
+inline bool is_fresh(const contact::PlasticIndentationHistoryT<D>& h) {
+  return h.u_max == 0.0 && contact::tan_is_zero(h.f_t) && h.sliding == 0;
+}
+}  // namespace
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::pair_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return pair_hist_;
+  } else {
+    return pl_pair_hist_;
+  }
+}
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::new_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return new_hist_;
+  } else {
+    return pl_new_hist_;
+  }
+}
+template <int D>
+template <class H>
+std::vector<H>& DynamicSolverT<D>::wall_histories() {
+  if constexpr (std::is_same_v<H, LudingHist>) {
+    return wall_hist_;
+  } else {
+    return pl_wall_hist_;
+  }
+}
+
+// The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted).
+template <int D>
+template <class H>
+void DynamicSolverT<D>::carry_histories(std::size_t n_new) {
+  std::vector<H>& old_h = pair_histories<H>();
+  std::vector<H>& new_h = new_histories<H>();
+  new_h.assign(n_new, H{});
+  std::size_t a = 0;
+  for (std::size_t b = 0; b < n_new; ++b) {
+    while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
+    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
+      new_h[b] = old_h[a];
+      pair_live_[b] = is_fresh(new_h[b]) ? 0 : 1;
+    }
+  }
+  old_h.swap(new_h);
+}
+
+// ---- neighbour search: cell list + Verlet table ------------------------------------------------
+
+template <int D>
+bool DynamicSolverT<D>::needs_rebuild() const {
+  const double lim =
+      displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  if (!(lim > 0.0) || walls_moved()) return true;
+  const double lim2 = lim * lim;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    const double dx = P_.x[i] - x_build_[i], dy = P_.y[i] - y_build_[i];
+    double d2 = dx * dx + dy * dy;
+    if constexpr (D == 3) {
+      const double dz = P_.z[i] - z_build_[i];
+      d2 += dz * dz;
+    }
+    if (d2 > lim2) return true;
+  }
+  return false;
+}
+
+// Wall candidates: particles within a_i + skin of a wall. Any other particle's wall histories
+// are cleared here (it does not touch a wall, so the next evaluation would clear them anyway).
+template <int D>
+void DynamicSolverT<D>::build_wall_list() {
+  const std::size_t n = P_.size();
+  wall_list_.clear();
+  wall_list_valid_ = walls_active();
+  if (!walls_active()) return;
+  box_build_[0] = box_.x_min;
+  box_build_[1] = box_.x_max;
+  box_build_[2] = box_.y_min;
+  box_build_[3] = box_.y_max;
+  if constexpr (D == 3) {
+    box_build_[4] = box_.z_min;
+    box_build_[5] = box_.z_max;
+  }
+  constexpr std::uint8_t kAll = (1u << kWalls) - 1u;
+  if (wall_touch_.size() != n) wall_touch_.assign(n, kAll);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double xi = P_.x[i], yi = P_.y[i], reach = P_.radius[i] + skin_;
+    bool near = xi - box_.x_min < reach || box_.x_max - xi < reach ||
+                yi - box_.y_min < reach || box_.y_max - yi < reach;
+    if constexpr (D == 3) near = near || P_.z[i] - box_.z_min < reach || box_.z_max - P_.z[i] < reach;
+    if (near) {
+      wall_list_.push_back(static_cast<std::uint32_t>(i));
+      wall_touch_[i] = kAll;  // the next evaluation visits its wall histories
+    } else if (wall_touch_[i] != 0) {
+      if (plastic())
+        for (std::size_t w = 0; w < kWalls; ++w) pl_wall_hist_[kWalls * i + w] = PlasticHist{};
+      else
+        for (std::size_t w = 0; w < kWalls; ++w) wall_hist_[kWalls * i + w] = LudingHist{};
+      wall_touch_[i] = 0;
+    }
+  }
+}
+
+template <int D>
+bool DynamicSolverT<D>::walls_moved() const {
+  if (!walls_active()) return false;
+  const double lim = 0.5 * skin_;
+  bool stay = std::fabs(box_.x_min - box_build_[0]) < lim && std::fabs(box_.x_max - box_build_[1]) < lim &&
+              std::fabs(box_.y_min - box_build_[2]) < lim && std::fabs(box_.y_max - box_build_[3]) < lim;
+  if constexpr (D == 3)
+    stay = stay && std::fabs(box_.z_min - box_build_[4]) < lim && std::fabs(box_.z_max - box_build_[5]) < lim;
+  return !stay;
+}
+
+template <int D>
+void DynamicSolverT<D>::build_table() {
+  const std::size_t n = P_.size();
+  ++rebuilds_;
+  radius_scale_build_ = radius_scale_;
+  x_build_ = P_.x;
+  y_build_ = P_.y;
+  if constexpr (D == 3) z_build_ = P_.z;
+  build_wall_list();
+  new_key_.clear();
+  if (n >= 2) {
+    double rmax = 0.0;
+    for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.radius[i]);
+    // cell side >= largest interaction range 2 rmax + skin (3 x 3 cells per query); <= ~4 n cells
+    if constexpr (D == 2) {
+      grid_.rebuild(P_.x, P_.y, 2.0 * rmax + skin_);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double xi = P_.x[i], yi = P_.y[i], ri = P_.radius[i];
+        grid_.for_each_near(xi, yi, ri + rmax + skin_, [&](std::uint32_t j) {
+          if (j <= i) return;
+          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi;
+          const double range = ri + P_.radius[j] + skin_;
+          if (dx * dx + dy * dy < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+        });
+      }
+    } else {  // 3 x 3 x 3 cells per query
+      grid_.rebuild(P_.x, P_.y, P_.z, 2.0 * rmax + skin_);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double xi = P_.x[i], yi = P_.y[i], zi = P_.z[i], ri = P_.radius[i];
+        grid_.for_each_near(xi, yi, zi, ri + rmax + skin_, [&](std::uint32_t j) {
+          if (j <= i) return;
+          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi, dz = P_.z[j] - zi;
+          const double range = ri + P_.radius[j] + skin_;
+          if (dx * dx + dy * dy + dz * dz < range * range)
+            new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+        });
+      }
+    }
+    std::sort(new_key_.begin(), new_key_.end());
+  }
+  // carry the committed histories of the pairs that stay in the table (both lists sorted)
+  pair_live_.assign(new_key_.size(), 0);
+  if (plastic())
+    carry_histories<PlasticHist>(new_key_.size());
+  else
+    carry_histories<LudingHist>(new_key_.size());
+  pair_key_.swap(new_key_);
+}
+
+template <int D>
+void DynamicSolverT<D>::touching_pairs(
+    std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const {
+  out.clear();
+  for (std::uint64_t key : pair_key_) {
+    const std::uint32_t i = static_cast<std::uint32_t>(key >> 32);
+    const std::uint32_t j = static_cast<std::uint32_t>(key & 0xffffffffu);
+    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
+    const double s = P_.radius[i] + P_.radius[j];
+    double L2 = dx * dx + dy * dy;
+    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+    if (L2 < s * s) out.emplace_back(i, j);
+  }
+}
+
+template <int D>
+auto DynamicSolverT<D>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist* {
+  const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
+  auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
+  if (plastic() || it == pair_key_.end() || *it != key) return nullptr;
+  return &pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
+}
+
+template <int D>
+auto DynamicSolverT<D>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist* {
+  const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
+  auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
+  if (!plastic() || it == pair_key_.end() || *it != key) return nullptr;
+  return &pl_pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
+}
+
+template bool DynamicSolverT<2>::needs_rebuild() const;
+template void DynamicSolverT<2>::build_wall_list();
+template bool DynamicSolverT<2>::walls_moved() const;
+template void DynamicSolverT<2>::build_table();
+template void DynamicSolverT<2>::touching_pairs( std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
+template auto DynamicSolverT<2>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist*;
+template auto DynamicSolverT<2>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist*;
+
+template bool DynamicSolverT<3>::needs_rebuild() const;
+template void DynamicSolverT<3>::build_wall_list();
+template bool DynamicSolverT<3>::walls_moved() const;
+template void DynamicSolverT<3>::build_table();
+template void DynamicSolverT<3>::touching_pairs( std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
+template auto DynamicSolverT<3>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist*;
+template auto DynamicSolverT<3>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist*;
+
+template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::LudingHist>();
+template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::LudingHist>();
+template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::LudingHist>();
+template void DynamicSolverT<2>::carry_histories<DynamicSolverT<2>::LudingHist>(std::size_t);
+template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::PlasticHist>();
+template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::PlasticHist>();
+template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::PlasticHist>();
+template void DynamicSolverT<2>::carry_histories<DynamicSolverT<2>::PlasticHist>(std::size_t);
+
+template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::LudingHist>();
+template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::LudingHist>();
+template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::LudingHist>();
+template void DynamicSolverT<3>::carry_histories<DynamicSolverT<3>::LudingHist>(std::size_t);
+template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::PlasticHist>();
+template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::PlasticHist>();
+template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::PlasticHist>();
+template void DynamicSolverT<3>::carry_histories<DynamicSolverT<3>::PlasticHist>(std::size_t);
+
+}  // namespace netdem::dem
