@@ -1,5 +1,6 @@
 #pragma once
-// Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield): the
+// Set-up shared by the netsolve subcommands (main.cpp: pack, compact; yield.cpp: yield) and by
+// demsolve compact and yield, which run netsolve's scene: the
 // packing, and the contact-law / Newton options both `compact` and `yield` take.
 #include <algorithm>
 #include <cctype>
@@ -148,10 +149,16 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
 }
 
 /// Contact law and Newton options common to `compact` and `yield`.
+/// The law's numbers default to the law's own (contact::PlasticIndentationParams), the Newton
+/// options to the library's compaction preset (qs::SolverOptions::compact()); friction and the
+/// unloading branch are the presets' too (sticking, reversible). demsolve compact and yield take
+/// their defaults from here.
 struct LawArgs {
   std::string friction = "inf", normal_unloading = "reversible";
-  double k_t = 1e3, sigma_y = 1.0, tol = 1e-3, viscosity = 0.01, first_touch = 1e-5;
-  int max_newton = 10;
+  double k_t = contact::PlasticIndentationParams{}.k_t, sigma_y = contact::PlasticIndentationParams{}.sigma_y;
+  double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
+  double first_touch = contact::PlasticIndentationParams{}.first_touch;
+  int max_newton = qs::SolverOptions::compact().max_newton;
 };
 
 /// The LawArgs of a library preset (the command's defaults).

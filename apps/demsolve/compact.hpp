@@ -4,7 +4,8 @@
 #include <filesystem>
 #include <string>
 
-#include "../netsolve/setup.hpp"
+#include "netdem/dynamic/solver.hpp"
+#include "setup.hpp"
 
 namespace netdem::app::dem {
 
@@ -13,18 +14,18 @@ struct DemCompactArgs {
   std::string packing_file;
   std::string path = "hydrostatic";
   std::string boundary = "layer";  ///< layer | walls
-  std::string friction = "inf";
-  std::string normal_unloading = "reversible";
+  std::string friction = netdem::app::netsolve::LawArgs{}.friction;
+  std::string normal_unloading = netdem::app::netsolve::LawArgs{}.normal_unloading;
   std::string snapshots = "0.82,0.84,0.85";
   bool affine = false, no_rotation = false, quiet = false, overwrite = false;
   double to_density = 0.85;
-  double first_touch = 1e-5;
-  double k_t = 1e3;
+  double first_touch = netdem::app::netsolve::LawArgs{}.first_touch;
+  double k_t = netdem::app::netsolve::LawArgs{}.k_t;
   /// I = gamma' d sqrt(rho / P_ref), d = 2R, P_ref = sigma_y (docs/dynamic.md "demsolve compact")
   double inertial_number = kDefaultInertialNumber;
   double damping = 0.5;  ///< damping_n = damping_t, fractions of critical damping of the chord stiffness
   double drag = 0.0;     ///< DynamicOptions::affine_drag [1/t*]
-  double steps_per_contact = 50.0;
+  double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;
   int increments = 100;
   double max_steps = 1e10;
   static constexpr double kDefaultInertialNumber = 1.5e-4;  // docs/dynamic.md "demsolve compact": the fit
@@ -37,8 +38,8 @@ struct DemYieldArgs {
   std::string precompact = "hydrostatic", compact_bc = "die", probe_bc;
   double to_density = 0.85;
   int increments = 100;
-  std::string friction = "inf", normal_unloading = "reversible";
-  double first_touch = 1e-5, k_t = 1e3;
+  std::string friction = DemCompactArgs{}.friction, normal_unloading = DemCompactArgs{}.normal_unloading;
+  double first_touch = DemCompactArgs{}.first_touch, k_t = DemCompactArgs{}.k_t;
   int directions = 24;
   std::string probe_list;
   int jobs = 1;
@@ -49,7 +50,7 @@ struct DemYieldArgs {
   double relax_drag = 30.0;  ///< drag of the holds after each unloading/probe increment [1/t*]
   double settle_tol = 1e-3;  ///< a hold ends when the unbalanced force < this x the mean contact force ...
   double settle_time = 50.0; ///< ... or after this time [t*] (the sample counts as unsettled)
-  double damping = 0.5, steps_per_contact = 50.0, max_steps = 1e11;
+  double damping = 0.5, steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact, max_steps = 1e11;
   bool no_rotation = false, quiet = false, overwrite = false, allow_unconverged = false;
 };
 

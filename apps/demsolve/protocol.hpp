@@ -23,7 +23,7 @@ struct RunArgs {
   bool pressure_given = false;  ///< with a state file: override the state's wall pressure
   double mu = 0.5;          ///< particle friction once friction is on (Table 1)
   double mu_wall_prepare = 0.0;  ///< wall friction during preparation (Table 1: 0); 0 after t_heat
-  double steps_per_contact = 50.0;  ///< Eq 6 rule, mean pair
+  double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;  ///< Eq 6 rule, mean pair
   bool quiet = false;
   std::string state_file;  ///< start from this state (its time decides the phase)
   std::vector<std::string> param_overrides;  ///< NAME=VALUE for LudingParams
