@@ -43,7 +43,6 @@ ALLOWED = {
     "src/dynamic/state.cpp:parse_state_body": 250,
     "apps/demsolve/main.cpp:main": 228,
     "src/quasistatic/staggered.cpp:step": 204,
-    "src/packing/io.cpp:read_packing_csv": 197,
     "apps/netsolve/main.cpp:run_compact": 178,
     "src/quasistatic/staggered.cpp:Staggered::load": 177,
     "apps/netsolve/sinter_pair.cpp:run": 175,
