@@ -39,7 +39,6 @@ ALLOWED = {
     "apps/netsolve/yield.cpp:run_yield": 301,
     "apps/demsolve/compact.cpp:run_dem_compact_3d": 301,
     "apps/demsolve/compact.cpp:run_dem_compact": 279,
-    "src/dynamic/green_body.cpp:make_green_body": 250,
     "src/dynamic/state.cpp:parse_state_body": 250,
     "apps/demsolve/main.cpp:main": 228,
     "src/quasistatic/staggered.cpp:step": 204,

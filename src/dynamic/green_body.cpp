@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
@@ -68,134 +69,165 @@ void GreenBodyOptions::validate() const {
   need(check_every >= 1, "check_every", ">= 1", static_cast<double>(check_every));
 }
 
-GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserver& observer) {
-  o.validate();
+namespace {
+
+/// The phases of make_green_body, in order (the numbers are the comments' of the route).
+class GreenBodyRoute {
   using clock = std::chrono::steady_clock;
-  GreenBodyResult res;
-  const double r = o.mean_radius, g = o.gravity;
-  const double m = o.solid_density * 4.0 / 3.0 * kPi * r * r * r;  // the mean sphere
-  const double mgr = m * g * r;
-  res.mean_mass = m;
-  res.time_unit = std::sqrt(r / g);
-  res.stiffness = o.stiffness_number * m * g / r;
-  // the restitution e of a mean pair (m12 = m / 2): e = exp(-eta t_c), t_c = pi / sqrt(k / m12 - eta^2)
-  const double m12 = 0.5 * m, le = std::log(o.restitution);
-  const double eta = -le * std::sqrt(res.stiffness / m12) / std::sqrt(kPi * kPi + le * le);
-  res.gamma_n = 2.0 * m12 * eta;
-  const double alpha = 2.0 / 7.0;  // k_t / k_n: the tangential and normal periods of a sphere pair match
-  res.gamma_t = alpha * res.gamma_n;
 
-  // 1. the cloud
-  const double vs_expected =
-      static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
-  // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
-  // depend on the target, so one seed settles the same way for every target
-  const double L0 = std::cbrt(vs_expected / (o.settled_guess * o.aspect));
-  const double H_cloud = vs_expected / (o.cloud_fraction * L0 * L0);
-  packing::RandomFill3dOptions fo;
-  fo.n = o.n;
-  fo.mean_radius = r;
-  fo.dispersion = o.dispersion;
-  fo.seed = o.seed;
-  fo.box = packing::Box{0.0, 0.0, L0, L0, 0.0, H_cloud};
-  res.cloud_box = fo.box;
-  const packing::Packing cloud = packing::random_fill_3d(fo);
-  const double vs = cloud.solid_volume();
+ public:
+  GreenBodyRoute(const GreenBodyOptions& o, const GreenBodyObserver& observer) : o_(o), observer_(observer) {}
 
-  LudingParams lp;
-  lp.k2 = res.stiffness;
-  lp.k1_ratio = 1.0;
-  lp.kc_ratio = 0.0;
-  lp.alpha = alpha;
-  lp.gamma_n = res.gamma_n;
-  lp.gamma_t = res.gamma_t;
-  lp.mu = o.mu_settle;
-  lp.mu_wall = o.mu_wall;
-  lp.a0 = r;
-  lp.rho_p = o.solid_density;
-  Particles P;
-  P.dim = 3;
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    P.add_sphere(cloud.x[i], cloud.y[i], cloud.z[i], cloud.r[i], o.solid_density);
-  Box box(fo.box);
-  DynamicOptions dopt;
-  dopt.model = ContactModel::Linear;
-  dopt.rule = TimeStepRule::MeanPair;
-  dopt.steps_per_contact = o.steps_per_contact;
-  dopt.gravity_z = -g;
-  DynamicSolver3 s(std::move(P), lp, box, dopt);
-  res.dt = s.dt();
-  res.contact_time = s.time_step().tc_mean;
-  const double dt = s.dt();
-  const double n_sph = static_cast<double>(o.n);
+  GreenBodyResult run() {
+    material();
+    make_cloud();  // 1.
+    settle();      // 2.
+    lid();         // 3.
+    res_.settled_box = static_cast<const packing::Box&>(s_->box());
+    res_.settled_density = s_->density();
+    compress();    // 4.
+    rest();        // 5.
+    finish();
+    return std::move(res_);
+  }
+
+ private:
+  // the mean sphere, the stiffness and the damping of a mean pair
+  void material() {
+    const double r = o_.mean_radius, g = o_.gravity;
+    m_ = o_.solid_density * 4.0 / 3.0 * kPi * r * r * r;  // the mean sphere
+    mgr_ = m_ * g * r;
+    res_.mean_mass = m_;
+    res_.time_unit = std::sqrt(r / g);
+    res_.stiffness = o_.stiffness_number * m_ * g / r;
+    // the restitution e of a mean pair (m12 = m / 2): e = exp(-eta t_c), t_c = pi / sqrt(k / m12 - eta^2)
+    const double m12 = 0.5 * m_, le = std::log(o_.restitution);
+    const double eta = -le * std::sqrt(res_.stiffness / m12) / std::sqrt(kPi * kPi + le * le);
+    res_.gamma_n = 2.0 * m12 * eta;
+    const double alpha = 2.0 / 7.0;  // k_t / k_n: the tangential and normal periods of a sphere pair match
+    res_.gamma_t = alpha * res_.gamma_n;
+    lp_.k2 = res_.stiffness;
+    lp_.k1_ratio = 1.0;
+    lp_.kc_ratio = 0.0;
+    lp_.alpha = alpha;
+    lp_.gamma_n = res_.gamma_n;
+    lp_.gamma_t = res_.gamma_t;
+    lp_.mu = o_.mu_settle;
+    lp_.mu_wall = o_.mu_wall;
+    lp_.a0 = r;
+    lp_.rho_p = o_.solid_density;
+  }
+
+  // 1. the cloud, and the solver on it
+  void make_cloud() {
+    const double r = o_.mean_radius;
+    vs_expected_ = static_cast<double>(o_.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o_.dispersion * o_.dispersion);
+    // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
+    // depend on the target, so one seed settles the same way for every target
+    L0_ = std::cbrt(vs_expected_ / (o_.settled_guess * o_.aspect));
+    H_cloud_ = vs_expected_ / (o_.cloud_fraction * L0_ * L0_);
+    packing::RandomFill3dOptions fo;
+    fo.n = o_.n;
+    fo.mean_radius = r;
+    fo.dispersion = o_.dispersion;
+    fo.seed = o_.seed;
+    fo.box = packing::Box{0.0, 0.0, L0_, L0_, 0.0, H_cloud_};
+    res_.cloud_box = fo.box;
+    const packing::Packing cloud = packing::random_fill_3d(fo);
+    vs_ = cloud.solid_volume();
+    Particles P;
+    P.dim = 3;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      P.add_sphere(cloud.x[i], cloud.y[i], cloud.z[i], cloud.r[i], o_.solid_density);
+    Box box(fo.box);
+    DynamicOptions dopt;
+    dopt.model = ContactModel::Linear;
+    dopt.rule = TimeStepRule::MeanPair;
+    dopt.steps_per_contact = o_.steps_per_contact;
+    dopt.gravity_z = -o_.gravity;
+    s_ = std::make_unique<DynamicSolver3>(std::move(P), lp_, box, dopt);
+    res_.dt = s_->dt();
+    res_.contact_time = s_->time_step().tc_mean;
+  }
+
   // translational kinetic energy per sphere / (m g r): a sphere spinning in place (e.g. touching
   // frictionless walls only, which cannot stop its spin) does not move the packing
-  const auto kinetic = [&] {
-    const Particles& Q = s.particles();
+  double kinetic() const {
+    const Particles& Q = s_->particles();
     double e = 0.0;
     for (std::size_t i = 0; i < Q.size(); ++i) e += Q.mass[i] * (Q.vx[i] * Q.vx[i] + Q.vy[i] * Q.vy[i] + Q.vz[i] * Q.vz[i]);
-    return 0.5 * e / n_sph / mgr;
-  };
+    return 0.5 * e / static_cast<double>(o_.n) / mgr_;
+  }
 
-  auto report = [&](const char* phase, std::int64_t steps, double ke, double fraction) {
-    if (!observer) return;
+  void report(const char* phase, std::int64_t steps, double ke, double fraction) const {
+    if (!observer_) return;
     GreenBodyProgress pr;
     pr.phase = phase;
     pr.steps = steps;
-    pr.time = s.time();
-    pr.density = s.density();
+    pr.time = s_->time();
+    pr.density = s_->density();
     pr.kinetic = ke;
     pr.fraction = fraction;
-    observer(pr);
-  };
+    observer_(pr);
+  }
+
   // runs until the rest criterion holds at 3 checks in a row (after min_time), or the cap
-  auto run_to_rest = [&](const char* name, double min_time) {
+  GreenBodyPhase run_to_rest(const char* name, double min_time) {
     GreenBodyPhase ph;
     ph.name = name;
     const auto w0 = clock::now();
-    const double t0 = s.time(), cap = o.max_phase_time * res.time_unit;
+    const double t0 = s_->time(), cap = o_.max_phase_time * res_.time_unit;
     int calm = 0;
     double ke = kinetic();
     while (true) {
-      s.run(static_cast<std::size_t>(o.check_every));
-      ph.steps += o.check_every;
+      s_->run(static_cast<std::size_t>(o_.check_every));
+      ph.steps += o_.check_every;
       ke = kinetic();
-      calm = ke < o.rest_energy && s.time() - t0 >= min_time ? calm + 1 : 0;
+      calm = ke < o_.rest_energy && s_->time() - t0 >= min_time ? calm + 1 : 0;
       report(name, ph.steps, ke, -1.0);
       if (calm >= 3) {
         ph.at_rest = true;
         break;
       }
-      if (s.time() - t0 >= cap) break;
+      if (s_->time() - t0 >= cap) break;
     }
-    ph.time = s.time() - t0;
-    ph.wall_seconds = std::chrono::duration<double>(clock::now() - w0).count();
-    ph.density = s.density();
-    ph.kinetic = ke;
+    close_phase(ph, t0, w0, ke);
     return ph;
-  };
-  auto not_ok = [&](const std::string& status, const std::string& why) {
-    if (res.status == "ok") {
-      res.status = status;
-      res.reason = why;
-    } else if (status == "unreachable" && res.status != "unreachable") {  // the stronger verdict first
-      res.reason = why + "; " + res.status + ": " + res.reason;
-      res.status = status;
+  }
+
+  void close_phase(GreenBodyPhase& ph, double t0, clock::time_point w0, double ke) const {
+    ph.time = s_->time() - t0;
+    ph.wall_seconds = std::chrono::duration<double>(clock::now() - w0).count();
+    ph.density = s_->density();
+    ph.kinetic = ke;
+  }
+
+  void not_ok(const std::string& status, const std::string& why) {
+    if (res_.status == "ok") {
+      res_.status = status;
+      res_.reason = why;
+    } else if (status == "unreachable" && res_.status != "unreachable") {  // the stronger verdict first
+      res_.reason = why + "; " + res_.status + ": " + res_.reason;
+      res_.status = status;
     } else {
-      res.reason += "; " + why;
+      res_.reason += "; " + why;
     }
-  };
+  }
 
   // 2. settle under gravity (at least the free-fall time over the cloud's empty height)
-  const double fall = std::sqrt(2.0 * std::max(0.0, H_cloud - vs_expected / (o.settled_guess * L0 * L0)) / g);
-  res.phases.push_back(run_to_rest("settle", fall));
-  if (!res.phases.back().at_rest)
-    not_ok("unconverged", fmt::format("the settling did not come to rest in {:g} sqrt(r/g) (kinetic energy {:.3g} m g r "
-                                      "per sphere, criterion {:.3g})",
-                                      o.max_phase_time, res.phases.back().kinetic, o.rest_energy));
+  void settle() {
+    const double fall =
+        std::sqrt(2.0 * std::max(0.0, H_cloud_ - vs_expected_ / (o_.settled_guess * L0_ * L0_)) / o_.gravity);
+    res_.phases.push_back(run_to_rest("settle", fall));
+    if (!res_.phases.back().at_rest)
+      not_ok("unconverged", fmt::format("the settling did not come to rest in {:g} sqrt(r/g) (kinetic energy {:.3g} m g r "
+                                        "per sphere, criterion {:.3g})",
+                                        o_.max_phase_time, res_.phases.back().kinetic, o_.rest_energy));
+  }
 
   // 3. the lid onto the uppermost sphere: the z_max wall moves down at 0.05 r_min per step
-  {
+  void lid() {
+    DynamicSolver3& s = *s_;
     GreenBodyPhase ph;
     ph.name = "lid";
     const auto w0 = clock::now();
@@ -211,112 +243,127 @@ GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserv
       const auto steps = static_cast<std::int64_t>(std::ceil(travel / (0.05 * rmin)));
       MovingWall fixed, lid;
       lid.mode = WallMode::Strain;
-      lid.velocity = -travel / (static_cast<double>(steps) * dt);
+      lid.velocity = -travel / (static_cast<double>(steps) * s.dt());
       s.set_walls(fixed, fixed, lid);
       s.run(static_cast<std::size_t>(steps));
       s.set_walls(fixed, fixed, fixed);
       ph.steps = steps;
     }
-    ph.time = s.time() - t0;
-    ph.wall_seconds = std::chrono::duration<double>(clock::now() - w0).count();
-    ph.density = s.density();
-    ph.kinetic = kinetic();
-    res.phases.push_back(ph);
+    close_phase(ph, t0, w0, kinetic());
+    res_.phases.push_back(ph);
   }
-  res.settled_box = static_cast<const packing::Box&>(s.box());
-  res.settled_density = s.density();
 
   // 4. compress: the three walls reach the scaled box at the same time, the fastest at wall_speed
   // the target box: width L* = (V / (target aspect))^(1/3) (x = y), height aspect L*, if every wall
   // then moves inward; else the settled box scaled by s = (settled density / target)^(1/3)
-  res.scale = std::cbrt(res.settled_density / o.target_density);
-  const packing::Box& b1 = res.settled_box;
-  res.target_box = b1;
-  const double Ls = std::cbrt(vs / (o.target_density * o.aspect)), Hs = o.aspect * Ls;
-  if (res.scale < 1.0) {
-    res.exact_aspect = Ls <= b1.width() && Ls <= b1.height() && Hs <= b1.depth();
-    res.target_box.x_max = b1.x_min + (res.exact_aspect ? Ls : res.scale * b1.width());
-    res.target_box.y_max = b1.y_min + (res.exact_aspect ? Ls : res.scale * b1.height());
-    res.target_box.z_max = b1.z_min + (res.exact_aspect ? Hs : res.scale * b1.depth());
+  void compress() {
+    res_.scale = std::cbrt(res_.settled_density / o_.target_density);
+    const packing::Box& b1 = res_.settled_box;
+    res_.target_box = b1;
+    const double Ls = std::cbrt(vs_ / (o_.target_density * o_.aspect)), Hs = o_.aspect * Ls;
+    if (!(res_.scale < 1.0)) return;
+    res_.exact_aspect = Ls <= b1.width() && Ls <= b1.height() && Hs <= b1.depth();
+    res_.target_box.x_max = b1.x_min + (res_.exact_aspect ? Ls : res_.scale * b1.width());
+    res_.target_box.y_max = b1.y_min + (res_.exact_aspect ? Ls : res_.scale * b1.height());
+    res_.target_box.z_max = b1.z_min + (res_.exact_aspect ? Hs : res_.scale * b1.depth());
+    DynamicSolver3& s = *s_;
     GreenBodyPhase ph;
     ph.name = "compress";
     const auto w0 = clock::now();
     const double t0 = s.time();
-    const double travel[3] = {b1.width() - res.target_box.width(), b1.height() - res.target_box.height(),
-                              b1.depth() - res.target_box.depth()};
+    const double travel[3] = {b1.width() - res_.target_box.width(), b1.height() - res_.target_box.height(),
+                              b1.depth() - res_.target_box.depth()};
     const double tmax = std::max({travel[0], travel[1], travel[2]});
-    const double vmax = o.wall_speed * std::sqrt(g * r);
-    const auto steps = static_cast<std::int64_t>(std::ceil(tmax / (vmax * dt)));
-    const double T = static_cast<double>(steps) * dt;
+    const double vmax = o_.wall_speed * std::sqrt(o_.gravity * o_.mean_radius);
+    const auto steps = static_cast<std::int64_t>(std::ceil(tmax / (vmax * s.dt())));
+    const double T = static_cast<double>(steps) * s.dt();
     MovingWall w[3];
     for (int a = 0; a < 3; ++a) {
       w[a].mode = WallMode::Strain;
       w[a].velocity = -travel[a] / T;
-      res.wall_velocity[a] = w[a].velocity;
+      res_.wall_velocity[a] = w[a].velocity;
     }
     const double Lmax = std::max({b1.width(), b1.height(), b1.depth()});
-    res.strain_rate = vmax / Lmax;
-    const double p_g = o.solid_density * res.settled_density * g * b1.depth() / 2.0;
-    res.inertial_number = res.strain_rate * 2.0 * r * std::sqrt(o.solid_density / p_g);
-    LudingParams lc = lp;
-    lc.mu = o.mu_compress;
+    res_.strain_rate = vmax / Lmax;
+    const double p_g = o_.solid_density * res_.settled_density * o_.gravity * b1.depth() / 2.0;
+    res_.inertial_number = res_.strain_rate * 2.0 * o_.mean_radius * std::sqrt(o_.solid_density / p_g);
+    LudingParams lc = lp_;
+    lc.mu = o_.mu_compress;
     s.set_params(lc);
     s.set_walls(w[0], w[1], w[2]);
+    ph.steps = compress_steps(steps);
+    MovingWall fixed;
+    s.set_walls(fixed, fixed, fixed);
+    close_phase(ph, t0, w0, kinetic());
+    res_.phases.push_back(ph);
+  }
+
+  // the walls' run in chunks, stopped when the mean overlap passes 3 x the limit; the steps done
+  std::int64_t compress_steps(std::int64_t steps) {
+    DynamicSolver3& s = *s_;
     std::int64_t done = 0;
-    bool aborted = false;
     while (done < steps) {
-      const std::int64_t chunk = std::min<std::int64_t>(o.check_every, steps - done);
+      const std::int64_t chunk = std::min<std::int64_t>(o_.check_every, steps - done);
       s.run(static_cast<std::size_t>(chunk));
       done += chunk;
-      const packing::OverlapStats ov = packing::overlap_stats(packing_of(s, o.seed));
-      res.compress_max_mean_overlap = std::max(res.compress_max_mean_overlap, ov.pair_mean);
-      if (res.limit_density == 0.0 && ov.pair_mean > o.max_mean_overlap) res.limit_density = s.density();
+      const packing::OverlapStats ov = packing::overlap_stats(packing_of(s, o_.seed));
+      res_.compress_max_mean_overlap = std::max(res_.compress_max_mean_overlap, ov.pair_mean);
+      if (res_.limit_density == 0.0 && ov.pair_mean > o_.max_mean_overlap) res_.limit_density = s.density();
       report("compress", done, kinetic(), static_cast<double>(done) / static_cast<double>(steps));
-      if (ov.pair_mean > 3.0 * o.max_mean_overlap) {
-        aborted = true;
+      if (ov.pair_mean > 3.0 * o_.max_mean_overlap) {
         not_ok("unreachable",
                fmt::format("the compression was stopped at density {:.4f}: the mean overlap reached {:.3g} r, 3 times the "
                            "limit {:.3g} r, before the target {:.4f} (it passed the limit at density {:.4f})",
-                           s.density(), ov.pair_mean, o.max_mean_overlap, o.target_density, res.limit_density));
+                           s.density(), ov.pair_mean, o_.max_mean_overlap, o_.target_density, res_.limit_density));
         break;
       }
     }
-    MovingWall fixed;
-    s.set_walls(fixed, fixed, fixed);
-    (void)aborted;
-    ph.steps = done;
-    ph.time = s.time() - t0;
-    ph.wall_seconds = std::chrono::duration<double>(clock::now() - w0).count();
-    ph.density = s.density();
-    ph.kinetic = kinetic();
-    res.phases.push_back(ph);
+    return done;
   }
 
   // 5. rest with the final friction
-  {
-    LudingParams lf = lp;
-    lf.mu = o.mu_final;
-    s.set_params(lf);
-    res.phases.push_back(run_to_rest("rest", 0.0));
-    if (!res.phases.back().at_rest)
+  void rest() {
+    LudingParams lf = lp_;
+    lf.mu = o_.mu_final;
+    s_->set_params(lf);
+    res_.phases.push_back(run_to_rest("rest", 0.0));
+    if (!res_.phases.back().at_rest)
       not_ok("unconverged", fmt::format("the final rest was not reached in {:g} sqrt(r/g) (kinetic energy {:.3g} m g r "
                                         "per sphere, criterion {:.3g})",
-                                        o.max_phase_time, res.phases.back().kinetic, o.rest_energy));
+                                        o_.max_phase_time, res_.phases.back().kinetic, o_.rest_energy));
   }
-  res.packing = packing_of(s, o.seed);
-  res.overlaps = packing::overlap_stats(res.packing);
-  const Stress3 ws = s.wall_stress();
-  for (int a = 0; a < 3; ++a) res.wall_stress[a] = ws.s[a][a];
-  if (res.overlaps.pair_mean > o.max_mean_overlap && res.status != "unreachable")
-    not_ok("unreachable",
-           fmt::format("at rest at density {:.4f} the mean overlap is {:.3g} r, above the limit {:.3g} r: the springs, not "
-                       "the packing, hold the target {:.4f}{}",
-                       s.density(), res.overlaps.pair_mean, o.max_mean_overlap, o.target_density,
-                       res.limit_density > 0.0
-                           ? fmt::format(" (the compression passed the limit at density {:.4f})", res.limit_density)
-                           : std::string()));
-  (void)vs;
-  return res;
+
+  // the packing, its overlaps and wall stresses, the verdict on the overlaps at rest
+  void finish() {
+    const DynamicSolver3& s = *s_;
+    res_.packing = packing_of(s, o_.seed);
+    res_.overlaps = packing::overlap_stats(res_.packing);
+    const Stress3 ws = s.wall_stress();
+    for (int a = 0; a < 3; ++a) res_.wall_stress[a] = ws.s[a][a];
+    if (res_.overlaps.pair_mean > o_.max_mean_overlap && res_.status != "unreachable")
+      not_ok("unreachable",
+             fmt::format("at rest at density {:.4f} the mean overlap is {:.3g} r, above the limit {:.3g} r: the springs, not "
+                         "the packing, hold the target {:.4f}{}",
+                         s.density(), res_.overlaps.pair_mean, o_.max_mean_overlap, o_.target_density,
+                         res_.limit_density > 0.0
+                             ? fmt::format(" (the compression passed the limit at density {:.4f})", res_.limit_density)
+                             : std::string()));
+  }
+
+  const GreenBodyOptions& o_;
+  const GreenBodyObserver& observer_;
+  GreenBodyResult res_;
+  LudingParams lp_;
+  std::unique_ptr<DynamicSolver3> s_;
+  double m_ = 0.0, mgr_ = 0.0;
+  double vs_expected_ = 0.0, L0_ = 0.0, H_cloud_ = 0.0, vs_ = 0.0;
+};
+
+}  // namespace
+
+GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserver& observer) {
+  o.validate();
+  return GreenBodyRoute(o, observer).run();
 }
 
 }  // namespace netdem::dem

@@ -13,10 +13,12 @@ first differing line of each), the files only one side has, and exits 1 if there
 Normalisation (what may differ between two runs of the same binary and is not a result):
   * JSON (summary.json, ...): keys that hold wall-clock or CPU times, rates per second, the
     commit, the binary's path, the date or the pid (VOLATILE_KEYS) are removed, at any depth;
-  * Markdown reports: lines that state a time in seconds or a date are dropped;
+  * Markdown reports: sections headed as timings and lines that state a time in seconds or a date
+    are dropped;
   * CSV: columns whose header names a wall-clock time (VOLATILE_COLUMNS) are dropped;
-  * state files (state*.txt, state*.json: the state format changes with issue 26) are listed but
-    not compared (marked "state");
+  * the absolute paths of the binaries and of the run root (command lines) become <bin>, <root>;
+  * state files (state*.txt, *_state.txt, state*.json: the state format changes with issue 26)
+    are listed but not compared (marked "state");
   * the run marker .incomplete never survives a finished run and is not listed.
 Everything else is compared byte for byte. `run` with the same build twice must compare equal
 (`compare` of two such runs is the script's own check: the outputs are deterministic).
@@ -46,7 +48,7 @@ CASES = [
     ("demsolve_compress", "demsolve", ["compress", "--state", "{root}/demsolve_sinter/state.txt"]),
     ("demsolve_vibrate", "demsolve", ["vibrate", "--state", "{root}/demsolve_sinter/state.txt"]),
     ("demsolve_compact", "demsolve", ["compact"]),
-    ("demsolve_compact3d", "demsolve", ["compact", "--dim", "3", "--boundary", "walls"]),
+    ("demsolve_compact3d", "demsolve", ["compact", "--dim", "3", "--boundary", "walls", "--width", "5"]),
 ]
 
 VOLATILE_KEYS = re.compile(
@@ -68,17 +70,31 @@ def strip_json(v):
     return v
 
 
+CASE_NAMES = "|".join(re.escape(c[0]) for c in CASES)
+BINARY_PATH = re.compile(rb"[^\s\"'`]*/apps/(netsolve|demsolve)\b")
+CASE_PATH = re.compile(rb"[^\s\"'`]*/(" + CASE_NAMES.encode() + rb")/")
+
+
 def normalised(path):
     name = os.path.basename(path)
     data = open(path, "rb").read()
+    # the binaries' and the run root's absolute paths (in command.txt, summary.json, reports)
+    data = CASE_PATH.sub(rb"<root>/\1/", BINARY_PATH.sub(rb"<bin>/\1", data))
     if name.endswith(".json"):
         try:
             return json.dumps(strip_json(json.loads(data)), sort_keys=True).encode()
         except ValueError:
             return data
     if name.endswith(".md"):
-        lines = data.decode(errors="replace").splitlines()
-        return "\n".join(l for l in lines if not VOLATILE_MD.search(l)).encode()
+        out, skip = [], False
+        for l in data.decode(errors="replace").splitlines():
+            if l.startswith("#"):  # a section on timings is dropped whole, to the next heading
+                skip = re.search(r"timing|run time|speed|performance", l, re.I) is not None
+            elif l.startswith("!["):
+                skip = False
+            if not skip and not VOLATILE_MD.search(l):
+                out.append(l)
+        return "\n".join(out).encode()
     if name.endswith(".csv"):
         lines = data.decode(errors="replace").splitlines()
         head = next((i for i, l in enumerate(lines) if l and not l.startswith("#")), None)
@@ -100,7 +116,7 @@ def normalised(path):
 
 
 def is_state(name):
-    return re.match(r"^state.*\.(txt|json|cbor)$", name) is not None
+    return re.match(r"^(.*_)?state.*\.(txt|json|cbor)$", name) is not None
 
 
 def run(build, root, only):
