@@ -28,34 +28,25 @@ template <int D>
 inline bool is_fresh(const contact::PlasticIndentationHistoryT<D>& h) {
   return h.u_max == 0.0 && contact::tan_is_zero(h.f_t) && h.sliding == 0;
 }
+// the store of law family H out of a (Luding, plastic) pair of stores
+template <class H, class L, class P>
+std::vector<H>& family(std::vector<L>& luding, std::vector<P>& plastic) {
+  if constexpr (std::is_same_v<H, L>)
+    return luding;
+  else
+    return plastic;
+}
 }  // namespace
+
 template <int D>
 template <class H>
-std::vector<H>& DynamicSolverT<D>::pair_histories() {
-  if constexpr (std::is_same_v<H, LudingHist>) {
-    return pair_hist_;
-  } else {
-    return pl_pair_hist_;
-  }
-}
+std::vector<H>& DynamicSolverT<D>::pair_histories() { return family<H>(pair_hist_, pl_pair_hist_); }
 template <int D>
 template <class H>
-std::vector<H>& DynamicSolverT<D>::new_histories() {
-  if constexpr (std::is_same_v<H, LudingHist>) {
-    return new_hist_;
-  } else {
-    return pl_new_hist_;
-  }
-}
+std::vector<H>& DynamicSolverT<D>::new_histories() { return family<H>(new_hist_, pl_new_hist_); }
 template <int D>
 template <class H>
-std::vector<H>& DynamicSolverT<D>::wall_histories() {
-  if constexpr (std::is_same_v<H, LudingHist>) {
-    return wall_hist_;
-  } else {
-    return pl_wall_hist_;
-  }
-}
+std::vector<H>& DynamicSolverT<D>::wall_histories() { return family<H>(wall_hist_, pl_wall_hist_); }
 
 // The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted).
 template <int D>
