@@ -15,22 +15,13 @@
 #include <vector>
 
 #include "netdem/packing/cell_grid.hpp"
+#include "deposition_checks.hpp"
 
 namespace netdem::packing {
 
 void DepositionOptions::validate() const {
   auto fail = [](const std::string& msg) { throw std::invalid_argument("deposition options: " + msg); };
-  auto finite = [&](double v, const char* name) {
-    if (!std::isfinite(v)) fail(fmt::format("{} must be finite, got {}", name, v));
-  };
-  finite(width, "width");
-  finite(height, "height");
-  finite(radius, "radius");
-  finite(r_min, "r_min");
-  finite(r_max, "r_max");
-  if (!(radius > 0)) fail(fmt::format("reference radius must be > 0, got {}", radius));
-  if (!(r_min > 0)) fail(fmt::format("r_min must be > 0, got {}", r_min));
-  if (r_min > r_max) fail(fmt::format("r_min = {} exceeds r_max = {}", r_min, r_max));
+  detail::check_deposition_sizes("deposition options", width, height, radius, r_min, r_max);
   if (width < 2 * r_max) fail(fmt::format("width {} is smaller than the largest diameter 2 r_max = {}", width, 2 * r_max));
   if (box_height() < 2 * r_max)
     fail(fmt::format("height {} is smaller than the largest diameter 2 r_max = {}", box_height(), 2 * r_max));

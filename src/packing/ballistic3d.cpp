@@ -14,24 +14,14 @@
 #include <vector>
 
 #include "netdem/packing/cell_grid.hpp"
-
+#include "deposition_checks.hpp"
 #include "netdem/packing/random_fill.hpp"
 
 namespace netdem::packing {
 
 void Deposition3dOptions::validate() const {
   auto fail = [](const std::string& msg) { throw std::invalid_argument("3D deposition options: " + msg); };
-  auto finite = [&](double v, const char* name) {
-    if (!std::isfinite(v)) fail(fmt::format("{} must be finite, got {}", name, v));
-  };
-  finite(width, "width");
-  finite(height, "height");
-  finite(radius, "radius");
-  finite(r_min, "r_min");
-  finite(r_max, "r_max");
-  if (!(radius > 0)) fail(fmt::format("reference radius must be > 0, got {}", radius));
-  if (!(r_min > 0)) fail(fmt::format("r_min must be > 0, got {}", r_min));
-  if (r_min > r_max) fail(fmt::format("r_min = {} exceeds r_max = {}", r_min, r_max));
+  detail::check_deposition_sizes("3D deposition options", width, height, radius, r_min, r_max);
   if (lateral == Lateral::Periodic && width < 4 * r_max)
     fail(fmt::format("periodic width {} is smaller than two largest diameters 4 r_max = {}", width, 4 * r_max));
   if (width < 2 * r_max) fail(fmt::format("width {} is smaller than the largest diameter 2 r_max = {}", width, 2 * r_max));

@@ -1,0 +1,26 @@
+#pragma once
+// Private: the checks that 2D and 3D ballistic deposition options share (ballistic.cpp,
+// ballistic3d.cpp).
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <fmt/core.h>
+
+namespace netdem::packing::detail {
+
+/// Throws std::invalid_argument "<what>: ..." unless width, height, radius, r_min and r_max are
+/// finite, radius > 0, r_min > 0 and r_min <= r_max.
+inline void check_deposition_sizes(const char* what, double width, double height, double radius, double r_min,
+                                   double r_max) {
+  auto fail = [&](const std::string& msg) { throw std::invalid_argument(std::string(what) + ": " + msg); };
+  const double v[5] = {width, height, radius, r_min, r_max};
+  static constexpr const char* kName[5] = {"width", "height", "radius", "r_min", "r_max"};
+  for (int i = 0; i < 5; ++i)
+    if (!std::isfinite(v[i])) fail(fmt::format("{} must be finite, got {}", kName[i], v[i]));
+  if (!(radius > 0)) fail(fmt::format("reference radius must be > 0, got {}", radius));
+  if (!(r_min > 0)) fail(fmt::format("r_min must be > 0, got {}", r_min));
+  if (r_min > r_max) fail(fmt::format("r_min = {} exceeds r_max = {}", r_min, r_max));
+}
+
+}  // namespace netdem::packing::detail
