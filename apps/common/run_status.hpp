@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "netdem/field_error.hpp"
 #include "output.hpp"
 
 namespace netdem::app {
@@ -76,6 +77,12 @@ int guarded(const std::string& prefix, F&& body) {
   } catch (const UsageError& e) {
     line(e.what());
     return exit_code::usage;
+  } catch (const FieldError& e) {  // a library's bad field: named by its option
+    std::string option = "--" + e.field();
+    for (char& c : option)
+      if (c == '_') c = '-';
+    line(option + ": " + e.what());
+    return run_dir_opened() ? exit_code::run_error : exit_code::usage;
   } catch (const std::exception& e) {
     line(e.what());
     return run_dir_opened() ? exit_code::run_error : exit_code::usage;

@@ -10,6 +10,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "netdem/field_error.hpp"
+
 namespace netdem::dem {
 
 namespace {
@@ -20,11 +22,11 @@ void hold_temperature(DynamicSolverT<D>& s, double T) { s.advance_temperature(T,
 
 void CompressionTest::validate() const {
   if (!(std::isfinite(strain_rate) && strain_rate > 0.0))
-    throw std::invalid_argument(fmt::format("--strain-rate must be a positive number of 1/s, got {}", strain_rate));
+    throw FieldError("strain_rate", fmt::format("the compression strain rate must be a positive number of 1/s, got {}", strain_rate));
   if (!(std::isfinite(max_strain) && max_strain > 0.0 && max_strain < 0.9))
-    throw std::invalid_argument(fmt::format("--max-strain must be in (0, 0.9), got {}", max_strain));
+    throw FieldError("max_strain", fmt::format("the maximum strain must be in (0, 0.9), got {}", max_strain));
   if (!(std::isfinite(ramp_time) && ramp_time >= 0.0))
-    throw std::invalid_argument(fmt::format("--ramp-time must be a number of seconds >= 0, got {}", ramp_time));
+    throw FieldError("ramp_time", fmt::format("the ramp time must be a number of seconds >= 0, got {}", ramp_time));
 }
 
 std::int64_t CompressionTest::steps(double dt) const {
@@ -108,13 +110,13 @@ CompressionFigures compression_figures(const CompressionRun& run, double window)
 
 void VibrationTest::validate() const {
   if (!(std::isfinite(frequency) && frequency > 0.0))
-    throw std::invalid_argument(fmt::format("--frequency must be a positive number of Hz, got {}", frequency));
+    throw FieldError("frequency", fmt::format("the vibration frequency must be a positive number of Hz, got {}", frequency));
   if (!(std::isfinite(amplitude) && amplitude >= 0.0))
-    throw std::invalid_argument(fmt::format("--amplitude must be a number of metres >= 0, got {}", amplitude));
+    throw FieldError("amplitude", fmt::format("the vibration amplitude must be a number of metres >= 0, got {}", amplitude));
   if (!(std::isfinite(time) && time > 0.0))
-    throw std::invalid_argument(fmt::format("--time must be a positive number of seconds, got {}", time));
+    throw FieldError("time", fmt::format("the vibration time must be a positive number of seconds, got {}", time));
   if (!(std::isfinite(gravity) && gravity >= 0.0))
-    throw std::invalid_argument(fmt::format("--gravity must be a number >= 0, got {}", gravity));
+    throw FieldError("gravity", fmt::format("the gravity must be a number >= 0, got {}", gravity));
 }
 
 void open_box_for_vibration(SolverState& st) {

@@ -9,6 +9,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "netdem/field_error.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/random_fill.hpp"
 
@@ -17,12 +18,12 @@ namespace netdem::dem {
 using packing::uniform01;
 
 Particles place_sample(const SampleSpec& a, const LudingParams& lp, Box& box) {
-  if (a.n < 1 || a.n > 1000000) throw std::invalid_argument(fmt::format("--n must be in [1, 1e6], got {}", a.n));
+  if (a.n < 1 || a.n > 1000000) throw FieldError("n", fmt::format("the number of particles n must be in [1, 1e6], got {}", a.n));
   if (!(a.initial_density > 0.0 && a.initial_density < 0.6))
     throw std::invalid_argument(fmt::format("initial density must be in (0, 0.6), got {}", a.initial_density));
   Particles P;
   if (a.arrangement != "random") {  // LMM05 section 4.1.3 control: three equal disks
-    if (a.n != 3) throw std::invalid_argument("--arrangement triangle|line needs --n 3");
+    if (a.n != 3) throw FieldError("n", "the triangle and line arrangements (LMM05 4.1.3) are three disks: n must be 3");
     const double r = lp.a0;
     if (a.arrangement == "line") {
       box.x_min = box.y_min = 0.0;
@@ -39,7 +40,7 @@ Particles place_sample(const SampleSpec& a, const LudingParams& lp, Box& box) {
       P.add(3.0 * r, r, r, lp);
       P.add(2.0 * r, r + h, r, lp);
     } else {
-      throw std::invalid_argument("--arrangement must be random, triangle or line, got '" + a.arrangement + "'");
+      throw FieldError("arrangement", "the arrangement must be random, triangle or line, got '" + a.arrangement + "'");
     }
     return P;
   }
@@ -70,7 +71,7 @@ Particles place_sample(const SampleSpec& a, const LudingParams& lp, Box& box) {
 
 double packing_length_unit(const packing::Packing& p, const LudingParams& lp, double length_unit) {
   if (!(std::isfinite(length_unit) && length_unit >= 0.0))
-    throw std::invalid_argument(fmt::format("--length-unit must be a number of metres >= 0, got {}", length_unit));
+    throw FieldError("length_unit", fmt::format("the length unit must be a number of metres >= 0 (0: from the radii), got {}", length_unit));
   if (length_unit > 0.0) return length_unit;
   double mean = 0.0;
   for (double r : p.r) mean += r;
@@ -100,7 +101,7 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
     if (!(r >= 0.01 * lp.a0 && r <= 100.0 * lp.a0))
       throw std::invalid_argument(fmt::format(
           "disk {} has radius {} m after the unit conversion ({} m per file unit), outside [a0 / 100, 100 a0] = "
-          "[{}, {}] m: check --length-unit",
+          "[{}, {}] m: check the length unit",
           i, r, s, 0.01 * lp.a0, 100.0 * lp.a0));
     if (x - r < box.x_min - tol || x + r > box.x_max + tol || y - r < box.y_min - tol)
       throw std::invalid_argument(fmt::format(
@@ -111,9 +112,9 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
 }
 
 Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
-  if (a.n < 1 || a.n > 1000000) throw std::invalid_argument(fmt::format("--n must be in [1, 1e6], got {}", a.n));
+  if (a.n < 1 || a.n > 1000000) throw FieldError("n", fmt::format("the number of particles n must be in [1, 1e6], got {}", a.n));
   if (a.arrangement != "random")
-    throw std::invalid_argument("--arrangement triangle|line is the 2D three-disk control of LMM05 4.1.3 (--dim 2)");
+    throw FieldError("arrangement", "the triangle and line arrangements are the 2D three-disk control of LMM05 4.1.3 (disks, not spheres)");
   // the cube whose region of the centres, (L - 2 a0)^3, holds the expected solid volume (E[a^3] of
   // the uniform radii) at kInitialDensity3 (a small box's walls would otherwise crowd the cloud)
   const double w = lp.w0, a0 = lp.a0;
@@ -143,7 +144,7 @@ Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
 Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
   if (spec.packing_file.empty()) return place_sample3(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
-  if (p.dim != 3) throw std::invalid_argument(fmt::format("{} is a 2D packing; --dim 3 needs a 3D one (# dim 3)", spec.packing_file));
+  if (p.dim != 3) throw std::invalid_argument(fmt::format("{} is a 2D packing; a sample of spheres needs a 3D one (# dim 3)", spec.packing_file));
   packing::validate(p);
   const double s = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = s;
@@ -160,7 +161,7 @@ Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box,
     if (!(r >= 0.01 * lp.a0 && r <= 100.0 * lp.a0))
       throw std::invalid_argument(fmt::format(
           "sphere {} has radius {} m after the unit conversion ({} m per file unit), outside [a0 / 100, 100 a0] = "
-          "[{}, {}] m: check --length-unit",
+          "[{}, {}] m: check the length unit",
           i, r, s, 0.01 * lp.a0, 100.0 * lp.a0));
     if (x - r < box.x_min - tol || x + r > box.x_max + tol || y - r < box.y_min - tol || y + r > box.y_max + tol ||
         z - r < box.z_min - tol)
@@ -176,7 +177,7 @@ Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box,
 Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
   if (spec.packing_file.empty()) return place_sample(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
-  if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing: run with --dim 3", spec.packing_file));
+  if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing (# dim 3): its spheres need the 3D solver", spec.packing_file));
   const double unit = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = unit;
   return particles_from_packing(p, lp, unit, box);

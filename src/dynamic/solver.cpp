@@ -545,7 +545,7 @@ void DynamicSolverT<D>::update_plastic_time_step() {
              fmt::format("the fixed time step {:.4g} gives the stiffest tangential spring {:.3g} steps per period, "
                          "fewer than {:g}",
                          ts_.dt, ts_.steps_per_contact_lightest, opt_.min_steps_per_contact),
-             "the contacts grew stiffer than the fixed time step allows (--dt; let the rule choose it)");
+             "the contacts grew stiffer than the fixed time step allows (the fixed time step dt; let the rule choose it)");
     return;
   }
   ts_.dt = tc / opt_.steps_per_contact;

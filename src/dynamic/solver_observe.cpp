@@ -23,13 +23,13 @@ using detail::fail;
 // ---- instability checks (docs/dynamic.md "Instability detection") -------------------------------
 namespace {
 const char* const kCauseStep =
-    "the time step is too large for the stiffness, the damping or the masses (--steps-per-contact, k2, "
+    "the time step is too large for the stiffness, the damping or the masses (steps per contact, k2, "
     "gamma_n, rho_p, m_wall, gamma_wall)";
 const char* const kCauseWall =
-    "a stress-controlled wall is unstable or driven too hard (m_wall, gamma_wall, --pressure, --strain-rate)";
+    "a stress-controlled wall is unstable or driven too hard (m_wall, gamma_wall, the wall pressure p, the strain rate)";
 const char* const kCauseLoad =
-    "the load is too high for the stiffness (2p/k2, k1_ratio, k2, --strain-rate) or the time step too large "
-    "(--steps-per-contact)";
+    "the load is too high for the stiffness (2p/k2, k1_ratio, k2, the strain rate) or the time step too large "
+    "(steps per contact)";
 }  // namespace
 
 template <int D>

@@ -320,7 +320,7 @@ struct Staggered::Impl {
     if (!(bmat.E > 0.0))
       bad("staggered: the bond needs Young's modulus: the material '" + mat.name + "' has no E (set E or --E)");
     if (bmat.nu == -1.0)
-      bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (set nu or --nu)");
+      bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (set the key nu of the material)");
     x_max = freeze_limit(mat, opt);
     if (!(x_max > opt.x0_over_R)) bad(fmt::format("staggered: the freeze limit x_max/R = {} is below x0/R", x_max));
     cache.m = &mat;

@@ -22,7 +22,7 @@ check_bad missing_state "cannot open state file" sinter --state "$tmp/nonexisten
 check_bad unknown_param "unknown contact parameter 'bogus'" sinter --param bogus=1
 check_bad bad_param_value "k2" sinter --param k2=-5
 check_bad param_not_number "not a number" sinter --param k2=abc
-check_bad line_needs_three "--n 3" sinter --arrangement line --n 5
+check_bad line_needs_three "n must be 3" sinter --arrangement line --n 5
 check_bad unstable_dt "steps per contact" sinter --steps-per-contact 2
 printf '# demsolve state v2\ntime 0\n' >"$tmp/truncated.txt"
 check_bad truncated_state "truncated.txt" sinter --state "$tmp/truncated.txt"
@@ -87,8 +87,8 @@ printf '# box 0 0 10 10\nid,x,y,r\n0,2,2,1\n1,5,5,0\n' >"$tmp/zero_radius.csv"
 check_bad packing_missing "cannot open" prepare --packing "$tmp/none.csv"
 check_bad packing_zero_radius "r <= 0" prepare --packing "$tmp/zero_radius.csv"
 check_bad packing_through_wall "side wall" prepare --packing "$tmp/through_wall.csv"
-check_bad packing_radius_range "length-unit" prepare --packing "$tmp/two.csv" --length-unit 1
-check_bad packing_bad_unit "length-unit" prepare --packing "$tmp/two.csv" --length-unit -1
+check_bad packing_radius_range "length unit" prepare --packing "$tmp/two.csv" --length-unit 1
+check_bad packing_bad_unit "length unit" prepare --packing "$tmp/two.csv" --length-unit -1
 check_bad packing_and_state "use one of them" sinter --packing "$tmp/two.csv" --state "$tmp/two.csv"
 if [ -n "$ns" ]; then
   "$ns" pack --width 12 --seed 4 --out "$tmp/np" >/dev/null 2>"$tmp/stderr" &&

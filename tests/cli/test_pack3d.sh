@@ -49,7 +49,7 @@ check_bad yield_3d "is a 3D packing; netsolve yield is 2D only" yield --packing 
 tool="$ds"
 check_bad dem_compact_3d "is a 3D packing; demsolve compact is 2D only" compact --packing "$p3"
 check_bad dem_yield_3d "is a 3D packing; demsolve yield is 2D only" yield --packing "$p3"
-check_bad dem_prepare_3d "is a 3D packing: run with --dim 3" prepare --packing "$p3"
+check_bad dem_prepare_3d "is a 3D packing (# dim 3)" prepare --packing "$p3"
 tool="$ns"
 # bad combinations
 check_bad lateral_in_2d "--lateral is for --dim 3 only" pack --lateral periodic

@@ -122,9 +122,9 @@ TEST(Protocol, BadPackingsGiveOneLineErrors) {
   p.r = {1.0, 1.5};
   EXPECT_EQ(message(p, 0.0), "");
   EXPECT_NE(message(p, 1.0).find("outside [a0 / 100, 100 a0]"), std::string::npos);  // 1 m disks
-  EXPECT_NE(message(p, 1e-9).find("check --length-unit"), std::string::npos);
-  EXPECT_NE(message(p, -1.0).find("--length-unit"), std::string::npos);
-  EXPECT_NE(message(p, std::nan("")).find("--length-unit"), std::string::npos);
+  EXPECT_NE(message(p, 1e-9).find("check the length unit"), std::string::npos);
+  EXPECT_NE(message(p, -1.0).find("length unit"), std::string::npos);
+  EXPECT_NE(message(p, std::nan("")).find("length unit"), std::string::npos);
   pk::Packing q = p;
   q.x[1] = 9.0;  // through the right wall
   EXPECT_NE(message(q, 0.0).find("disk 1"), std::string::npos);
