@@ -1,5 +1,5 @@
 // netsolve sinter-pair: one two-particle sintering contact against time (issue #14). The model is a
-// documented reconstruction (/work/shared/notes/sintering-pair-model.md), not the authors' model;
+// documented reconstruction (docs/sintering_pair.md), not the authors' model;
 // docs/sintering_pair.md describes it, its files and this command.
 //
 //   netsolve sinter-pair [--material cu|ti|FILE] [--set KEY=VALUE]... [--radius R | --radii RA,RB]
@@ -170,6 +170,7 @@ int run(const Args& a, const std::string& command) {
   io.x_over_R_max = a.x_max;
   io.validate();
   sp::PairContact c = sp::make_contact(RA, RB, a.x0);
+  c.status = sp::check_state(c.q, c.R_min0(), io.x_over_R_max);  // a start outside the limits ends there, at t = 0
   if (!(std::isfinite(a.t_first) && a.t_first > 0.0)) throw std::invalid_argument("--t-first must be positive [s]");
   const auto times = output_times(a.t_end, a.t_first, prof, a.per_decade);
   const sp::PathSwitches paths = parse_paths(a.paths);
@@ -207,13 +208,21 @@ int run(const Args& a, const std::string& command) {
   const auto w0 = std::chrono::steady_clock::now();
   netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
   bool dropped_row = false;
+  std::string failure;  // a SUNDIALS error: the step failed (the contact says StepFailure)
   for (double t : times) {
-    if (t > 0.0) integ.advance(c, problem, t);
+    if (t > 0.0) {
+      try {
+        integ.advance(c, problem, t);
+      } catch (const sp::SundialsError& e) {
+        failure = e.what();
+        c.status = sp::PairStatus::StepFailure;
+      }
+    }
     Row r;
     if (make_row(r)) {
       rows.push_back(r);
       max_drift = std::max(max_drift, std::fabs(r.volume / V0 - 1.0));
-    } else {
+    } else if (!sp::validity_limit(c.status)) {  // the state past a validity limit has no row
       dropped_row = true;
     }
     progress.update(std::log10(1.0 + c.t));
@@ -237,7 +246,7 @@ int run(const Args& a, const std::string& command) {
   json j;
   j["command"] = command;
   j["model"] = "two-particle cap-cone sintering model: a documented reconstruction of "
-               "/work/shared/notes/sintering-pair-model.md, not the model of Thomsen et al. / Ivannikov et al.";
+               "the model note described in docs/sintering_pair.md, not the model of Thomsen et al. / Ivannikov et al.";
   j["material"] = {{"name", mat.name},         {"source", mat_source},         {"Omega", mat.omega},
                    {"gamma_s", mat.gamma_s},   {"gamma_gb", mat.gamma_gb},     {"D_vol0", mat.D_vol0},
                    {"Q_vol", mat.Q_vol},       {"deltaD_gb0", mat.deltaD_gb0}, {"Q_gb", mat.Q_gb},
@@ -265,7 +274,8 @@ int run(const Args& a, const std::string& command) {
       break;
     case sp::PairStatus::NonFinite:
     case sp::PairStatus::StepFailure:
-      status.add("unstable", fmt::format("stopped at t = {:.6g} s: {}", c.t, sp::describe(c.status, io.x_over_R_max)));
+      status.add("unstable", fmt::format("stopped at t = {:.6g} s: {}{}", c.t, sp::describe(c.status, io.x_over_R_max),
+                                         failure.empty() ? "" : " (" + failure + ")"));
       break;
   }
   if (dropped_row) status.add("unstable", "rows with non-finite values were dropped from pair.csv");
@@ -319,7 +329,7 @@ int run_sinter_pair_command(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
   Args a;
   CLI::App app{"netsolve sinter-pair: one two-particle sintering contact against time (a documented reconstruction of "
-               "/work/shared/notes/sintering-pair-model.md; docs/sintering_pair.md). SI units."};
+               "the model note described in docs/sintering_pair.md). SI units."};
   app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format)")->capture_default_str();
   app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
   auto* o_r = app.add_option("--radius", a.radius, "radius of both particles [m]")->capture_default_str();
