@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/laminar.hpp"
+#include "netdem/packing/random_fill.hpp"
 #include "output.hpp"
 #include "run_status.hpp"
 
@@ -22,6 +24,30 @@ namespace netdem::app::netsolve {
 namespace {
 
 nlohmann::json box_json(const packing::Box& b) { return {b.x_min, b.y_min, b.z_min, b.x_max, b.y_max, b.z_max}; }
+
+/// The checks of the route that need the options together, before the output folder exists
+/// (issue 27 item 8): the lamina width against the expected box, and the random cloud itself
+/// (step 1 of the route, deterministic for the options: made here once more, it cannot fail later).
+void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
+  // the final box: solid volume / target density, height / width = aspect
+  const double r = o.mean_radius;
+  const double vs = static_cast<double>(o.n) * 4.0 / 3.0 * std::numbers::pi * r * r * r * (1.0 + o.dispersion * o.dispersion);
+  const double width = std::cbrt(vs / (o.target_density * o.aspect));
+  const double extent = std::max(width, o.aspect * width);
+  if (!(extent / a.lamina <= 5e5))
+    throw UsageError(fmt::format("--lamina {:g} m cuts the green body's expected extent of about {:.3g} m into more than "
+                                 "5e5 laminae (laminar.csv allows 1e6): give a wider --lamina", a.lamina, extent));
+  try {
+    (void)packing::random_fill_3d(dem::green_body_cloud_options(o));
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (why.rfind("random_fill_3d: ", 0) == 0) why = why.substr(16);
+    if (const auto k = why.find("; use a larger box"); k != std::string::npos) why.resize(k);
+    throw UsageError(fmt::format("--n {} with --dispersion {:g}, --cloud-fraction {:g} and --aspect {:g}: the route's random "
+                                 "cloud cannot be made ({}); change these options",
+                                 o.n, o.dispersion, o.cloud_fraction, o.aspect, packing::quote_input(why, 200)));
+  }
+}
 
 }  // namespace
 
@@ -36,6 +62,8 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
     throw UsageError(fmt::format("--lamina must be a positive finite length in metres, got {}", a.lamina));
   if (!(std::isfinite(a.bulk_margin) && a.bulk_margin >= 0.0))
     throw UsageError(fmt::format("--bulk-margin must be >= 0 mean diameters, got {}", a.bulk_margin));
+  if (!(std::isfinite(o.gravity) && o.gravity >= 1e-6 && o.gravity <= 1e4))
+    throw UsageError(fmt::format("--gravity must be in [1e-6, 1e4] m/s^2 (demsolve's range), got {}", o.gravity));
   o.mean_radius = 0.5 * a.diameter;
   o.seed = seed;
   try {
@@ -46,6 +74,7 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   RunDirOptions ro;
   ro.overwrite = overwrite;
   check_run_dir(out, ro);
+  check_green_door(o, a);
   activity() = "running the green-body route";
   open_run_dir(out, command, ro);
   const auto t0 = std::chrono::steady_clock::now();

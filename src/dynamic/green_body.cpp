@@ -51,7 +51,7 @@ void GreenBodyOptions::validate() const {
        "the cloud fraction", "in (0, 0.30]", cloud_fraction);
   need(fin(settled_guess) && settled_guess > cloud_fraction && settled_guess < 0.74, "the settled-density guess",
        "in (cloud fraction, 0.74)", settled_guess);
-  need(fin(gravity) && gravity > 0.0, "the gravity", "positive and finite", gravity);
+  need(fin(gravity) && gravity >= 1e-6 && gravity <= 1e4, "the gravity", "in [1e-6, 1e4] m/s^2", gravity);
   need(fin(stiffness_number) && stiffness_number >= 10.0 && stiffness_number <= 1e9, "the stiffness number kappa",
        "in [10, 1e9]", stiffness_number);
   need(fin(restitution) && restitution > 0.0 && restitution <= 1.0, "the restitution", "in (0, 1]", restitution);
@@ -66,6 +66,24 @@ void GreenBodyOptions::validate() const {
        "in (0, 0.5)", max_mean_overlap);
   need(fin(max_phase_time) && max_phase_time > 0.0, "the phase-time cap", "positive and finite", max_phase_time);
   need(check_every >= 1, "check_every", ">= 1", static_cast<double>(check_every));
+}
+
+packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& o) {
+  o.validate();
+  const double r = o.mean_radius;
+  const double vs_expected =
+      static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
+  // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
+  // depend on the target, so one seed settles the same way for every target
+  const double L0 = std::cbrt(vs_expected / (o.settled_guess * o.aspect));
+  const double H_cloud = vs_expected / (o.cloud_fraction * L0 * L0);
+  packing::RandomFill3dOptions fo;
+  fo.n = o.n;
+  fo.mean_radius = r;
+  fo.dispersion = o.dispersion;
+  fo.seed = o.seed;
+  fo.box = packing::Box{0.0, 0.0, L0, L0, 0.0, H_cloud};
+  return fo;
 }
 
 GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserver& observer) {
@@ -86,18 +104,7 @@ GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserv
   res.gamma_t = alpha * res.gamma_n;
 
   // 1. the cloud
-  const double vs_expected =
-      static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
-  // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
-  // depend on the target, so one seed settles the same way for every target
-  const double L0 = std::cbrt(vs_expected / (o.settled_guess * o.aspect));
-  const double H_cloud = vs_expected / (o.cloud_fraction * L0 * L0);
-  packing::RandomFill3dOptions fo;
-  fo.n = o.n;
-  fo.mean_radius = r;
-  fo.dispersion = o.dispersion;
-  fo.seed = o.seed;
-  fo.box = packing::Box{0.0, 0.0, L0, L0, 0.0, H_cloud};
+  const packing::RandomFill3dOptions fo = green_body_cloud_options(o);
   res.cloud_box = fo.box;
   const packing::Packing cloud = packing::random_fill_3d(fo);
   const double vs = cloud.solid_volume();
@@ -187,6 +194,8 @@ GreenBodyResult make_green_body(const GreenBodyOptions& o, const GreenBodyObserv
   };
 
   // 2. settle under gravity (at least the free-fall time over the cloud's empty height)
+  const double L0 = fo.box.x_max - fo.box.x_min, H_cloud = fo.box.z_max - fo.box.z_min;  // green_body_cloud_options
+  const double vs_expected = static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
   const double fall = std::sqrt(2.0 * std::max(0.0, H_cloud - vs_expected / (o.settled_guess * L0 * L0)) / g);
   res.phases.push_back(run_to_rest("settle", fall));
   if (!res.phases.back().at_rest)
