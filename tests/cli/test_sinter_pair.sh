@@ -110,6 +110,8 @@ printf 'time,T\n0,1273.15\n600,9999\n' >"$tmp/warm.csv"  # just inside: accepted
 printf 'name = neg\nOmega = 1.18e-29\ngamma_s = 1.72\ngamma_gb = 0.625\nD_vol0 = 2e-5\nQ_vol = 197e3\nE = 1e11\nnu = -0.3\n' >"$tmp/neg_nu.txt"
 usage2 sp_nu_negative "neg_nu.txt:8: Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter-pair --material "$tmp/neg_nu.txt"
 usage2 sinter_nu_negative "neg_nu.txt:8: Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter --generate cu --time 10 --quiet --material "$tmp/neg_nu.txt"
+usage2 sp_set_nu_negative "--set 'nu=-0.3': Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter-pair --set D_vol0=2e-5 --set nu=-0.3
+usage2 sinter_set_transus "--set 'T_transus=2e4': T_transus = 20000 K" sinter --generate cu --time 10 --quiet --set T_transus=2e4
 head -c 4096 /dev/zero | tr '\0' '\377' >"$tmp/binary.bin"  # a 4 kB first line of bytes 0xff
 printf '\n' >>"$tmp/binary.bin"
 { head -c 4000 /dev/zero | tr '\0' 'k'; printf ' = 1\n'; } >"$tmp/longkey.txt"
