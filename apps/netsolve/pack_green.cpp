@@ -106,7 +106,8 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   const packing::Box bb = packing::bounding_box(pk);
   const double margin = a.bulk_margin * a.diameter;
   packing::Box inner{b.x_min + margin, b.y_min + margin, b.x_max - margin, b.y_max - margin, b.z_min + margin, b.z_max - margin};
-  const bool has_bulk = inner.width() > 0.0 && inner.height() > 0.0 && inner.depth() > 0.0;
+  // a window narrower than one mean diameter samples a sphere or two, not a bulk: null (issue 27)
+  const bool has_bulk = inner.width() >= a.diameter && inner.height() >= a.diameter && inner.depth() >= a.diameter;
   const double bulk = has_bulk ? packing::sampled_density(pk, inner, a.bulk_spacing * o.mean_radius) : -1.0;
 
   std::string lam = "# Eq 48 of Ivannikov et al.: laminae of width ~q_s along x, y, z; lengths in metres\n";
@@ -203,10 +204,11 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   j["status_reason"] = res.ok() ? std::string("every criterion met") : res.reason;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %.4f), mean overlap %.2e r "
+  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %s), mean overlap %.2e r "
               "(max %.2e), %lld steps, %.1f s -> %s\n",
               static_cast<unsigned long long>(seed), pk.size(), 1e3 * b.width(), 1e3 * b.height(), 1e3 * b.depth(),
-              vs / b.volume(), bulk, ov.pair_mean, ov.pair_max, static_cast<long long>(steps), wall,
+              vs / b.volume(), has_bulk ? fmt::format("{:.4f}", bulk).c_str() : "n/a: the window is under one diameter",
+              ov.pair_mean, ov.pair_max, static_cast<long long>(steps), wall,
               (out / "packing.csv").c_str());
   if (!res.ok()) {
     std::fprintf(stderr, "netsolve: error: %s: %s\n", res.status.c_str(), res.reason.c_str());

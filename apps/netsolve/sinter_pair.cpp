@@ -118,6 +118,8 @@ std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
 // --paths: "all" or a comma list of I, II, III, IV, V (the path types of note section 3)
 sp::PathSwitches parse_paths(const std::string& s) {
   if (s == "all") return {};
+  if (s.empty())  // no transport at all: a run that cannot change anything (issue 27)
+    throw std::invalid_argument("--paths '' names no transport path: give 'all' or a comma list of I, II, III, IV, V");
   sp::PathSwitches p{0, 0, 0, 0, 0};
   std::stringstream in(s);
   std::string item;

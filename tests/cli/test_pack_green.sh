@@ -79,4 +79,9 @@ door green_gravity_1e300 "--gravity must be in [1e-6, 1e4]" --gravity 1e300
 door green_lamina_1e-12 "--lamina 1e-12 m" --lamina 1e-12
 door green_dispersion_0.999 "--dispersion 0.999" --dispersion 0.999
 door green_n_1 "--n 1 " --n 1
+# a body too small for its bulk window (100 spheres, 2 diameters from every wall) reports no bulk
+# density rather than one from a window under one sphere (issue 27 item 9)
+"$tool" pack --dim 3 --route green-body --quiet --n 100 --max-overlap 0.049 --out "$tmp/green100" >"$tmp/stdout" 2>"$tmp/stderr"
+if grep -q '"bulk": null' "$tmp/green100/summary.json" && grep -q "bulk n/a" "$tmp/stdout"; then pass=$((pass + 1)); else
+  fail=$((fail + 1)); echo "FAIL green_small_bulk: $(grep '"bulk"' "$tmp/green100/summary.json") $(cat "$tmp/stdout")"; fi
 finish

@@ -22,6 +22,7 @@ check_bad sp_set "unknown key" sinter-pair --set bogus=1
 check_bad sp_set_value "not a finite number" sinter-pair --set D_vol0=fast
 check_bad sp_unknown "bogus" sinter-pair --bogus
 check_bad sp_paths "paths" sinter-pair --paths I,VI
+check_bad sp_paths_empty "names no transport path" sinter-pair --paths ''
 printf 'time,T\n0,1273.15\n10,-4\n' >"$tmp/bad_profile.csv"
 check_bad sp_profile_bad "bad_profile.csv:3: T = -4 K is outside (0, 1e4) K" sinter-pair --profile "$tmp/bad_profile.csv"
 printf 'Omega = 1e-29\ngamma_s = 1\n' >"$tmp/bad_material.txt"
