@@ -25,6 +25,29 @@ namespace {
 
 nlohmann::json box_json(const packing::Box& b) { return {b.x_min, b.y_min, b.z_min, b.x_max, b.y_max, b.z_max}; }
 
+/// The route's options from the command line, checked (UsageError naming the option).
+dem::GreenBodyOptions green_options(const GreenArgs& a, std::uint64_t seed) {
+  dem::GreenBodyOptions o = a.body;
+  if (!(std::isfinite(a.diameter) && a.diameter > 0.0))
+    throw UsageError(fmt::format("--diameter must be a positive finite length in metres, got {}", a.diameter));
+  if (!(a.diameter <= 1e-2))
+    throw UsageError(fmt::format("--diameter {} m: the route is in SI metres (50e-6 is 50 um); above 1 cm is refused", a.diameter));
+  if (!(std::isfinite(a.lamina) && a.lamina > 0.0))
+    throw UsageError(fmt::format("--lamina must be a positive finite length in metres, got {}", a.lamina));
+  if (!(std::isfinite(a.bulk_margin) && a.bulk_margin >= 0.0))
+    throw UsageError(fmt::format("--bulk-margin must be >= 0 mean diameters, got {}", a.bulk_margin));
+  if (!(std::isfinite(o.gravity) && o.gravity >= 1e-6 && o.gravity <= 1e4))
+    throw UsageError(fmt::format("--gravity must be in [1e-6, 1e4] m/s^2 (demsolve's range), got {}", o.gravity));
+  o.mean_radius = 0.5 * a.diameter;
+  o.seed = seed;
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return o;
+}
+
 /// The checks of the route that need the options together, before the output folder exists
 /// (issue 27 item 8): the lamina width against the expected box, and the random cloud itself
 /// (step 1 of the route, deterministic for the options: made here once more, it cannot fail later).
@@ -53,24 +76,7 @@ void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
 
 int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, const std::string& command,
                         const std::filesystem::path& out) {
-  dem::GreenBodyOptions o = a.body;
-  if (!(std::isfinite(a.diameter) && a.diameter > 0.0))
-    throw UsageError(fmt::format("--diameter must be a positive finite length in metres, got {}", a.diameter));
-  if (!(a.diameter <= 1e-2))
-    throw UsageError(fmt::format("--diameter {} m: the route is in SI metres (50e-6 is 50 um); above 1 cm is refused", a.diameter));
-  if (!(std::isfinite(a.lamina) && a.lamina > 0.0))
-    throw UsageError(fmt::format("--lamina must be a positive finite length in metres, got {}", a.lamina));
-  if (!(std::isfinite(a.bulk_margin) && a.bulk_margin >= 0.0))
-    throw UsageError(fmt::format("--bulk-margin must be >= 0 mean diameters, got {}", a.bulk_margin));
-  if (!(std::isfinite(o.gravity) && o.gravity >= 1e-6 && o.gravity <= 1e4))
-    throw UsageError(fmt::format("--gravity must be in [1e-6, 1e4] m/s^2 (demsolve's range), got {}", o.gravity));
-  o.mean_radius = 0.5 * a.diameter;
-  o.seed = seed;
-  try {
-    o.validate();
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
+  const dem::GreenBodyOptions o = green_options(a, seed);
   RunDirOptions ro;
   ro.overwrite = overwrite;
   check_run_dir(out, ro);

@@ -138,6 +138,64 @@ sp::SinterMaterial load_material(const Args& a, std::string& source) {
   return netdem::app::netsolve::load_sinter_material(a.material, a.set, source);
 }
 
+/// The rows of pair.csv at the output times, and how the integration ended.
+struct Integration {
+  std::vector<Row> rows;
+  double max_drift = 0.0;
+  bool dropped_row = false;
+  std::string failure;  ///< a SUNDIALS error: the step failed (the contact says StepFailure)
+};
+
+/// One row of the contact's current state; false if it cannot be evaluated or is not finite.
+bool make_row(const sp::PairContact& c, const sp::PairProblem& p, Row& r) {
+  const sp::SinterMaterial& mat = *p.material;
+  const double T = (*p.temperature)(c.t);
+  const auto d = sp::diffusivities(mat, T);
+  r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
+  try {
+    const auto law = sp::effective_law(c.q, d, mat, p.paths);
+    r.F_s = law.F_s;
+    r.eta = law.eta;
+    r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
+  } catch (const std::domain_error&) {
+    return false;
+  }
+  bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
+                std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
+  for (double v : r.y) finite = finite && std::isfinite(v);
+  return finite;
+}
+
+/// Integrates the contact through the output times, stopping where it stops (c.status).
+Integration integrate(sp::PairContact& c, const sp::IntegratorOptions& io, const sp::PairProblem& problem,
+                      const std::vector<double>& times, const Args& a) {
+  Integration out;
+  sp::PairIntegrator integ(io);
+  const double V0 = sp::pair_volume(c.q);
+  netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
+  for (double t : times) {
+    if (t > 0.0) {
+      try {
+        integ.advance(c, problem, t);
+      } catch (const sp::SundialsError& e) {
+        out.failure = e.what();
+        c.status = sp::PairStatus::StepFailure;
+      }
+    }
+    Row r;
+    if (make_row(c, problem, r)) {
+      out.rows.push_back(r);
+      out.max_drift = std::max(out.max_drift, std::fabs(r.volume / V0 - 1.0));
+    } else if (!sp::validity_limit(c.status)) {  // the state past a validity limit has no row
+      out.dropped_row = true;
+    }
+    progress.update(std::log10(1.0 + c.t));
+    if (c.status != sp::PairStatus::Ok) break;
+  }
+  progress.finish();
+  return out;
+}
+
 int run(const Args& a, const std::string& command) {
   // ---- everything is checked before the output folder exists
   {
@@ -185,52 +243,13 @@ int run(const Args& a, const std::string& command) {
   netdem::app::open_run_dir(out, command, rdo);
 
   const sp::PairProblem problem{&mat, &prof, paths, a.force};
-  sp::PairIntegrator integ(io);
-  const double V0 = sp::pair_volume(c.q);
-  std::vector<Row> rows;
-  double max_drift = 0.0;
-  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
-  auto make_row = [&](Row& r) {
-    const double T = prof(c.t);
-    const auto d = sp::diffusivities(mat, T);
-    r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
-    try {
-      const auto law = sp::effective_law(c.q, d, mat, paths);
-      r.F_s = law.F_s;
-      r.eta = law.eta;
-      r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
-    } catch (const std::domain_error&) {
-      return false;
-    }
-    bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
-                  std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
-    for (double v : r.y) finite = finite && std::isfinite(v);
-    return finite;
-  };
   const auto w0 = std::chrono::steady_clock::now();
-  netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
-  bool dropped_row = false;
-  std::string failure;  // a SUNDIALS error: the step failed (the contact says StepFailure)
-  for (double t : times) {
-    if (t > 0.0) {
-      try {
-        integ.advance(c, problem, t);
-      } catch (const sp::SundialsError& e) {
-        failure = e.what();
-        c.status = sp::PairStatus::StepFailure;
-      }
-    }
-    Row r;
-    if (make_row(r)) {
-      rows.push_back(r);
-      max_drift = std::max(max_drift, std::fabs(r.volume / V0 - 1.0));
-    } else if (!sp::validity_limit(c.status)) {  // the state past a validity limit has no row
-      dropped_row = true;
-    }
-    progress.update(std::log10(1.0 + c.t));
-    if (c.status != sp::PairStatus::Ok) break;
-  }
-  progress.finish();
+  const Integration result = integrate(c, io, problem, times, a);
+  const std::vector<Row>& rows = result.rows;
+  const double max_drift = result.max_drift;
+  const bool dropped_row = result.dropped_row;
+  const std::string& failure = result.failure;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
 
   std::string csv = "t,T,x_over_R,shrinkage,volume,free_energy,sintering_force,y1,y2,y3,y4,y5,y6,y7\n";

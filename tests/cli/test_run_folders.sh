@@ -16,13 +16,13 @@ ko() { fail=$((fail + 1)); echo "FAIL $1: $(head -c 600 "$tmp/stderr" 2>/dev/nul
 snapshot() { (cd "$1" && find . -type f -exec sha256sum {} + | sort); }
 
 # start_long NAME CMD...: starts CMD in the background (its pid in $bg) and waits until its
-# .incomplete exists (at most 30 s), so that the folder is held by a live run
+# .incomplete exists (at most 60 s), so that the folder is held by a live run
 start_long() {
   local dir="$1"
   shift
   "$@" >/dev/null 2>&1 &
   bg=$!
-  for _ in $(seq 600); do [ -s "$dir/.incomplete" ] && [ -s "$dir/command.txt" ] && return 0; sleep 0.05; done
+  for _ in $(seq 1200); do [ -s "$dir/.incomplete" ] && [ -s "$dir/command.txt" ] && return 0; sleep 0.05; done
   echo "FAIL: $* did not open $dir"
   return 1
 }
