@@ -221,8 +221,10 @@ TEST(RunDir, LiveRunRefusedEvenWithOverwriteStaleMarkerCleared) {
   netdem::app::check_run_dir(d, o);
   touch(d / "state.txt");  // the killed run's
   touch(d / "my.dat");     // not a name a run writes
+  touch(d / ".summary.json.tmp0123abcd");  // write_file_atomic's temporary, left by the kill
   netdem::app::open_run_dir(d, "second", o);
   EXPECT_FALSE(fs::exists(d / "state.txt"));
+  EXPECT_FALSE(fs::exists(d / ".summary.json.tmp0123abcd"));
   EXPECT_TRUE(fs::exists(d / "my.dat"));
   std::ifstream in(d / ".incomplete");
   std::string first;
