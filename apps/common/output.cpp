@@ -152,7 +152,7 @@ Marker read_marker(const fs::path& dir) {
 std::string live_holder(const fs::path& dir, const std::string& name) {
   if (!fs::exists(dir / kIncompleteMarker)) return "";
   const Marker m = read_marker(dir);
-  if (m.pid <= 0) return "";  // no pid: not a marker a run wrote
+  if (m.pid <= 0 || m.pid > (1L << 22)) return "";  // no pid (above Linux's pid_max limit): not a marker a run wrote
   const std::string marker = quoted((dir / kIncompleteMarker).string());
   const std::string when = m.started.empty() ? "" : fmt::format(", started {}", quoted(m.started));
   if (m.has_start && m.host != host_name())
