@@ -1,5 +1,5 @@
 // bench_sintering_pair: the per-contact sintering workload of the staggered scheme (issue #14), for
-// the two-particle model (a documented reconstruction of /work/shared/notes/sintering-pair-model.md).
+// the two-particle model (a documented reconstruction of the model note; docs/sintering_pair.md).
 // Plain executable with its own timing loop (no Google Benchmark); prints a markdown table.
 //
 //   bench_sintering_pair [contacts=2400] [reps=1]

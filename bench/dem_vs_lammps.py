@@ -47,6 +47,16 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
+
+
+def shown(p):
+    """An argument for a report: a path relative to the repository; a file outside it by its name
+    only (never an absolute path of the machine that ran it, issue 26 item 6)."""
+    p = str(p)
+    if not os.path.isabs(p):
+        return p
+    r = os.path.relpath(p, REPO)
+    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
 SHARED = REPO.parent / "shared" / "bench" / "lammps"
 
 LAMMPS_IN = r"""# bench_lammps.in -- written by netdem bench/dem_vs_lammps.py: the demsolve scene in LAMMPS
@@ -303,7 +313,7 @@ def main():
     md = [f"# demsolve vs LAMMPS ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())})", "",
           f"Machine: {os.cpu_count()} cores, {model}; load averages seen (1/5/15 min): "
           f"{loads[0]} ... {loads[-1]}", "",
-          f"Command: `/usr/bin/python3 bench/dem_vs_lammps.py {' '.join(sys.argv[1:])}`", "",
+          f"Command: `/usr/bin/python3 bench/dem_vs_lammps.py {' '.join(shown(x) for x in sys.argv[1:])}`", "",
           f"Median over {a.reps} repetitions (min-max in brackets), millions of particle-steps per CPU-second; "
           f"timed runs of max(200, {a.psteps:.3g}/N) steps after {a.warmup} warm-up steps.", "", table, ""]
     (out / f"{a.name}.md").write_text("\n".join(md))
@@ -436,7 +446,7 @@ def main3(a):
     if logs:
         lmp_ver = Path(logs[0]).read_text(errors="replace").splitlines()[0]
     md = [f"# netdem DynamicSolver3 vs LAMMPS in 3D ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())})", "",
-          f"Command: `/usr/bin/python3 bench/dem_vs_lammps.py {' '.join(sys.argv[1:])}`", "",
+          f"Command: `/usr/bin/python3 bench/dem_vs_lammps.py {' '.join(shown(x) for x in sys.argv[1:])}`", "",
           f"LAMMPS: `{a.lammps}` ({lmp_ver}), `pair_style gran/hooke/history`, one process, OMP_NUM_THREADS=1; "
           "netdem: bench_dem --dim 3 (one thread).", "",
           f"Median over {a.reps} interleaved repetitions (per repetition and N: LAMMPS, then netdem Linear and Full "

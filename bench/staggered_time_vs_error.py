@@ -21,6 +21,16 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, ".."))
 
 
+def shown(p):
+    """An argument for a report: a path relative to the repository; a file outside it by its name
+    only (never an absolute path of the machine that ran it, issue 26 item 6)."""
+    p = str(p)
+    if not os.path.isabs(p):
+        return p
+    r = os.path.relpath(p, REPO)
+    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
+
+
 def run(bench, packing, strategy, eps, t_end, dt_max=10.0):
     out = subprocess.run([bench, packing, "--strategy", str(strategy), "--eps-lim", str(eps), "--time", str(t_end),
                           "--dt-max", str(dt_max)], check=True, capture_output=True, text=True).stdout
@@ -71,7 +81,7 @@ def main():
         pass
     with open(a.out + ".md", "w") as f:
         f.write(f"# Staggered scheme: run time against error of strategies 1 and 2\n\n"
-                f"`{' '.join(['bench/staggered_time_vs_error.py', a.packing, '--time', str(a.time)])}`; "
+                f"`{' '.join(['bench/staggered_time_vs_error.py', shown(a.packing), '--time', str(a.time)])}`; "
                 f"machine: {cpu}, one core. Reference: strategy 2 at eps_lim = {a.ref_eps:g}, dt_max = {a.ref_dt_max:g} s "
                 f"({ref['wall']:.2f} s, {ref['steps']} steps; shrinkage {ref['shrink']:.9e}, neck {ref['neck']:.9e}).\n\n"
                 "| strategy | eps_lim | dt_max [s] | run time [s] | steps | sub-steps | error of the mean shrinkage | error of the mean neck |\n"

@@ -44,8 +44,6 @@ ALLOWED = {
     "src/quasistatic/staggered.cpp:step": 204,
     "apps/netsolve/main.cpp:run_compact": 178,
     "src/quasistatic/staggered.cpp:Staggered::load": 177,
-    "apps/netsolve/sinter_pair.cpp:run": 175,
-    "apps/netsolve/pack_green.cpp:run_pack_green_body": 160,
     "apps/netsolve/main.cpp:main": 156,
 }
 

@@ -2,6 +2,8 @@
 
 #include "netdem/packing/io.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -11,6 +13,8 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <set>
+#include <sstream>
 #include <random>
 #include <stdexcept>
 
@@ -64,6 +68,9 @@ namespace {
 namespace fs = std::filesystem;
 bool g_run_dir_opened = false;
 
+/// The record a run leaves of its own files (written by close_run_dir), one name a line.
+constexpr const char* kFilesRecord = ".netdem-files";
+
 /// At most 80 printable characters of `s`, for messages (the readers' quoting rule).
 std::string quoted(const std::string& s) { return netdem::packing::quote_input(s, 80); }
 
@@ -73,6 +80,146 @@ std::string recorded_command(const fs::path& dir) {
   std::string line;
   std::getline(in, line);
   return line;
+}
+
+/// The first line of a small text file (/proc, the boot id), or "".
+std::string first_line_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+std::string host_name() {
+  char h[256] = "";
+  if (::gethostname(h, sizeof h - 1) != 0) return "";
+  return h;
+}
+
+/// State and start time (field 22 of /proc/PID/stat, clock ticks since boot) of a process, or
+/// false if it cannot be read.
+bool process_start(long pid, char& state, unsigned long long& start) {
+  const std::string s = first_line_of(fmt::format("/proc/{}/stat", pid));
+  const auto close = s.rfind(')');  // the command name may hold spaces and parentheses
+  if (close == std::string::npos) return false;
+  std::istringstream in(s.substr(close + 1));
+  std::string f;
+  if (!(in >> state)) return false;
+  for (int field = 4; field < 22; ++field)
+    if (!(in >> f)) return false;
+  return static_cast<bool>(in >> start);
+}
+
+/// What .incomplete says of the run that wrote it.
+struct Marker {
+  long pid = 0;
+  std::string started;                ///< wall clock, as written
+  bool has_start = false;             ///< the process start time was recorded (this version on)
+  unsigned long long start_ticks = 0;
+  std::string boot_id, host;
+  bool has_kept = false;              ///< the entries the folder held before the run were recorded
+  std::set<std::string> kept;
+};
+
+Marker read_marker(const fs::path& dir) {
+  Marker m;
+  std::ifstream in(dir / kIncompleteMarker);
+  std::string line;
+  if (std::getline(in, line)) {
+    if (const auto p = line.find(": pid "); p != std::string::npos) m.pid = std::atol(line.c_str() + p + 6);
+    if (const auto p = line.find(", started "); p != std::string::npos) m.started = line.substr(p + 10);
+  }
+  std::getline(in, line);  // the command
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    std::string key;
+    f >> key;
+    if (key == "process") {
+      std::string w;
+      f >> m.start_ticks >> w >> m.boot_id >> w >> m.host;
+      m.has_start = !f.fail();
+    } else if (key == "before:") {
+      m.has_kept = true;
+    } else if (key == "keep" && line.size() > 5) {
+      m.kept.insert(line.substr(5));
+    }
+  }
+  return m;
+}
+
+/// Why the run of dir/.incomplete may still be running ("" if it is gone: its process is dead, or
+/// its pid now belongs to another process, or the machine has been restarted since).
+std::string live_holder(const fs::path& dir, const std::string& name) {
+  if (!fs::exists(dir / kIncompleteMarker)) return "";
+  const Marker m = read_marker(dir);
+  if (m.pid <= 0 || m.pid > (1L << 22)) return "";  // no pid (above Linux's pid_max limit): not a marker a run wrote
+  const std::string marker = quoted((dir / kIncompleteMarker).string());
+  const std::string when = m.started.empty() ? "" : fmt::format(", started {}", quoted(m.started));
+  if (m.has_start && m.host != host_name())
+    return fmt::format("--out '{}' is held by a run on the machine '{}' (pid {}{}); if `ps -p {}` on that machine "
+                       "shows no such process, the run is gone: remove '{}' and run again",
+                       name, quoted(m.host), m.pid, when, m.pid, marker);
+  if (m.has_start && !m.boot_id.empty() && m.boot_id != first_line_of("/proc/sys/kernel/random/boot_id")) return "";
+  if (::kill(static_cast<pid_t>(m.pid), 0) != 0 && errno == ESRCH) return "";
+  char state = '?';
+  unsigned long long start = 0;
+  if (process_start(m.pid, state, start)) {
+    if (state == 'Z' || state == 'X') return "";          // dead, not yet reaped
+    if (m.has_start && start != m.start_ticks) return "";  // the pid was reused by another process
+  }
+  return fmt::format("--out '{}' is held by a run that is still running (pid {}{}), with or without --overwrite: "
+                     "wait for it to end or stop it, or choose another folder (the run is gone when `ps -p {}` shows "
+                     "no such process{})",
+                     name, m.pid, when, m.pid, m.has_start ? "" : fmt::format(" or not a netdem run; then remove '{}'", marker));
+}
+
+/// True for the names a netdem run writes into its folder (folders of older versions, killed runs).
+bool netdem_name(const std::string& n) {
+  static const std::set<std::string> exact = {"command.txt", "summary.json", kIncompleteMarker, kFilesRecord,
+                                              "parameters.json", "report.md", "probes"};
+  if (exact.count(n) != 0U) return true;
+  const auto ends = [&](const char* e) {
+    const std::string s(e);
+    return n.size() > s.size() && n.compare(n.size() - s.size(), s.size(), s) == 0;
+  };
+  if (ends(".csv") || ends(".vtp") || ends(".pvd") || ends(".svg")) return true;
+  if (n.size() > 1 && n[0] == '.' && n.find(".tmp") != std::string::npos) return true;  // write_file_atomic's, of a killed run
+  return n.rfind("state", 0) == 0 && ends(".txt");
+}
+
+/// The top-level entries of `dir` (names).
+std::set<std::string> entries(const fs::path& dir) {
+  std::set<std::string> s;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) s.insert(e.path().filename().string());
+  return s;
+}
+
+/// The entries of `dir` that its old run wrote: the run's own record if it finished; if it was
+/// killed or failed, the netdem names it did not find there; for a folder of an older version
+/// (neither record), the netdem names.
+std::vector<std::string> old_run_files(const fs::path& dir) {
+  std::vector<std::string> out;
+  const auto now = entries(dir);
+  if (fs::exists(dir / kIncompleteMarker)) {
+    const Marker m = read_marker(dir);
+    for (const auto& n : now)
+      if (netdem_name(n) && (!m.has_kept || m.kept.count(n) == 0U)) out.push_back(n);
+    return out;
+  }
+  std::ifstream in(dir / kFilesRecord);
+  if (in) {
+    std::set<std::string> listed = {kFilesRecord, "command.txt", "summary.json"};
+    std::string line;
+    while (std::getline(in, line))
+      if (!line.empty()) listed.insert(line);
+    for (const auto& n : now)
+      if (listed.count(n) != 0U) out.push_back(n);
+    return out;
+  }
+  for (const auto& n : now)
+    if (netdem_name(n)) out.push_back(n);
+  return out;
 }
 
 /// The canonical form of p, or p made absolute and normal if it does not exist.
@@ -141,6 +288,7 @@ void check_run_dir(const std::filesystem::path& dir, const RunDirOptions& o) {
     if (::access(dir.c_str(), W_OK | X_OK) != 0)
       throw UsageError(fmt::format("cannot write into the output folder '{}': {}", name, std::strerror(errno)));
     if (!holds_run(dir)) return;  // empty, or only files no run wrote: nothing to mix with
+    if (const std::string live = live_holder(dir, name); !live.empty()) throw UsageError(live);
     const std::string cmd = recorded_command(dir);
     const std::string which = cmd.empty() ? (fs::exists(dir / kIncompleteMarker) ? "an unfinished run" : "another run")
                                           : fmt::format("the run '{}'", quoted(cmd));
@@ -163,28 +311,93 @@ void check_run_dir(const std::filesystem::path& dir, const RunDirOptions& o) {
   }
 }
 
+namespace {
+/// The text of .incomplete: who runs (pid, wall-clock start; process start time, boot and machine,
+/// to tell a live run from a dead one whose pid was reused), the command, and the entries the
+/// folder held before the run (the user's: --overwrite keeps them).
+std::string marker_text(const std::string& command, const std::set<std::string>& kept) {
+  const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  char when[32] = "";
+  std::tm tm{};
+  if (gmtime_r(&now, &tm) != nullptr) std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  std::string s = fmt::format("unfinished netdem run (running, failed or killed): pid {}, started {}\n{}\n", ::getpid(),
+                              when, command);
+  char state = '?';
+  unsigned long long start = 0;
+  if (process_start(::getpid(), state, start)) {
+    const std::string boot = first_line_of("/proc/sys/kernel/random/boot_id");
+    const std::string host = host_name();
+    if (!boot.empty() && !host.empty() && boot.find(' ') == std::string::npos && host.find(' ') == std::string::npos)
+      s += fmt::format("process {} boot {} host {}\n", start, boot, host);
+  }
+  s += fmt::format("before: {} entries\n", kept.size());
+  for (const auto& k : kept)
+    if (k.find('\n') == std::string::npos) s += "keep " + k + "\n";
+  return s;
+}
+
+/// Writes the marker: created exclusively if the folder had none (a run that started at the same
+/// moment is caught by check_run_dir again), replaced if it had a stale one.
+void write_marker(const fs::path& dir, const std::string& text, bool had_marker, const RunDirOptions& o) {
+  const fs::path m = dir / kIncompleteMarker;
+  if (!had_marker) {
+    const int fd = ::open(m.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == EEXIST) {
+      check_run_dir(dir, o);  // throws for a live run, or without overwrite
+      write_file_atomic(m, text);
+      return;
+    }
+    if (fd < 0)
+      throw std::runtime_error(fmt::format("cannot write into the output folder '{}': {}", quoted(dir.string()),
+                                           std::strerror(errno)));
+    const bool ok = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    const int err = errno;
+    ::close(fd);
+    if (!ok)
+      throw std::runtime_error(fmt::format("cannot write into the output folder '{}': {}", quoted(dir.string()),
+                                           std::strerror(err ? err : EIO)));
+    return;
+  }
+  write_file_atomic(m, text);
+}
+
+/// One line on stderr: what --overwrite removed (and what it kept).
+void report_removed(const fs::path& dir, const std::vector<std::string>& removed, const std::set<std::string>& kept) {
+  std::string names;
+  std::size_t shown = 0;
+  for (const auto& n : removed) {
+    if (n == kIncompleteMarker || n == kFilesRecord) continue;
+    if (shown < 12) names += (shown == 0 ? "" : ", ") + quoted(n) + (fs::is_directory(dir / n) ? "/" : "");
+    ++shown;
+  }
+  if (shown > 12) names += fmt::format(", ... ({} in all)", shown);
+  std::string keep;
+  std::size_t k = 0;
+  for (const auto& n : kept)
+    if (k++ < 5) keep += (k == 1 ? "" : ", ") + quoted(n);
+  if (kept.size() > 5) keep += ", ...";
+  std::fprintf(stderr, "%s: --overwrite removed the earlier run's files from '%s': %s%s\n", program_invocation_short_name,
+               quoted(dir.string()).c_str(), shown == 0 ? "none" : names.c_str(),
+               kept.empty() ? "" : fmt::format("; kept {} other{}: {}", kept.size(), kept.size() == 1 ? "" : "s", keep).c_str());
+}
+}  // namespace
+
 void open_run_dir(const std::filesystem::path& dir, const std::string& command, const RunDirOptions& o) {
   check_run_dir(dir, o);
   const bool clear = o.overwrite && holds_run(dir);
+  const bool had_marker = fs::exists(dir / kIncompleteMarker);
+  const std::vector<std::string> old = clear ? old_run_files(dir) : std::vector<std::string>{};
   make_output_dir(dir);
-  {  // the marker first: from here on the folder is an unfinished run until close_run_dir
-    const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-    char when[32] = "";
-    std::tm tm{};
-    if (gmtime_r(&now, &tm) != nullptr) std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
-    std::ofstream m(dir / kIncompleteMarker, std::ios::trunc);
-    m << "unfinished netdem run (running, failed or killed): pid " << ::getpid() << ", started " << when << "\n"
-      << command << "\n";
-    m.flush();
-    if (!m) throw std::runtime_error(fmt::format("cannot write into the output folder '{}': {}", quoted(dir.string()),
-                                                 std::strerror(errno ? errno : EIO)));
-  }
+  std::set<std::string> kept = entries(dir);  // the user's: what the old run did not write
+  for (const auto& n : old) kept.erase(n);
+  kept.erase(kIncompleteMarker);
+  // the marker first: from here on the folder is an unfinished run until close_run_dir
+  write_marker(dir, marker_text(command, kept), had_marker, o);
   if (clear) {  // why_not_clear allowed it: top-level files and probes/
     std::error_code ec;
-    std::vector<fs::path> old;
-    for (const auto& e : fs::directory_iterator(dir)) old.push_back(e.path());
-    for (const auto& p : old) {
-      if (p.filename() == kIncompleteMarker) continue;
+    for (const auto& n : old) {
+      if (n == kIncompleteMarker) continue;
+      const fs::path p = dir / n;
       if (fs::is_directory(fs::symlink_status(p))) {
         fs::remove_all(p, ec);
       } else {
@@ -192,6 +405,7 @@ void open_run_dir(const std::filesystem::path& dir, const std::string& command, 
       }
       if (ec) throw std::runtime_error(fmt::format("cannot clear '{}': {}: {}", quoted(dir.string()), quoted(p.string()), ec.message()));
     }
+    report_removed(dir, old, kept);
   }
   write_file_atomic(dir / "command.txt", command + "\n");
   g_run_dir_opened = true;
@@ -199,6 +413,17 @@ void open_run_dir(const std::filesystem::path& dir, const std::string& command, 
 
 void close_run_dir(const std::filesystem::path& dir) {
   std::error_code ec;
+  if (!fs::exists(dir / kIncompleteMarker, ec)) return;
+  // the record of the run's own files: what the folder holds now and did not hold before the run
+  const Marker m = read_marker(dir);
+  if (m.has_kept) {
+    std::string list;
+    for (const auto& n : entries(dir))
+      if (n != kIncompleteMarker && n != kFilesRecord && m.kept.count(n) == 0U && n.find('\n') == std::string::npos &&
+          n.rfind(".", 0) != 0)
+        list += n + "\n";
+    write_file_atomic(dir / kFilesRecord, list);
+  }
   fs::remove(dir / kIncompleteMarker, ec);
   if (ec) throw std::runtime_error(fmt::format("cannot remove '{}': {}", (dir / kIncompleteMarker).string(), ec.message()));
 }

@@ -33,14 +33,17 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& tex
 void make_output_dir(const std::filesystem::path& dir);
 
 // ---- run folders: a folder never mixes two runs (README.md "Run folders") -----------------------
-//   check_run_dir   before any work: refuses (UsageError) a folder that holds another run's files
-//                   (command.txt, summary.json or .incomplete) unless overwrite, an --out that is a
-//                   file or cannot be written, and an input file inside a folder --overwrite clears;
-//                   touches nothing.
-//   open_run_dir    check_run_dir, then (overwrite) clears the old run's files, creates the folder,
-//                   writes the marker .incomplete first, then command.txt.
-//   close_run_dir   removes .incomplete: the last thing a run does. A run that fails or is killed
-//                   leaves it, so a folder with .incomplete never holds a finished run.
+//   check_run_dir   before any work: refuses (UsageError) a folder held by a run that is still
+//                   running (the pid and process start time in .incomplete), with or without
+//                   overwrite; a folder that holds another run's files (command.txt, summary.json or
+//                   .incomplete) unless overwrite; an --out that is a file or cannot be written, and
+//                   an input file inside a folder --overwrite clears; touches nothing.
+//   open_run_dir    check_run_dir, then writes the marker .incomplete first (pid, process start
+//                   time, the entries the folder held before: the user's), then (overwrite) removes
+//                   the old run's files only and lists them on stderr (one line), then command.txt.
+//   close_run_dir   writes .netdem-files (the run's own files: what --overwrite will remove) and
+//                   removes .incomplete: the last thing a run does. A run that fails or is killed
+//                   leaves .incomplete, so a folder with it never holds a finished run.
 
 /// The marker of an unfinished run.
 inline constexpr const char* kIncompleteMarker = ".incomplete";

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/laminar.hpp"
+#include "netdem/packing/random_fill.hpp"
 #include "output.hpp"
 #include "run_status.hpp"
 
@@ -23,10 +25,8 @@ namespace {
 
 nlohmann::json box_json(const packing::Box& b) { return {b.x_min, b.y_min, b.z_min, b.x_max, b.y_max, b.z_max}; }
 
-}  // namespace
-
-int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, const std::string& command,
-                        const std::filesystem::path& out) {
+/// The route's options from the command line, checked (UsageError naming the option).
+dem::GreenBodyOptions green_options(const GreenArgs& a, std::uint64_t seed) {
   dem::GreenBodyOptions o = a.body;
   if (!(std::isfinite(a.diameter) && a.diameter > 0.0))
     throw UsageError(fmt::format("--diameter must be a positive finite length in metres, got {}", a.diameter));
@@ -36,6 +36,8 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
     throw UsageError(fmt::format("--lamina must be a positive finite length in metres, got {}", a.lamina));
   if (!(std::isfinite(a.bulk_margin) && a.bulk_margin >= 0.0))
     throw UsageError(fmt::format("--bulk-margin must be >= 0 mean diameters, got {}", a.bulk_margin));
+  if (!(std::isfinite(o.gravity) && o.gravity >= 1e-6 && o.gravity <= 1e4))
+    throw UsageError(fmt::format("--gravity must be in [1e-6, 1e4] m/s^2 (demsolve's range), got {}", o.gravity));
   o.mean_radius = 0.5 * a.diameter;
   o.seed = seed;
   try {
@@ -43,9 +45,42 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  return o;
+}
+
+/// The checks of the route that need the options together, before the output folder exists
+/// (issue 27 item 8): the lamina width against the expected box, and the random cloud itself
+/// (step 1 of the route, deterministic for the options: made here once more, it cannot fail later).
+void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
+  // the final box: solid volume / target density, height / width = aspect
+  const double r = o.mean_radius;
+  const double vs = static_cast<double>(o.n) * 4.0 / 3.0 * std::numbers::pi * r * r * r * (1.0 + o.dispersion * o.dispersion);
+  const double width = std::cbrt(vs / (o.target_density * o.aspect));
+  const double extent = std::max(width, o.aspect * width);
+  if (!(extent / a.lamina <= 5e5))
+    throw UsageError(fmt::format("--lamina {:g} m cuts the green body's expected extent of about {:.3g} m into more than "
+                                 "5e5 laminae (laminar.csv allows 1e6): give a wider --lamina", a.lamina, extent));
+  try {
+    (void)packing::random_fill_3d(dem::green_body_cloud_options(o));
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (why.rfind("random_fill_3d: ", 0) == 0) why = why.substr(16);
+    if (const auto k = why.find("; use a larger box"); k != std::string::npos) why.resize(k);
+    throw UsageError(fmt::format("--n {} with --dispersion {:g}, --cloud-fraction {:g} and --aspect {:g}: the route's random "
+                                 "cloud cannot be made ({}); change these options",
+                                 o.n, o.dispersion, o.cloud_fraction, o.aspect, packing::quote_input(why, 200)));
+  }
+}
+
+}  // namespace
+
+int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, const std::string& command,
+                        const std::filesystem::path& out) {
+  const dem::GreenBodyOptions o = green_options(a, seed);
   RunDirOptions ro;
   ro.overwrite = overwrite;
   check_run_dir(out, ro);
+  check_green_door(o, a);
   activity() = "running the green-body route";
   open_run_dir(out, command, ro);
   const auto t0 = std::chrono::steady_clock::now();
@@ -77,7 +112,8 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   const packing::Box bb = packing::bounding_box(pk);
   const double margin = a.bulk_margin * a.diameter;
   packing::Box inner{b.x_min + margin, b.y_min + margin, b.x_max - margin, b.y_max - margin, b.z_min + margin, b.z_max - margin};
-  const bool has_bulk = inner.width() > 0.0 && inner.height() > 0.0 && inner.depth() > 0.0;
+  // a window narrower than one mean diameter samples a sphere or two, not a bulk: null (issue 27)
+  const bool has_bulk = inner.width() >= a.diameter && inner.height() >= a.diameter && inner.depth() >= a.diameter;
   const double bulk = has_bulk ? packing::sampled_density(pk, inner, a.bulk_spacing * o.mean_radius) : -1.0;
 
   std::string lam = "# Eq 48 of Ivannikov et al.: laminae of width ~q_s along x, y, z; lengths in metres\n";
@@ -174,10 +210,11 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   j["status_reason"] = res.ok() ? std::string("every criterion met") : res.reason;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %.4f), mean overlap %.2e r "
+  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %s), mean overlap %.2e r "
               "(max %.2e), %lld steps, %.1f s -> %s\n",
               static_cast<unsigned long long>(seed), pk.size(), 1e3 * b.width(), 1e3 * b.height(), 1e3 * b.depth(),
-              vs / b.volume(), bulk, ov.pair_mean, ov.pair_max, static_cast<long long>(steps), wall,
+              vs / b.volume(), has_bulk ? fmt::format("{:.4f}", bulk).c_str() : "n/a: the window is under one diameter",
+              ov.pair_mean, ov.pair_max, static_cast<long long>(steps), wall,
               (out / "packing.csv").c_str());
   if (!res.ok()) {
     std::fprintf(stderr, "netsolve: error: %s: %s\n", res.status.c_str(), res.reason.c_str());

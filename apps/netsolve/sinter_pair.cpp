@@ -1,5 +1,5 @@
 // netsolve sinter-pair: one two-particle sintering contact against time (issue #14). The model is a
-// documented reconstruction (/work/shared/notes/sintering-pair-model.md), not the authors' model;
+// documented reconstruction (docs/sintering_pair.md), not the authors' model;
 // docs/sintering_pair.md describes it, its files and this command.
 //
 //   netsolve sinter-pair [--material cu|ti|FILE] [--set KEY=VALUE]... [--radius R | --radii RA,RB]
@@ -118,6 +118,8 @@ std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
 // --paths: "all" or a comma list of I, II, III, IV, V (the path types of note section 3)
 sp::PathSwitches parse_paths(const std::string& s) {
   if (s == "all") return {};
+  if (s.empty())  // no transport at all: a run that cannot change anything (issue 27)
+    throw std::invalid_argument("--paths '' names no transport path: give 'all' or a comma list of I, II, III, IV, V");
   sp::PathSwitches p{0, 0, 0, 0, 0};
   std::stringstream in(s);
   std::string item;
@@ -134,6 +136,64 @@ sp::PathSwitches parse_paths(const std::string& s) {
 
 sp::SinterMaterial load_material(const Args& a, std::string& source) {
   return netdem::app::netsolve::load_sinter_material(a.material, a.set, source);
+}
+
+/// The rows of pair.csv at the output times, and how the integration ended.
+struct Integration {
+  std::vector<Row> rows;
+  double max_drift = 0.0;
+  bool dropped_row = false;
+  std::string failure;  ///< a SUNDIALS error: the step failed (the contact says StepFailure)
+};
+
+/// One row of the contact's current state; false if it cannot be evaluated or is not finite.
+bool make_row(const sp::PairContact& c, const sp::PairProblem& p, Row& r) {
+  const sp::SinterMaterial& mat = *p.material;
+  const double T = (*p.temperature)(c.t);
+  const auto d = sp::diffusivities(mat, T);
+  r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
+  try {
+    const auto law = sp::effective_law(c.q, d, mat, p.paths);
+    r.F_s = law.F_s;
+    r.eta = law.eta;
+    r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
+  } catch (const std::domain_error&) {
+    return false;
+  }
+  bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
+                std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
+  for (double v : r.y) finite = finite && std::isfinite(v);
+  return finite;
+}
+
+/// Integrates the contact through the output times, stopping where it stops (c.status).
+Integration integrate(sp::PairContact& c, const sp::IntegratorOptions& io, const sp::PairProblem& problem,
+                      const std::vector<double>& times, const Args& a) {
+  Integration out;
+  sp::PairIntegrator integ(io);
+  const double V0 = sp::pair_volume(c.q);
+  netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
+  for (double t : times) {
+    if (t > 0.0) {
+      try {
+        integ.advance(c, problem, t);
+      } catch (const sp::SundialsError& e) {
+        out.failure = e.what();
+        c.status = sp::PairStatus::StepFailure;
+      }
+    }
+    Row r;
+    if (make_row(c, problem, r)) {
+      out.rows.push_back(r);
+      out.max_drift = std::max(out.max_drift, std::fabs(r.volume / V0 - 1.0));
+    } else if (!sp::validity_limit(c.status)) {  // the state past a validity limit has no row
+      out.dropped_row = true;
+    }
+    progress.update(std::log10(1.0 + c.t));
+    if (c.status != sp::PairStatus::Ok) break;
+  }
+  progress.finish();
+  return out;
 }
 
 int run(const Args& a, const std::string& command) {
@@ -170,6 +230,7 @@ int run(const Args& a, const std::string& command) {
   io.x_over_R_max = a.x_max;
   io.validate();
   sp::PairContact c = sp::make_contact(RA, RB, a.x0);
+  c.status = sp::check_state(c.q, c.R_min0(), io.x_over_R_max);  // a start outside the limits ends there, at t = 0
   if (!(std::isfinite(a.t_first) && a.t_first > 0.0)) throw std::invalid_argument("--t-first must be positive [s]");
   const auto times = output_times(a.t_end, a.t_first, prof, a.per_decade);
   const sp::PathSwitches paths = parse_paths(a.paths);
@@ -182,44 +243,13 @@ int run(const Args& a, const std::string& command) {
   netdem::app::open_run_dir(out, command, rdo);
 
   const sp::PairProblem problem{&mat, &prof, paths, a.force};
-  sp::PairIntegrator integ(io);
-  const double V0 = sp::pair_volume(c.q);
-  std::vector<Row> rows;
-  double max_drift = 0.0;
-  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
-  auto make_row = [&](Row& r) {
-    const double T = prof(c.t);
-    const auto d = sp::diffusivities(mat, T);
-    r = {c.t, T, c.x_over_R(), sp::shrinkage(c.q, c.q0), sp::pair_volume(c.q), sp::pair_energy(c.q, mat), 0.0, 0.0, 0.0, sp::full_state(c.q)};
-    try {
-      const auto law = sp::effective_law(c.q, d, mat, paths);
-      r.F_s = law.F_s;
-      r.eta = law.eta;
-      r.eta_BM = d.deltaD_gb > 0.0 ? sp::bouvard_mcmeeking_viscosity(c.q[sp::kX], d, mat) : 0.0;
-    } catch (const std::domain_error&) {
-      return false;
-    }
-    bool finite = std::isfinite(r.T) && std::isfinite(r.x_over_R) && std::isfinite(r.shrinkage) && std::isfinite(r.volume) &&
-                  std::isfinite(r.energy) && std::isfinite(r.F_s);  // eta may be +inf (no densifying path)
-    for (double v : r.y) finite = finite && std::isfinite(v);
-    return finite;
-  };
   const auto w0 = std::chrono::steady_clock::now();
-  netdem::app::Progress progress("sinter-pair", std::log10(1.0 + a.t_end), a.quiet);
-  bool dropped_row = false;
-  for (double t : times) {
-    if (t > 0.0) integ.advance(c, problem, t);
-    Row r;
-    if (make_row(r)) {
-      rows.push_back(r);
-      max_drift = std::max(max_drift, std::fabs(r.volume / V0 - 1.0));
-    } else {
-      dropped_row = true;
-    }
-    progress.update(std::log10(1.0 + c.t));
-    if (c.status != sp::PairStatus::Ok) break;
-  }
-  progress.finish();
+  const Integration result = integrate(c, io, problem, times, a);
+  const std::vector<Row>& rows = result.rows;
+  const double max_drift = result.max_drift;
+  const bool dropped_row = result.dropped_row;
+  const std::string& failure = result.failure;
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };  // inf viscosity -> null
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
 
   std::string csv = "t,T,x_over_R,shrinkage,volume,free_energy,sintering_force,y1,y2,y3,y4,y5,y6,y7\n";
@@ -237,7 +267,7 @@ int run(const Args& a, const std::string& command) {
   json j;
   j["command"] = command;
   j["model"] = "two-particle cap-cone sintering model: a documented reconstruction of "
-               "/work/shared/notes/sintering-pair-model.md, not the model of Thomsen et al. / Ivannikov et al.";
+               "the model note described in docs/sintering_pair.md, not the model of Thomsen et al. / Ivannikov et al.";
   j["material"] = {{"name", mat.name},         {"source", mat_source},         {"Omega", mat.omega},
                    {"gamma_s", mat.gamma_s},   {"gamma_gb", mat.gamma_gb},     {"D_vol0", mat.D_vol0},
                    {"Q_vol", mat.Q_vol},       {"deltaD_gb0", mat.deltaD_gb0}, {"Q_gb", mat.Q_gb},
@@ -265,7 +295,8 @@ int run(const Args& a, const std::string& command) {
       break;
     case sp::PairStatus::NonFinite:
     case sp::PairStatus::StepFailure:
-      status.add("unstable", fmt::format("stopped at t = {:.6g} s: {}", c.t, sp::describe(c.status, io.x_over_R_max)));
+      status.add("unstable", fmt::format("stopped at t = {:.6g} s: {}{}", c.t, sp::describe(c.status, io.x_over_R_max),
+                                         failure.empty() ? "" : " (" + failure + ")"));
       break;
   }
   if (dropped_row) status.add("unstable", "rows with non-finite values were dropped from pair.csv");
@@ -319,7 +350,7 @@ int run_sinter_pair_command(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
   Args a;
   CLI::App app{"netsolve sinter-pair: one two-particle sintering contact against time (a documented reconstruction of "
-               "/work/shared/notes/sintering-pair-model.md; docs/sintering_pair.md). SI units."};
+               "the model note described in docs/sintering_pair.md). SI units."};
   app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format)")->capture_default_str();
   app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
   auto* o_r = app.add_option("--radius", a.radius, "radius of both particles [m]")->capture_default_str();

@@ -1,5 +1,5 @@
 // Two-particle sintering model: a documented reconstruction (see sintering_pair.hpp and
-// /work/shared/notes/sintering-pair-model.md, cited as "note §n").
+// the model note, docs/sintering_pair.md, cited as "note §n").
 #include "netdem/contact/sintering_pair.hpp"
 
 #include <algorithm>
@@ -75,6 +75,24 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
+/// At most 80 printable characters of a bad input, for messages (the readers' quoting rule:
+/// netdem::packing::quote_input).
+std::string quote80(const std::string& s) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size() && i < 80; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+  }
+  if (s.size() > 80) out += "...";
+  return out;
+}
+
+std::string number(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
 bool to_double(const std::string& s, double& v) {
   if (s.empty()) return false;
   errno = 0;
@@ -110,11 +128,11 @@ void SinterMaterial::validate() const {
   need(nonneg(c_III), "c_III", ">= 0", c_III);
   need(nonneg(c_IV), "c_IV", ">= 0", c_IV);
   need(nonneg(youngs_modulus), "E", ">= 0", youngs_modulus);
-  need(poisson_ratio == -1.0 || (std::isfinite(poisson_ratio) && poisson_ratio > -1.0 && poisson_ratio < 0.5), "nu",
-       "in (-1, 0.5) (or absent)", poisson_ratio);
+  need(poisson_ratio == -1.0 || (std::isfinite(poisson_ratio) && poisson_ratio >= 0.0 && poisson_ratio < 0.5), "nu",
+       "in [0, 0.5) (or absent)", poisson_ratio);
   need(D_vol0 > 0.0 || deltaD_gb0 > 0.0 || deltaD_s0 > 0.0, "one of D_vol0, deltaD_gb0, deltaD_s0",
        "positive", 0.0);
-  need(nonneg(T_transus), "T_transus", ">= 0 [K]", T_transus);
+  need(nonneg(T_transus) && T_transus < kMaxTemperature, "T_transus", "in [0, 1e4) K", T_transus);
   if (T_transus > 0.0) {
     for (const auto& [v, k] : {std::pair{D_vol0_low, "D_vol0_low"}, {Q_vol_low, "Q_vol_low"},
                                {deltaD_gb0_low, "deltaD_gb0_low"}, {Q_gb_low, "Q_gb_low"},
@@ -147,16 +165,20 @@ SinterMaterial parse_sinter_material(const std::string& text, const std::string&
     auto fail = [&](const std::string& what) {
       throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": " + what);
     };
-    if (eq == std::string::npos) fail("expected 'key = value', got '" + line + "'");
+    if (eq == std::string::npos) fail("expected 'key = value', got '" + quote80(line) + "'");
     const std::string key = trim(line.substr(0, eq)), val = trim(line.substr(eq + 1));
     if (key == "name") {
       if (val.empty()) fail("empty name");
-      name = val;
+      name = quote80(val);
       continue;
     }
-    if (std::find(std::begin(known), std::end(known), key) == std::end(known)) fail("unknown key '" + key + "'");
+    if (std::find(std::begin(known), std::end(known), key) == std::end(known)) fail("unknown key '" + quote80(key) + "'");
     double x = 0.0;
-    if (!to_double(val, x)) fail("'" + key + "' = '" + val + "' is not a finite number");
+    if (!to_double(val, x)) fail("'" + key + "' = '" + quote80(val) + "' is not a finite number");
+    // the ranges of the command line (--nu, --temperature), with the line that breaks them
+    if (key == "nu" && !(x >= 0.0 && x < 0.5)) fail("Poisson's ratio nu = " + number(x) + " is outside [0, 0.5)");
+    if (key == "T_transus" && !(x >= 0.0 && x < kMaxTemperature))
+      fail("T_transus = " + number(x) + " K is outside [0, 1e4) K");
     v[key] = x;
   }
   auto get = [&](const char* k, double def) {
@@ -438,9 +460,9 @@ std::string describe(PairStatus s, double xmax) {
 // Temperature profile
 
 TemperatureProfile TemperatureProfile::constant(double T) {
-  if (!(std::isfinite(T) && T > 0.0)) {
+  if (!(std::isfinite(T) && T > 0.0 && T < kMaxTemperature)) {
     std::ostringstream o;
-    o << "temperature must be positive and finite [K], got " << T;
+    o << "temperature must be in (0, 1e4) K, got " << T;
     throw std::invalid_argument(o.str());
   }
   TemperatureProfile p;
@@ -453,9 +475,9 @@ TemperatureProfile::TemperatureProfile(std::vector<double> t, std::vector<double
   if (t_.empty() || t_.size() != T_.size()) throw std::invalid_argument("temperature profile: no breakpoints");
   for (std::size_t i = 0; i < t_.size(); ++i) {
     if (!std::isfinite(t_[i])) throw std::invalid_argument("temperature profile: non-finite time");
-    if (!(std::isfinite(T_[i]) && T_[i] > 0.0)) {
+    if (!(std::isfinite(T_[i]) && T_[i] > 0.0 && T_[i] < kMaxTemperature)) {
       std::ostringstream o;
-      o << "temperature profile: T must be positive [K], got " << T_[i] << " at t = " << t_[i];
+      o << "temperature profile: T must be in (0, 1e4) K, got " << T_[i] << " at t = " << t_[i];
       throw std::invalid_argument(o.str());
     }
     if (i > 0 && t_[i] < t_[i - 1]) {
@@ -495,13 +517,15 @@ TemperatureProfile TemperatureProfile::parse_csv(const std::string& text, const 
     const std::string a = trim(line.substr(0, comma)), b = comma == std::string::npos ? "" : trim(line.substr(comma + 1));
     if (!header) {
       if (a != "time" || b != "T")
-        throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": expected the header 'time,T', got '" + line + "'");
+        throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": expected the header 'time,T', got '" + quote80(line) + "'");
       header = true;
       continue;
     }
     double tv = 0.0, Tv = 0.0;
     if (comma == std::string::npos || !to_double(a, tv) || !to_double(b, Tv))
-      throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": expected 'time,T' numbers, got '" + line + "'");
+      throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": expected 'time,T' numbers, got '" + quote80(line) + "'");
+    if (!(Tv > 0.0 && Tv < kMaxTemperature))  // the range of --temperature
+      throw std::invalid_argument(origin + ":" + std::to_string(lineno) + ": T = " + number(Tv) + " K is outside (0, 1e4) K");
     t.push_back(tv);
     T.push_back(Tv);
   }

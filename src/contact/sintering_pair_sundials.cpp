@@ -131,6 +131,12 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   if (c.status != PairStatus::Ok) return c.status;
   Impl& I = *impl_;
   const double Rmin = c.R_min0();
+  // a state already outside the validity limits (a contact that starts there): the same end as
+  // DP45's and RK4's, before SUNDIALS sees a right-hand side it cannot evaluate
+  if (const PairStatus s0 = check_state(c.q, Rmin, opts.x_over_R_max); s0 != PairStatus::Ok) {
+    c.status = s0;
+    return s0;
+  }
   const double atol = opts.atol_scale * opts.rtol * Rmin;
   I.cd.p = &p;
   I.cd.m = p.material;
@@ -198,8 +204,12 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
                          flag == CV_REPTD_RHSFUNC_ERR || flag == CV_RHSFUNC_FAIL || flag == CV_TOO_CLOSE)
                       : (flag == ARK_TOO_MUCH_WORK || flag == ARK_ERR_FAILURE || flag == ARK_REPTD_RHSFUNC_ERR ||
                          flag == ARK_RHSFUNC_FAIL || flag == ARK_TOO_CLOSE);
-          if (!step_failure) throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
-          s = PairStatus::StepFailure;
+          const bool first_rhs = I.cvode ? flag == CV_FIRST_RHSFUNC_ERR : flag == ARK_FIRST_RHSFUNC_ERR;
+          if (!step_failure && !first_rhs) throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
+          // a right-hand side that cannot be evaluated at a state outside the validity limits is
+          // that limit (as for DP45 and RK4); otherwise the step failed
+          s = check_state(state_now(), Rmin, opts.x_over_R_max);
+          if (s == PairStatus::Ok || s == PairStatus::NonFinite) s = PairStatus::StepFailure;
           break;
         }
         ++c.steps;

@@ -52,7 +52,7 @@ void GreenBodyOptions::validate() const {
        "the cloud fraction", "in (0, 0.30]", cloud_fraction);
   need(fin(settled_guess) && settled_guess > cloud_fraction && settled_guess < 0.74, "the settled-density guess",
        "in (cloud fraction, 0.74)", settled_guess);
-  need(fin(gravity) && gravity > 0.0, "the gravity", "positive and finite", gravity);
+  need(fin(gravity) && gravity >= 1e-6 && gravity <= 1e4, "the gravity", "in [1e-6, 1e4] m/s^2", gravity);
   need(fin(stiffness_number) && stiffness_number >= 10.0 && stiffness_number <= 1e9, "the stiffness number kappa",
        "in [10, 1e9]", stiffness_number);
   need(fin(restitution) && restitution > 0.0 && restitution <= 1.0, "the restitution", "in (0, 1]", restitution);
@@ -67,6 +67,24 @@ void GreenBodyOptions::validate() const {
        "in (0, 0.5)", max_mean_overlap);
   need(fin(max_phase_time) && max_phase_time > 0.0, "the phase-time cap", "positive and finite", max_phase_time);
   need(check_every >= 1, "check_every", ">= 1", static_cast<double>(check_every));
+}
+
+packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& o) {
+  o.validate();
+  const double r = o.mean_radius;
+  const double vs_expected =
+      static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
+  // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
+  // depend on the target, so one seed settles the same way for every target
+  const double L0 = std::cbrt(vs_expected / (o.settled_guess * o.aspect));
+  const double H_cloud = vs_expected / (o.cloud_fraction * L0 * L0);
+  packing::RandomFill3dOptions fo;
+  fo.n = o.n;
+  fo.mean_radius = r;
+  fo.dispersion = o.dispersion;
+  fo.seed = o.seed;
+  fo.box = packing::Box{0.0, 0.0, L0, L0, 0.0, H_cloud};
+  return fo;
 }
 
 namespace {
@@ -121,17 +139,10 @@ class GreenBodyRoute {
   // 1. the cloud, and the solver on it
   void make_cloud() {
     const double r = o_.mean_radius;
+    const packing::RandomFill3dOptions fo = green_body_cloud_options(o_);
     vs_expected_ = static_cast<double>(o_.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o_.dispersion * o_.dispersion);
-    // width L0: the settled box (density settled_guess) has the intended aspect; the cloud does not
-    // depend on the target, so one seed settles the same way for every target
-    L0_ = std::cbrt(vs_expected_ / (o_.settled_guess * o_.aspect));
-    H_cloud_ = vs_expected_ / (o_.cloud_fraction * L0_ * L0_);
-    packing::RandomFill3dOptions fo;
-    fo.n = o_.n;
-    fo.mean_radius = r;
-    fo.dispersion = o_.dispersion;
-    fo.seed = o_.seed;
-    fo.box = packing::Box{0.0, 0.0, L0_, L0_, 0.0, H_cloud_};
+    L0_ = fo.box.x_max - fo.box.x_min;
+    H_cloud_ = fo.box.z_max - fo.box.z_min;
     res_.cloud_box = fo.box;
     const packing::Packing cloud = packing::random_fill_3d(fo);
     vs_ = cloud.solid_volume();

@@ -318,9 +318,9 @@ struct Staggered::Impl {
     bmat.E = opt.E > 0.0 ? opt.E : mat.youngs_modulus;
     bmat.nu = opt.nu != -1.0 ? opt.nu : mat.poisson_ratio;
     if (!(bmat.E > 0.0))
-      bad("staggered: the bond needs Young's modulus: the material '" + mat.name + "' has no E (set E or --E)");
+      bad("staggered: the bond needs Young's modulus: the material '" + mat.name + "' has no E (give the material's E or the option E)");
     if (bmat.nu == -1.0)
-      bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (set the key nu of the material)");
+      bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (give the material's nu or the option nu)");
     x_max = freeze_limit(mat, opt);
     if (!(x_max > opt.x0_over_R)) bad(fmt::format("staggered: the freeze limit x_max/R = {} is below x0/R", x_max));
     cache.m = &mat;

@@ -1,11 +1,15 @@
 // The run status rules of netsolve (apps/netsolve/status.hpp) and the run-folder helpers of
 // apps/common/output.hpp (README.md "Exit status", "Run folders").
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -106,21 +110,23 @@ TEST(RunDir, MarkerFirstRemovedLastAndForeignFoldersRefused) {
   EXPECT_TRUE(fs::exists(d / "command.txt"));
   EXPECT_TRUE(netdem::app::run_dir_opened());
   touch(d / "summary.json");
+  fs::create_directory(d / "probes");
+  touch(d / "probes" / "probe_000.json");
+  touch(d / "state.txt");
   netdem::app::close_run_dir(d);
   EXPECT_FALSE(fs::exists(d / ".incomplete"));
+  touch(d / "notes.txt");  // the user's, after the run
   // another run into it: refused, nothing touched
   EXPECT_THROW(netdem::app::check_run_dir(d, o), netdem::app::UsageError);
   EXPECT_THROW(netdem::app::open_run_dir(d, "second", o), netdem::app::UsageError);
   EXPECT_TRUE(fs::exists(d / "summary.json"));
-  // --overwrite clears the old files (and probes/), keeps nothing of the old run
-  fs::create_directory(d / "probes");
-  touch(d / "probes" / "probe_000.json");
-  touch(d / "state.txt");
+  // --overwrite clears the old run's files (and probes/), keeps nothing of the old run but the user's
   o.overwrite = true;
   netdem::app::open_run_dir(d, "second", o);
   EXPECT_FALSE(fs::exists(d / "summary.json"));
   EXPECT_FALSE(fs::exists(d / "state.txt"));
   EXPECT_FALSE(fs::exists(d / "probes"));
+  EXPECT_TRUE(fs::exists(d / "notes.txt"));
   EXPECT_TRUE(fs::exists(d / ".incomplete"));
   std::ifstream in(d / "command.txt");
   std::string line;
@@ -162,4 +168,71 @@ TEST(RunDir, OverwriteIsConservative) {
   // a file as --out
   touch(t.path / "f");
   EXPECT_THROW(netdem::app::check_run_dir(t.path / "f", plain), netdem::app::UsageError);
+}
+
+namespace {
+/// A marker as open_run_dir writes it, for process `pid` started at `ticks` (field 22 of /proc/PID/stat).
+void write_marker(const fs::path& d, long pid, const std::string& ticks) {
+  std::ifstream b("/proc/sys/kernel/random/boot_id");
+  std::string boot;
+  std::getline(b, boot);
+  char host[256] = "";
+  ::gethostname(host, sizeof host - 1);
+  std::ofstream m(d / ".incomplete");
+  m << "unfinished netdem run (running, failed or killed): pid " << pid << ", started 2026-01-01T00:00:00Z\n"
+    << "netsolve sinter --out x\nprocess " << ticks << " boot " << boot << " host " << host << "\nbefore: 0 entries\n";
+}
+std::string own_start_ticks() {
+  std::ifstream in("/proc/self/stat");
+  std::string s;
+  std::getline(in, s);
+  std::istringstream f(s.substr(s.rfind(')') + 2));
+  std::string w;
+  for (int field = 3; field <= 22; ++field) f >> w;
+  return w;
+}
+}  // namespace
+
+TEST(RunDir, LiveRunRefusedEvenWithOverwriteStaleMarkerCleared) {
+  TempDir t;
+  const fs::path d = t.path / "run";
+  fs::create_directory(d);
+  netdem::app::RunDirOptions o;
+  o.overwrite = true;
+  // held by a live process (this one): refused with its pid, nothing touched
+  write_marker(d, ::getpid(), own_start_ticks());
+  try {
+    netdem::app::check_run_dir(d, o);
+    ADD_FAILURE() << "a live run's folder was accepted";
+  } catch (const netdem::app::UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find(fmt::format("pid {}", ::getpid())), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("still running"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(netdem::app::open_run_dir(d, "second", o), netdem::app::UsageError);
+  EXPECT_TRUE(fs::exists(d / ".incomplete"));
+  // the same pid with another start time: the pid was reused, the marker is stale
+  write_marker(d, ::getpid(), own_start_ticks() + "1");
+  netdem::app::check_run_dir(d, o);
+  // a dead process: stale, may be overwritten
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ::waitpid(child, nullptr, 0);
+  write_marker(d, child, "1");
+  netdem::app::check_run_dir(d, o);
+  touch(d / "state.txt");  // the killed run's
+  touch(d / "my.dat");     // not a name a run writes
+  touch(d / ".summary.json.tmp0123abcd");  // write_file_atomic's temporary, left by the kill
+  netdem::app::open_run_dir(d, "second", o);
+  EXPECT_FALSE(fs::exists(d / "state.txt"));
+  EXPECT_FALSE(fs::exists(d / ".summary.json.tmp0123abcd"));
+  EXPECT_TRUE(fs::exists(d / "my.dat"));
+  std::ifstream in(d / ".incomplete");
+  std::string first;
+  std::getline(in, first);
+  EXPECT_NE(first.find(fmt::format("pid {},", ::getpid())), std::string::npos) << first;
+  // ... and without --overwrite a stale marker is still another run's folder
+  netdem::app::close_run_dir(d);
+  EXPECT_TRUE(fs::exists(d / ".netdem-files"));
+  o.overwrite = false;
+  EXPECT_THROW(netdem::app::check_run_dir(d, o), netdem::app::UsageError);
 }

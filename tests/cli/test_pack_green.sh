@@ -60,4 +60,28 @@ check_bad green_dispersion "dispersion must be in" pack --dim 3 --route green-bo
 check_bad green_restitution "restitution must be in (0, 1]" pack --dim 3 --route green-body --restitution 0
 check_bad green_lamina "--lamina must be a positive" pack --dim 3 --route green-body --lamina 0
 check_bad green_n_zero "number of spheres" pack --dim 3 --route green-body --n 0
+# issue 27 item 8: refused at the door (exit 2, one line naming the option, no folder) instead of
+# exit 1 after the folder exists with an internal quantity (gamma_0, random_fill_3d, laminar_density)
+door() {  # NAME WORD ARGS...
+  local name="$1" word="$2"
+  shift 2
+  "$tool" pack --dim 3 --route green-body --quiet "$@" --out "$tmp/$name" >/dev/null 2>"$tmp/stderr"
+  local rc=$?
+  if [ "$rc" -eq 2 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -qF -- "$word" "$tmp/stderr" && [ ! -e "$tmp/$name" ] &&
+     ! grep -q "gamma_0\|random_fill_3d\|laminar_density" "$tmp/stderr"; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1))
+    echo "FAIL $name: rc=$rc $(head -c 400 "$tmp/stderr")"
+  fi
+}
+door green_gravity_1e300 "--gravity must be in [1e-6, 1e4]" --gravity 1e300
+door green_lamina_1e-12 "--lamina 1e-12 m" --lamina 1e-12
+door green_dispersion_0.999 "--dispersion 0.999" --dispersion 0.999
+door green_n_1 "--n 1 " --n 1
+# a body too small for its bulk window (100 spheres, 2 diameters from every wall) reports no bulk
+# density rather than one from a window under one sphere (issue 27 item 9)
+"$tool" pack --dim 3 --route green-body --quiet --n 100 --max-overlap 0.049 --out "$tmp/green100" >"$tmp/stdout" 2>"$tmp/stderr"
+if grep -q '"bulk": null' "$tmp/green100/summary.json" && grep -q "bulk n/a" "$tmp/stdout"; then pass=$((pass + 1)); else
+  fail=$((fail + 1)); echo "FAIL green_small_bulk: $(grep '"bulk"' "$tmp/green100/summary.json") $(cat "$tmp/stdout")"; fi
 finish

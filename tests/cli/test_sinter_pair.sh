@@ -22,8 +22,9 @@ check_bad sp_set "unknown key" sinter-pair --set bogus=1
 check_bad sp_set_value "not a finite number" sinter-pair --set D_vol0=fast
 check_bad sp_unknown "bogus" sinter-pair --bogus
 check_bad sp_paths "paths" sinter-pair --paths I,VI
+check_bad sp_paths_empty "names no transport path" sinter-pair --paths ''
 printf 'time,T\n0,1273.15\n10,-4\n' >"$tmp/bad_profile.csv"
-check_bad sp_profile_bad "T must be positive" sinter-pair --profile "$tmp/bad_profile.csv"
+check_bad sp_profile_bad "bad_profile.csv:3: T = -4 K is outside (0, 1e4) K" sinter-pair --profile "$tmp/bad_profile.csv"
 printf 'Omega = 1e-29\ngamma_s = 1\n' >"$tmp/bad_material.txt"
 check_bad sp_material_file "missing key 'gamma_gb'" sinter-pair --material "$tmp/bad_material.txt"
 
@@ -70,4 +71,53 @@ for integ in dp45 rk4 cvode arkode; do
     ko "sp_profile_$integ"
   fi
 done
+
+# one ending per physical situation, whatever the integrator (issue 27 item 5): R = 1e-9 and
+# 1e-3 m start with a degenerate cone, a validity limit: exit 0, "incomplete", the files written
+for integ in dp45 rk4 cvode arkode; do
+  d="$tmp/sp_cone_$integ"
+  "$tool" sinter-pair --quiet --radii 1e-9,1e-3 --integrator "$integ" --out "$d" >/dev/null 2>"$tmp/stderr"
+  rc=$?
+  if [ "$rc" -eq 0 ] && grep -q '"status": "incomplete"' "$d/summary.json" && grep -q '"stop": "cone_degenerate"' "$d/summary.json" &&
+     [ "$(head -1 "$d/pair.csv")" = "$header" ] && [ -s "$d/pair.svg" ] && [ ! -e "$d/.incomplete" ] &&
+     grep -q "validity limit" "$d/summary.json" && ! grep -qi "nan" "$d/pair.csv"; then
+    ok
+  else
+    ko "sp_cone_degenerate_$integ rc=$rc"
+  fi
+done
+
+# profiles and material files are held to the command line's ranges (issue 27 items 6, 8): exit 2,
+# one line naming the file's line, a bad input quoted to at most 80 characters
+usage2() {  # NAME WORD ARGS...: exit 2, one line containing WORD, under 300 bytes, no output folder
+  local name="$1" word="$2"
+  shift 2
+  "$tool" "$@" --out "$tmp/$name" >/dev/null 2>"$tmp/stderr"
+  local rc=$?
+  if [ "$rc" -eq 2 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -qF -- "$word" "$tmp/stderr" &&
+     [ "$(wc -c <"$tmp/stderr")" -lt 300 ] && [ ! -e "$tmp/$name" ]; then
+    ok
+  else
+    ko "$name rc=$rc ($(wc -c <"$tmp/stderr") bytes)"
+  fi
+}
+for T in 2e4 1e5 1e300; do
+  printf 'time,T\n0,1273.15\n600,%s\n' "$T" >"$tmp/hot_$T.csv"
+  usage2 "sp_profile_hot_$T" "hot_$T.csv:3: T = " sinter-pair --profile "$tmp/hot_$T.csv"
+  usage2 "sinter_profile_hot_$T" "hot_$T.csv:3: T = " sinter --generate cu --time 10 --quiet --profile "$tmp/hot_$T.csv"
+done
+printf 'time,T\n0,1273.15\n600,9999\n' >"$tmp/warm.csv"  # just inside: accepted
+"$tool" sinter-pair --quiet --profile "$tmp/warm.csv" --time 1 --out "$tmp/sp_warm" >/dev/null 2>"$tmp/stderr" && ok || ko sp_profile_9999
+printf 'name = neg\nOmega = 1.18e-29\ngamma_s = 1.72\ngamma_gb = 0.625\nD_vol0 = 2e-5\nQ_vol = 197e3\nE = 1e11\nnu = -0.3\n' >"$tmp/neg_nu.txt"
+usage2 sp_nu_negative "neg_nu.txt:8: Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter-pair --material "$tmp/neg_nu.txt"
+usage2 sinter_nu_negative "neg_nu.txt:8: Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter --generate cu --time 10 --quiet --material "$tmp/neg_nu.txt"
+usage2 sp_set_nu_negative "--set 'nu=-0.3': Poisson's ratio nu = -0.3 is outside [0, 0.5)" sinter-pair --set D_vol0=2e-5 --set nu=-0.3
+usage2 sinter_set_transus "--set 'T_transus=2e4': T_transus = 20000 K" sinter --generate cu --time 10 --quiet --set T_transus=2e4
+head -c 4096 /dev/zero | tr '\0' '\377' >"$tmp/binary.bin"  # a 4 kB first line of bytes 0xff
+printf '\n' >>"$tmp/binary.bin"
+{ head -c 4000 /dev/zero | tr '\0' 'k'; printf ' = 1\n'; } >"$tmp/longkey.txt"
+usage2 sp_long_key "longkey.txt:1: unknown key 'kkkk" sinter-pair --material "$tmp/longkey.txt"
+usage2 sp_binary_material "binary.bin:1:" sinter-pair --material "$tmp/binary.bin"
+usage2 sp_binary_profile "binary.bin:1:" sinter-pair --profile "$tmp/binary.bin"
+usage2 sinter_binary_profile "binary.bin:1:" sinter --generate cu --time 10 --quiet --profile "$tmp/binary.bin"
 finish

@@ -1,5 +1,5 @@
 // Tests of the two-particle sintering model, a documented reconstruction of
-// /work/shared/notes/sintering-pair-model.md ("note §n"). Reference numbers come from the note
+// the model note (docs/sintering_pair.md; "note §n"). Reference numbers come from the note
 // (its tables, produced by the independent Python prototype) or from closed forms, never from this
 // code's own output.
 #include <gtest/gtest.h>
@@ -661,4 +661,56 @@ TEST(SinteringPair, PhaseSwitchAtTheTransus) {
   EXPECT_THROW(sp::parse_sinter_material(ti + "\nD_vol0_low = 1e-9\n", "x"), std::invalid_argument);
   EXPECT_THROW(sp::parse_sinter_material(ti + "\nT_transus = 1155\n", "x"), std::invalid_argument);
   EXPECT_THROW(sp::parse_sinter_material(ti + "\nT_transus = -3\nD_vol0_low = 1e-9\n", "x"), std::invalid_argument);
+}
+
+// ---- issue 27: one ending per physical situation; the command line's ranges ----------------------
+
+TEST(SinteringPair, EveryIntegratorEndsADegenerateStartTheSameWay) {
+  // R = 1e-9 and 1e-3 m: x0 = 1e-11 m, x^2 + h^2 == h^2 for the big particle in double precision
+  const auto cu = sp::builtin_sinter_material("cu");
+  const auto T = sp::TemperatureProfile::constant(1273.15);
+  const sp::PairProblem p{&cu, &T, {}, 0.0};
+  for (auto kind : {sp::IntegratorKind::DP45, sp::IntegratorKind::RK4, sp::IntegratorKind::CVODE, sp::IntegratorKind::ARKODE}) {
+    sp::IntegratorOptions o;
+    o.kind = kind;
+    sp::PairIntegrator integ(o);
+    sp::PairContact c = sp::make_contact(1e-9, 1e-3);
+    EXPECT_EQ(integ.advance(c, p, 1.0), sp::PairStatus::ConeDegenerate) << sp::to_string(kind);
+    EXPECT_EQ(c.t, 0.0) << sp::to_string(kind);
+    EXPECT_TRUE(sp::validity_limit(c.status));
+  }
+  EXPECT_FALSE(sp::validity_limit(sp::PairStatus::StepFailure));
+  EXPECT_FALSE(sp::validity_limit(sp::PairStatus::NonFinite));
+  EXPECT_FALSE(sp::validity_limit(sp::PairStatus::Ok));
+}
+
+TEST(SinteringPair, ProfilesAndMaterialsKeepTheCommandLineRanges) {
+  auto message = [](auto f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  for (const char* hot : {"2e4", "1e5", "1e300", "10000"}) {
+    const std::string m = message([&] { sp::TemperatureProfile::parse_csv(std::string("time,T\n0,1273\n600,") + hot + "\n", "p.csv"); });
+    EXPECT_NE(m.find("p.csv:3: T = "), std::string::npos) << m;
+    EXPECT_NE(m.find("outside (0, 1e4) K"), std::string::npos) << m;
+  }
+  EXPECT_NO_THROW(sp::TemperatureProfile::parse_csv("time,T\n0,1273\n600,9999\n", "p.csv"));
+  EXPECT_THROW(sp::TemperatureProfile({0.0}, {2e4}), std::invalid_argument);
+  EXPECT_THROW(sp::TemperatureProfile::constant(1e5), std::invalid_argument);
+  const std::string base = "Omega = 1.18e-29\ngamma_s = 1.72\ngamma_gb = 0.625\nD_vol0 = 2e-5\n";
+  std::string m = message([&] { sp::parse_sinter_material(base + "nu = -0.3\n", "m.txt"); });
+  EXPECT_NE(m.find("m.txt:5: Poisson's ratio nu = -0.3 is outside [0, 0.5)"), std::string::npos) << m;
+  EXPECT_NO_THROW(sp::parse_sinter_material(base + "nu = 0\n", "m.txt"));
+  m = message([&] { sp::parse_sinter_material(base + "T_transus = 2e4\n", "m.txt"); });
+  EXPECT_NE(m.find("m.txt:5: T_transus"), std::string::npos) << m;
+  // a binary first line is quoted to at most 80 characters
+  m = message([&] { sp::parse_sinter_material(std::string(4096, '\xff') + "\n", "b.bin"); });
+  EXPECT_LT(m.size(), 160U) << m.size();
+  m = message([&] { sp::TemperatureProfile::parse_csv(std::string(4096, 'x') + "\n", "b.csv"); });
+  EXPECT_LT(m.size(), 160U) << m.size();
+  EXPECT_NE(m.find("b.csv:1:"), std::string::npos) << m;
 }

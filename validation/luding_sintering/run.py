@@ -37,6 +37,16 @@ sys.path.insert(0, HERE)
 import study  # noqa: E402
 
 REPO = study.REPO
+
+
+def shown(p):
+    """A path for the report: relative to the repository; a file outside it by its name only
+    (never an absolute path of the machine that ran it, issue 26 item 6)."""
+    p = str(p)
+    if not os.path.isabs(p):
+        return p
+    r = os.path.relpath(p, REPO)
+    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
 PAPER_K1 = {1e-4: ("0.95", 0.95, 0.005), 0.01: ("0.17", 0.17, 0.005), 0.02: ("0.10", 0.10, 0.005),
             0.1: ("0.036", 0.036, 0.0005), 1.0: ("0.0198", 0.0198, 0.00005)}
 
@@ -1018,18 +1028,18 @@ def write_report(out, a, runs, sims, tests, figs, F, notes, binary, t_total, nb,
     L.append("# Validation: long-time sintering (Luding, Manetsberger & Muellers 2005), section 4\n")
     L.append(f"Generated {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')} by "
              f"`/usr/bin/python3 validation/luding_sintering/run.py{' --quick' if a.quick else ''}` ({mode} grid).\n")
-    L.append(f"* binary given to this invocation (used for the runs made now): `{binary}`, git revision "
+    L.append(f"* binary given to this invocation (used for the runs made now): `{shown(binary)}`, git revision "
              f"{a.revision or git_rev()}")
     shas = {}
     for r in list(sims.values()) + list(tests.values()):
         if r.meta.get("binary_sha256"):
-            k = (r.meta["binary_sha256"][:12], r.meta.get("binary", "?"))
+            k = (r.meta["binary_sha256"][:12], shown(r.meta.get("binary", "?")))
             shas[k] = shas.get(k, 0) + 1
     L.append("* binaries of the runs (sha256 first 12 hex, path, runs): "
              + ("; ".join(f"{h} `{b}` ({c})" for (h, b), c in sorted(shas.items())) or "n/a"))
     for note in a.note or []:
         L.append(f"* {note}")
-    L.append(f"* paper: `/work/shared/papers/luding-manetsberger-muellers-2005-long-time-sintering.md`")
+    L.append("* paper: S. Luding, K. Manetsberger, J. Muellers, J. Mech. Phys. Solids 53 (2005) 455-491")
     cpu = sum(x.meta.get("cpu_s", 0.0) or 0.0 for x in list(sims.values()) + list(tests.values()))
     wall = sum(x.meta.get("wall_s", 0.0) or 0.0 for x in list(sims.values()) + list(tests.values()))
     L.append(f"* run time: {cpu:.0f} CPU-s summed over {len(sims) + len(tests)} runs ({wall:.0f} s wall summed; "
@@ -1088,7 +1098,7 @@ def write_report(out, a, runs, sims, tests, figs, F, notes, binary, t_total, nb,
              f"{' --quick' if a.quick else ''}` prints the same list), each run under `nice -n 10`:\n")
     L.append("```")
     for r in runs:
-        L.append(shlex.join([binary] + r.args))
+        L.append(shlex.join([shown(binary)] + [shown(x) for x in r.args]))
     L.append("```\n")
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write("\n".join(L) + "\n")

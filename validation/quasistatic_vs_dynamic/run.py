@@ -48,6 +48,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
+
+def shown(p):
+    """A path for the report: relative to the repository; a file outside it by its name only
+    (never an absolute path of the machine that ran it, issue 26 item 6)."""
+    p = str(p)
+    if not os.path.isabs(p):
+        return p
+    r = os.path.relpath(p, REPO)
+    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
+
 FULL = {"name": "full", "width": 80, "seeds": (1, 2, 3)}
 QUICK = {"name": "quick", "width": 40, "seeds": (1,)}
 INERTIAL = (4.5e-4, 1.5e-4, 5e-5)  # demsolve --inertial-number
@@ -513,7 +523,7 @@ def write_report(R, rows, yrows, figs, out, mode, runs, cmdline, total, netsolve
     w("# Validation: netsolve (quasi-static) against the DEM limit I → 0 (issue 12 section 5)\n")
     w(f"Generated {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')} by "
       f"`{cmdline}` (mode **{mode['name']}**: W = {mode['width']} R, seeds "
-      f"{', '.join(map(str, mode['seeds']))}). Binaries: `{netsolve}`, `{demsolve}`.\n")
+      f"{', '.join(map(str, mode['seeds']))}). Binaries: `{shown(netsolve)}`, `{shown(demsolve)}`.\n")
     w("Every combination: `demsolve compact` at I = " + ", ".join(f"{I:g}" for I in INERTIAL)
       + f" (to D = {DEM_D}, {DEM_INC} windows) and `netsolve compact` at --viscosity 0.01 (default), "
       f"0.01/3, 0.01/9, 0.01/27 (to D = {NET_D}, {NET_INC} increments). A DEM row is a window mean, "

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Validation of `netsolve sinter-pair`, the two-particle sintering model (a documented reconstruction of
-/work/shared/notes/sintering-pair-model.md, not the model of Thomsen et al. / Ivannikov et al.).
+the model note described in docs/sintering_pair.md, not the model of Thomsen et al. / Ivannikov et al.).
 
 usage: /usr/bin/python3 validation/sintering_pair/run.py
            [--quick] [--force] [--netsolve PATH] [--out DIR] [--runs DIR] [--jobs N (ignored)] [--demsolve PATH (ignored)]
@@ -399,7 +399,7 @@ def main():
             f"Generated {now} by `validation/sintering_pair/run.py`{' --quick' if a.quick else ''}; run folders in "
             f"`{os.path.relpath(runs_dir, REPO)}`. {npass} PASS, {nfail} FAIL.\n\n"
             "**What is validated.** The model is a *documented reconstruction* "
-            "(`/work/shared/notes/sintering-pair-model.md`), not the model of Thomsen et al. used by Ivannikov et al. "
+            "(the model note described in `docs/sintering_pair.md`), not the model of Thomsen et al. used by Ivannikov et al. "
             "(whose flux and material tables are not public). Most lines below compare against the note's tables, "
             "which come from the note's own Python prototype of the same reconstruction: they pass *by construction* "
             "when the implementation is right and say nothing about the physics. The lines marked 'no' test "

@@ -4,7 +4,7 @@
 //
 // THIS IS A DOCUMENTED RECONSTRUCTION, NOT THE AUTHORS' MODEL. The Thomsen et al. papers, the
 // paper's flux table (Table 1) and material tables are not public. What is implemented is the
-// closed reconstruction of /work/shared/notes/sintering-pair-model.md (cited below as "note §n"),
+// closed reconstruction of the model note (docs/sintering_pair.md; cited below as "note §n"),
 // written afresh in C++ (the note's sintering_pair_proto.py was only used to compare numbers).
 // User documentation: docs/sintering_pair.md.
 //
@@ -184,11 +184,21 @@ enum class PairStatus : std::uint8_t {
   StepFailure,     ///< the integrator could not make a step (step size underflow / step cap)
 };
 const char* to_string(PairStatus s);
+/// True for the expected ends at a validity limit of the model (NeckLimit, ConeDegenerate,
+/// NeckVanished: "incomplete", exit 0), false for Ok and for the failures (NonFinite, StepFailure:
+/// "unstable", exit 3), whatever the integrator.
+constexpr bool validity_limit(PairStatus s) {
+  return s == PairStatus::NeckLimit || s == PairStatus::ConeDegenerate || s == PairStatus::NeckVanished;
+}
 /// One-sentence reason for a status (for summary.json and messages).
 std::string describe(PairStatus s, double x_over_R_max);
 
 // ------------------------------------------------------------------------------------------------
 // Temperature against time (Eq 5 with T(t); note §6)
+
+/// Temperatures are in (0, kMaxTemperature) K everywhere: the command line (--temperature), the
+/// profiles and the material files (T_transus).
+inline constexpr double kMaxTemperature = 1e4;
 
 /// Piecewise-linear T(t) through breakpoints (t_i, T_i); constant before the first and after the
 /// last one. Two equal consecutive times make a jump (a step in T); T(t) is right-continuous there.
@@ -205,7 +215,7 @@ class TemperatureProfile {
   };
   /// A constant temperature (no breakpoints).
   static TemperatureProfile constant(double T);
-  /// Breakpoints (t_i, T_i): t non-decreasing, at most two equal in a row (a jump), T > 0;
+  /// Breakpoints (t_i, T_i): t non-decreasing, at most two equal in a row (a jump), 0 < T < 1e4 K;
   /// throws std::invalid_argument (one line).
   TemperatureProfile(std::vector<double> t, std::vector<double> T);
   /// Parses a `time,T` CSV (header line `time,T` required; SI: s and K; `#` comment lines).

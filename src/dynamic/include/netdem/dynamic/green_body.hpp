@@ -29,6 +29,7 @@
 
 #include "netdem/packing/laminar.hpp"
 #include "netdem/packing/packing.hpp"
+#include "netdem/packing/random_fill.hpp"
 
 namespace netdem::dem {
 
@@ -113,6 +114,11 @@ struct GreenBodyResult {
 };
 
 using GreenBodyObserver = std::function<void(const GreenBodyProgress&)>;
+
+/// The options of the route's random cloud (step 1): random_fill_3d with them makes the same cloud
+/// as make_green_body, so a cloud that cannot be placed can be refused before anything is written.
+/// Throws std::invalid_argument for bad options (validate()).
+packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& options);
 
 /// Runs the route. Deterministic for the options (one thread). Throws std::invalid_argument for
 /// bad options (validate(), the cloud's checks), std::runtime_error when the cloud cannot be
