@@ -647,6 +647,7 @@ void DynamicSolverT<D>::step() {
     if constexpr (D == 3) box_.z_max += dt * wall_v_[2];
   }
   time_ += dt;
+  ++steps_taken_;
   if (far || walls_moved()) build_table();
   compute_forces_dispatch();  // forces use the half-step velocities for the damping terms
   if (opt_.affine_drag > 0.0) apply_affine_drag();

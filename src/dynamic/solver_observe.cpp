@@ -30,13 +30,32 @@ const char* const kCauseWall =
 const char* const kCauseLoad =
     "the load is too high for the stiffness (2p/k2, k1_ratio, k2, the strain rate) or the time step too large "
     "(steps per contact)";
+// the same causes in the terms of the plastic-indentation law (Redanz & Fleck; demsolve compact, yield)
+const char* const kCauseStepPlastic =
+    "the time step is too large for the stiffness, the damping or the masses (steps per contact, the first-touch "
+    "chord stiffness 6 sigma_y / sqrt(first_touch), the damping fractions, the density)";
+const char* const kCauseWallPlastic = "a wall is driven too hard (the strain rate or the inertial number)";
+const char* const kCauseLoadPlastic =
+    "the load is too high for the stiffness (sigma_y, first_touch, the strain rate or the inertial number) or the "
+    "time step too large (steps per contact)";
+
+// the cause in the terms of the law the run uses
+const char* cause_for(bool plastic, const std::string& cause) {
+  if (!plastic) return cause.c_str();
+  if (cause == kCauseStep) return kCauseStepPlastic;
+  if (cause == kCauseWall) return kCauseWallPlastic;
+  if (cause == kCauseLoad) return kCauseLoadPlastic;
+  return cause.c_str();
+}
 }  // namespace
 
 template <int D>
 void DynamicSolverT<D>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const {
-  const std::int64_t step = ts_.dt > 0.0 ? static_cast<std::int64_t>(std::llround(time_ / ts_.dt)) : 0;
+  // fixed dt: the step since t = 0 (restarts included); the plastic law's dt varies, so its steps are counted
+  const std::int64_t step =
+      plastic() ? steps_taken_ : ts_.dt > 0.0 ? static_cast<std::int64_t>(std::llround(time_ / ts_.dt)) : 0;
   throw InstabilityError(fmt::format("unstable at step {} (t = {:.6g} s): {}; likely cause: {}", step, time_, what,
-                                     cause),
+                                     cause_for(plastic(), cause)),
                          quantity, step, time_);
 }
 

@@ -361,3 +361,32 @@ TEST(DynamicPlastic, ElasticBranchSwitchHasNoForceJump) {
   EXPECT_GT(d_el, 2.0 * d_rev);
   EXPECT_GT(d_rev, 0.0);
 }
+
+// An instability of a plastic-law run is reported in the terms of that law (no Luding parameter
+// such as k2 is blamed) and at the step the solver took, not at time / dt (its dt varies).
+TEST(DynamicPlastic, InstabilityNamesThePlasticLawAndTheStepTaken) {
+  Particles P;
+  const double v0 = 10.0;  // u_max of the reversible law (Eq 2) ~ 7 R: past half a radius
+  P.add_disk(0.0, 0.0, 1.0, 1.0, 0.5 * v0, 0.0);
+  P.add_disk(2.001, 0.0, 1.0, 1.0, -0.5 * v0, 0.0);
+  Box box;
+  box.enabled = false;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic = frictionless(true);
+  o.dt = 1e-3;
+  o.min_steps_per_contact = 1.0;
+  o.check_every = 1;
+  DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  std::int64_t taken = 0;
+  try {
+    for (; taken < 100000; ++taken) s.step();
+    FAIL() << "no instability";
+  } catch (const netdem::dem::InstabilityError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(e.quantity(), "overlap") << m;
+    EXPECT_NE(m.find("sigma_y"), std::string::npos) << m;
+    EXPECT_EQ(m.find("k2"), std::string::npos) << m;
+    EXPECT_EQ(e.step(), taken + 1) << m;  // the step that failed its check is the (taken + 1)-th
+  }
+}

@@ -243,7 +243,7 @@ class InstabilityError : public std::runtime_error {
   InstabilityError(const std::string& message, std::string quantity, std::int64_t step, double time)
       : std::runtime_error(message), quantity_(std::move(quantity)), step_(step), time_(time) {}
   const std::string& quantity() const { return quantity_; }
-  std::int64_t step() const { return step_; }  ///< time / dt rounded
+  std::int64_t step() const { return step_; }  ///< time / dt rounded (the plastic law: steps taken)
   double time() const { return time_; }
 
  private:
@@ -455,6 +455,7 @@ class DynamicSolverT {
   TimeStepInfo ts_;
   contact::LudingThermalState thermal_;
   double time_ = 0.0, skin_ = 0.0;
+  std::int64_t steps_taken_ = 0;  ///< steps since construction or restore (the plastic law's dt varies)
   std::size_t rebuilds_ = 0;
   bool friction_ = true;             ///< any friction (particles or walls): F.friction instantiation
   std::vector<double> radius_ref_;   ///< radii at T_radius_ref (Eq 9)
