@@ -45,6 +45,40 @@
 using namespace netdem::app::dem;
 using netdem::dem::quote_input;
 
+/// demsolve compress's options (section 4.4.1).
+CLI::App* add_compress(CLI::App& app, CompressArgs& ca, std::string& out_compress) {
+  auto* comp = app.add_subcommand("compress", "bi-axial compression test of a sample (section 4.4.1): sigma_xx = p held, top wall at constant strain rate");
+  comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")->required();
+  comp->add_option("--strain-rate", ca.strain_rate, "vertical strain rate [1/s] (eps_zz = 1 - z/z0)")->capture_default_str();
+  comp->add_option("--max-strain", ca.max_strain, "final vertical strain")->capture_default_str();
+  comp->add_option("--ramp-time", ca.ramp_time, "the top wall's speed rises smoothly over this time [s]")->capture_default_str();
+  comp->add_option("--pressure", ca.pressure, "sigma_xx held by the right wall [N/m]; 0: the state's");
+  comp->add_option("--param", ca.param_overrides, "contact parameter NAME=VALUE");
+  comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
+  comp->add_option("--max-steps", ca.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  comp->add_flag("--allow-long", ca.allow_long, "run even above 5e10 particle-steps (about 1-3 h of one core)");
+  comp->add_flag("--overwrite", ca.overwrite, "clear an output folder that holds another run's files first");
+  comp->add_option("--out", out_compress, "output folder")->default_val("results/compress");
+  return comp;
+}
+
+/// demsolve vibrate's options (section 4.4).
+CLI::App* add_vibrate(CLI::App& app, VibrateArgs& va, std::string& out_vibrate) {
+  auto* vib = app.add_subcommand("vibrate", "vibration test (section 4.4): walls removed, vertical vibration on a flat bottom in gravity");
+  vib->add_option("--state", va.state_file, "state file of the sample")->required();
+  vib->add_option("--frequency", va.frequency, "[Hz]")->capture_default_str();
+  vib->add_option("--amplitude", va.amplitude, "[m]")->capture_default_str();
+  vib->add_option("--time", va.time, "vibration time [s]")->capture_default_str();
+  vib->add_option("--gravity", va.gravity, "[m/s^2]")->capture_default_str();
+  vib->add_option("--param", va.param_overrides, "contact parameter NAME=VALUE");
+  vib->add_flag("--quiet", va.quiet, "no progress on stderr");
+  vib->add_option("--max-steps", va.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  vib->add_flag("--allow-long", va.allow_long, "run even above 5e10 particle-steps (about 1-3 h of one core)");
+  vib->add_flag("--overwrite", va.overwrite, "clear an output folder that holds another run's files first");
+  vib->add_option("--out", out_vibrate, "output folder")->default_val("results/vibrate");
+  return vib;
+}
+
 int main(int argc, char** argv) {
   std::string command;
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
@@ -65,6 +99,7 @@ int main(int argc, char** argv) {
   auto limits = [&](CLI::App* c) {
     c->add_option("--max-steps", max_steps, "refuse a run of more time steps than this (the estimate is in the message)")
         ->capture_default_str();
+    c->add_flag("--allow-long", run.allow_long, "run even above 5e10 particle-steps (about 1-3 h of one core)");
     c->add_flag("--overwrite", run.overwrite, "clear an output folder that holds another run's files first");
   };
   auto common = [&](CLI::App* c) {
@@ -119,30 +154,10 @@ int main(int argc, char** argv) {
   sint->add_option("--out", out_sinter, "output folder")->default_val("results/sinter");
   CompressArgs ca;
   std::string out_compress;
-  auto* comp = app.add_subcommand("compress", "bi-axial compression test of a sample (section 4.4.1): sigma_xx = p held, top wall at constant strain rate");
-  comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")->required();
-  comp->add_option("--strain-rate", ca.strain_rate, "vertical strain rate [1/s] (eps_zz = 1 - z/z0)")->capture_default_str();
-  comp->add_option("--max-strain", ca.max_strain, "final vertical strain")->capture_default_str();
-  comp->add_option("--ramp-time", ca.ramp_time, "the top wall's speed rises smoothly over this time [s]")->capture_default_str();
-  comp->add_option("--pressure", ca.pressure, "sigma_xx held by the right wall [N/m]; 0: the state's");
-  comp->add_option("--param", ca.param_overrides, "contact parameter NAME=VALUE");
-  comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
-  comp->add_option("--max-steps", ca.max_steps, "refuse a run of more time steps than this")->capture_default_str();
-  comp->add_flag("--overwrite", ca.overwrite, "clear an output folder that holds another run's files first");
-  comp->add_option("--out", out_compress, "output folder")->default_val("results/compress");
+  auto* comp = add_compress(app, ca, out_compress);
   VibrateArgs va;
   std::string out_vibrate;
-  auto* vib = app.add_subcommand("vibrate", "vibration test (section 4.4): walls removed, vertical vibration on a flat bottom in gravity");
-  vib->add_option("--state", va.state_file, "state file of the sample")->required();
-  vib->add_option("--frequency", va.frequency, "[Hz]")->capture_default_str();
-  vib->add_option("--amplitude", va.amplitude, "[m]")->capture_default_str();
-  vib->add_option("--time", va.time, "vibration time [s]")->capture_default_str();
-  vib->add_option("--gravity", va.gravity, "[m/s^2]")->capture_default_str();
-  vib->add_option("--param", va.param_overrides, "contact parameter NAME=VALUE");
-  vib->add_flag("--quiet", va.quiet, "no progress on stderr");
-  vib->add_option("--max-steps", va.max_steps, "refuse a run of more time steps than this")->capture_default_str();
-  vib->add_flag("--overwrite", va.overwrite, "clear an output folder that holds another run's files first");
-  vib->add_option("--out", out_vibrate, "output folder")->default_val("results/vibrate");
+  auto* vib = add_vibrate(app, va, out_vibrate);
   DemCompactArgs dc;
   std::string out_dcompact;
   auto* dcomp = app.add_subcommand("compact", "explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) on "

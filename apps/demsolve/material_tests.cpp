@@ -72,7 +72,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   opt.model = ContactModel::Full;
   DynamicSolverT<D> s(st, opt);
   const double z0 = D == 2 ? s.box().y_max - s.box().y_min : s.box().z_max - s.box().z_min, t_start = s.time();
-  check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps);
+  check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps, a.allow_long);
   {  // the top wall's travel per contact duration (Eq 6, mean pair) below 0.1 r_min
     double rmin = s.particles().radius[0];
     for (double r : s.particles().radius) rmin = std::min(rmin, r);
@@ -196,7 +196,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   opt.model = ContactModel::Full;
   DynamicSolver s(st, opt);
   const double w = 2.0 * std::numbers::pi * a.frequency, t_start = s.time();
-  check_run_limits(s, a.time / s.dt(), a.max_steps);
+  check_run_limits(s, a.time / s.dt(), a.max_steps, a.allow_long);
   {  // the floor's period resolved (>= 20 steps) and its peak speed A w below 0.1 r_min per step
     double rmin = s.particles().radius[0];
     for (double r : s.particles().radius) rmin = std::min(rmin, r);

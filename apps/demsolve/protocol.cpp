@@ -162,7 +162,7 @@ void check_temperature(double T, const LudingParams& p, const std::string& what)
 }
 
 template <int D>
-void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps) {
+void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps, bool allow_long) {
   const double dt = s.dt();
   if (!(std::isfinite(dt) && dt > 0.0))
     throw UsageError(fmt::format("the time step is {:g} s: check --steps-per-contact, k2 and rho_p", dt));
@@ -170,6 +170,12 @@ void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps
   if (!(steps <= max_steps))
     throw UsageError(fmt::format("the run needs about {:.3g} time steps of {:.3g} s, more than --max-steps = {:.3g}",
                                  steps, dt, max_steps));
+  const double work = steps * static_cast<double>(s.particles().size());
+  if (!allow_long && !(work <= kMaxParticleSteps))
+    throw UsageError(fmt::format("the run needs about {:.3g} particle-steps ({} particles x {:.3g} time steps of {:.3g} s), "
+                                 "more than {:.3g}, about {:.1f} to {:.1f} h of one core: pass --allow-long to run it",
+                                 work, s.particles().size(), steps, dt, kMaxParticleSteps, work / 2e7 / 3600.0,
+                                 work / 1e7 / 3600.0));
   const Particles& P = s.particles();
   const LudingParams& lp = s.params();
   double m_lo = std::numeric_limits<double>::infinity();
@@ -434,7 +440,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
       summary["length_unit_m"] = length_unit;
     }
   }
-  check_run_limits(*s, (phase_end(phases, phases.size() - 1) - s->time()) / s->dt(), args.max_steps);
+  check_run_limits(*s, (phase_end(phases, phases.size() - 1) - s->time()) / s->dt(), args.max_steps, args.allow_long);
   RunDirOptions rdo;
   rdo.overwrite = args.overwrite;
   rdo.inputs = {args.state_file, sample.packing_file};
@@ -522,8 +528,8 @@ template void write_snapshot<2>(const DynamicSolverT<2>&, const fs::path&, const
                                  const std::vector<Field>&);
 template void write_snapshot<3>(const DynamicSolverT<3>&, const fs::path&, const std::string&, std::vector<ContactInfo>&,
                                  const std::vector<Field>&);
-template void check_run_limits<2>(const DynamicSolverT<2>&, double, double);
-template void check_run_limits<3>(const DynamicSolverT<3>&, double, double);
+template void check_run_limits<2>(const DynamicSolverT<2>&, double, double, bool);
+template void check_run_limits<3>(const DynamicSolverT<3>&, double, double, bool);
 template int report_unstable<2>(const InstabilityError&, const DynamicSolverT<2>&, const fs::path&, nlohmann::json);
 template int report_unstable<3>(const InstabilityError&, const DynamicSolverT<3>&, const fs::path&, nlohmann::json);
 

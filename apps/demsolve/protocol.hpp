@@ -30,6 +30,7 @@ struct RunArgs {
   bool sample_given = false;   ///< --n, --seed or --arrangement on the command line (refused with --state)
   bool packing_given = false;  ///< --packing on the command line (refused if empty)
   double max_steps = 1e9;      ///< --max-steps
+  bool allow_long = false;     ///< --allow-long: run past kMaxParticleSteps
   bool overwrite = false;      ///< --overwrite
   int dim = 2;                 ///< --dim: 2 disks, 3 spheres (a state file gives its own)
   bool dim_given = false;
@@ -43,12 +44,17 @@ std::string one_line(const std::string& m);
 /// and every other error: 1. (A detected instability is handled inside the command: exit 3.)
 int guarded(const std::function<int()>& body);
 
+/// Work above which a run is refused unless --allow-long: particles x time steps (about 1-3 h of
+/// one core at the measured 1e7-2e7 particle-steps per second; docs/dynamic.md "Limits").
+inline constexpr double kMaxParticleSteps = 5e10;
+
 /// Door checks shared by every command, on the solver before it runs (docs/dynamic.md "Limits"):
 /// the step count `steps` (a double, so that an absurd count is not an overflow) against
-/// max_steps, the normal and wall damping and the wall mass against the time step. Throws
-/// UsageError with the estimate.
+/// max_steps, the work (particles x steps) against kMaxParticleSteps unless allow_long, the
+/// normal and wall damping and the wall mass against the time step. Throws UsageError with the
+/// estimate.
 template <int D>
-void check_run_limits(const netdem::dem::DynamicSolverT<D>& s, double steps, double max_steps);
+void check_run_limits(const netdem::dem::DynamicSolverT<D>& s, double steps, double max_steps, bool allow_long);
 /// The memory estimate of a run of n particles against MemAvailable (/proc/meminfo); throws
 /// UsageError with the estimate. Call it before building the solver.
 void check_memory(std::size_t n);
@@ -91,6 +97,7 @@ struct CompressArgs {
   bool quiet = false;
   std::vector<std::string> param_overrides;
   double max_steps = 1e9;
+  bool allow_long = false;
   bool overwrite = false;
 };
 int run_compress(const std::string& command, const CompressArgs& a, const std::filesystem::path& out);
@@ -105,6 +112,7 @@ struct VibrateArgs {
   bool quiet = false;
   std::vector<std::string> param_overrides;
   double max_steps = 1e9;
+  bool allow_long = false;
   bool overwrite = false;
 };
 int run_vibrate(const std::string& command, const VibrateArgs& a, const std::filesystem::path& out);

@@ -43,6 +43,7 @@
 #include "netdem/quasistatic/staggered.hpp"
 #include "output.hpp"
 #include "sinter_material.hpp"
+#include "sinter_plot.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
 #include "status.hpp"
@@ -150,66 +151,7 @@ json moments(const std::vector<double>& v) {
           {"excess_kurtosis", spread ? json(m4 / (m2 * m2) - 3.0) : json(nullptr)}};
 }
 
-// ---- the plot: two linear panels (shrinkage per axis against t; mean neck against t), SVG as
-// sinter-pair's pair.svg (no dependencies)
-struct Series {
-  std::vector<double> y;
-  const char* colour;
-  const char* label;
-};
-
-/// Round tick step for a range: 1, 2 or 5 x 10^k, about 5 ticks.
-double tick_step(double range) {
-  if (!(range > 0.0) || !std::isfinite(range)) return 1.0;
-  const double raw = range / 5.0, p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0})
-    if (m * p >= raw) return m * p;
-  return 10.0 * p;
-}
-
-std::string svg_panel(double ox, double W, double H, const std::vector<double>& t, const std::vector<Series>& ser, const char* ylabel) {
-  const double L = ox + 70, R = ox + W - 15, T = 40, B = H - 50;
-  double y0 = 0.0, y1 = 0.0;
-  for (const auto& s : ser)
-    for (double v : s.y)
-      if (std::isfinite(v)) y0 = std::min(y0, v), y1 = std::max(y1, v);
-  if (y1 <= y0) y1 = y0 + 1.0;
-  const double t0 = t.empty() ? 0.0 : t.front(), t1 = t.empty() || t.back() <= t0 ? t0 + 1.0 : t.back();
-  auto X = [&](double v) { return L + (v - t0) / (t1 - t0) * (R - L); };
-  auto Y = [&](double v) { return B - (v - y0) / (y1 - y0) * (B - T); };
-  std::string s = fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", L, T, R - L, B - T);
-  const double ts = tick_step(t1 - t0), ys = tick_step(y1 - y0);
-  for (double v = std::ceil(t0 / ts) * ts; v <= t1 + 1e-9 * ts; v += ts)
-    s += fmt::format("<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0:.1f}\" y=\"{3}\" "
-                     "text-anchor=\"middle\">{4:g}</text>\n",
-                     X(v), T, B, B + 16, v);
-  for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-9 * ys; v += ys)
-    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2:.1f}\" y2=\"{2:.1f}\" stroke=\"#ddd\"/><text x=\"{3}\" y=\"{4:.1f}\" "
-                     "text-anchor=\"end\">{5:.3g}</text>\n",
-                     L, R, Y(v), L - 6, Y(v) + 4, std::fabs(v) < 1e-12 * ys ? 0.0 : v);
-  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">t [s]</text>\n", (L + R) / 2, H - 12);
-  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 {} {})\">{}</text>\n", ox + 16, (T + B) / 2,
-                   ox + 16, (T + B) / 2, ylabel);
-  int k = 0;
-  for (const auto& se : ser) {
-    std::string p;
-    for (std::size_t i = 0; i < t.size() && i < se.y.size(); ++i)
-      if (std::isfinite(se.y[i])) p += fmt::format("{:.1f},{:.1f} ", X(t[i]), Y(se.y[i]));
-    s += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"2\" points=\"{}\"/>\n", se.colour, p);
-    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"/><text x=\"{4}\" y=\"{5}\">{6}</text>\n",
-                     L + 10, L + 40, T + 16 + 18 * k, se.colour, L + 46, T + 20 + 18 * k, se.label);
-    ++k;
-  }
-  return s;
-}
-
 std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
-  const double W = 900, H = 420;
-  std::string s = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"12\">\n"
-      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\">{}</text>\n",
-      W, H, W / 2, title);
-  if (rows.size() < 2) return s + "<text x=\"100\" y=\"200\">fewer than two rows to plot</text>\n</svg>\n";
   std::vector<double> t, sx, sy, sz, neck;
   for (const auto& r : rows) {
     t.push_back(r.t);
@@ -218,10 +160,7 @@ std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
     sz.push_back(r.sz);
     neck.push_back(r.neck_mean);
   }
-  s += svg_panel(0, W / 2, H, t, {{sx, "#1f77b4", "shrink_x"}, {sy, "#2ca02c", "shrink_y"}, {sz, "#d62728", "shrink_z"}},
-                 "shrinkage -F_ii (homogeneous strain)");
-  s += svg_panel(W / 2, W / 2, H, t, {{neck, "#9467bd", "mean neck x / R_min"}}, "neck x / R_min");
-  return s + "</svg>\n";
+  return netdem::app::netsolve::history_svg(t, sx, sy, sz, neck, title);
 }
 
 // ---- inputs
@@ -237,6 +176,16 @@ std::string read_text(const fs::path& p, const char* what) {
   std::ostringstream o;
   o << in.rdbuf();
   return o.str();
+}
+
+// The work estimate at the door: a run of `span` seconds takes at least span / dt_max steps; more
+// than --max-steps would end "incomplete" after hours, so it is refused now (issue 27).
+void check_step_budget(double span, double dt_max, long max_steps) {
+  const double min_steps = span / dt_max;
+  if (!(min_steps <= static_cast<double>(max_steps)))
+    throw UsageError(fmt::format("the run of {:.6g} s needs at least {:.3g} steps of at most {:.6g} s (--dt-max), more than "
+                                 "--max-steps {}: shorten --time or raise --max-steps",
+                                 span, min_steps, dt_max, max_steps));
 }
 
 /// Eq 48 of the green-body packing along x, y, z (the laminar.csv of netsolve pack --route green-body).
@@ -346,6 +295,28 @@ const char* const kFixedByState[] = {"--packing", "--generate", "--green-density
                                      "--temperature", "--profile", "--strategy", "--dt-max", "--dt-initial", "--eps-lim",
                                      "--alpha", "--new-contacts", "--x0", "--x-max", "--E", "--nu", "--planes"};
 
+// The door checks of a new (not restarted) run's options.
+void check_new_run(const Args& a) {
+  if (!a.profile.empty() && fs::is_directory(a.profile))
+    throw UsageError(fmt::format("--profile '{}' is a folder, not a CSV file", netdem::packing::quote_input(a.profile)));
+  if (!(std::isfinite(a.temperature) && a.temperature > 0.0 && a.temperature < 1e4))
+    throw UsageError(fmt::format("--temperature must be in (0, 1e4) K, got {}", a.temperature));
+  if (a.strategy != 1 && a.strategy != 2) throw UsageError(fmt::format("--strategy must be 1 or 2, got {}", a.strategy));
+  if (!(std::isfinite(a.dt_max) && a.dt_max > 0.0)) throw UsageError(fmt::format("--dt-max must be a positive time in seconds, got {}", a.dt_max));
+  if (!(std::isfinite(a.dt_initial) && a.dt_initial > 0.0))
+    throw UsageError(fmt::format("--dt-initial must be a positive time in seconds, got {}", a.dt_initial));
+  if (!(std::isfinite(a.eps_lim) && a.eps_lim > 0.0 && a.eps_lim < 1.0))
+    throw UsageError(fmt::format("--eps-lim must be in (0, 1), got {}", a.eps_lim));
+  if (!(std::isfinite(a.alpha) && a.alpha > 1.0)) throw UsageError(fmt::format("--alpha must be a finite number above 1, got {}", a.alpha));
+  if (!(std::isfinite(a.x0) && a.x0 > 0.0 && a.x0 < 1.0)) throw UsageError(fmt::format("--x0 must be in (0, 1) (x0 / R_min), got {}", a.x0));
+  if (!(std::isfinite(a.x_max) && a.x_max >= 0.0 && a.x_max < 1.0))
+    throw UsageError(fmt::format("--x-max must be in [0, 1) (x / R_min; 0: the dihedral limit), got {}", a.x_max));
+  if (a.x_max > 0.0 && a.x_max <= a.x0) throw UsageError(fmt::format("--x-max {} must be above --x0 {}", a.x_max, a.x0));
+  if (!(std::isfinite(a.E) && a.E >= 0.0)) throw UsageError(fmt::format("--E must be a Young's modulus in Pa (> 0), got {}", a.E));
+  if (!(std::isfinite(a.nu) && a.nu < 0.5) || (a.nu < 0.0 && a.nu != -1.0))
+    throw UsageError(fmt::format("--nu must be a Poisson's ratio in [0, 0.5), got {}", a.nu));
+}
+
 int run(const Args& a, const CLI::App& app, const std::string& command) {
   namespace na = netdem::app;
   const auto w0 = std::chrono::steady_clock::now();
@@ -384,6 +355,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     if (!(a.t_end > sim->time()))
       throw UsageError(fmt::format("--time {} s is not after the time of the restart state {} ({:.17g} s)", a.t_end,
                                    netdem::packing::quote_input(a.restart), sim->time()));
+    check_step_budget(a.t_end - sim->time(), sim->options().dt_max, a.max_steps);
     mat = sim->material();
     mat_source = fmt::format("restart state {}", a.restart);
     packing_source = fmt::format("restart state {}", a.restart);
@@ -405,24 +377,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
       }
     }
   } else {
-    if (!a.profile.empty() && fs::is_directory(a.profile))
-      throw UsageError(fmt::format("--profile '{}' is a folder, not a CSV file", netdem::packing::quote_input(a.profile)));
-    if (!(std::isfinite(a.temperature) && a.temperature > 0.0 && a.temperature < 1e4))
-      throw UsageError(fmt::format("--temperature must be in (0, 1e4) K, got {}", a.temperature));
-    if (a.strategy != 1 && a.strategy != 2) throw UsageError(fmt::format("--strategy must be 1 or 2, got {}", a.strategy));
-    if (!(std::isfinite(a.dt_max) && a.dt_max > 0.0)) throw UsageError(fmt::format("--dt-max must be a positive time in seconds, got {}", a.dt_max));
-    if (!(std::isfinite(a.dt_initial) && a.dt_initial > 0.0))
-      throw UsageError(fmt::format("--dt-initial must be a positive time in seconds, got {}", a.dt_initial));
-    if (!(std::isfinite(a.eps_lim) && a.eps_lim > 0.0 && a.eps_lim < 1.0))
-      throw UsageError(fmt::format("--eps-lim must be in (0, 1), got {}", a.eps_lim));
-    if (!(std::isfinite(a.alpha) && a.alpha > 1.0)) throw UsageError(fmt::format("--alpha must be a finite number above 1, got {}", a.alpha));
-    if (!(std::isfinite(a.x0) && a.x0 > 0.0 && a.x0 < 1.0)) throw UsageError(fmt::format("--x0 must be in (0, 1) (x0 / R_min), got {}", a.x0));
-    if (!(std::isfinite(a.x_max) && a.x_max >= 0.0 && a.x_max < 1.0))
-      throw UsageError(fmt::format("--x-max must be in [0, 1) (x / R_min; 0: the dihedral limit), got {}", a.x_max));
-    if (a.x_max > 0.0 && a.x_max <= a.x0) throw UsageError(fmt::format("--x-max {} must be above --x0 {}", a.x_max, a.x0));
-    if (!(std::isfinite(a.E) && a.E >= 0.0)) throw UsageError(fmt::format("--E must be a Young's modulus in Pa (> 0), got {}", a.E));
-    if (!(std::isfinite(a.nu) && a.nu < 0.5) || (a.nu < 0.0 && a.nu != -1.0))
-      throw UsageError(fmt::format("--nu must be a Poisson's ratio in [0, 0.5), got {}", a.nu));
+    check_new_run(a);
     mat = load_material(a, mat_source);
     const double E = a.E > 0.0 ? a.E : mat->youngs_modulus;
     const double nu = a.nu >= 0.0 ? a.nu : mat->poisson_ratio;
@@ -431,6 +386,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     if (nu < 0.0)
       throw UsageError(fmt::format("material {} has no Poisson's ratio: add 'nu = ...' to it, --set nu=NU or --nu NU", mat->name));
     if (!(nu < 0.5)) throw UsageError(fmt::format("material {}: Poisson's ratio nu = {} is outside [0, 0.5)", mat->name, nu));
+    check_step_budget(a.t_end, a.dt_max, a.max_steps);
     if (generate) {
       gb.seed = a.seed;
       gb.target_density = a.green_density;

@@ -23,6 +23,7 @@ has_columns() {  # csv columns...
 check_bad bad_dim "--dim" prepare --dim 4
 check_bad line_is_2d "2D three-disk control" prepare --dim 3 --arrangement line --n 3
 check_bad pressure_3d_too_high "4 p a0/k2" prepare --dim 3 --pressure 1e7
+check_bad long_run_refused "pass --allow-long" prepare --dim 3 --n 2000 --time 100
 good() {  # out-dir time
   "$ds" prepare --dim 3 --n 40 --time "$2" --seed 5 --quiet --out "$1" >/dev/null 2>"$tmp/stderr"
 }

@@ -40,6 +40,8 @@ check_bad_rc() {  # like check_bad, and the exit status must be 2
 check_bad_rc sn_missing_packing "no_such.csv" sinter --packing "$tmp/no_such.csv" --time 100 --quiet
 check_bad_rc sn_negative_time "time" sinter --packing "$lat" --time -5 --quiet
 check_bad_rc sn_strategy "strategy" sinter --packing "$lat" --time 100 --strategy 3 --quiet
+check_bad_rc sn_time_beyond_max_steps "shorten --time or raise --max-steps" sinter --packing "$lat" --time 1e12 --quiet
+check_bad_rc sn_restart_beyond_max_steps "more than --max-steps 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
 check_bad_rc sn_nan_temperature "temperature" sinter --packing "$lat" --time 100 --temperature nan --quiet
 check_bad_rc sn_material "material" sinter --packing "$lat" --material unobtainium --quiet
 check_bad_rc sn_new_contacts "new-contacts" sinter --packing "$lat" --new-contacts maybe --quiet
