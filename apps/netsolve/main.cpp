@@ -421,7 +421,8 @@ int main(int argc, char** argv) {
       pack->add_option("--lamina", ga.lamina, "green-body: lamina width q_s of Eq 48 [m] (laminar.csv)")->capture_default_str(),
       pack->add_option("--bulk-margin", ga.bulk_margin, "green-body: the bulk density's region keeps this many mean diameters from every wall")
           ->capture_default_str(),
-      pack->add_flag("--quiet", ga.quiet, "green-body: no progress on stderr")};
+      pack->add_flag("--quiet", ga.quiet, "green-body: no progress on stderr"),
+      pack->add_flag("--allow-long", ga.allow_long, "green-body: run even above 5e10 particle-steps (hours of one core)")};
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");

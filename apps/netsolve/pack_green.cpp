@@ -60,6 +60,12 @@ void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
   if (!(extent / a.lamina <= 5e5))
     throw UsageError(fmt::format("--lamina {:g} m cuts the green body's expected extent of about {:.3g} m into more than "
                                  "5e5 laminae (laminar.csv allows 1e6): give a wider --lamina", a.lamina, extent));
+  const double steps = dem::green_body_min_steps(o), work = steps * static_cast<double>(o.n);
+  if (!a.allow_long && !(work <= kMaxGreenParticleSteps))
+    throw UsageError(fmt::format("--n {}, --steps-per-contact {:g} and --wall-speed {:g}: the route needs at least {:.3g} "
+                                 "particle-steps ({:.3g} time steps), more than {:.3g} (hours of one core): pass --allow-long "
+                                 "to run it",
+                                 o.n, o.steps_per_contact, o.wall_speed, work, steps, kMaxGreenParticleSteps));
   try {
     (void)packing::random_fill_3d(dem::green_body_cloud_options(o));
   } catch (const std::exception& e) {

@@ -18,7 +18,13 @@ struct GreenArgs {
   double bulk_margin = 2.0;         ///< --bulk-margin: the bulk region's distance from every wall [mean diameters]
   double bulk_spacing = 0.1;        ///< lattice spacing of the bulk density [mean radii]
   bool quiet = false;
+  bool allow_long = false;          ///< --allow-long: run even above kMaxGreenParticleSteps
 };
+
+/// Work above which the route is refused unless --allow-long: spheres x the lower bound of its
+/// time steps (dem::green_body_min_steps); the default 805 spheres need about 6e7 (measured 7.5e7
+/// in 16 s), 5e10 is hours of one core.
+inline constexpr double kMaxGreenParticleSteps = 5e10;
 
 /// Runs the route and writes the run folder `out` (packing.csv, laminar.csv, particles.vtp,
 /// summary.json, command.txt); returns the exit code (0 ok, 3 unreachable or unconverged).

@@ -87,6 +87,24 @@ packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& o)
   return fo;
 }
 
+double green_body_min_steps(const GreenBodyOptions& o) {
+  const packing::RandomFill3dOptions fo = green_body_cloud_options(o);
+  const double r = o.mean_radius, g = o.gravity;
+  // the mean pair's time step, as make_green_body sets the law (material()) and the MeanPair rule
+  const double m = o.solid_density * 4.0 / 3.0 * kPi * r * r * r, m12 = 0.5 * m;
+  const double k = o.stiffness_number * m * g / r, le = std::log(o.restitution);
+  const double eta = -le * std::sqrt(k / m12) / std::sqrt(kPi * kPi + le * le);
+  const double dt = kPi / std::sqrt(k / m12 - eta * eta) / o.steps_per_contact;
+  const double vs = static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
+  const double L0 = fo.box.x_max, H_cloud = fo.box.z_max;
+  const double fall = std::sqrt(2.0 * std::max(0.0, H_cloud - vs / (o.settled_guess * L0 * L0)) / g);
+  // the expected settled box (density settled_guess, aspect) scaled to the target
+  const double scale = std::cbrt(o.settled_guess / o.target_density);
+  const double travel = scale < 1.0 ? (1.0 - scale) * std::max(L0, o.aspect * L0) : 0.0;
+  const double compress = travel / (o.wall_speed * std::sqrt(g * r));
+  return (fall + compress) / dt;
+}
+
 namespace {
 
 /// The phases of make_green_body, in order (the numbers are the comments' of the route).

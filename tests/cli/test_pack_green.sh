@@ -51,6 +51,9 @@ check_bad green_needs_3d "--route green-body is 3D" pack --route green-body
 check_bad green_width "--width is an option of the ballistic deposition" pack --dim 3 --route green-body --width 20
 check_bad green_lateral "--lateral is an option of the ballistic" pack --dim 3 --route green-body --lateral periodic
 check_bad ballistic_n "--n is an option of --route green-body" pack --dim 3 --n 100
+check_bad green_long_n "pass --allow-long" pack --dim 3 --route green-body --n 10000000
+check_bad green_long_spc "pass --allow-long" pack --dim 3 --route green-body --steps-per-contact 1e6
+check_bad green_long_speed "pass --allow-long" pack --dim 3 --route green-body --wall-speed 1e-9
 check_bad route_2d "--route is for --dim 3 only" pack --route ballistic
 check_bad route_bad "--route" pack --dim 3 --route sideways
 check_bad green_diameter "--diameter must be a positive" pack --dim 3 --route green-body --diameter -1

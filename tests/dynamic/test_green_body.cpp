@@ -55,6 +55,14 @@ TEST(GreenBody, ReachesTargetAtRest) {
   EXPECT_GT(r.settled_density, 0.3);
   EXPECT_LT(r.overlaps.pair_mean, 0.01);
   EXPECT_LT(r.overlaps.pair_max, 0.1);
+  {  // the work estimate at the door is a lower bound of the steps taken, and not a loose one
+    double steps = 0.0;
+    for (const auto& ph : r.phases) steps += static_cast<double>(ph.steps);
+    const double lower = netdem::dem::green_body_min_steps(small(n, target));
+    std::printf("  steps taken %.0f, lower bound %.0f\n", steps, lower);
+    EXPECT_LE(lower, steps);
+    EXPECT_GT(lower, 0.1 * steps);
+  }
   if (r.exact_aspect) {
     EXPECT_NEAR(r.packing.box.depth() / r.packing.box.width(), 0.8, 1e-9);
   }

@@ -120,6 +120,12 @@ using GreenBodyObserver = std::function<void(const GreenBodyProgress&)>;
 /// Throws std::invalid_argument for bad options (validate()).
 packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& options);
 
+/// A lower bound on the route's time steps, for a work estimate before it runs: the free fall over
+/// the cloud's empty height and the walls' travel at wall_speed from the expected settled box to
+/// the target, over the mean pair's time step (the settle and rest phases' waits to come to rest
+/// are not counted). Throws std::invalid_argument for bad options (validate()).
+double green_body_min_steps(const GreenBodyOptions& options);
+
 /// Runs the route. Deterministic for the options (one thread). Throws std::invalid_argument for
 /// bad options (validate(), the cloud's checks), std::runtime_error when the cloud cannot be
 /// placed, InstabilityError if the DEM breaks down. An unreachable target or a phase that does not
