@@ -344,6 +344,43 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
 
 }  // namespace
 
+/// The options of `pack --route green-body` (pack_green.hpp); returned so that main can refuse
+/// them with the ballistic route.
+std::vector<CLI::Option*> add_green_body_options(CLI::App* pack, netdem::app::netsolve::GreenArgs& ga) {
+  auto& gb = ga.body;
+  return {
+      pack->add_option("--n", gb.n, "green-body: number of spheres")->capture_default_str(),
+      pack->add_option("--diameter", ga.diameter, "green-body: mean diameter [m]")->capture_default_str(),
+      pack->add_option("--dispersion", gb.dispersion, "green-body: diameters uniform in mean (1 +- dispersion)")->capture_default_str(),
+      pack->add_option("--target-density", gb.target_density, "green-body: sum of sphere volumes / wall-box volume at the end")
+          ->capture_default_str(),
+      pack->add_option("--aspect", gb.aspect, "green-body: intended final height / width (x = y)")->capture_default_str(),
+      pack->add_option("--solid-density", gb.solid_density, "green-body: particle material density [kg/m^3] (Cu)")->capture_default_str(),
+      pack->add_option("--friction", gb.mu_settle, "green-body: particle friction while settling and at the final rest")
+          ->capture_default_str(),
+      pack->add_option("--compress-friction", gb.mu_compress, "green-body: particle friction during the compression")
+          ->capture_default_str(),
+      pack->add_option("--wall-friction", gb.mu_wall, "green-body: sphere-wall friction")->capture_default_str(),
+      pack->add_option("--gravity", gb.gravity, "green-body: gravity along -z [m/s^2] (at a fixed stiffness number it rescales time only)")
+          ->capture_default_str(),
+      pack->add_option("--stiffness-number", gb.stiffness_number, "green-body: kappa = k r / (m g) of the mean sphere")
+          ->capture_default_str(),
+      pack->add_option("--restitution", gb.restitution, "green-body: normal restitution of a mean pair")->capture_default_str(),
+      pack->add_option("--steps-per-contact", gb.steps_per_contact, "green-body: time step t_c / this (mean pair)")->capture_default_str(),
+      pack->add_option("--wall-speed", gb.wall_speed, "green-body: speed of the fastest compressing wall / sqrt(g r)")
+          ->capture_default_str(),
+      pack->add_option("--rest-energy", gb.rest_energy, "green-body: at rest when the kinetic energy per sphere < this x m g r")
+          ->capture_default_str(),
+      pack->add_option("--max-overlap", gb.max_mean_overlap, "green-body: refuse (unreachable, exit 3) a mean pair overlap / r above this at rest")
+          ->capture_default_str(),
+      pack->add_option("--cloud-fraction", gb.cloud_fraction, "green-body: solid fraction of the initial cloud's box")->capture_default_str(),
+      pack->add_option("--lamina", ga.lamina, "green-body: lamina width q_s of Eq 48 [m] (laminar.csv)")->capture_default_str(),
+      pack->add_option("--bulk-margin", ga.bulk_margin, "green-body: the bulk density's region keeps this many mean diameters from every wall")
+          ->capture_default_str(),
+      pack->add_flag("--quiet", ga.quiet, "green-body: no progress on stderr"),
+      pack->add_flag("--allow-long", ga.allow_long, "green-body: run even above 5e10 particle-steps (hours of one core)")};
+}
+
 int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
@@ -387,42 +424,11 @@ int main(int argc, char** argv) {
   pack->add_option("--out", out, "output folder")->default_val("results/pack");
   // --route green-body (3D): the route of Ivannikov et al. (pack_green.hpp), lengths in SI metres
   netdem::app::netsolve::GreenArgs ga;
-  auto& gb = ga.body;
   pack->add_option("--route", ga.route, "3D only: 'ballistic' deposition, or 'green-body': a random cloud, gravity, a lid, "
                                         "triaxial compression to --target-density with the 3D DEM (Ivannikov et al. 3.2; SI metres)")
       ->check(CLI::IsMember({"ballistic", "green-body"}))
       ->capture_default_str();
-  std::vector<CLI::Option*> green_opts = {
-      pack->add_option("--n", gb.n, "green-body: number of spheres")->capture_default_str(),
-      pack->add_option("--diameter", ga.diameter, "green-body: mean diameter [m]")->capture_default_str(),
-      pack->add_option("--dispersion", gb.dispersion, "green-body: diameters uniform in mean (1 +- dispersion)")->capture_default_str(),
-      pack->add_option("--target-density", gb.target_density, "green-body: sum of sphere volumes / wall-box volume at the end")
-          ->capture_default_str(),
-      pack->add_option("--aspect", gb.aspect, "green-body: intended final height / width (x = y)")->capture_default_str(),
-      pack->add_option("--solid-density", gb.solid_density, "green-body: particle material density [kg/m^3] (Cu)")->capture_default_str(),
-      pack->add_option("--friction", gb.mu_settle, "green-body: particle friction while settling and at the final rest")
-          ->capture_default_str(),
-      pack->add_option("--compress-friction", gb.mu_compress, "green-body: particle friction during the compression")
-          ->capture_default_str(),
-      pack->add_option("--wall-friction", gb.mu_wall, "green-body: sphere-wall friction")->capture_default_str(),
-      pack->add_option("--gravity", gb.gravity, "green-body: gravity along -z [m/s^2] (at a fixed stiffness number it rescales time only)")
-          ->capture_default_str(),
-      pack->add_option("--stiffness-number", gb.stiffness_number, "green-body: kappa = k r / (m g) of the mean sphere")
-          ->capture_default_str(),
-      pack->add_option("--restitution", gb.restitution, "green-body: normal restitution of a mean pair")->capture_default_str(),
-      pack->add_option("--steps-per-contact", gb.steps_per_contact, "green-body: time step t_c / this (mean pair)")->capture_default_str(),
-      pack->add_option("--wall-speed", gb.wall_speed, "green-body: speed of the fastest compressing wall / sqrt(g r)")
-          ->capture_default_str(),
-      pack->add_option("--rest-energy", gb.rest_energy, "green-body: at rest when the kinetic energy per sphere < this x m g r")
-          ->capture_default_str(),
-      pack->add_option("--max-overlap", gb.max_mean_overlap, "green-body: refuse (unreachable, exit 3) a mean pair overlap / r above this at rest")
-          ->capture_default_str(),
-      pack->add_option("--cloud-fraction", gb.cloud_fraction, "green-body: solid fraction of the initial cloud's box")->capture_default_str(),
-      pack->add_option("--lamina", ga.lamina, "green-body: lamina width q_s of Eq 48 [m] (laminar.csv)")->capture_default_str(),
-      pack->add_option("--bulk-margin", ga.bulk_margin, "green-body: the bulk density's region keeps this many mean diameters from every wall")
-          ->capture_default_str(),
-      pack->add_flag("--quiet", ga.quiet, "green-body: no progress on stderr"),
-      pack->add_flag("--allow-long", ga.allow_long, "green-body: run even above 5e10 particle-steps (hours of one core)")};
+  const std::vector<CLI::Option*> green_opts = add_green_body_options(pack, ga);
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
