@@ -97,6 +97,7 @@ double Field::real() const {
 
 double Field::real(double lo, double hi) const {
   const double v = real();
+  if (hi == std::numeric_limits<double>::max() && !(v >= lo)) fail(fmt::format("{} is below {:g}", shown(*j_), lo));
   if (!(v >= lo && v <= hi)) fail(fmt::format("{} is outside [{:g}, {:g}]", shown(*j_), lo, hi));
   return v;
 }

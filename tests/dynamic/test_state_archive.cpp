@@ -195,7 +195,7 @@ TEST(StateArchive, CorruptFieldsAreRefusedAtTheDoorOnOneLine) {
          "/pairs/i/1: pairs must be sorted");
   refuse("pair index", [](J& j) { j["pairs"]["j"][0] = 36; }, "/pairs/j/0: 36 is outside [0, 35]");
   refuse("history size", [](J& j) { j["pairs"]["history"].erase(0); }, "/pairs/history: expected");
-  refuse("u_max", [](J& j) { j["pairs"]["history"][1]["u_max"] = -1e-3; }, "/pairs/history/1/u_max: -0.001 is outside");
+  refuse("u_max", [](J& j) { j["pairs"]["history"][1]["u_max"] = -1e-3; }, "/pairs/history/1/u_max: -0.001 is below 0");
   refuse("f_t", [](J& j) { j["pairs"]["history"][0]["f_t"] = "inf"; }, "/pairs/history/0/f_t: must be a finite number");
   refuse("f_t type", [](J& j) { j["pairs"]["history"][0]["f_t"] = J::array({1.0, 2.0, 3.0}); }, "/pairs/history/0/f_t: expected a number, found array");
   refuse("sliding", [](J& j) { j["pairs"]["history"][0]["sliding"] = 2; }, "/pairs/history/0/sliding: expected true or false");

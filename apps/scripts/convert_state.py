@@ -1,0 +1,187 @@
+#!/usr/bin/python3
+"""Converts a state file of the old text formats (before issue 26) to the state archive.
+
+Usage: convert_state.py OLD NEW        (NEW "-" writes to stdout)
+
+Reads the demsolve state v2 (2D and 3D; "# demsolve state v2" on the first line) and writes the
+JSON archive of docs/dynamic.md "State files" ("format": "netdem-state", "kind": "dem"). Every
+number is read with float() and written with repr(), so every double keeps its bits; an
+infinity is written as the string "inf". The converter checks the structure only: the ranges are
+checked by the reader of the new file (demsolve --state), which names the field of a bad value.
+Debian's /usr/bin/python3, standard library only.
+"""
+import json
+import math
+import sys
+
+LUDING_NAMES = ["k2", "k1_ratio", "kc_ratio", "alpha", "gamma_n", "gamma_t", "mu", "mu_wall", "T_melt", "T_var",
+                "da_T", "delta_fluid_rel", "t0", "t0_sinter", "a0", "w0", "h", "rho_p", "m_wall", "gamma_wall",
+                "T_radius_ref"]
+LUDING_SWITCHES = ["stiffness_growth", "sliding_breaks_cohesion", "cooling_stiffness_update", "wall_sintering"]
+COLUMNS = {2: ["x", "y", "vx", "vy", "omega", "theta", "radius", "radius_ref", "mass", "inertia", "fx", "fy",
+               "torque"],
+           3: ["x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "radius", "radius_ref", "mass", "inertia", "fx",
+               "fy", "fz", "tx", "ty", "tz"]}
+
+
+class ConvertError(Exception):
+    pass
+
+
+def real(token, what):
+    """A double as the old reader read it (strtod); inf as "inf", NaN kept as the string "nan"
+    (the new reader refuses it by name)."""
+    try:
+        v = float(token)
+    except ValueError:
+        raise ConvertError(f"cannot read {what} {token[:40]!r}")
+    if math.isnan(v):
+        return "nan"
+    if math.isinf(v):
+        return "inf" if v > 0 else "-inf"
+    return v
+
+
+class Lines:
+    def __init__(self, text):
+        self.lines = [l.rstrip("\r") for l in text.split("\n")]
+        self.k = 0
+
+    def next(self):
+        while self.k < len(self.lines):
+            s = self.lines[self.k]
+            self.k += 1
+            if s and not s.startswith("#"):
+                return s
+        raise ConvertError("unexpected end of file (truncated?)")
+
+    def keyed(self, key):
+        words = self.next().split()
+        if not words or words[0] != key:
+            raise ConvertError(f"line {self.k}: expected {key!r}")
+        return words[1:]
+
+    def peek_key(self):
+        k = self.k
+        s = self.next()
+        self.k = k
+        return s.split()[0] if s.split() else ""
+
+
+def history(words, dim, what):
+    n = 7 if dim == 2 else 9
+    if len(words) < n:
+        raise ConvertError(f"{what}: {len(words)} values, expected {n}")
+    h = {"delta_max": real(words[0], "delta_max"), "delta0": real(words[1], "delta0"),
+         "k2_line": real(words[2], "k2_line"), "k1_seen": real(words[3], "k1_seen")}
+    if dim == 2:
+        h["xi"] = real(words[4], "xi")
+        rest = words[5:7]
+    else:
+        h["xi"] = [real(w, "xi") for w in words[4:7]]
+        rest = words[7:9]
+    h["fluid"] = int(rest[0]) != 0
+    h["sliding"] = int(rest[1]) != 0
+    return h
+
+
+def convert_dem(text):
+    r = Lines(text)
+    r.k = 1  # the first line
+    dim = 2
+    if r.peek_key() == "dim":
+        dim = int(r.keyed("dim")[0])
+        if dim != 3:
+            raise ConvertError("dim must be 3")
+    j = {"format": "netdem-state", "kind": "dem", "version": 1, "dim": dim,
+         "time": real(r.keyed("time")[0], "time"), "dt": real(r.keyed("dt")[0], "dt")}
+    b = r.keyed("box")
+    if len(b) != 1 + 2 * dim:
+        raise ConvertError("box: wrong number of values")
+    j["box"] = {"enabled": int(b[0]) != 0, "contact_walls": True,
+                "min": [real(w, "box") for w in b[1:1 + dim]], "max": [real(w, "box") for w in b[1 + dim:]]}
+    walls = []
+    for name in (["wall_right", "wall_top"] if dim == 2 else ["wall_right", "wall_back", "wall_top"]):
+        w = r.keyed(name)
+        if len(w) != 6:
+            raise ConvertError(f"{name}: wrong number of values")
+        walls.append({"mode": w[0], "velocity": real(w[1], "velocity"), "pressure": real(w[2], "pressure"),
+                      "mass": real(w[3], "mass"), "damping": real(w[4], "damping"),
+                      "current_velocity": real(w[5], "velocity")})
+    j["moving_walls"] = walls
+    j["wall_force"] = [real(w, "wall force") for w in r.keyed("wall_force")]
+    s = r.keyed("stress_sum")
+    j["stress_sum"] = [real(w, "stress") for w in s[:dim * dim]]
+    j["elastic"] = real(s[dim * dim], "elastic") if len(s) > dim * dim else 0.0
+    t = r.keyed("thermal")
+    j["thermal"] = {"T": real(t[0], "T"), "k1_Tt": real(t[1], "k1_Tt")}
+    # the optional switches keep their defaults (true) when the file leaves them out
+    luding = {name: True for name in LUDING_SWITCHES}
+    while r.peek_key() == "param":
+        p = r.keyed("param")
+        if len(p) < 2:
+            raise ConvertError("param: NAME VALUE expected")
+        v = real(p[1], p[0])
+        luding[p[0]] = (v != 0.0) if p[0] in LUDING_SWITCHES else v
+    j["luding"] = luding
+    j["law"] = "luding"
+    n = int(r.keyed("particles")[0])
+    header = r.next()
+    if not header.startswith("id,"):
+        raise ConvertError("expected the particle header line")
+    cols = {c: [] for c in COLUMNS[dim]}
+    for i in range(n):
+        f = r.next().split(",")
+        if len(f) != 1 + len(COLUMNS[dim]):
+            raise ConvertError(f"particle {i}: {len(f)} fields")
+        for c, v in zip(COLUMNS[dim], f[1:]):
+            cols[c].append(real(v, c))
+    j["particles"] = cols
+    m = int(r.keyed("pairs")[0])
+    pairs = {"i": [], "j": [], "history": []}
+    for k in range(m):
+        w = r.next().split()
+        pairs["i"].append(int(w[0]))
+        pairs["j"].append(int(w[1]))
+        pairs["history"].append(history(w[2:], dim, f"pair {k}"))
+    j["pairs"] = pairs
+    m = int(r.keyed("wall_contacts")[0])
+    wc = {"particle": [], "wall": [], "history": []}
+    for k in range(m):
+        w = r.next().split()
+        wc["particle"].append(int(w[0]))
+        wc["wall"].append(int(w[1]))
+        wc["history"].append(history(w[2:], dim, f"wall contact {k}"))
+    j["wall_contacts"] = wc
+    if r.next() != "end":
+        raise ConvertError("expected 'end' (truncated file?)")
+    return j
+
+
+def convert(text):
+    first = text.split("\n", 1)[0]
+    if first.startswith("# demsolve state v2"):
+        return convert_dem(text)
+    raise ConvertError(f"not an old state file (first line {first[:40]!r}); known: '# demsolve state v2'")
+
+
+def main(argv):
+    if len(argv) != 3:
+        print(__doc__.strip().split("\n\n")[1], file=sys.stderr)
+        return 2
+    try:
+        with open(argv[1], encoding="utf-8", errors="replace") as f:
+            out = json.dumps(convert(f.read()), separators=(",", ":"), sort_keys=True, allow_nan=False) + "\n"
+    except (OSError, ConvertError, ValueError, IndexError) as e:
+        print(f"convert_state.py: {argv[1]}: {e}", file=sys.stderr)
+        return 1
+    if argv[2] == "-":
+        sys.stdout.write(out)
+    else:
+        with open(argv[2], "w", encoding="utf-8") as f:
+            f.write(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
