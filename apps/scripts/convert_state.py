@@ -3,9 +3,11 @@
 
 Usage: convert_state.py OLD NEW        (NEW "-" writes to stdout)
 
-Reads the demsolve state v2 (2D and 3D; "# demsolve state v2" on the first line) and writes the
-JSON archive of docs/dynamic.md "State files" ("format": "netdem-state", "kind": "dem"). Every
-number is read with float() and written with repr(), so every double keeps its bits; an
+Reads the demsolve state v2 (2D and 3D; "# demsolve state v2" on the first line; docs/dynamic.md
+"State files", kind "dem") and the network state 1 of netsolve compact --save-state
+("netdem-network-state 1"; docs/quasistatic.md "State file", kind "network") and writes the JSON
+state archive ("format": "netdem-state"). Every number is read with float() (float.fromhex for
+the hexadecimal ones) and written with repr(), so every double keeps its bits; an
 infinity is written as the string "inf". The converter checks the structure only: the ranges are
 checked by the reader of the new file (demsolve --state), which names the field of a bad value.
 Debian's /usr/bin/python3, standard library only.
@@ -158,11 +160,89 @@ def convert_dem(text):
     return j
 
 
+def hexreal(token, what):
+    """A hexadecimal (or decimal) double of the network and staggered states."""
+    try:
+        v = float.fromhex(token)
+    except ValueError:
+        return real(token, what)
+    if math.isnan(v):
+        return "nan"
+    if math.isinf(v):
+        return "inf" if v > 0 else "-inf"
+    return v
+
+
+def convert_network(text):
+    lines = [l.split() for l in text.split("\n") if l.strip()]
+    k = 0
+
+    def take(key, count):
+        nonlocal k
+        if k >= len(lines):
+            raise ConvertError(f"ends early, expected {key!r}")
+        w = lines[k]
+        k += 1
+        if key and (not w or w[0] != key):
+            raise ConvertError(f"record {k}: expected {key!r}")
+        w = w[1:] if key else w
+        if len(w) != count:
+            raise ConvertError(f"record {k}: {len(w)} values, expected {count}")
+        return w
+
+    take("netdem-network-state", 1)
+    pred = int(take("predictor", 1)[0]) == 1
+    n = int(take("particles", 1)[0])
+    p = {c: [] for c in ["x", "y", "theta", "r", "peripheral", "x_build", "y_build", "f_contact", "du_prev"]}
+    for _ in range(n):
+        w = take("", 13 if pred else 10)
+        for c, t in zip(["x", "y", "theta", "r"], w[0:4]):
+            p[c].append(hexreal(t, c))
+        p["peripheral"].append(int(w[4]) != 0)
+        p["x_build"].append(hexreal(w[5], "x_build"))
+        p["y_build"].append(hexreal(w[6], "y_build"))
+        p["f_contact"] += [hexreal(t, "f_contact") for t in w[7:10]]
+        if pred:
+            p["du_prev"] += [hexreal(t, "du_prev") for t in w[10:13]]
+    j = {"format": "netdem-state", "kind": "network", "version": 1, "particles": p}
+    sc = take("scalars", 3)
+    j["solid_area"], j["initial_density"], j["box_area0"] = (hexreal(t, "scalar") for t in sc)
+    b = [hexreal(t, "box0") for t in take("box0", 4)]
+    j["box0"] = {"min": b[0:2], "max": b[2:4]}
+    j["seed"] = int(take("seed", 1)[0])
+    for key in ["box_deformation", "strain", "box_deformation_build", "dE_prev"]:
+        j[key] = [hexreal(t, key) for t in take(key, 4)]
+    m = int(take("pairs", 1)[0])
+    pr = {c: [] for c in ["i", "j", "history", "E_form", "slip", "centre", "f_n", "f_t", "sliding"]}
+    for _ in range(m):
+        w = take("", 14)
+        pr["i"].append(int(w[0]))
+        pr["j"].append(int(w[1]))
+        pr["history"].append({"u_max": hexreal(w[2], "u_max"), "f_t": hexreal(w[3], "f_t"), "sliding": int(w[4]) != 0})
+        pr["E_form"].append([hexreal(t, "E_form") for t in w[5:9]])
+        pr["slip"].append(hexreal(w[9], "slip"))
+        pr["centre"].append(hexreal(w[10], "centre"))
+        pr["f_n"].append(hexreal(w[11], "f_n"))
+        pr["f_t"].append(hexreal(w[12], "f_t"))
+        pr["sliding"].append(int(w[13]) != 0)
+    j["pairs"] = pr
+    t = take("timings", 11)
+    names = ["assemble", "analyse", "factorise", "solve", "neighbours", "total"]
+    j["timings"] = {c: hexreal(v, c) for c, v in zip(names, t[0:6])}
+    for c, v in zip(["analyses", "factorisations", "solves", "increments", "newton_iterations"], t[6:11]):
+        j["timings"][c] = int(v)
+    take("end", 0)
+    return j
+
+
 def convert(text):
     first = text.split("\n", 1)[0]
     if first.startswith("# demsolve state v2"):
         return convert_dem(text)
-    raise ConvertError(f"not an old state file (first line {first[:40]!r}); known: '# demsolve state v2'")
+    if first.startswith("netdem-network-state"):
+        return convert_network(text)
+    raise ConvertError(f"not an old state file (first line {first[:40]!r}); known: '# demsolve state v2', "
+                       "'netdem-network-state 1'")
 
 
 def main(argv):

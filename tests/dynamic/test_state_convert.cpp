@@ -1,7 +1,7 @@
 // apps/scripts/convert_state.py on state files written by the old text writers
 // (tests/data/old_states, commit ee3802d): the old file is refused with how to convert it, the
-// converted archive is read, every number of the particle rows, the pair and wall histories, time
-// and dt is the double the old reader read (strtod), bit for bit, and the state restarts.
+// converted archive is read, every number is the double the old reader read (strtod: decimal for
+// the DEM, hexadecimal for the network state), bit for bit, and a DEM state restarts.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -17,6 +17,7 @@
 
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/dynamic/state.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
 
 using namespace netdem::dem;
 namespace fs = std::filesystem;
@@ -123,4 +124,54 @@ TEST(StateConvert, OldDemTextStatesConvertBitForBit) {
     }
   }
   fs::remove_all(tmp);
+}
+
+// The network state of netsolve compact --save-state (hexadecimal doubles): every particle record
+// and pair record of the old file equals the converted archive's, bit for bit.
+TEST(StateConvert, OldNetworkTextStateConvertsBitForBit) {
+  const fs::path old = fs::path(NETDEM_OLD_STATES) / "network.txt";
+  const fs::path out = fs::temp_directory_path() / ("netdem_convert_net_" + std::to_string(::getpid()) + ".json");
+  try {
+    (void)netdem::qs::load_state(old.string());
+    ADD_FAILURE() << "the old text file was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("convert it with apps/scripts/convert_state.py"), std::string::npos) << e.what();
+  }
+  const std::string cmd = "/usr/bin/python3 " + std::string(NETDEM_CONVERTER) + " " + old.string() + " " + out.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const netdem::qs::NetworkState s = netdem::qs::load_state(out.string());
+  fs::remove(out);
+  std::ifstream in(old);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const auto lines = split(text.str(), '\n');
+  std::size_t k = 0, bad = 0, compared = 0;
+  auto cmp = [&](const std::string& tok, double v) {
+    ++compared;
+    bad += !same_bits(std::strtod(tok.c_str(), nullptr), v);
+  };
+  while (lines[k].rfind("particles ", 0) != 0) ++k;
+  ASSERT_EQ(std::stoul(split(lines[k], ' ')[1]), s.x.size());
+  for (std::size_t p = 0; p < s.x.size(); ++p) {
+    const auto w = split(lines[k + 1 + p], ' ');
+    cmp(w[0], s.x[p]);
+    cmp(w[1], s.y[p]);
+    cmp(w[2], s.theta[p]);
+    cmp(w[3], s.r[p]);
+    cmp(w[5], s.x_build[p]);
+    for (int c = 0; c < 3; ++c) cmp(w[7 + c], s.f_contact[3 * p + c]);
+  }
+  while (lines[k].rfind("pairs ", 0) != 0) ++k;
+  ASSERT_EQ(std::stoul(split(lines[k], ' ')[1]), s.pair_i.size());
+  for (std::size_t p = 0; p < s.pair_i.size(); ++p) {
+    const auto w = split(lines[k + 1 + p], ' ');
+    cmp(w[2], s.history[p].u_max);
+    cmp(w[3], s.history[p].f_t);
+    cmp(w[9], s.aux[p].slip);
+    cmp(w[11], s.f_n[p]);
+    cmp(w[12], s.f_t[p]);
+  }
+  EXPECT_GT(s.pair_i.size(), 5u);
+  EXPECT_GT(compared, 100u);
+  EXPECT_EQ(bad, 0u);
 }
