@@ -5,7 +5,10 @@ Usage: convert_state.py OLD NEW        (NEW "-" writes to stdout)
 
 Reads the demsolve state v2 (2D and 3D; "# demsolve state v2" on the first line; docs/dynamic.md
 "State files", kind "dem") and the network state 1 of netsolve compact --save-state
-("netdem-network-state 1"; docs/quasistatic.md "State file", kind "network") and writes the JSON
+("netdem-network-state 1"; docs/quasistatic.md "State file", kind "network") and the staggered
+sintering state of netsolve sinter ("netdem-staggered-state 1"; docs/staggered.md "Restart state",
+kind "staggered", with the seed and packing of the summary.json beside it as the record of
+origin) and writes the JSON
 state archive ("format": "netdem-state"). Every number is read with float() (float.fromhex for
 the hexadecimal ones) and written with repr(), so every double keeps its bits; an
 infinity is written as the string "inf". The converter checks the structure only: the ranges are
@@ -14,6 +17,7 @@ Debian's /usr/bin/python3, standard library only.
 """
 import json
 import math
+import os
 import sys
 
 LUDING_NAMES = ["k2", "k1_ratio", "kc_ratio", "alpha", "gamma_n", "gamma_t", "mu", "mu_wall", "T_melt", "T_var",
@@ -235,14 +239,145 @@ def convert_network(text):
     return j
 
 
-def convert(text):
+OPT_REALS = ["dt_initial", "dt_max", "dt_min", "alpha", "eps_lim", "grow_below", "shrink_above"]
+MAT_REALS = ["omega", "gamma_s", "gamma_gb", "D_vol0", "Q_vol", "deltaD_gb0", "Q_gb", "deltaD_s0", "Q_s", "c_III", "c_IV",
+             "youngs_modulus", "poisson_ratio", "T_transus", "D_vol0_low", "Q_vol_low", "deltaD_gb0_low", "Q_gb_low",
+             "deltaD_s0_low", "Q_s_low"]
+
+
+def convert_staggered(text, origin):
+    w = text.split()
+    k = 0
+
+    def word():
+        nonlocal k
+        if k >= len(w):
+            raise ConvertError("unexpected end of file")
+        k += 1
+        return w[k - 1]
+
+    def expect(key):
+        got = word()
+        if got != key:
+            raise ConvertError(f"expected {key!r}, got {got[:40]!r}")
+
+    def num(what="value"):
+        return hexreal(word(), what)
+
+    def integer():
+        v = float.fromhex(word()) if w[k].startswith(("0x", "-0x")) else float(word())
+        if v != math.floor(v):
+            raise ConvertError("expected an integer")
+        return int(v)
+
+    expect("netdem-staggered-state")
+    if integer() != 1:
+        raise ConvertError("unknown state version")
+    expect("options")
+    o = {"strategy": integer()}
+    for c in OPT_REALS:
+        o[c] = num(c)
+    o["new_contacts"] = integer() != 0
+    o["x0_over_R"], o["x_max_over_R"] = num(), num()
+    o["boundary_planes"] = integer() != 0
+    for c in ["boundary_factor", "E", "nu", "gmres_tolerance"]:
+        o[c] = num(c)
+    o["refactor_iterations"] = integer()
+    po = [num("plane_origin") for _ in range(3)]
+    o["plane_origin"] = None if any(v == "nan" for v in po) else po  # NaN: the spheres' bounding box
+    expect("material")
+    m = {"name": word()}
+    for c in MAT_REALS:
+        m[c] = num(c)
+    expect("profile")
+    np_ = integer()
+    if np_ == 0:
+        profile = {"constant": num("T")}
+    else:
+        tt, TT = [], []
+        for _ in range(np_):
+            tt.append(num("t"))
+            TT.append(num("T"))
+        profile = {"times": tt, "temperatures": TT}
+    expect("clock")
+    clock = {"t": num("t"), "dt": num("dt"), "steps": integer(), "need_factor": integer() != 0,
+             "last_iterations": integer()}
+    nref = integer()
+    clock["rhs_evals"] = integer()
+    expect("timers")
+    timers = {c: num(c) for c in ["detect", "integrate", "assemble", "factorise", "solve", "correct"]}
+    expect("particles")
+    n = integer()
+    p = {c: [] for c in ["x", "y", "z", "r", "x0", "y0", "z0", "r0", "fixed_user", "fixed_plane"]}
+    for _ in range(n):
+        for c in ["x", "y", "z", "r", "x0", "y0", "z0", "r0"]:
+            p[c].append(num(c))
+        flags = integer()
+        p["fixed_user"].append(flags & 63)
+        p["fixed_plane"].append((flags >> 6) & 63)
+    expect("contacts")
+    nc = integer()
+    cols = ["a", "b", "frozen", "status", "q", "q0", "t", "h", "steps", "rejected", "rhs_evals", "restarts",
+            "t_created", "L_created", "dL_bar", "x_start"]
+    c = {col: [] for col in cols}
+    for _ in range(nc):
+        c["a"].append(integer())
+        c["b"].append(integer())
+        c["frozen"].append(integer() != 0)
+        c["status"].append(integer())
+        c["q"].append([num("q") for _ in range(5)])
+        c["q0"].append([num("q0") for _ in range(5)])
+        c["t"].append(num("t"))
+        c["h"].append(num("h"))
+        for col in ["steps", "rejected", "rhs_evals", "restarts"]:
+            c[col].append(integer())
+        for col in ["t_created", "L_created", "dL_bar", "x_start"]:
+            c[col].append(num(col))
+    expect("factor")
+    if integer() != nref:
+        raise ConvertError("bad factor size")
+    nfix = integer()
+    fixed = [integer() for _ in range(nfix // 6)]
+    el = {col: [] for col in ["e1", "e2", "e3", "lA0", "lB0", "Rm"]}
+    for _ in range(nref):
+        for col in ["e1", "e2", "e3"]:
+            el[col].append([num(col) for _ in range(3)])
+        for col in ["lA0", "lB0", "Rm"]:
+            el[col].append(num(col))
+    expect("end")
+    return {"format": "netdem-state", "kind": "staggered", "version": 1, "options": o, "material": m,
+            "profile": profile, "clock": clock, "timers": timers, "particles": p, "contacts": c,
+            "factor": {"fixed": fixed, "elements": el}, "origin": origin}
+
+
+def staggered_origin(path):
+    """The record of origin of an old staggered state: the seed and the packing of the summary.json
+    beside it (where netsolve sinter looked it up before issue 26), or null."""
+    try:
+        with open(os.path.join(os.path.dirname(os.path.abspath(path)), "summary.json")) as f:
+            old = json.load(f)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(old, dict):
+        return None
+    rec = {}
+    if isinstance(old.get("seed"), int) and old["seed"] >= 0:
+        rec["seed"] = old["seed"]
+    if "packing" in old:
+        rec["packing"] = old["packing"]
+    return rec or None
+
+
+def convert(text, path=""):
     first = text.split("\n", 1)[0]
     if first.startswith("# demsolve state v2"):
         return convert_dem(text)
     if first.startswith("netdem-network-state"):
         return convert_network(text)
+    if first.startswith("netdem-staggered-state"):
+        return convert_staggered(text, staggered_origin(path))
     raise ConvertError(f"not an old state file (first line {first[:40]!r}); known: '# demsolve state v2', "
-                       "'netdem-network-state 1'")
+                       "'netdem-network-state 1', 'netdem-staggered-state 1'")
 
 
 def main(argv):
@@ -251,7 +386,7 @@ def main(argv):
         return 2
     try:
         with open(argv[1], encoding="utf-8", errors="replace") as f:
-            out = json.dumps(convert(f.read()), separators=(",", ":"), sort_keys=True, allow_nan=False) + "\n"
+            out = json.dumps(convert(f.read(), argv[1]), separators=(",", ":"), sort_keys=True, allow_nan=False) + "\n"
     except (OSError, ConvertError, ValueError, IndexError) as e:
         print(f"convert_state.py: {argv[1]}: {e}", file=sys.stderr)
         return 1

@@ -18,6 +18,7 @@
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/dynamic/state.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/quasistatic/staggered.hpp"
 
 using namespace netdem::dem;
 namespace fs = std::filesystem;
@@ -174,4 +175,62 @@ TEST(StateConvert, OldNetworkTextStateConvertsBitForBit) {
   EXPECT_GT(s.pair_i.size(), 5u);
   EXPECT_GT(compared, 100u);
   EXPECT_EQ(bad, 0u);
+}
+
+// The staggered state of netsolve sinter (hexadecimal doubles, a checkpoint at t = 50 s): the
+// particles and the pair states equal the old file's bit for bit, the record of origin comes from
+// the summary.json beside the old state (seed 7), and the converted state steps on to 100 s.
+TEST(StateConvert, OldStaggeredTextStateConvertsBitForBit) {
+  namespace st = netdem::qs::staggered;
+  const fs::path old = fs::path(NETDEM_OLD_STATES) / "staggered.txt";
+  const fs::path out = fs::temp_directory_path() / ("netdem_convert_stag_" + std::to_string(::getpid()) + ".json");
+  std::ifstream in(old);
+  std::ostringstream text;
+  text << in.rdbuf();
+  try {
+    (void)st::Staggered::load(text.str(), old.string());
+    ADD_FAILURE() << "the old text file was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("convert it with apps/scripts/convert_state.py"), std::string::npos) << e.what();
+  }
+  const std::string cmd = "/usr/bin/python3 " + std::string(NETDEM_CONVERTER) + " " + old.string() + " " + out.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream jin(out);
+  std::ostringstream json;
+  json << jin.rdbuf();
+  fs::remove(out);
+  st::Staggered s = st::Staggered::load(json.str(), "converted");
+  EXPECT_NE(s.origin_record().find("\"seed\":7"), std::string::npos) << s.origin_record();
+  std::vector<std::string> tok;
+  for (const auto& line : split(text.str(), '\n'))
+    for (const auto& t : split(line, ' ')) tok.push_back(t);
+  std::size_t k = 0, bad = 0, compared = 0;
+  auto cmp = [&](const std::string& t, double v) {
+    ++compared;
+    bad += !same_bits(std::strtod(t.c_str(), nullptr), v);
+  };
+  while (tok[k] != "particles") ++k;
+  const std::size_t n = std::stoul(tok[++k]);
+  ASSERT_EQ(n, s.particles().size());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.particles()[i].x[a]);
+    cmp(tok[++k], s.particles()[i].r);
+    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.initial_particles()[i].x[a]);
+    cmp(tok[++k], s.initial_particles()[i].r);
+    ++k;  // the flags
+  }
+  ASSERT_EQ(tok[++k], "contacts");
+  ASSERT_EQ(std::stoul(tok[++k]), s.contacts().size());
+  for (const auto& c : s.contacts()) {
+    k += 4;  // a b frozen status
+    for (double v : c.pair.q) cmp(tok[++k], v);
+    for (double v : c.pair.q0) cmp(tok[++k], v);
+    k += 10;
+  }
+  EXPECT_GT(s.contacts().size(), 5u);
+  EXPECT_GT(compared, 100u);
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(s.time(), 50.0);
+  while (s.time() < 100.0) s.step(100.0);
+  EXPECT_EQ(s.time(), 100.0);
 }

@@ -7,6 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -356,6 +359,23 @@ TEST(Staggered, StateFieldsAreCheckedAtTheDoor) {
   refuse("/factor/fixed", nlohmann::json::array({0}), "/factor/fixed: expected 0 or");
   refuse("/origin", 5, "/origin: expected an object or null");
   refuse("/kind", "dem", "/kind: a dem state, expected a staggered state");
+  // the regressions of fuzz_staggered_state: every refuse_* file refused on one line naming a field
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(NETDEM_STAGGERED_REGRESSIONS)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ++files;
+    try {
+      (void)st::Staggered::load(text, "input");
+      ADD_FAILURE() << e.path() << ": accepted";
+    } catch (const std::invalid_argument& err) {
+      const std::string m = err.what();
+      EXPECT_EQ(m.rfind("input: /", 0), 0u) << e.path() << ": " << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+      std::printf("  %s: %s\n", e.path().filename().c_str(), m.c_str());
+    }
+  }
+  EXPECT_GE(files, 7);
   try {
     (void)st::Staggered::load("netdem-staggered-state 1\noptions 2\n", "old");
     ADD_FAILURE() << "an old text state was read";
