@@ -2,7 +2,8 @@
 // The one state archive of every solver (issue 26): a JSON document (nlohmann-json) with a format,
 // a kind and a version, exact doubles (the shortest text that reads back to the same bits; an
 // infinity as the string "inf" or "-inf", NaN refused), and a reader that checks every field at
-// the door. Format and rules: docs/architecture.md "State archive".
+// the door. Format and rules: docs/dynamic.md "State files" (and the state sections of
+// docs/quasistatic.md and docs/staggered.md).
 //
 // Reading: Field is a value of the document with its place (the file name and the JSON pointer);
 // its accessors check the type, the range and the array sizes and throw FieldError, a
