@@ -28,22 +28,18 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 
 # path -> lines, or "path:function" -> lines (the sizes when the list was last tightened; they only shrink)
 ALLOWED = {
-    "src/quasistatic/staggered.cpp": 1165,
-    "src/dynamic/state.cpp": 1002,
+    "src/quasistatic/staggered.cpp": 1005,
     "apps/netsolve/yield.cpp": 953,
     "apps/demsolve/compact.cpp": 872,
-    "apps/netsolve/sinter.cpp": 826,
+    "apps/netsolve/sinter.cpp": 824,
     "apps/demsolve/yield.cpp:run_dem_yield": 463,
-    "apps/netsolve/sinter.cpp:run": 447,
+    "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
     "apps/netsolve/yield.cpp:run_yield": 301,
     "apps/demsolve/compact.cpp:run_dem_compact_3d": 301,
     "apps/demsolve/compact.cpp:run_dem_compact": 279,
-    "src/dynamic/state.cpp:parse_state_body": 250,
     "apps/demsolve/main.cpp:main": 209,
-    "src/quasistatic/staggered.cpp:step": 204,
     "apps/netsolve/main.cpp:run_compact": 178,
-    "src/quasistatic/staggered.cpp:Staggered::load": 177,
 }
 
 CONTROL = {"if", "for", "while", "switch", "catch", "return", "sizeof", "decltype", "alignof", "noexcept",

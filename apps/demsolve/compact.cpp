@@ -278,7 +278,7 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
     write_file_atomic(out / "history.csv", csv);
     summary["increments_done"] = done;
     summary["steps"] = steps;
-    // as report_unstable(), without state_last_good.txt: state files hold the Luding models only
+    // as report_unstable(), without state_last_good.txt (compact writes no state file)
     summary["status"] = "unstable";
     summary["status_reason"] = e.what();
     summary["unstable_quantity"] = e.quantity();

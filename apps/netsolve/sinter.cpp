@@ -360,21 +360,15 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     mat_source = fmt::format("restart state {}", a.restart);
     packing_source = fmt::format("restart state {}", a.restart);
     restart_json = {{"state", a.restart}, {"t_start", sim->time()}, {"steps_before", sim->steps()}};
-    // the seed of the run that wrote the state, from its summary.json when it is beside the state
+    // the seed and the packing of the run that made the sample: the state's record of origin
     seed_known = false;
-    const fs::path sj = fs::path(a.restart).parent_path() / "summary.json";
-    std::ifstream in(sj);
-    if (in) {
-      try {
-        const json old = json::parse(in);
-        if (old.contains("seed") && old["seed"].is_number_unsigned()) {
-          seed = old["seed"].get<std::uint64_t>();
-          seed_known = true;
-        }
-        if (old.contains("packing")) restart_json["packing"] = old["packing"];
-      } catch (const std::exception&) {
-        // not a summary we can read: the seed stays unknown
+    const json origin = json::parse(sim->origin_record());
+    if (origin.is_object()) {
+      if (origin.contains("seed") && origin["seed"].is_number_unsigned()) {
+        seed = origin["seed"].get<std::uint64_t>();
+        seed_known = true;
       }
+      if (origin.contains("packing")) restart_json["packing"] = origin["packing"];
     }
   } else {
     check_new_run(a);
@@ -517,6 +511,10 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
       sim.emplace(particles_of(pk), *mat, prof, so);
     }
   }
+  if (!restart && sim)  // the record of origin travels with every state this run writes
+    sim->set_origin_record(json{{"seed", seed_known ? json(seed) : json(nullptr)},
+                                {"packing", {{"source", packing_source}, {"particles", sim->particles().size()}}}}
+                               .dump());
 
   std::vector<Row> rows;
   std::string steps_csv = std::string(kStepsHeader) + "\n";

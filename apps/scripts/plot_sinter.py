@@ -37,28 +37,11 @@ def read_csv(path):
 
 
 def read_state(path):
-    """Particles (x, y, radius) and box of a demsolve state file v2."""
-    xs, ys, rs, box = [], [], [], None
+    """Particles (x, y, radius) and box of a demsolve state file (the state archive, docs/dynamic.md)."""
     with open(path) as f:
-        lines = f.read().split("\n")
-    k = 0
-    while k < len(lines):
-        line = lines[k]
-        if line.startswith("box "):
-            box = [float(v) for v in line.split()[2:6]]
-        if line.startswith("id,x,y"):
-            head = line.split(",")
-            ix, iy, ir = head.index("x"), head.index("y"), head.index("radius")
-            k += 1
-            while k < len(lines) and not lines[k].startswith("pairs"):
-                v = lines[k].split(",")
-                xs.append(float(v[ix]))
-                ys.append(float(v[iy]))
-                rs.append(float(v[ir]))
-                k += 1
-            break
-        k += 1
-    return xs, ys, rs, box
+        j = json.load(f)
+    p, b = j["particles"], j["box"]
+    return p["x"], p["y"], p["radius"], [b["min"][0], b["min"][1], b["max"][0], b["max"][1]]
 
 
 def save(fig, path):

@@ -19,6 +19,8 @@
 
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
+#include "netdem/system/archive.hpp"
+#include "staggered_state.hpp"
 
 namespace netdem::qs::staggered {
 
@@ -157,41 +159,6 @@ ContactResult advance_substeps(const State& q0, double R_min0, const RhsCtx& f, 
   return r;
 }
 
-// Hexadecimal floating point (bit-exact text).
-std::string hex(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%a", v);
-  return buf;
-}
-
-struct Reader {
-  std::istringstream in;
-  std::string origin;
-  explicit Reader(const std::string& text, std::string o) : in(text), origin(std::move(o)) {}
-  [[noreturn]] void fail(const std::string& what) { bad(origin + ": " + what); }
-  std::string word() {
-    std::string w;
-    if (!(in >> w)) fail("unexpected end of file");
-    return w;
-  }
-  void expect(const char* w) {
-    const std::string got = word();
-    if (got != w) fail(fmt::format("expected '{}', got '{}'", w, got));
-  }
-  double num() {
-    const std::string w = word();
-    char* end = nullptr;
-    const double v = std::strtod(w.c_str(), &end);
-    if (end == w.c_str() || *end != '\0') fail("'" + w + "' is not a number");
-    return v;
-  }
-  long integer() {
-    const double v = num();
-    if (!(std::fabs(v) < 9e15) || v != std::floor(v)) fail("expected an integer");
-    return static_cast<long>(v);
-  }
-};
-
 }  // namespace
 
 // ================================================================================================
@@ -301,10 +268,12 @@ struct Staggered::Impl {
   // work arrays of step()
   std::vector<State> qnew;
   std::vector<int> active;
+  std::vector<int> domain_fail;  // strategy 1: the contacts whose trial step left the domain
   std::vector<std::uint8_t> freeze;
   std::vector<contact::BondElement> el;
   std::vector<Eigen::Vector3d> u;
   std::unique_ptr<LinearSolver> solver;
+  std::string origin_record = "null";  // JSON: the run that made the sample (set_origin_record)
 
   void init_solver() {
     LinearSolverOptions lo;
@@ -631,87 +600,113 @@ struct Staggered::Impl {
     timers.assemble += seconds_since(t0);
 
     const double seg_end = prof.segment_at(t).t1;
+    t0 = Clock::now();
+    const double h = integrate_contacts(rec, t_end, seg_end);
+    timers.integrate += seconds_since(t0);
+    const VecX uhat = solve_network(rec);
+    t0 = Clock::now();
+    const double t_new = (h == std::min(t_end, seg_end) - t) ? std::min(t_end, seg_end) : t + h;
+    move_and_correct(rec, uhat, t_new);
+    timers.correct += seconds_since(t0);
+    t = t_new;
+    ++nsteps;
+    rec.t = t;
+    rec.T = prof(t);
+    rec.dt = h;
+    return rec;
+  }
+
+  // The two-particle models of the active contacts over one accepted step [t, t + h] with F = 0,
+  // into qnew (freeze[i] = 2: the contact left the model's domain); returns h.
+  double integrate_contacts(StepRecord& rec, double t_end, double seg_end) {
     RhsCtx f{&mat, &cache, prof.segment_at(t), &rhs_evals};
     // per-step work arrays, kept in Impl (no allocation once the contact count has settled)
     qnew.resize(c.size());
     active.clear();
     for (std::size_t i = 0; i < c.size(); ++i)
       if (!c[i].frozen) active.push_back(static_cast<int>(i));
-    double h = 0.0;
     freeze.assign(c.size(), 0);
-    t0 = Clock::now();
     for (;;) {
-      h = std::min({dt, t_end - t, seg_end - t});
+      double h = std::min({dt, t_end - t, seg_end - t});
       if (h >= (std::min(t_end, seg_end) - t) * (1.0 - 1e-12)) h = std::min(t_end, seg_end) - t;
-      bool accepted = true;
       rec.max_error = 0.0;
       rec.substeps = 0;
       rec.contacts_substepped = 0;
-      if (opt.strategy == 1) {
-        std::vector<int> domain_fail;
-        for (int i : active) {
-          const Trial tr = trial_step(f, t, h, c[i].pair.q);
-          if (!tr.ok) domain_fail.push_back(i);
-          if (!tr.ok || tr.error > opt.eps_lim) {
-            accepted = false;
-            continue;
-          }
-          qnew[i] = tr.q;
-          rec.max_error = std::max(rec.max_error, tr.error / opt.eps_lim);
-        }
-        rec.substeps = static_cast<long>(active.size());
-        if (!accepted) {
-          ++rec.rejected;
-          dt = h / opt.alpha;  // Eq 45
-          if (dt < opt.dt_min) {
-            if (!domain_fail.empty()) {  // these contacts left the model's domain: freeze them
-              for (int i : domain_fail) {
-                c[i].frozen = true;
-                c[i].pair.status = cs::PairStatus::ConeDegenerate;
-                ++rec.newly_frozen;
-              }
-              active.erase(std::remove_if(active.begin(), active.end(), [&](int i) { return c[i].frozen; }),
-                           active.end());
-              dt = opt.dt_min;
-              continue;
-            }
-            throw std::runtime_error(fmt::format(
-                "staggered: strategy 1 needs a step below dt_min = {:.3g} s at t = {:.6g} s", opt.dt_min, t));
-          }
+      if (opt.strategy != 1 || strategy1_attempt(rec, f, h)) {
+        if (opt.strategy != 1) strategy2_step(rec, f, h);
+        return h;
+      }
+    }
+  }
+
+  // Strategy 1: one step h for every contact, accepted when every error is below eps_lim (else dt
+  // shrinks, Eq 45; contacts that leave the domain at dt_min are frozen); true if accepted.
+  bool strategy1_attempt(StepRecord& rec, const RhsCtx& f, double h) {
+    bool accepted = true;
+    domain_fail.clear();
+    for (int i : active) {
+      const Trial tr = trial_step(f, t, h, c[i].pair.q);
+      if (!tr.ok) domain_fail.push_back(i);
+      if (!tr.ok || tr.error > opt.eps_lim) {
+        accepted = false;
+        continue;
+      }
+      qnew[i] = tr.q;
+      rec.max_error = std::max(rec.max_error, tr.error / opt.eps_lim);
+    }
+    rec.substeps = static_cast<long>(active.size());
+    if (accepted) {
+      if (rec.max_error < 0.1) dt = std::min(opt.dt_max, opt.alpha * dt);  // Eqs 46-47
+      return true;
+    }
+    ++rec.rejected;
+    dt = h / opt.alpha;  // Eq 45
+    if (dt < opt.dt_min) {
+      if (domain_fail.empty())
+        throw std::runtime_error(
+            fmt::format("staggered: strategy 1 needs a step below dt_min = {:.3g} s at t = {:.6g} s", opt.dt_min, t));
+      for (int i : domain_fail) {  // these contacts left the model's domain: freeze them
+        c[i].frozen = true;
+        c[i].pair.status = cs::PairStatus::ConeDegenerate;
+        ++rec.newly_frozen;
+      }
+      active.erase(std::remove_if(active.begin(), active.end(), [&](int i) { return c[i].frozen; }), active.end());
+      dt = opt.dt_min;
+    }
+    return false;
+  }
+
+  // Strategy 2: each contact sub-steps over [t, t + h] on its own; dt follows the fraction of
+  // contacts that needed sub-steps.
+  void strategy2_step(StepRecord& rec, const RhsCtx& f, double h) {
+    for (int i : active) {
+      const ContactResult r = advance_substeps(c[i].pair.q, c[i].pair.R_min0(), f, t, t + h, opt, x_max);
+      if (!r.ok) {
+        if (r.domain) {
+          freeze[i] = 2;  // leaves the domain: frozen, no load this step
+          qnew[i] = c[i].pair.q;
           continue;
         }
-        if (rec.max_error < 0.1) dt = std::min(opt.dt_max, opt.alpha * dt);  // Eqs 46-47
-      } else {
-        for (int i : active) {
-          const ContactResult r = advance_substeps(c[i].pair.q, c[i].pair.R_min0(), f, t, t + h, opt, x_max);
-          if (!r.ok) {
-            if (r.domain) {
-              freeze[i] = 2;  // leaves the domain: frozen, no load this step
-              qnew[i] = c[i].pair.q;
-              continue;
-            }
-            throw std::runtime_error(fmt::format(
-                "staggered: contact {}-{} needs a sub-step below dt_min = {:.3g} s at t = {:.6g} s", c[i].a, c[i].b,
-                opt.dt_min, t));
-          }
-          qnew[i] = r.q;
-          rec.substeps += r.substeps;
-          if (r.substeps > 1) ++rec.contacts_substepped;
-          rec.max_error = std::max(rec.max_error, r.max_error);
-        }
-        const double frac =
-            active.empty() ? 0.0 : static_cast<double>(rec.contacts_substepped) / static_cast<double>(active.size());
-        if (frac < opt.grow_below)
-          dt = std::min(opt.dt_max, opt.alpha * dt);
-        else if (frac > opt.shrink_above)
-          dt = std::max(opt.dt_min, dt / opt.alpha);
+        throw std::runtime_error(fmt::format(
+            "staggered: contact {}-{} needs a sub-step below dt_min = {:.3g} s at t = {:.6g} s", c[i].a, c[i].b,
+            opt.dt_min, t));
       }
-      if (accepted) break;
+      qnew[i] = r.q;
+      rec.substeps += r.substeps;
+      if (r.substeps > 1) ++rec.contacts_substepped;
+      rec.max_error = std::max(rec.max_error, r.max_error);
     }
-    timers.integrate += seconds_since(t0);
+    const double frac =
+        active.empty() ? 0.0 : static_cast<double>(rec.contacts_substepped) / static_cast<double>(active.size());
+    if (frac < opt.grow_below)
+      dt = std::min(opt.dt_max, opt.alpha * dt);
+    else if (frac > opt.shrink_above)
+      dt = std::max(opt.dt_min, dt / opt.alpha);
+  }
 
-    // the sintering loads and the network
-    t0 = Clock::now();
+  // The sintering loads of the step (Eq 10) on the bond network; the scaled displacements.
+  VecX solve_network(StepRecord& rec) {
+    auto t0 = Clock::now();
     el.resize(c.size());
     for (std::size_t i = 0; i < c.size(); ++i) el[i] = element(c[i]);
     VecX fhat = VecX::Zero(nfree);
@@ -732,53 +727,55 @@ struct Staggered::Impl {
     // and 25 at c = 265 (Ti, 3619), so the cost is taken as 0.1 c iterations. Deterministic: it
     // depends on the pattern, not on the clock.
     if (solver->has_factor() && nfree > 0) {
-      const double c = static_cast<double>(solver->stats().factor_nnz) / nfree;
-      if (last_iterations > std::max(static_cast<double>(opt.refactor_iterations), 0.1 * c)) need_factor = true;
+      const double cols = static_cast<double>(solver->stats().factor_nnz) / nfree;
+      if (last_iterations > std::max(static_cast<double>(opt.refactor_iterations), 0.1 * cols)) need_factor = true;
     }
     assemble(el);
     timers.assemble += seconds_since(t0);
     VecX uhat = VecX::Zero(nfree);
-    if (nfree > 0) {
-      if (need_factor) {
-        t0 = Clock::now();
-        const LinearStatus fs = solver->factorise(K, false);
-        timers.factorise += seconds_since(t0);
-        if (!fs.ok) {
-          const int col = fs.column;
-          int part = -1, d = -1;
-          for (int g = 0; g < static_cast<int>(dof.size()); ++g)
-            if (dof[g] == col) {
-              part = g / 6;
-              d = g % 6;
-            }
-          throw std::runtime_error(fmt::format("staggered: the bond network is singular at t = {:.6g} s (particle {}, "
-                                               "DOF {}): {}",
-                                               t, part, d, fs.message));
-        }
-        ref = el;
-        ref_fixed = fixed;
-        need_factor = false;
-        rec.refactorised = true;
-      }
+    if (nfree == 0) return uhat;
+    if (need_factor) {
       t0 = Clock::now();
-      LinearStatus ss = solver->solve(K, fhat, uhat);
-      if (!ss.ok) {  // the reused factor is too far off: refactorise now
-        const LinearStatus fs = solver->factorise(K, false);
-        if (!fs.ok) throw std::runtime_error("staggered: the bond network became singular: " + fs.message);
-        ref = el;
-        ref_fixed = fixed;
-        rec.refactorised = true;
-        ss = solver->solve(K, fhat, uhat);
-        if (!ss.ok) throw std::runtime_error("staggered: the network solve failed: " + ss.message);
+      const LinearStatus fs = solver->factorise(K, false);
+      timers.factorise += seconds_since(t0);
+      if (!fs.ok) {
+        const int col = fs.column;
+        int part = -1, d = -1;
+        for (int g = 0; g < static_cast<int>(dof.size()); ++g)
+          if (dof[g] == col) {
+            part = g / 6;
+            d = g % 6;
+          }
+        throw std::runtime_error(fmt::format("staggered: the bond network is singular at t = {:.6g} s (particle {}, "
+                                             "DOF {}): {}",
+                                             t, part, d, fs.message));
       }
-      timers.solve += seconds_since(t0);
-      last_iterations = rec.refactorised ? ss.iterations : last_iterations + ss.iterations;
-      rec.gmres_iterations = ss.iterations;
-      rec.solves = 1;
+      ref = el;
+      ref_fixed = fixed;
+      need_factor = false;
+      rec.refactorised = true;
     }
-
-    // move the nodes, then correct the shrinkage (Eqs 41-44)
     t0 = Clock::now();
+    LinearStatus ss = solver->solve(K, fhat, uhat);
+    if (!ss.ok) {  // the reused factor is too far off: refactorise now
+      const LinearStatus fs = solver->factorise(K, false);
+      if (!fs.ok) throw std::runtime_error("staggered: the bond network became singular: " + fs.message);
+      ref = el;
+      ref_fixed = fixed;
+      rec.refactorised = true;
+      ss = solver->solve(K, fhat, uhat);
+      if (!ss.ok) throw std::runtime_error("staggered: the network solve failed: " + ss.message);
+    }
+    timers.solve += seconds_since(t0);
+    last_iterations = rec.refactorised ? ss.iterations : last_iterations + ss.iterations;
+    rec.gmres_iterations = ss.iterations;
+    rec.solves = 1;
+    return uhat;
+  }
+
+  // Moves the nodes by the solve's translations, then corrects the shrinkage (Eqs 41-44) and
+  // advances every contact's state to t_new (freezing those that left the model's domain).
+  void move_and_correct(StepRecord& rec, const VecX& uhat, double t_new) {
     u.assign(N(), Eigen::Vector3d::Zero());
     for (int i = 0; i < N(); ++i)
       for (int k = 0; k < 3; ++k) {
@@ -787,7 +784,6 @@ struct Staggered::Impl {
       }
     remove_rigid_motions(u);
     for (int i = 0; i < N(); ++i) p[i].x += u[i];
-    const double t_new = (h == std::min(t_end, seg_end) - t) ? std::min(t_end, seg_end) : t + h;
     for (std::size_t i = 0; i < c.size(); ++i) {
       Contact& k = c[i];
       const State qold = k.pair.q;
@@ -799,30 +795,22 @@ struct Staggered::Impl {
       k.pair.q[kHA] = y4;
       k.pair.q[kHB] = y7;
       rec.max_shrink_error = std::max(rec.max_shrink_error, std::fabs(y4 + y7 - d) / d);
-      if (!k.frozen) {
-        k.pair.t = t_new;
-        ++k.pair.steps;
-        if (freeze[i] == 2) {
-          k.frozen = true;
-          k.pair.status = cs::PairStatus::ConeDegenerate;
-          ++rec.newly_frozen;
-          continue;
-        }
-        const cs::PairStatus s = cs::check_state(k.pair.q, k.pair.R_min0(), x_max);
-        if (s != cs::PairStatus::Ok) {
-          k.frozen = true;
-          k.pair.status = s;
-          ++rec.newly_frozen;
-        }
+      if (k.frozen) continue;
+      k.pair.t = t_new;
+      ++k.pair.steps;
+      if (freeze[i] == 2) {
+        k.frozen = true;
+        k.pair.status = cs::PairStatus::ConeDegenerate;
+        ++rec.newly_frozen;
+        continue;
+      }
+      const cs::PairStatus s = cs::check_state(k.pair.q, k.pair.R_min0(), x_max);
+      if (s != cs::PairStatus::Ok) {
+        k.frozen = true;
+        k.pair.status = s;
+        ++rec.newly_frozen;
       }
     }
-    timers.correct += seconds_since(t0);
-    t = t_new;
-    ++nsteps;
-    rec.t = t;
-    rec.T = prof(t);
-    rec.dt = h;
-    return rec;
   }
 };
 
@@ -918,248 +906,100 @@ double Staggered::density() const {
 }
 
 // ================================================================================================
-// save / load
+// save / load: the state as plain data (StaggeredState), its file in staggered_state.cpp
 
 std::string Staggered::save() const {
   const Impl& m = *impl_;
-  std::ostringstream o;
-  const auto& q = m.opt;
-  o << "netdem-staggered-state 1\n";
-  o << "options " << q.strategy << ' ' << hex(q.dt_initial) << ' ' << hex(q.dt_max) << ' ' << hex(q.dt_min) << ' '
-    << hex(q.alpha) << ' ' << hex(q.eps_lim) << ' ' << hex(q.grow_below) << ' ' << hex(q.shrink_above) << ' '
-    << (q.new_contacts ? 1 : 0) << ' ' << hex(q.x0_over_R) << ' ' << hex(q.x_max_over_R) << ' '
-    << (q.boundary_planes ? 1 : 0) << ' ' << hex(q.boundary_factor) << ' ' << hex(q.E) << ' ' << hex(q.nu) << ' '
-    << hex(q.gmres_tolerance) << ' ' << q.refactor_iterations << ' ' << hex(q.plane_origin[0]) << ' '
-    << hex(q.plane_origin[1]) << ' ' << hex(q.plane_origin[2]) << '\n';
-  const auto& a = m.mat;
-  std::string name = a.name;
-  for (char& ch : name)
-    if (ch == ' ' || ch == '\n' || ch == '\t') ch = '_';
-  o << "material " << (name.empty() ? "_" : name) << ' ' << hex(a.omega) << ' ' << hex(a.gamma_s) << ' '
-    << hex(a.gamma_gb) << ' ' << hex(a.D_vol0) << ' ' << hex(a.Q_vol) << ' ' << hex(a.deltaD_gb0) << ' '
-    << hex(a.Q_gb) << ' ' << hex(a.deltaD_s0) << ' ' << hex(a.Q_s) << ' ' << hex(a.c_III) << ' ' << hex(a.c_IV) << ' '
-    << hex(a.youngs_modulus) << ' ' << hex(a.poisson_ratio) << ' ' << hex(a.T_transus) << ' ' << hex(a.D_vol0_low)
-    << ' ' << hex(a.Q_vol_low) << ' ' << hex(a.deltaD_gb0_low) << ' ' << hex(a.Q_gb_low) << ' ' << hex(a.deltaD_s0_low)
-    << ' ' << hex(a.Q_s_low) << '\n';
-  const auto& pt = m.prof.times();
-  const auto& pT = m.prof.temperatures();
-  o << "profile " << pt.size();
-  for (std::size_t i = 0; i < pt.size(); ++i) o << ' ' << hex(pt[i]) << ' ' << hex(pT[i]);
-  if (pt.empty()) o << ' ' << hex(m.prof(0.0));
-  o << '\n';
-  o << "clock " << hex(m.t) << ' ' << hex(m.dt) << ' ' << m.nsteps << ' ' << (m.need_factor ? 1 : 0) << ' '
-    << m.last_iterations << ' ' << m.ref.size() << ' ' << m.rhs_evals << '\n';
-  o << "timers " << hex(m.timers.detect) << ' ' << hex(m.timers.integrate) << ' ' << hex(m.timers.assemble) << ' '
-    << hex(m.timers.factorise) << ' ' << hex(m.timers.solve) << ' ' << hex(m.timers.correct) << '\n';
-  o << "particles " << m.p.size() << '\n';
-  for (std::size_t i = 0; i < m.p.size(); ++i) {
-    o << hex(m.p[i].x[0]) << ' ' << hex(m.p[i].x[1]) << ' ' << hex(m.p[i].x[2]) << ' ' << hex(m.p[i].r) << ' '
-      << hex(m.p0[i].x[0]) << ' ' << hex(m.p0[i].x[1]) << ' ' << hex(m.p0[i].x[2]) << ' ' << hex(m.p0[i].r);
-    int flags = 0;
-    for (int k = 0; k < 6; ++k) flags |= (m.fixed_user[6 * i + k] ? 1 : 0) << k;
-    for (int k = 0; k < 6; ++k) flags |= (m.fixed_plane[6 * i + k] ? 1 : 0) << (6 + k);
-    o << ' ' << flags << '\n';
-  }
-  o << "contacts " << m.c.size() << '\n';
-  for (const auto& k : m.c) {
-    o << k.a << ' ' << k.b << ' ' << (k.frozen ? 1 : 0) << ' ' << static_cast<int>(k.pair.status);
-    for (double v : k.pair.q) o << ' ' << hex(v);
-    for (double v : k.pair.q0) o << ' ' << hex(v);
-    o << ' ' << hex(k.pair.t) << ' ' << hex(k.pair.h) << ' ' << k.pair.steps << ' ' << k.pair.rejected << ' '
-      << k.pair.rhs_evals << ' ' << k.pair.restarts << ' ' << hex(k.t_created) << ' ' << hex(k.L_created) << ' '
-      << hex(k.dL_bar) << ' ' << hex(k.x_start) << '\n';
-  }
-  o << "factor " << m.ref.size() << ' ' << m.ref_fixed.size() << '\n';
-  for (std::size_t i = 0; i < m.ref_fixed.size(); i += 6) {
-    int flags = 0;
-    for (int k = 0; k < 6; ++k) flags |= (m.ref_fixed[i + k] ? 1 : 0) << k;
-    o << flags << (i + 6 < m.ref_fixed.size() ? ' ' : '\n');
-  }
-  for (const auto& e : m.ref) {
-    for (const auto* v : {&e.e1, &e.e2, &e.e3})
-      for (int k = 0; k < 3; ++k) o << hex((*v)[k]) << ' ';
-    o << hex(e.lA0) << ' ' << hex(e.lB0) << ' ' << hex(e.Rm) << '\n';
-  }
-  o << "end\n";
-  return o.str();
+  StaggeredState s;
+  s.opt = m.opt;
+  s.mat = m.mat;
+  s.profile_t = m.prof.times();
+  s.profile_T = m.prof.temperatures();
+  if (s.profile_t.empty()) s.profile_constant = m.prof(0.0);
+  s.t = m.t;
+  s.dt = m.dt;
+  s.nsteps = m.nsteps;
+  s.need_factor = m.need_factor;
+  s.last_iterations = m.last_iterations;
+  s.rhs_evals = m.rhs_evals;
+  s.timers = m.timers;
+  s.p = m.p;
+  s.p0 = m.p0;
+  s.fixed_user = m.fixed_user;
+  s.fixed_plane = m.fixed_plane;
+  s.c = m.c;
+  s.ref_fixed = m.ref_fixed;
+  s.ref = m.ref;
+  s.origin_record = m.origin_record;
+  return format_staggered_state(s);
 }
 
 Staggered Staggered::load(const std::string& text, const std::string& origin) {
-  Reader r(text, origin);
-  r.expect("netdem-staggered-state");
-  if (r.integer() != 1) r.fail("unknown state version");
+  StaggeredState st = parse_staggered_state(text, origin);
+  auto fail = [&](const std::string& what) { bad(origin + ": " + what); };
   Staggered s;
   Impl& m = *s.impl_;
-  auto& q = m.opt;
-  r.expect("options");
-  q.strategy = static_cast<int>(r.integer());
-  q.dt_initial = r.num();
-  q.dt_max = r.num();
-  q.dt_min = r.num();
-  q.alpha = r.num();
-  q.eps_lim = r.num();
-  q.grow_below = r.num();
-  q.shrink_above = r.num();
-  q.new_contacts = r.integer() != 0;
-  q.x0_over_R = r.num();
-  q.x_max_over_R = r.num();
-  q.boundary_planes = r.integer() != 0;
-  q.boundary_factor = r.num();
-  q.E = r.num();
-  q.nu = r.num();
-  q.gmres_tolerance = r.num();
-  q.refactor_iterations = static_cast<int>(r.integer());
-  for (double& v : q.plane_origin) v = r.num();
+  m.opt = st.opt;
+  m.mat = st.mat;
   try {
-    q.validate();
-  } catch (const std::invalid_argument& e) {
-    r.fail(e.what());
-  }
-  r.expect("material");
-  auto& a = m.mat;
-  a.name = r.word();
-  a.omega = r.num();
-  a.gamma_s = r.num();
-  a.gamma_gb = r.num();
-  a.D_vol0 = r.num();
-  a.Q_vol = r.num();
-  a.deltaD_gb0 = r.num();
-  a.Q_gb = r.num();
-  a.deltaD_s0 = r.num();
-  a.Q_s = r.num();
-  a.c_III = r.num();
-  a.c_IV = r.num();
-  a.youngs_modulus = r.num();
-  a.poisson_ratio = r.num();
-  a.T_transus = r.num();
-  a.D_vol0_low = r.num();
-  a.Q_vol_low = r.num();
-  a.deltaD_gb0_low = r.num();
-  a.Q_gb_low = r.num();
-  a.deltaD_s0_low = r.num();
-  a.Q_s_low = r.num();
-  r.expect("profile");
-  const long np = r.integer();
-  if (np < 0 || np > 10'000'000) r.fail("bad profile size");
-  try {
-    if (np == 0) {
-      m.prof = cs::TemperatureProfile::constant(r.num());
-    } else {
-      std::vector<double> tt(np), TT(np);
-      for (long i = 0; i < np; ++i) {
-        tt[i] = r.num();
-        TT[i] = r.num();
-      }
-      m.prof = cs::TemperatureProfile(tt, TT);
-    }
+    m.prof = st.profile_t.empty() ? cs::TemperatureProfile::constant(st.profile_constant)
+                                  : cs::TemperatureProfile(st.profile_t, st.profile_T);
     m.setup_material();
   } catch (const std::invalid_argument& e) {
-    r.fail(e.what());
+    fail(e.what());
   }
-  r.expect("clock");
-  m.t = r.num();
-  m.dt = r.num();
-  m.nsteps = r.integer();
-  const bool need_factor = r.integer() != 0;
-  const int last_iterations = static_cast<int>(r.integer());
-  const long nref = r.integer();
-  m.rhs_evals = r.integer();
-  r.expect("timers");
-  m.timers.detect = r.num();
-  m.timers.integrate = r.num();
-  m.timers.assemble = r.num();
-  m.timers.factorise = r.num();
-  m.timers.solve = r.num();
-  m.timers.correct = r.num();
-  r.expect("particles");
-  const long n = r.integer();
-  if (n <= 0 || n > 100'000'000) r.fail("bad particle count");
-  m.p.resize(n);
-  m.p0.resize(n);
-  std::vector<int> flags(n);
-  for (long i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) m.p[i].x[k] = r.num();
-    m.p[i].r = r.num();
-    for (int k = 0; k < 3; ++k) m.p0[i].x[k] = r.num();
-    m.p0[i].r = r.num();
-    flags[i] = static_cast<int>(r.integer());
-  }
+  m.t = st.t;
+  m.dt = st.dt;
+  m.nsteps = st.nsteps;
+  m.rhs_evals = st.rhs_evals;
+  m.timers = st.timers;
+  m.p = std::move(st.p);
+  m.p0 = std::move(st.p0);
   try {
     m.setup_particles();
   } catch (const std::invalid_argument& e) {
-    r.fail(e.what());
+    fail(e.what());
   }
-  for (long i = 0; i < n; ++i)
-    for (int k = 0; k < 6; ++k) {
-      m.fixed_user[6 * i + k] = (flags[i] >> k) & 1;
-      m.fixed_plane[6 * i + k] = (flags[i] >> (6 + k)) & 1;
-    }
-  r.expect("contacts");
-  const long nc = r.integer();
-  if (nc < 0 || nc > 1'000'000'000) r.fail("bad contact count");
-  m.c.reserve(nc);
-  for (long i = 0; i < nc; ++i) {
-    Contact k;
-    k.a = static_cast<int>(r.integer());
-    k.b = static_cast<int>(r.integer());
-    if (k.a < 0 || k.b < 0 || k.a >= n || k.b >= n || k.a == k.b) r.fail(fmt::format("contact {}: bad particles", i));
-    k.frozen = r.integer() != 0;
-    const long st = r.integer();
-    if (st < 0 || st > 5) r.fail(fmt::format("contact {}: bad status", i));
-    k.pair.status = static_cast<cs::PairStatus>(st);
-    for (double& v : k.pair.q) v = r.num();
-    for (double& v : k.pair.q0) v = r.num();
-    k.pair.t = r.num();
-    k.pair.h = r.num();
-    k.pair.steps = r.integer();
-    k.pair.rejected = r.integer();
-    k.pair.rhs_evals = r.integer();
-    k.pair.restarts = r.integer();
-    k.t_created = r.num();
-    k.L_created = r.num();
-    k.dL_bar = r.num();
-    k.x_start = r.num();
-    if (!finite_state(k.pair.q) || !finite_state(k.pair.q0)) r.fail(fmt::format("contact {}: non-finite state", i));
+  m.fixed_user = std::move(st.fixed_user);
+  m.fixed_plane = std::move(st.fixed_plane);
+  m.c.reserve(st.c.size());
+  for (const Contact& k : st.c) {
+    if (!finite_state(k.pair.q) || !finite_state(k.pair.q0)) fail(fmt::format("contact {}: non-finite state", m.c.size()));
     m.adj[k.a].push_back(static_cast<int>(m.c.size()));
     m.adj[k.b].push_back(static_cast<int>(m.c.size()));
     m.c.push_back(k);
   }
-  r.expect("factor");
-  if (r.integer() != nref || nref > nc) r.fail("bad factor size");
-  const long nfix = r.integer();
-  if (nfix != 0 && nfix != 6 * n) r.fail("bad factor constraints");
-  m.ref_fixed.assign(static_cast<std::size_t>(nfix), 0);
-  for (long i = 0; i < nfix; i += 6) {
-    const long flags = r.integer();
-    for (int k = 0; k < 6; ++k) m.ref_fixed[i + k] = (flags >> k) & 1;
-  }
-  m.ref.resize(nref);
-  for (auto& e : m.ref) {
-    for (auto* v : {&e.e1, &e.e2, &e.e3})
-      for (int k = 0; k < 3; ++k) (*v)[k] = r.num();
-    e.lA0 = r.num();
-    e.lB0 = r.num();
-    e.Rm = r.num();
-  }
-  r.expect("end");
+  m.ref_fixed = std::move(st.ref_fixed);
+  m.ref = std::move(st.ref);
+  m.origin_record = std::move(st.origin_record);
   m.init_solver();
   m.pattern_dirty = true;
   // the factor of the saved run, rebuilt from its contacts, constraints and elements: the same
   // pattern, the same values, the same bits
-  if (!need_factor && nref > 0 && nfix > 0) {
-    m.build_pattern_for(static_cast<std::size_t>(nref), m.ref_fixed);
+  const std::size_t nref = m.ref.size(), nc = m.c.size();
+  if (!st.need_factor && nref > 0 && !m.ref_fixed.empty()) {
+    m.build_pattern_for(nref, m.ref_fixed);
     if (m.nfree > 0) {
       m.assemble(m.ref);
       const LinearStatus fs = m.solver->factorise(m.K, false);
-      if (!fs.ok) r.fail("the saved factor geometry is singular: " + fs.message);
+      if (!fs.ok) fail("the saved factor geometry is singular: " + fs.message);
     }
   }
   if (nc > 0) {
     m.build_pattern();
-    if (need_factor) m.need_factor = true;
+    if (st.need_factor) m.need_factor = true;
   }
-  m.last_iterations = last_iterations;
+  m.last_iterations = st.last_iterations;
   return s;
 }
+
+void Staggered::set_origin_record(const std::string& json_object) {
+  const auto j = sys::Json::parse(json_object, nullptr, false);
+  if (j.is_discarded() || !(j.is_object() || j.is_null()))
+    bad("staggered: the record of origin must be a JSON object or null");
+  impl_->origin_record = j.dump();
+}
+
+const std::string& Staggered::origin_record() const { return impl_->origin_record; }
 
 }  // namespace netdem::qs::staggered

@@ -1,23 +1,11 @@
-// The network-solver state file: plain text, one record per line, every floating-point value in
-// hexadecimal notation (exact), so that a restored run continues bit-identically.
-//
-//   netdem-network-state 1
-//   predictor 0|1
-//   particles N
-//   x y theta r peripheral x_build y_build f0 f1 f2 [du0 du1 du2]      (N lines; du if predictor 1)
-//   scalars solid_area initial_density box_area0
-//   box0 x_min y_min x_max y_max
-//   seed S
-//   box_deformation a11 a12 a21 a22      (and strain, box_deformation_build, dE_prev)
-//   pairs P
-//   i j u_max f_t hist_sliding E11 E12 E21 E22 slip centre f_n f_t sliding   (P lines)
-//   timings assemble analyse factorise solve neighbours total analyses factorisations solves increments newton
-//   end
-#include <cerrno>
-#include <cstdio>
-#include <cstdlib>
+// The network-solver state file in the state archive of netdem_system (kind "network", version 1;
+// docs/quasistatic.md "State file"): every double exact, every field checked at the door with a
+// one-line std::invalid_argument "FILE: /json/pointer: problem".
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -25,111 +13,181 @@
 
 #include <fmt/format.h>
 
-#include "netdem/packing/io.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/archive.hpp"
+#include "netdem/system/law_json.hpp"
 
 namespace netdem::qs {
 
 namespace {
 
-std::string hx(double v) { return fmt::format("{:a}", v); }
+using sys::Field;
+using sys::Json;
+using sys::real_json;
 
-std::string quote(const std::string& t) { return packing::quote_input(t, 40); }
+constexpr int kNetworkStateVersion = 1;
+constexpr double kMax = std::numeric_limits<double>::max();
 
-void put_matrix(std::string& out, const char* name, const Eigen::Matrix2d& m) {
-  out += fmt::format("{} {} {} {} {}\n", name, hx(m(0, 0)), hx(m(0, 1)), hx(m(1, 0)), hx(m(1, 1)));
+Json reals(const std::vector<double>& v, const char* what) {
+  Json a = Json::array();
+  for (double d : v) a.push_back(real_json(d, what));
+  return a;
+}
+Json matrix(const Eigen::Matrix2d& m, const char* what) {
+  return Json::array({real_json(m(0, 0), what), real_json(m(0, 1), what), real_json(m(1, 0), what), real_json(m(1, 1), what)});
+}
+Eigen::Matrix2d matrix(const Field& f) {
+  f.array(4);
+  Eigen::Matrix2d m;
+  m << f[std::size_t{0}].real(), f[std::size_t{1}].real(), f[std::size_t{2}].real(), f[std::size_t{3}].real();
+  return m;
+}
+std::vector<double> reals(const Field& f, std::size_t n, double lo = -kMax, double hi = kMax) {
+  f.array(n);
+  std::vector<double> v(n);
+  for (std::size_t k = 0; k < n; ++k) v[k] = f[k].real(lo, hi);
+  return v;
 }
 
-/// Line reader with one-line errors naming the file and line.
-class Reader {
- public:
-  static constexpr std::size_t kMaxLine = 4096;
-  Reader(std::istream& in, const std::string& path) : path_(path), in_(in) {}
-  /// Next line split into tokens; the first must be `key` (if not empty) and `count` tokens follow.
-  std::vector<std::string> next(const std::string& key, std::size_t count) {
-    std::string line;
-    if (!std::getline(in_, line)) fail(fmt::format("ends early, expected '{}'", key.empty() ? "a record" : key));
-    ++line_no_;
-    // a record has at most 14 values: a longer line is not one (and is not split into a huge list)
-    if (line.size() > kMaxLine) fail(fmt::format("line longer than {} characters", kMaxLine));
-    std::istringstream ls(line);
-    std::vector<std::string> tok;
-    for (std::string t; ls >> t;) tok.push_back(t);
-    std::size_t first = 0;
-    if (!key.empty()) {
-      if (tok.empty() || tok[0] != key) fail(fmt::format("expected '{}'", key));
-      first = 1;
-    }
-    if (tok.size() - first != count) fail(fmt::format("expected {} values, got {}", count, tok.size() - first));
-    return {tok.begin() + static_cast<std::ptrdiff_t>(first), tok.end()};
+Json state_json(const NetworkState& s) {
+  Json j = sys::make_archive("network", kNetworkStateVersion);
+  std::vector<bool> per(s.peripheral.begin(), s.peripheral.end());
+  j["particles"] = Json{{"x", reals(s.x, "x")},
+                        {"y", reals(s.y, "y")},
+                        {"theta", reals(s.theta, "theta")},
+                        {"r", reals(s.r, "r")},
+                        {"peripheral", per},
+                        {"x_build", reals(s.x_build, "x_build")},
+                        {"y_build", reals(s.y_build, "y_build")},
+                        {"f_contact", reals(s.f_contact, "f_contact")},
+                        {"du_prev", reals(s.du_prev, "du_prev")}};
+  j["solid_area"] = real_json(s.solid_area, "solid_area");
+  j["initial_density"] = real_json(s.initial_density, "initial_density");
+  j["box_area0"] = real_json(s.box_area0, "box_area0");
+  j["box0"] = Json{{"min", Json::array({real_json(s.box0.x_min, "box0"), real_json(s.box0.y_min, "box0")})},
+                   {"max", Json::array({real_json(s.box0.x_max, "box0"), real_json(s.box0.y_max, "box0")})}};
+  j["seed"] = s.seed;
+  j["box_deformation"] = matrix(s.box_deformation, "box_deformation");
+  j["strain"] = matrix(s.strain, "strain");
+  j["box_deformation_build"] = matrix(s.box_deformation_build, "box_deformation_build");
+  j["dE_prev"] = matrix(s.dE_prev, "dE_prev");
+  Json e = Json::array(), slip = Json::array(), centre = Json::array(), hist = Json::array();
+  for (std::size_t k = 0; k < s.pair_i.size(); ++k) {
+    e.push_back(matrix(s.aux[k].E_form, "E_form"));
+    slip.push_back(real_json(s.aux[k].slip, "slip"));
+    centre.push_back(real_json(s.aux[k].centre, "centre"));
+    hist.push_back(s.history[k]);
   }
-  double real(const std::string& t) {
-    errno = 0;
-    char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
-    if (end == t.c_str() || *end != '\0' || errno == ERANGE) fail(fmt::format("'{}' is not a number", quote(t)));
-    return v;
-  }
-  long integer(const std::string& t, long lo, long hi) {
-    errno = 0;
-    char* end = nullptr;
-    const long v = std::strtol(t.c_str(), &end, 10);
-    if (end == t.c_str() || *end != '\0' || errno == ERANGE || v < lo || v > hi)
-      fail(fmt::format("'{}' is not an integer in [{}, {}]", quote(t), lo, hi));
-    return v;
-  }
-  Eigen::Matrix2d matrix(const std::string& key) {
-    const auto t = next(key, 4);
-    Eigen::Matrix2d m;
-    m << real(t[0]), real(t[1]), real(t[2]), real(t[3]);
-    return m;
-  }
-  [[noreturn]] void fail(const std::string& m) const {
-    throw std::runtime_error(fmt::format("{}:{}: {}", path_, line_no_, m));
-  }
+  std::vector<bool> sl(s.sliding.begin(), s.sliding.end());
+  j["pairs"] = Json{{"i", s.pair_i},        {"j", s.pair_j},   {"history", hist}, {"E_form", e},
+                    {"slip", slip},         {"centre", centre}, {"f_n", reals(s.f_n, "f_n")},
+                    {"f_t", reals(s.f_t, "f_t")}, {"sliding", sl}};
+  const auto& t = s.timings;
+  j["timings"] = Json{{"assemble", real_json(t.assemble, "timing")},     {"analyse", real_json(t.analyse, "timing")},
+                      {"factorise", real_json(t.factorise, "timing")},   {"solve", real_json(t.solve, "timing")},
+                      {"neighbours", real_json(t.neighbours, "timing")}, {"total", real_json(t.total, "timing")},
+                      {"analyses", t.analyses},                          {"factorisations", t.factorisations},
+                      {"solves", t.solves},                              {"increments", t.increments},
+                      {"newton_iterations", t.newton_iterations}};
+  return j;
+}
 
- private:
-  std::string path_;
-  std::istream& in_;
-  long line_no_ = 0;
-};
+void read_particles(const Field& root, NetworkState& s) {
+  constexpr std::size_t kMaxParticles = 100000000;
+  const Field p = root["particles"];
+  p.object({"x", "y", "theta", "r", "peripheral", "x_build", "y_build", "f_contact", "du_prev"});
+  const std::size_t n = p["x"].array(1, kMaxParticles);
+  s.x = reals(p["x"], n);
+  s.y = reals(p["y"], n);
+  s.theta = reals(p["theta"], n);
+  s.r = reals(p["r"], n, 0.0, kMax);
+  for (std::size_t k = 0; k < n; ++k)
+    if (!(s.r[k] > 0.0)) p["r"][k].fail("a radius must be positive");
+  p["peripheral"].array(n);
+  s.peripheral.resize(n);
+  for (std::size_t k = 0; k < n; ++k) s.peripheral[k] = p["peripheral"][k].boolean() ? 1 : 0;
+  s.x_build = reals(p["x_build"], n);
+  s.y_build = reals(p["y_build"], n);
+  s.f_contact = reals(p["f_contact"], 3 * n);
+  if (p["du_prev"].json().is_array() && p["du_prev"].json().empty()) s.du_prev.clear();
+  else s.du_prev = reals(p["du_prev"], 3 * n);  // the predictor: empty at the start, else 3 per particle
+}
+
+void read_globals(const Field& root, NetworkState& s) {
+  s.solid_area = root["solid_area"].real(0.0, kMax);
+  s.initial_density = root["initial_density"].real(0.0, kMax);
+  s.box_area0 = root["box_area0"].real(0.0, kMax);
+  const Field b = root["box0"];
+  b.object({"min", "max"});
+  const auto lo = reals(b["min"], 2), hi = reals(b["max"], 2);
+  s.box0 = {lo[0], lo[1], hi[0], hi[1]};
+  if (!(s.box0.x_max > s.box0.x_min && s.box0.y_max > s.box0.y_min)) b.fail("the initial box must have positive size");
+  const Field seed = root["seed"];
+  if (!seed.json().is_number_unsigned() && !(seed.json().is_number_integer() && seed.json().get<std::int64_t>() >= 0))
+    seed.fail("expected a non-negative integer");
+  s.seed = seed.json().get<std::uint64_t>();
+  s.box_deformation = matrix(root["box_deformation"]);
+  s.strain = matrix(root["strain"]);
+  s.box_deformation_build = matrix(root["box_deformation_build"]);
+  s.dE_prev = matrix(root["dE_prev"]);
+  if (!(s.box_deformation.determinant() > 0.0)) root["box_deformation"].fail("the determinant must be positive");
+  if (!(s.box_deformation_build.determinant() > 0.0))
+    root["box_deformation_build"].fail("the determinant must be positive");
+}
+
+void read_pairs(const Field& root, NetworkState& s) {
+  const Field p = root["pairs"];
+  p.object({"i", "j", "history", "E_form", "slip", "centre", "f_n", "f_t", "sliding"});
+  const std::size_t n = s.x.size();
+  const std::size_t np = p["i"].array(0, n * (n - 1) / 2);
+  for (const char* key : {"j", "history", "E_form", "slip", "centre", "f_n", "f_t", "sliding"}) p[key].array(np);
+  const auto last = static_cast<std::int64_t>(n) - 1;
+  s.pair_i.resize(np);
+  s.pair_j.resize(np);
+  s.history.resize(np);
+  s.aux.resize(np);
+  s.sliding.resize(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    s.pair_i[k] = static_cast<int>(p["i"][k].integer(0, last));
+    s.pair_j[k] = static_cast<int>(p["j"][k].integer(0, last));
+    if (!(s.pair_i[k] < s.pair_j[k])) p["j"][k].fail("pair indices must satisfy i < j < N");
+    if (k > 0 && !(std::make_pair(s.pair_i[k - 1], s.pair_j[k - 1]) < std::make_pair(s.pair_i[k], s.pair_j[k])))
+      p["i"][k].fail("pairs must be sorted by (i, j)");
+    s.history[k] = p["history"][k].get<contact::PlasticIndentationHistory>();
+    s.aux[k].E_form = matrix(p["E_form"][k]);
+    s.aux[k].slip = p["slip"][k].real();
+    s.aux[k].centre = p["centre"][k].real();
+    s.sliding[k] = p["sliding"][k].boolean() ? 1 : 0;
+  }
+  s.f_n = reals(p["f_n"], np, 0.0, kMax);
+  s.f_t = reals(p["f_t"], np);
+}
+
+void read_timings(const Field& root, SolverTimings& T) {
+  const Field t = root["timings"];
+  t.object({"assemble", "analyse", "factorise", "solve", "neighbours", "total", "analyses", "factorisations", "solves",
+            "increments", "newton_iterations"});
+  T.assemble = t["assemble"].real(0.0, kMax);
+  T.analyse = t["analyse"].real(0.0, kMax);
+  T.factorise = t["factorise"].real(0.0, kMax);
+  T.solve = t["solve"].real(0.0, kMax);
+  T.neighbours = t["neighbours"].real(0.0, kMax);
+  T.total = t["total"].real(0.0, kMax);
+  constexpr std::int64_t kBig = std::int64_t{1} << 50;
+  T.analyses = t["analyses"].integer(0, kBig);
+  T.factorisations = t["factorisations"].integer(0, kBig);
+  T.solves = t["solves"].integer(0, kBig);
+  T.increments = t["increments"].integer(0, kBig);
+  T.newton_iterations = t["newton_iterations"].integer(0, kBig);
+}
 
 }  // namespace
 
 void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
   if (!s.wall_history.empty())
-    throw std::invalid_argument("the state file does not hold wall contacts (--boundary walls) yet");
-  const bool pred = !s.du_prev.empty();
-  std::string out = "netdem-network-state 1\n";
-  out += fmt::format("predictor {}\n", pred ? 1 : 0);
-  out += fmt::format("particles {}\n", s.x.size());
-  for (std::size_t p = 0; p < s.x.size(); ++p) {
-    out += fmt::format("{} {} {} {} {} {} {} {} {} {}", hx(s.x[p]), hx(s.y[p]), hx(s.theta[p]), hx(s.r[p]),
-                       int(s.peripheral[p]), hx(s.x_build[p]), hx(s.y_build[p]), hx(s.f_contact[3 * p]),
-                       hx(s.f_contact[3 * p + 1]), hx(s.f_contact[3 * p + 2]));
-    if (pred) out += fmt::format(" {} {} {}", hx(s.du_prev[3 * p]), hx(s.du_prev[3 * p + 1]), hx(s.du_prev[3 * p + 2]));
-    out += '\n';
-  }
-  out += fmt::format("scalars {} {} {}\n", hx(s.solid_area), hx(s.initial_density), hx(s.box_area0));
-  out += fmt::format("box0 {} {} {} {}\nseed {}\n", hx(s.box0.x_min), hx(s.box0.y_min), hx(s.box0.x_max), hx(s.box0.y_max),
-                     s.seed);
-  put_matrix(out, "box_deformation", s.box_deformation);
-  put_matrix(out, "strain", s.strain);
-  put_matrix(out, "box_deformation_build", s.box_deformation_build);
-  put_matrix(out, "dE_prev", s.dE_prev);
-  out += fmt::format("pairs {}\n", s.pair_i.size());
-  for (std::size_t k = 0; k < s.pair_i.size(); ++k) {
-    const auto& h = s.history[k];
-    const auto& a = s.aux[k];
-    out += fmt::format("{} {} {} {} {} {} {} {} {} {} {} {} {} {}\n", s.pair_i[k], s.pair_j[k], hx(h.u_max), hx(h.f_t),
-                       int(h.sliding), hx(a.E_form(0, 0)), hx(a.E_form(0, 1)), hx(a.E_form(1, 0)), hx(a.E_form(1, 1)),
-                       hx(a.slip), hx(a.centre), hx(s.f_n[k]), hx(s.f_t[k]), int(s.sliding[k]));
-  }
-  const auto& t = s.timings;
-  out += fmt::format("timings {} {} {} {} {} {} {} {} {} {} {}\nend\n", hx(t.assemble), hx(t.analyse), hx(t.factorise),
-                     hx(t.solve), hx(t.neighbours), hx(t.total), t.analyses, t.factorisations, t.solves, t.increments,
-                     t.newton_iterations);
+    throw std::invalid_argument("the state file does not hold wall contacts (the walls boundary) yet");
+  const std::string out = sys::dump_archive(state_json(s));
   const std::string tmp = path + ".tmp";
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
@@ -143,117 +201,31 @@ void save_state(const NetworkState& s, const std::string& path) {
   if (ec) throw std::runtime_error(fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message()));
 }
 
-namespace {
-
-void read_particles(Reader& in, NetworkState& s) {
-  constexpr long kMaxParticles = 100000000;
-  const bool pred = in.integer(in.next("predictor", 1)[0], 0, 1) == 1;
-  const auto n = static_cast<std::size_t>(in.integer(in.next("particles", 1)[0], 1, kMaxParticles));
-  // the arrays grow with the lines actually read: a count alone never allocates (a 20-byte file
-  // claiming 10^8 particles ends early instead of allocating gigabytes)
-  for (std::size_t p = 0; p < n; ++p) {
-    for (auto* v : {&s.x, &s.y, &s.theta, &s.r, &s.x_build, &s.y_build}) v->resize(p + 1);
-    s.peripheral.resize(p + 1);
-    s.f_contact.resize(3 * (p + 1));
-    if (pred) s.du_prev.resize(3 * (p + 1));
-    const auto t = in.next("", pred ? 13 : 10);
-    s.x[p] = in.real(t[0]);
-    s.y[p] = in.real(t[1]);
-    s.theta[p] = in.real(t[2]);
-    s.r[p] = in.real(t[3]);
-    s.peripheral[p] = static_cast<std::uint8_t>(in.integer(t[4], 0, 1));
-    s.x_build[p] = in.real(t[5]);
-    s.y_build[p] = in.real(t[6]);
-    for (int c = 0; c < 3; ++c) s.f_contact[3 * p + c] = in.real(t[7 + c]);
-    if (pred)
-      for (int c = 0; c < 3; ++c) s.du_prev[3 * p + c] = in.real(t[10 + c]);
-  }
-}
-
-void read_globals(Reader& in, NetworkState& s) {
-  const auto sc = in.next("scalars", 3);
-  s.solid_area = in.real(sc[0]);
-  s.initial_density = in.real(sc[1]);
-  s.box_area0 = in.real(sc[2]);
-  const auto b0 = in.next("box0", 4);
-  s.box0 = {in.real(b0[0]), in.real(b0[1]), in.real(b0[2]), in.real(b0[3])};
-  const std::string t = in.next("seed", 1)[0];
-  errno = 0;
-  char* end = nullptr;
-  if (t.empty() || t[0] == '-') in.fail("seed must be a non-negative integer");
-  s.seed = std::strtoull(t.c_str(), &end, 10);
-  if (*end != '\0' || errno == ERANGE) in.fail(fmt::format("'{}' is not a seed", quote(t)));
-  s.box_deformation = in.matrix("box_deformation");
-  s.strain = in.matrix("strain");
-  s.box_deformation_build = in.matrix("box_deformation_build");
-  s.dE_prev = in.matrix("dE_prev");
-}
-
-void read_pairs(Reader& in, NetworkState& s) {
-  constexpr long kMaxPairs = 1000000000;
-  const auto np = static_cast<std::size_t>(in.integer(in.next("pairs", 1)[0], 0, kMaxPairs));
-  const long last = static_cast<long>(s.x.size()) - 1;
-  for (std::size_t k = 0; k < np; ++k) {  // grow with the lines read (see read_particles)
-    s.pair_i.resize(k + 1);
-    s.pair_j.resize(k + 1);
-    s.history.resize(k + 1);
-    s.aux.resize(k + 1);
-    s.f_n.resize(k + 1);
-    s.f_t.resize(k + 1);
-    s.sliding.resize(k + 1);
-    const auto t = in.next("", 14);
-    s.pair_i[k] = static_cast<int>(in.integer(t[0], 0, last));
-    s.pair_j[k] = static_cast<int>(in.integer(t[1], 0, last));
-    s.history[k].u_max = in.real(t[2]);
-    s.history[k].f_t = in.real(t[3]);
-    s.history[k].sliding = static_cast<std::uint8_t>(in.integer(t[4], 0, 1));
-    s.aux[k].E_form << in.real(t[5]), in.real(t[6]), in.real(t[7]), in.real(t[8]);
-    s.aux[k].slip = in.real(t[9]);
-    s.aux[k].centre = in.real(t[10]);
-    s.f_n[k] = in.real(t[11]);
-    s.f_t[k] = in.real(t[12]);
-    s.sliding[k] = static_cast<std::uint8_t>(in.integer(t[13], 0, 1));
-  }
-}
-
-void read_timings(Reader& in, SolverTimings& T) {
-  const auto tm = in.next("timings", 11);
-  T.assemble = in.real(tm[0]);
-  T.analyse = in.real(tm[1]);
-  T.factorise = in.real(tm[2]);
-  T.solve = in.real(tm[3]);
-  T.neighbours = in.real(tm[4]);
-  T.total = in.real(tm[5]);
-  constexpr long kBig = 1L << 50;
-  T.analyses = in.integer(tm[6], 0, kBig);
-  T.factorisations = in.integer(tm[7], 0, kBig);
-  T.solves = in.integer(tm[8], 0, kBig);
-  T.increments = in.integer(tm[9], 0, kBig);
-  T.newton_iterations = in.integer(tm[10], 0, kBig);
-}
-
-}  // namespace
-
 NetworkState load_state(const std::string& path) {
-  if (std::filesystem::is_directory(path)) throw std::runtime_error(fmt::format("{}: is a directory, not a state file", path));
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error(fmt::format("{}: cannot be opened", path));
-  return load_state(f, path);
+  return load_state_text(sys::read_text_file(path, "state file"), path);
 }
 
 NetworkState load_state(std::istream& stream, const std::string& path) {
-  Reader in(stream, path);
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return load_state_text(text.str(), path);
+}
+
+NetworkState load_state_text(std::string_view text, const std::string& path) {
+  const Json j = sys::parse_archive(text, path);
+  const Field root(j, path);
+  sys::check_header(root, "network", kNetworkStateVersion);
+  root.object({"format", "kind", "version", "particles", "solid_area", "initial_density", "box_area0", "box0", "seed",
+               "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "timings"});
   NetworkState s;
-  if (in.next("netdem-network-state", 1)[0] != "1") in.fail("unsupported state file version");
-  read_particles(in, s);
-  read_globals(in, s);
-  read_pairs(in, s);
-  read_timings(in, s.timings);
-  in.next("end", 0);
+  read_particles(root, s);
+  read_globals(root, s);
+  read_pairs(root, s);
+  read_timings(root, s.timings);
   try {
     s.validate();
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(fmt::format("{}: {}", path, e.what()));
+    root.fail(e.what());
   }
   return s;
 }

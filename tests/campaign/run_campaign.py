@@ -428,35 +428,33 @@ def packing_reproducers(text):
 
 
 def dem_state_reproducers(text):
-    """The state-file reproducers of issue 13 for demsolve: [(label, bytes)]."""
-    lines = text.rstrip("\n").split("\n")
-    k0 = next(k for k, ln in enumerate(lines) if ln.startswith("id,")) + 1
-    out = []
-    m = list(lines)
-    for k, ln in enumerate(m):
-        if ln.startswith("wall ") or re.match(r"^(left|right|bottom|top) ", ln):
-            f = ln.split(" ")
-            if len(f) > 4 and f[1].startswith("stress"):
-                f[4] = "0"
-                m[k] = " ".join(f)
-    out.append(("dem state: stress-controlled wall with mass 0", ("\n".join(m) + "\n").encode()))
-    m = list(lines)
-    f0, f1 = m[k0].split(","), m[k0 + 1].split(",")
-    f1[1], f1[2] = f0[1], f0[2]
-    m[k0 + 1] = ",".join(f1)
-    out.append(("dem state: two particles at the same position", ("\n".join(m) + "\n").encode()))
-    m = list(lines)
-    f = m[k0].split(",")
-    f[1] = "1e3"
-    m[k0] = ",".join(f)
-    out.append(("dem state: a particle far outside the box", ("\n".join(m) + "\n").encode()))
-    for col, name in ((7, "radius"), (3, "velocity vx")):
-        m = list(lines)
-        f = m[k0].split(",")
-        f[col] = "1e300"
-        m[k0] = ",".join(f)
-        out.append((f"dem state: {name} 1e300", ("\n".join(m) + "\n").encode()))
-    return out
+    """The state-file reproducers of issue 13 for demsolve (the state archive, docs/dynamic.md): [(label, bytes)]."""
+    good = json.loads(text)
+
+    def mutated(label, edit):
+        j = json.loads(json.dumps(good))
+        edit(j)
+        return (label, (json.dumps(j, separators=(",", ":")) + "\n").encode())
+
+    def wall_mass_zero(j):
+        for w in j["moving_walls"]:
+            if w["mode"] == "stress":
+                w["mass"] = 0.0
+
+    def same_position(j):
+        p = j["particles"]
+        p["x"][1], p["y"][1] = p["x"][0], p["y"][0]
+
+    def column(name, value):
+        def edit(j):
+            j["particles"][name][0] = value
+        return edit
+
+    return [mutated("dem state: stress-controlled wall with mass 0", wall_mass_zero),
+            mutated("dem state: two particles at the same position", same_position),
+            mutated("dem state: a particle far outside the box", column("x", 1e3)),
+            mutated("dem state: radius 1e300", column("radius", 1e300)),
+            mutated("dem state: velocity vx 1e300", column("vx", 1e300))]
 
 
 # ---- the task list ------------------------------------------------------------------------------------

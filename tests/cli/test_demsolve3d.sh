@@ -33,7 +33,7 @@ good() {  # out-dir time
 good "$tmp/d1" 0.004 && good "$tmp/d2" 0.004 && cmp -s "$tmp/d1/state.txt" "$tmp/d2/state.txt"
 result prepare_3d_deterministic $?
 good "$tmp/a" 0.15 &&
-  grep -q '^dim 3$' "$tmp/a/state.txt" &&
+  grep -q '"dim":3,' "$tmp/a/state.txt" &&
   has_columns "$tmp/a/timeseries.csv" t nu C sxx syy szz syy_over_p szz_contacts box_z &&
   grep -q '"dim": 3' "$tmp/a/summary.json" && grep -q '"pressure_N_per_m2": 50000' "$tmp/a/summary.json" &&
   grep -q 'NumberOfComponents="3"' "$tmp/a/particles_final.vtp" &&
@@ -82,7 +82,7 @@ result good_compress_3d $?
 if [ -n "$ns" ]; then
   "$ns" pack --dim 3 --width 6 --lateral walls --seed 3 --out "$tmp/np" >/dev/null 2>"$tmp/stderr" &&
     "$ds" prepare --dim 3 --packing "$tmp/np/packing.csv" --time 1e-9 --quiet --out "$tmp/dp" >/dev/null 2>"$tmp/stderr" &&
-    grep -q '^dim 3$' "$tmp/dp/state.txt"
+    grep -q '"dim":3,' "$tmp/dp/state.txt"
   result packing_3d_from_netsolve $?
   "$ns" pack --width 8 --seed 4 --out "$tmp/n2" >/dev/null 2>"$tmp/stderr"
   check_bad packing_2d_for_dim3 "2D packing" prepare --dim 3 --packing "$tmp/n2/packing.csv"

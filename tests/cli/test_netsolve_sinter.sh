@@ -102,6 +102,11 @@ ok sn_restart_last [ "$(tail -1 "$tmp/r2/history.csv")" = "$(tail -1 "$c/history
 ok sn_restart_rows [ "$(awk -F, 'NR > 2' "$tmp/r2/history.csv")" = "$(awk -F, 'NR > 1 && $1 > 50' "$c/history.csv")" ]
 ok sn_restart_start awk -F, 'NR == 2 { exit !($1 == 50) }' "$tmp/r2/history.csv"
 ok sn_restart_seed grep -q '"seed": 7' "$tmp/r2/summary.json"
+# the record of origin is in the state itself: a state without its summary.json beside it keeps the seed
+mkdir -p "$tmp/lone" && cp "$tmp/r1/state.txt" "$tmp/lone/state.txt"
+"$tool" sinter --restart "$tmp/lone/state.txt" --time 100 --quiet --out "$tmp/r4" >/dev/null 2>"$tmp/stderr"
+ok sn_restart_origin_in_state grep -q '"seed": 7' "$tmp/r4/summary.json"
+ok sn_restart_origin_packing grep -q '"source": ".*lattice.csv"' "$tmp/r4/summary.json"
 ok sn_restart_old_untouched [ "$(tail -1 "$tmp/r1/history.csv")" = "$(grep '^50,' "$c/history.csv")" ]
 # the same from the checkpoint's state
 "$tool" sinter --restart "$c/state_1.txt" --time 100 --quiet --out "$tmp/r3" >/dev/null 2>&1

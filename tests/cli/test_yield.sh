@@ -74,7 +74,7 @@ else
   ko yield_from_state_equals_uninterrupted
 fi
 check_bad yield_from_state_path "does not lie along" yield --from-state "$tmp/cstate/state.txt" --precompact closed-die --directions 4
-check_bad yield_from_state_missing "cannot be opened" yield --from-state "$tmp/no_such_state.txt" --directions 4
+check_bad yield_from_state_missing "cannot open state file" yield --from-state "$tmp/no_such_state.txt" --directions 4
 # merging runs of different setups is refused
 if "$ns" "${args[@]}" --friction 0 --probes 0 --out "$tmp/ysf" >/dev/null 2>"$tmp/stderr"; then
   check_bad yield_merge_mismatch "different setup" yield-merge "$tmp/ys0" "$tmp/ysf"

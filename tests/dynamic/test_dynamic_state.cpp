@@ -243,20 +243,21 @@ TEST(DynamicState, BadStateFilesGiveOneLineErrors) {
       EXPECT_EQ(m.find('\n'), std::string::npos) << m;
     }
   };
-  expect_error(good.substr(0, good.size() - 4), "end");                 // truncated
-  expect_error("hello\n", "not a demsolve state file");
-  std::string nan = good;
-  {
-    const auto b = nan.find("\n0,") + 3;
-    nan.replace(b, nan.find(',', b) - b, "nan");
-  }
-  expect_error(nan, "not a finite number");
-  std::string neg = good;
-  neg.replace(neg.find("param k2 ") + 9, 1, "-");
-  expect_error(neg, "k2");
-  std::string unk = good;
-  unk.replace(unk.find("param mu "), 9, "param zz ");
-  expect_error(unk, "unknown contact parameter 'zz'");
+  expect_error(good.substr(0, good.size() - 4), "f: /: not a JSON state archive (syntax error at byte");  // truncated
+  expect_error("hello\n", "not a JSON state archive");
+  expect_error("# demsolve state v2 (docs/dynamic.md)\ntime 0\n", "convert it with apps/scripts/convert_state.py");
+  auto edit = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return t.replace(at, from.size(), to);
+  };
+  expect_error(edit("\"x\":[", "\"x\":[\"nan\","), "f: /particles/x/0: expected a number, found string \"nan\"");
+  expect_error(edit("\"k2\":200000.0", "\"k2\":-200000.0"), "f: /luding: luding contact law: k2 must be positive");
+  expect_error(edit("\"k2\":200000.0", "\"zz\":1.0,\"k2\":200000.0"), "f: /luding/zz: unknown member");
+  expect_error(edit("\"k2\":200000.0", "\"k2\":\"inf\""), "f: /luding/k2: must be a finite number");
+  expect_error(edit("\"kind\":\"dem\"", "\"kind\":\"network\""), "f: /kind: a network state, expected a dem state");
+  expect_error(edit("\"version\":1", "\"version\":2"), "f: /version: 2 is outside [1, 1]");
   EXPECT_THROW(read_state_file("/nonexistent/state.txt"), std::invalid_argument);
   // parameters by name: every field round-trips
   LudingParams q;

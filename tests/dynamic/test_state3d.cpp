@@ -80,7 +80,7 @@ TEST(DynamicState3D, RestartThroughStateFileIsBitwiseExact) {
   const double ramp = 0.8 * static_cast<double>(n1 + n2) * a.dt();
   advance(a, n1, ramp);
   const std::string text = format_state(a.state());
-  ASSERT_NE(text.find("\ndim 3\n"), std::string::npos);
+  ASSERT_NE(text.find("\"dim\":3"), std::string::npos);
   std::istringstream in(text);
   const SolverState parsed = parse_state(in, "mem");
   EXPECT_EQ(parsed.dim(), 3);
@@ -216,9 +216,9 @@ TEST(DynamicState3D, BadStateFilesGiveOneLineErrors) {
     EXPECT_NE(at, std::string::npos) << from;
     return s.replace(at, from.size(), to);
   };
-  refuse(replace(good, "dim 3", "dim 4"), "dim must be 3");
-  refuse(replace(good, "wall_back", "wall_top"), "expected 'wall_back'");
-  refuse(good.substr(0, good.size() - 4), "unexpected end of file");
+  refuse(replace(good, "\"dim\":3", "\"dim\":4"), "/dim: 4 is outside [2, 3]");
+  refuse(replace(good, "\"moving_walls\":[{", "\"moving_walls\":[{},{"), "/moving_walls: expected 3 elements, found 4");
+  refuse(good.substr(0, good.size() - 4), "syntax error at byte");
   {  // a centre outside the box (z above z_max)
     std::istringstream in(good);
     SolverState st = parse_state(in, "s3");

@@ -2,6 +2,8 @@
 // identities on random packings, and increment convergence.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "test_scale.hpp"
 
 #include <algorithm>
@@ -596,7 +598,7 @@ TEST(NetworkSolverState, FileRoundTripAndBadFiles) {
     try {
       qs::load_state(bad);
       ADD_FAILURE() << "accepted: " << what;
-    } catch (const std::runtime_error& e) {
+    } catch (const std::invalid_argument& e) {
       const std::string m = e.what();
       EXPECT_NE(m.find(bad), std::string::npos) << m;
       EXPECT_EQ(m.find('\n'), std::string::npos) << m;
@@ -606,13 +608,36 @@ TEST(NetworkSolverState, FileRoundTripAndBadFiles) {
   };
   std::ifstream in(file);
   const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  expect_error(good.substr(0, good.size() / 2), "");                    // truncated
-  expect_error("netdem-network-state 2\n", "version");
-  expect_error("hello\n", "netdem-network-state");
-  std::string nan = good;
-  nan.replace(nan.find("scalars ") + 8, 1, "n");  // solid area -> not a number
-  expect_error(nan, "not a number");
-  EXPECT_THROW(qs::load_state(testing::TempDir() + "/does_not_exist.txt"), std::runtime_error);
+  auto edit = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return t.replace(at, from.size(), to);
+  };
+  expect_error(good.substr(0, good.size() / 2), ": /: not a JSON state archive (syntax error at byte");  // truncated
+  expect_error(edit("\"version\":1", "\"version\":2"), ": /version: 2 is outside [1, 1]");
+  expect_error("hello\n", "not a JSON state archive");
+  expect_error("netdem-network-state 1\npredictor 0\n", "convert it with apps/scripts/convert_state.py");
+  auto set = [&](const std::string& pointer, const nlohmann::json& v) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    j[nlohmann::json::json_pointer(pointer)] = v;
+    return j.dump();
+  };
+  expect_error(set("/solid_area", "nan"), ": /solid_area: expected a number, found string \"nan\"");
+  expect_error(set("/particles/r/0", "inf"), ": /particles/r/0: must be a finite number");
+  expect_error(set("/particles/r/2", -1.0), ": /particles/r/2: -1.0 is below 0");
+  expect_error(set("/particles/r/2", 0.0), ": /particles/r/2: a radius must be positive");
+  expect_error(set("/seed", -3), ": /seed: expected a non-negative integer");
+  expect_error(set("/pairs/j/0", 0), ": /pairs/j/0: pair indices must satisfy i < j < N");
+  expect_error(set("/pairs/f_n/1", -2.0), ": /pairs/f_n/1: -2.0 is below 0");
+  expect_error(set("/pairs/history/0/u_max", -1.0), ": /pairs/history/0/u_max: -1.0 is below 0");
+  expect_error(set("/box_deformation/0", -1.0), ": /box_deformation: the determinant must be positive");
+  expect_error(set("/particles/f_contact", nlohmann::json::array()), ": /particles/f_contact: expected");
+  expect_error(set("/pairs/E_form/0", "x"), ": /pairs/E_form/0: expected an array of 4");
+  expect_error(edit("\"peripheral\":[", "\"peripheral\":[2,"), ": /particles/peripheral: expected");
+  expect_error(edit("\"u_max\":", "\"u_max\":-1.0,\"zz\":"), ": /pairs/history/0/zz: unknown member");
+  expect_error(edit("\"seed\":", "\"seed\":-3,\"zz\":"), ": /zz: unknown member");
+  EXPECT_THROW(qs::load_state(testing::TempDir() + "/does_not_exist.txt"), std::invalid_argument);
   std::remove(file.c_str());
 }
 

@@ -4,7 +4,12 @@
 // and a restart is bit-identical.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -312,6 +317,71 @@ TEST(Staggered, RefusesBadInput) {
   m.poisson_ratio = -1.0;
   EXPECT_THROW(st::Staggered(p, m, T, o), std::invalid_argument);
   EXPECT_THROW(st::Staggered::load("netdem-staggered-state 1\noptions 2 nonsense", "x"), std::invalid_argument);
+}
+
+// The restart state in the state archive: the record of origin travels with it, and every field is
+// checked at the door, one line naming the field (a negative initial radius, the 8th value of an old
+// particle row, was accepted before issue 26).
+TEST(Staggered, StateFieldsAreCheckedAtTheDoor) {
+  st::Staggered a = jittered(120e9, 2);
+  while (a.time() < 40.0) a.step(40.0);
+  a.set_origin_record(R"({"seed":7,"packing":{"source":"lattice.csv"}})");
+  const std::string good = a.save();
+  const st::Staggered b = st::Staggered::load(good, "s");
+  EXPECT_EQ(b.origin_record(), R"({"packing":{"source":"lattice.csv"},"seed":7})");
+  EXPECT_EQ(b.save(), good) << "state -> file -> state is not the identity";
+  EXPECT_THROW(a.set_origin_record("[1, 2]"), std::invalid_argument);
+  ASSERT_GT(a.contacts().size(), 2u);
+  auto refuse = [&](const char* pointer, const nlohmann::json& v, const std::string& needle) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    j[nlohmann::json::json_pointer(pointer)] = v;
+    try {
+      (void)st::Staggered::load(j.dump(), "s");
+      ADD_FAILURE() << pointer << ": accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("s: " + needle), std::string::npos) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    }
+  };
+  refuse("/particles/r0/3", -25e-6, "/particles/r0/3: an initial radius must be positive");
+  refuse("/particles/r/1", 0.0, "/particles/r/1: a radius must be positive");
+  refuse("/particles/x/2", "nan", "/particles/x/2: expected a number, found string \"nan\"");
+  refuse("/particles/fixed_user/0", 64, "/particles/fixed_user/0: 64 is outside [0, 63]");
+  refuse("/contacts/status/1", 9, "/contacts/status/1: 9 is outside [0, 5]");
+  refuse("/contacts/b/0", 1000, "/contacts/b/0: 1000 is outside");
+  refuse("/contacts/q/0", nlohmann::json::array({1.0, 2.0}), "/contacts/q/0: expected 5 elements, found 2");
+  refuse("/contacts/h/0", -1.0, "/contacts/h/0: -1.0 is below 0");
+  refuse("/options/dt_max", -1.0, "/options: staggered:");
+  refuse("/options/strategy", 3, "/options/strategy: 3 is outside [1, 2]");
+  refuse("/material/gamma_s", "x", "/material/gamma_s: expected a number");
+  refuse("/clock/dt", "inf", "/clock/dt: must be a finite number");
+  refuse("/factor/fixed", nlohmann::json::array({0}), "/factor/fixed: expected 0 or");
+  refuse("/origin", 5, "/origin: expected an object or null");
+  refuse("/kind", "dem", "/kind: a dem state, expected a staggered state");
+  // the regressions of fuzz_staggered_state: every refuse_* file refused on one line naming a field
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(NETDEM_STAGGERED_REGRESSIONS)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ++files;
+    try {
+      (void)st::Staggered::load(text, "input");
+      ADD_FAILURE() << e.path() << ": accepted";
+    } catch (const std::invalid_argument& err) {
+      const std::string m = err.what();
+      EXPECT_EQ(m.rfind("input: /", 0), 0u) << e.path() << ": " << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+      std::printf("  %s: %s\n", e.path().filename().c_str(), m.c_str());
+    }
+  }
+  EXPECT_GE(files, 7);
+  try {
+    (void)st::Staggered::load("netdem-staggered-state 1\noptions 2\n", "old");
+    ADD_FAILURE() << "an old text state was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("convert it with apps/scripts/convert_state.py"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

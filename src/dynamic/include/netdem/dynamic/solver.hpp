@@ -217,7 +217,16 @@ struct SolverState {
   std::vector<contact::LudingHistoryT<3>> pair_history3;  ///< one per pair_key
   std::vector<contact::LudingHistoryT<3>> wall_history3;  ///< 6 per particle
   std::vector<contact::PlasticIndentationHistoryT<3>> plastic_pair_history3, plastic_wall_history3;
+  /// ContactModel::PlasticIndentation: the law and the wall friction of the solver that wrote the
+  /// state (DynamicOptions::plastic, plastic_wall_mu); a restart continues with them.
+  contact::PlasticIndentationParams plastic;
+  double plastic_wall_mu = 0.0;
+  /// The plastic law: the largest contact width A_c of the last force evaluation (the tangential
+  /// bound of the next step's time step, plastic_time_step).
+  double plastic_area_max = 0.0;
   int dim() const { return particles.dim; }
+  /// A state of the plastic-indentation law (its wall histories are filled, the Luding ones empty).
+  bool plastic_law() const { return !plastic_wall_history.empty() || !plastic_wall_history3.empty(); }
 };
 
 /// One touching contact at the current state, for output (distributions, snapshots).
@@ -271,9 +280,10 @@ class DynamicSolverT {
   using Stress = std::conditional_t<D == 2, Stress2, Stress3>;
 
   /// Restart: continues exactly (bit for bit) where the solver that produced `state` stopped.
-  /// The state's params and dt are used; options give the model and the checks. (2D only)
+  /// The state's params and dt (the plastic law: also its law and wall friction) are used; options
+  /// give the model and the checks.
   DynamicSolverT(const SolverState& state, const DynamicOptions& options);
-  /// The complete state at the current time (for state files and restarts). (2D only)
+  /// The complete state at the current time (for state files and restarts).
   SolverState state() const;
 
   /// Validates, chooses the time step, builds the neighbour table, computes the first forces.

@@ -34,6 +34,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -138,15 +139,17 @@ struct NetworkState {
   void validate() const;
 };
 
-/// Writes the state exactly (hexadecimal floating point), atomically (temporary file + rename).
-/// Throws std::runtime_error naming the file on failure.
+/// Writes the state exactly in the state archive (JSON, kind "network"; docs/quasistatic.md
+/// "State file"), atomically (temporary file + rename). Throws std::runtime_error naming the file
+/// on failure.
 void save_state(const NetworkState& state, const std::string& path);
-/// Reads and validates a state file written by save_state; throws std::runtime_error (one line,
-/// naming the file and line) on a missing, truncated or inconsistent file.
+/// Reads and validates a state file written by save_state; throws std::invalid_argument (one line,
+/// "FILE: /json/pointer: problem") on a missing, truncated, old-format or inconsistent file.
 NetworkState load_state(const std::string& path);
-/// The same reader on a stream (load_state(path) is a thin wrapper); `source` names the input in
-/// the messages.
+/// The same reader on a stream and on the text (load_state(path) is a thin wrapper); `source`
+/// names the input in the messages.
 NetworkState load_state(std::istream& in, const std::string& source);
+NetworkState load_state_text(std::string_view text, const std::string& source);
 
 class NetworkSolver {
  public:

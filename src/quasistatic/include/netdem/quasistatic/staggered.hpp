@@ -146,12 +146,19 @@ class Staggered {
   /// Sum of the initial particle volumes / volume of the current bounding box of the spheres.
   double density() const;
 
-  /// The whole state as text (hexadecimal floating point: bit-exact): options, material,
-  /// temperature profile, particles, contacts, constraints and the geometry of the last
-  /// factorisation, so that a run continued from it is bit-identical to an uninterrupted one.
+  /// The whole state in the state archive (JSON, kind "staggered", every double exact;
+  /// docs/staggered.md "Restart state"): options, material, temperature profile, particles,
+  /// contacts, constraints, the geometry of the last factorisation and the record of origin, so
+  /// that a run continued from it is bit-identical to an uninterrupted one.
   std::string save() const;
-  /// Reads save(); throws std::invalid_argument (one line, with origin) for a bad file.
+  /// Reads save(); every field is checked at the door; throws std::invalid_argument (one line,
+  /// "ORIGIN: /json/pointer: problem") for a bad file. An old text state is refused with how to
+  /// convert it.
   static Staggered load(const std::string& text, const std::string& origin);
+  /// The record of origin of the sample (a JSON object, e.g. the seed and the packing of the run
+  /// that made it, or null): kept in the state, so that a restart knows it.
+  void set_origin_record(const std::string& json_object);
+  const std::string& origin_record() const;
 
  private:
   Staggered();

@@ -1,0 +1,421 @@
+// Solver state between steps: restart from a SolverState, state(), the temperature schedule,
+// parameter and wall changes, and contacts() (the state file: state.cpp, docs/dynamic.md).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "netdem/dynamic/solver.hpp"
+#include "state_of.hpp"
+
+namespace netdem::dem {
+
+namespace {
+[[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
+}  // namespace
+
+
+namespace {
+// The options of a restart: a plastic-law state brings its law and wall friction.
+DynamicOptions restart_options(const SolverState& st, DynamicOptions o) {
+  if (st.plastic_law() && o.model == ContactModel::PlasticIndentation) {
+    o.plastic = st.plastic;
+    o.plastic_wall_mu = st.plastic_wall_mu;
+  }
+  return o;
+}
+}  // namespace
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& options)
+    : P_(st.particles), params_(st.params), box_(st.box), opt_(restart_options(st, options)) {
+  using S = StateOf<D>;
+  params_.validate();
+  opt_.validate();
+  const std::size_t n = P_.size();
+  if (P_.dim != D) fail(fmt::format("state: the particles are {}D, the solver {}D", P_.dim, D));
+  auto same = [n](std::size_t m) { return m == n; };
+  const auto& wh = S::wall(st);
+  const auto& pwh = S::pl_wall(st);
+  const std::size_t nw = static_cast<std::size_t>(kWalls);
+  bool sizes = same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
+               same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
+               same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) && same(P_.torque.size()) &&
+               same(st.radius_ref.size());
+  if constexpr (D == 3)
+    sizes = sizes && same(P_.z.size()) && same(P_.vz.size()) && same(P_.fz.size()) && same(P_.wx.size()) &&
+            same(P_.wy.size()) && same(P_.tx.size()) && same(P_.ty.size());
+  const bool luding_h = wh.size() == nw * n && st.pair_key.size() == S::pair(st).size();
+  const bool plastic_h = options.model == ContactModel::PlasticIndentation && pwh.size() == nw * n &&
+                         S::pl_pair(st).size() == st.pair_key.size() && wh.empty() && S::pair(st).empty();
+  if (st.plastic_law() != (options.model == ContactModel::PlasticIndentation))
+    fail(st.plastic_law() ? "state: a state of the plastic-indentation law needs ContactModel::PlasticIndentation"
+                          : "state: a state of the Luding law cannot restart with ContactModel::PlasticIndentation");
+  if (!sizes || !(luding_h || plastic_h)) fail("state: inconsistent array sizes");
+  if (n == 0) fail("state: no particles");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(st.radius_ref[i] > 0.0 && P_.radius[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
+      fail("state: particle " + std::to_string(i) + " has a non-positive radius or mass");
+  if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
+    fail("state: box must have x_max > x_min and y_max > y_min");
+  if (D == 3 && box_.enabled && !(box_.z_max > box_.z_min)) fail("state: a 3D box must have z_max > z_min");
+  if (!(st.dt > 0.0) || !std::isfinite(st.dt)) fail("state: time step must be positive");
+  for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
+    const auto i = st.pair_key[k] >> 32, j = st.pair_key[k] & 0xffffffffu;
+    if (!(i < j && j < n) || (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])))
+      fail("state: contact table is not a sorted list of pairs i < j < N");
+  }
+  DynamicOptions o = opt_;
+  o.dt = st.dt;
+  // checks the stored dt against the stability rule
+  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, o, 0.0) : choose_time_step(P_, params_, o);
+  thermal_ = st.thermal;
+  time_ = st.time;
+  radius_ref_ = st.radius_ref;
+  radius_scale_ = P_.radius[0] / radius_ref_[0];
+  std::copy(S::wall_velocity(st), S::wall_velocity(st) + D, wall_v_);
+  std::copy(S::wall_force(st), S::wall_force(st) + 2 * D, wall_force_);
+  if constexpr (D == 2) {
+    sxx_ = st.stress_sum[0];
+    sxy_ = st.stress_sum[1];
+    syx_ = st.stress_sum[2];
+    syy_ = st.stress_sum[3];
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) s3_[a][b] = st.stress_sum3[3 * a + b];
+  }
+  elastic_ = st.elastic;
+  if (plastic()) area_max_ = st.plastic_area_max;
+  wall_hist_ = wh;
+  pl_wall_hist_ = pwh;
+  centre0_[0] = 0.5 * (box_.x_min + box_.x_max);  // the affine map starts again at the restart
+  centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
+  if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
+  finish_setup();
+  // The table is rebuilt from the current positions, carrying the stored histories; forces are
+  // NOT re-evaluated (the stored ones are those of the last step).
+  pair_key_ = st.pair_key;
+  pair_hist_ = S::pair(st);
+  pl_pair_hist_ = S::pl_pair(st);
+  build_table();
+  rebuilds_ = 0;
+}
+
+template <int D>
+SolverState DynamicSolverT<D>::state() const {
+  using S = StateOf<D>;
+  SolverState st;
+  st.particles = P_;
+  st.radius_ref = radius_ref_;
+  st.box = box_;
+  std::copy(wall_v_, wall_v_ + D, S::wall_velocity(st));
+  std::copy(wall_force_, wall_force_ + 2 * D, S::wall_force(st));
+  if constexpr (D == 2) {
+    st.stress_sum[0] = sxx_;
+    st.stress_sum[1] = sxy_;
+    st.stress_sum[2] = syx_;
+    st.stress_sum[3] = syy_;
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) st.stress_sum3[3 * a + b] = s3_[a][b];
+  }
+  st.elastic = elastic_;
+  st.time = time_;
+  st.dt = ts_.dt;
+  st.thermal = thermal_;
+  st.params = params_;
+  if (plastic()) {
+    st.plastic = opt_.plastic;
+    st.plastic_wall_mu = opt_.plastic_wall_mu;
+    st.plastic_area_max = area_max_;
+  }
+  // only the pairs with a live history (touching); the others are rebuilt from positions
+  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+    if (plastic()) {
+      const PlasticHist& h = pl_pair_hist_[k];
+      if (h.u_max != 0.0 || !contact::tan_is_zero(h.f_t) || h.sliding != 0) {
+        st.pair_key.push_back(pair_key_[k]);
+        S::pl_pair(st).push_back(h);
+      }
+      continue;
+    }
+    const LudingHist& h = pair_hist_[k];
+    if (!h.fresh()) {
+      st.pair_key.push_back(pair_key_[k]);
+      S::pair(st).push_back(h);
+    }
+  }
+  S::wall(st) = wall_hist_;
+  S::pl_wall(st) = pl_wall_hist_;
+  return st;
+}
+
+template <int D>
+void DynamicSolverT<D>::advance_temperature(double T_new, double dt, double t0) {
+  if (opt_.model != ContactModel::Full)
+    fail("advance_temperature: a temperature needs ContactModel::Full");
+  if (!std::isfinite(T_new) || !(dt >= 0.0) || !(t0 > 0.0))
+    fail("advance_temperature: T must be finite, dt >= 0 and t0 > 0");
+  const double k1T = contact::luding_k1_of_T(params_, T_new);
+  if (T_new == thermal_.T && thermal_.k1_Tt == k1T) return;  // nothing moves
+  const bool t_changed = T_new != thermal_.T;
+  thermal_ = contact::luding_advance_thermal(params_, thermal_, T_new, dt, t0);
+  if (t_changed) {  // Eq 9 with constant mass
+    radius_scale_ = contact::luding_radius(params_, 1.0, T_new);
+    for (std::size_t i = 0; i < P_.size(); ++i) {
+      P_.radius[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
+    }
+  }
+}
+
+template <int D>
+void DynamicSolverT<D>::set_params(const LudingParams& params) {
+  params.validate();
+  params_ = params;
+  wall_params_ = params_.wall_params();
+  choose_friction();
+}
+
+template <int D>
+void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& back, const MovingWall& top) {
+  if constexpr (D == 2) {
+    (void)right;
+    (void)back;
+    (void)top;
+    fail("set_walls: a 2D box has two moving walls (right, top)");
+  } else {
+    for (const MovingWall* w : {&right, &back, &top}) {
+      if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
+        fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
+    }
+    box_.right = right;
+    box_.back = back;
+    box_.top = top;
+    for (int a = 0; a < 3; ++a) {
+      const MovingWall& w = moving_wall(a);
+      if (w.mode == WallMode::Strain) wall_v_[a] = w.velocity;
+      if (w.mode == WallMode::Fixed) wall_v_[a] = 0.0;
+    }
+  }
+}
+
+template <int D>
+void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& top) {
+  if constexpr (D == 3) {
+    set_walls(right, box_.back, top);
+    return;
+  }
+  for (const MovingWall* w : {&right, &top})
+    if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
+      fail("set_walls: a stress-controlled wall needs mass > 0 and damping >= 0");
+  box_.right = right;
+  box_.top = top;
+  if (right.mode == WallMode::Strain) wall_v_[0] = right.velocity;
+  if (right.mode == WallMode::Fixed) wall_v_[0] = 0.0;
+  if (top.mode == WallMode::Strain) wall_v_[1] = top.velocity;
+  if (top.mode == WallMode::Fixed) wall_v_[1] = 0.0;
+}
+
+template <int D>
+void DynamicSolverT<D>::set_gravity(double gx, double gy) {
+  if (!std::isfinite(gx) || !std::isfinite(gy)) fail("set_gravity: gravity must be finite");
+  opt_.gravity_x = gx;
+  opt_.gravity_y = gy;
+}
+
+template <int D>
+void DynamicSolverT<D>::set_gravity(double gx, double gy, double gz) {
+  if (D == 2 && gz != 0.0) fail("set_gravity: a 2D solver has no z");
+  if (!std::isfinite(gz)) fail("set_gravity: gravity must be finite");
+  set_gravity(gx, gy);
+  opt_.gravity_z = gz;
+}
+
+template <int D>
+std::size_t DynamicSolverT<D>::wall_contacts() const {
+  if (!walls_active()) return 0;
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    const double r = P_.radius[i];
+    c += (P_.x[i] - box_.x_min < r) + (box_.x_max - P_.x[i] < r) + (P_.y[i] - box_.y_min < r) +
+         (box_.y_max - P_.y[i] < r);
+    if constexpr (D == 3) c += (P_.z[i] - box_.z_min < r) + (box_.z_max - P_.z[i] < r);
+  }
+  return c;
+}
+
+
+namespace {
+void set_tangential(ContactInfo& c, double f_t) { c.f_t = f_t; }
+void set_tangential(ContactInfo& c, const Eigen::Vector3d& f_t) {
+  c.ftx = f_t.x();
+  c.fty = f_t.y();
+  c.ftz = f_t.z();
+  c.f_t = f_t.norm();
+}
+
+// The touching contacts (pairs of the table, then the walls) at the current positions, with the
+// law evaluated on the committed histories with a zero slip increment and the current normal
+// rate. eval(history, kinematics, wall, info) fills the forces of `info` and returns whether the
+// contact is reported.
+template <int D, class H, class Eval>
+void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint64_t>& keys,
+                 const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval) {
+  out.clear();
+  auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
+  auto vzc = [&](std::size_t i) { return D == 3 ? P.vz[i] : 0.0; };
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
+    const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
+    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
+    const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
+    const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
+    if (!(L2 < s * s)) continue;
+    const double L = std::sqrt(L2), nx = dx / L, ny = dy / L, nz = dz / L;
+    const double q = (ri * ri - rj * rj) / (2.0 * L);
+    contact::Kinematics<D> in;
+    in.overlap = in.overlap_start = s - L;
+    if constexpr (D == 2)
+      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
+    else
+      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny + (vzc(j) - vzc(i)) * nz);
+    in.r_eff = ri * rj / s;
+    in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
+    ContactInfo c;
+    c.i = i;
+    c.j = j;
+    c.overlap = in.overlap;
+    c.d_i = 0.5 * L + q;
+    c.d_j = 0.5 * L - q;
+    c.nx = nx;
+    c.ny = ny;
+    if constexpr (D == 3) {
+      c.nz = nz;
+      in.transport.n = Eigen::Vector3d(nx, ny, nz);  // the committed spring lies in this plane already
+    }
+    if (!eval(hist[k], in, false, c)) continue;
+    c.sliding = hist[k].sliding != 0;
+    out.push_back(c);
+  }
+  if (!(box.enabled && box.contact_walls)) return;
+  constexpr int W = 2 * D;
+  const double pos[6] = {box.x_min, box.x_max, box.y_min, box.y_max, box.z_min, box.z_max};
+  for (std::size_t i = 0; i < P.size(); ++i)
+    for (int w = 0; w < W; ++w) {
+      const int axis = w / 2;
+      const double sign = (w % 2 == 0) ? 1.0 : -1.0;  // the normal from the wall into the box
+      const double xa = axis == 0 ? P.x[i] : axis == 1 ? P.y[i] : zc(i);
+      const double va = axis == 0 ? P.vx[i] : axis == 1 ? P.vy[i] : vzc(i);
+      const double dist = sign * (xa - pos[w]);
+      const double delta = P.radius[i] - dist;
+      if (!(delta > 0.0)) continue;
+      contact::Kinematics<D> in;
+      in.overlap = in.overlap_start = delta;
+      in.v_n = -(va * sign);
+      in.r_eff = P.radius[i];
+      in.m_eff = P.mass[i];
+      const H& h = whist[static_cast<std::size_t>(W) * i + static_cast<std::size_t>(w)];
+      ContactInfo c;
+      c.i = static_cast<std::uint32_t>(i);
+      c.j = static_cast<std::uint32_t>(w);
+      c.wall = w;
+      c.overlap = delta;
+      c.d_i = dist;
+      c.nx = axis == 0 ? sign : 0.0;
+      c.ny = axis == 1 ? sign : 0.0;
+      if constexpr (D == 3) {
+        c.nz = axis == 2 ? sign : 0.0;
+        in.transport.n = Eigen::Vector3d(c.nx, c.ny, c.nz);
+      }
+      if (!eval(h, in, true, c)) continue;
+      c.sliding = h.sliding != 0;
+      out.push_back(c);
+    }
+}
+
+template <contact::LudingFeatures F, int D>
+void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
+                     const std::vector<std::uint64_t>& keys, const std::vector<contact::LudingHistoryT<D>>& hist,
+                     const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+  contacts_of<D>(P, box, keys, hist, whist, out,
+                 [&](const contact::LudingHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall, ContactInfo& c) {
+                   contact::LudingInputT<D> in;
+                   in.delta = k.overlap;
+                   in.delta_dot = k.v_n;
+                   in.k1_Tt = k1Tt;
+                   const auto r = contact::luding_evaluate<F>(wall ? pw : pp, h, in);
+                   c.f_n = r.f_n;
+                   set_tangential(c, r.f_t);
+                   c.f_min = r.f_min;
+                   c.mu = r.mu;
+                   return true;
+                 });
+}
+constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
+
+// The plastic-indentation law: the contacts on their loaded branch.
+template <int D>
+void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
+                      const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
+                      const std::vector<contact::PlasticIndentationHistoryT<D>>& hist,
+                      const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+  const contact::PlasticIndentationLawT<D> lp(pp), lw(pw);
+  contacts_of<D>(P, box, keys, hist, whist, out,
+                 [&](const contact::PlasticIndentationHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall,
+                     ContactInfo& c) {
+                   const auto r = (wall ? lw : lp).evaluate(h, k, nullptr);
+                   c.f_n = r.f_n;
+                   set_tangential(c, r.f_t);
+                   c.mu = (wall ? pw : pp).mu_eff();
+                   return r.loaded;
+                 });
+}
+}  // namespace
+
+template <int D>
+void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
+  switch (opt_.model) {
+    case ContactModel::Linear:
+      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
+                                                 pair_hist_, wall_hist_, out);
+      break;
+    case ContactModel::Hysteretic:
+      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, pair_hist_,
+                                         wall_hist_, out);
+      break;
+    case ContactModel::Full:
+      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
+                                               pair_hist_, wall_hist_, out);
+      break;
+    case ContactModel::PlasticIndentation:
+      plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
+      break;
+  }
+}
+
+// the members defined here, for both dimensions (the class: solver.cpp)
+template DynamicSolverT<2>::DynamicSolverT(const SolverState&, const DynamicOptions&);
+template SolverState DynamicSolverT<2>::state() const;
+template void DynamicSolverT<2>::advance_temperature(double, double, double);
+template void DynamicSolverT<2>::set_params(const LudingParams&);
+template void DynamicSolverT<2>::set_walls(const MovingWall&, const MovingWall&);
+template void DynamicSolverT<2>::set_walls(const MovingWall&, const MovingWall&, const MovingWall&);
+template void DynamicSolverT<2>::set_gravity(double, double);
+template void DynamicSolverT<2>::set_gravity(double, double, double);
+template std::size_t DynamicSolverT<2>::wall_contacts() const;
+template void DynamicSolverT<2>::contacts(std::vector<ContactInfo>&) const;
+template DynamicSolverT<3>::DynamicSolverT(const SolverState&, const DynamicOptions&);
+template SolverState DynamicSolverT<3>::state() const;
+template void DynamicSolverT<3>::advance_temperature(double, double, double);
+template void DynamicSolverT<3>::set_params(const LudingParams&);
+template void DynamicSolverT<3>::set_walls(const MovingWall&, const MovingWall&);
+template void DynamicSolverT<3>::set_walls(const MovingWall&, const MovingWall&, const MovingWall&);
+template void DynamicSolverT<3>::set_gravity(double, double);
+template void DynamicSolverT<3>::set_gravity(double, double, double);
+template std::size_t DynamicSolverT<3>::wall_contacts() const;
+template void DynamicSolverT<3>::contacts(std::vector<ContactInfo>&) const;
+
+}  // namespace netdem::dem

@@ -1,0 +1,41 @@
+#pragma once
+// The SolverState fields of dimension D (the 2D ones, or the 3D ones of a sphere state), for
+// solver_state.cpp and state.cpp.
+#include "netdem/dynamic/solver.hpp"
+
+namespace netdem::dem {
+// The SolverState fields of dimension D (the 2D ones, or the 3D ones of a sphere state).
+template <int D>
+struct StateOf;
+template <>
+struct StateOf<2> {
+  static auto& pair(SolverState& s) { return s.pair_history; }
+  static auto& wall(SolverState& s) { return s.wall_history; }
+  static auto& pl_pair(SolverState& s) { return s.plastic_pair_history; }
+  static auto& pl_wall(SolverState& s) { return s.plastic_wall_history; }
+  static const auto& pair(const SolverState& s) { return s.pair_history; }
+  static const auto& wall(const SolverState& s) { return s.wall_history; }
+  static const auto& pl_pair(const SolverState& s) { return s.plastic_pair_history; }
+  static const auto& pl_wall(const SolverState& s) { return s.plastic_wall_history; }
+  static double* wall_velocity(SolverState& s) { return s.wall_velocity; }
+  static const double* wall_velocity(const SolverState& s) { return s.wall_velocity; }
+  static double* wall_force(SolverState& s) { return s.wall_force; }
+  static const double* wall_force(const SolverState& s) { return s.wall_force; }
+};
+template <>
+struct StateOf<3> {
+  static auto& pair(SolverState& s) { return s.pair_history3; }
+  static auto& wall(SolverState& s) { return s.wall_history3; }
+  static auto& pl_pair(SolverState& s) { return s.plastic_pair_history3; }
+  static auto& pl_wall(SolverState& s) { return s.plastic_wall_history3; }
+  static const auto& pair(const SolverState& s) { return s.pair_history3; }
+  static const auto& wall(const SolverState& s) { return s.wall_history3; }
+  static const auto& pl_pair(const SolverState& s) { return s.plastic_pair_history3; }
+  static const auto& pl_wall(const SolverState& s) { return s.plastic_wall_history3; }
+  static double* wall_velocity(SolverState& s) { return s.wall_velocity3; }
+  static const double* wall_velocity(const SolverState& s) { return s.wall_velocity3; }
+  static double* wall_force(SolverState& s) { return s.wall_force3; }
+  static const double* wall_force(const SolverState& s) { return s.wall_force3; }
+};
+
+}  // namespace netdem::dem
