@@ -73,7 +73,9 @@ void CellGridT<D>::rebuild(const Axes& axes, double min_cell) {
 
 template struct GridLayoutT<2>;
 template struct GridLayoutT<3>;
-template class CellGridT<2>;
-template class CellGridT<3>;
+// rebuild() only: an explicit instantiation of the whole class would also instantiate the members
+// constrained to the other dimension with clang 14
+template void CellGridT<2>::rebuild(const CellGridT<2>::Axes&, double);
+template void CellGridT<3>::rebuild(const CellGridT<3>::Axes&, double);
 
 }  // namespace netdem::packing
