@@ -49,14 +49,13 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 
 
+sys.path.insert(0, os.path.join(str(REPO), "apps", "scripts"))
+from report_paths import shown_path  # noqa: E402
+
+
 def shown(p):
-    """An argument for a report: a path relative to the repository; a file outside it by its name
-    only (never an absolute path of the machine that ran it, issue 26 item 6)."""
-    p = str(p)
-    if not os.path.isabs(p):
-        return p
-    r = os.path.relpath(p, REPO)
-    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
+    """A path for the report (apps/scripts/report_paths.py)."""
+    return shown_path(p, REPO)
 SHARED = REPO.parent / "shared" / "bench" / "lammps"
 
 LAMMPS_IN = r"""# bench_lammps.in -- written by netdem bench/dem_vs_lammps.py: the demsolve scene in LAMMPS

@@ -39,14 +39,13 @@ import study  # noqa: E402
 REPO = study.REPO
 
 
+sys.path.insert(0, os.path.join(str(REPO), "apps", "scripts"))
+from report_paths import shown_path  # noqa: E402
+
+
 def shown(p):
-    """A path for the report: relative to the repository; a file outside it by its name only
-    (never an absolute path of the machine that ran it, issue 26 item 6)."""
-    p = str(p)
-    if not os.path.isabs(p):
-        return p
-    r = os.path.relpath(p, REPO)
-    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
+    """A path for the report (apps/scripts/report_paths.py)."""
+    return shown_path(p, REPO)
 PAPER_K1 = {1e-4: ("0.95", 0.95, 0.005), 0.01: ("0.17", 0.17, 0.005), 0.02: ("0.10", 0.10, 0.005),
             0.1: ("0.036", 0.036, 0.0005), 1.0: ("0.0198", 0.0198, 0.00005)}
 

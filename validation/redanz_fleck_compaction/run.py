@@ -42,14 +42,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
+sys.path.insert(0, os.path.join(str(REPO), "apps", "scripts"))
+from report_paths import shown_path  # noqa: E402
+
+
 def shown(p):
-    """A path for the report: relative to the repository; a file outside it by its name only
-    (never an absolute path of the machine that ran it, issue 26 item 6)."""
-    p = str(p)
-    if not os.path.isabs(p):
-        return p
-    r = os.path.relpath(p, REPO)
-    return r if not r.startswith("..") else os.path.join("<outside the repository>", os.path.basename(p))
+    """A path for the report (apps/scripts/report_paths.py)."""
+    return shown_path(p, REPO)
 
 TARGET_D = 0.85
 # The paper's compaction (sections 2-3.3) uses Eq 2 in its incremental form (Eq 3) for every contact;
