@@ -31,7 +31,6 @@ ALLOWED = {
     "src/quasistatic/staggered.cpp": 1005,
     "apps/netsolve/yield.cpp": 953,
     "apps/demsolve/compact.cpp": 872,
-    "apps/netsolve/sinter.cpp": 824,
     "apps/demsolve/yield.cpp:run_dem_yield": 463,
     "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,

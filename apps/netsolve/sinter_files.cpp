@@ -1,0 +1,123 @@
+// netsolve sinter's files (sinter_files.hpp).
+#include "sinter_files.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "netdem/packing/laminar.hpp"
+#include "output.hpp"
+
+namespace netdem::app::netsolve {
+
+namespace fs = std::filesystem;
+namespace sp = netdem::contact::sinter;
+namespace st = netdem::qs::staggered;
+using nlohmann::json;
+
+/// Eq 48 of the green-body packing along x, y, z (the laminar.csv of netsolve pack --route green-body).
+std::string laminar_csv(const netdem::packing::Packing& pk, double lamina) {
+  std::string lam = "# Eq 48 of Ivannikov et al.: laminae of width ~q_s along x, y, z; lengths in metres\n";
+  lam += fmt::format("# q_s {:.9g}\n", lamina);
+  lam += "axis,lamina,lo,hi,density\n";
+  const char* names[3] = {"x", "y", "z"};
+  for (int ax = 0; ax < 3; ++ax) {
+    const auto prof = netdem::packing::laminar_density(pk, ax, lamina);
+    for (std::size_t s = 0; s < prof.density.size(); ++s)
+      lam += fmt::format("{},{},{:.9g},{:.9g},{:.6f}\n", names[ax], s, prof.lo[s], prof.hi[s], prof.density[s]);
+  }
+  return lam;
+}
+
+std::vector<st::Particle> particles_of(const netdem::packing::Packing& pk) {
+  std::vector<st::Particle> p(pk.size());
+  for (std::size_t i = 0; i < pk.size(); ++i) {
+    p[i].x = Eigen::Vector3d(pk.x[i], pk.y[i], pk.z[i]);
+    p[i].r = pk.r[i];
+  }
+  return p;
+}
+
+/// --planes box: the boundary planes of section 3.3 are the lower faces of the packing's box (the
+/// planes Oxy, Oxz, Oyz of a box at the origin; the walls of the green-body route), not those of
+/// the spheres' bounding box: a sphere pressed into a wall (overlap up to ~1 % r at rest) sits
+/// below the wall, and the bounding box's face is the deepest one, which leaves a handful of
+/// spheres on the planes (3, 4, 2 of the Cu packing instead of 57, 63, 88). Sets
+/// StaggeredOptions::plane_origin; returns the count of spheres on each plane (the library's rule).
+std::array<int, 3> box_plane_counts(const std::vector<st::Particle>& P, const netdem::packing::Box& box, double factor) {
+  std::array<int, 3> n{0, 0, 0};
+  const double lo[3] = {box.x_min, box.y_min, box.z_min};
+  for (std::size_t i = 0; i < P.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (P[i].x[k] - lo[k] <= factor * P[i].r) ++n[static_cast<std::size_t>(k)];
+  return n;
+}
+
+// ---- snapshots
+void write_snapshot(const fs::path& out, int k, const st::Staggered& s) {
+  const auto& P = s.particles();
+  const auto& P0 = s.initial_particles();
+  std::vector<double> x(P.size()), y(P.size()), z(P.size());
+  Field rad{"radius", 1, {}}, disp{"displacement", 3, {}};
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    x[i] = P[i].x.x();
+    y[i] = P[i].x.y();
+    z[i] = P[i].x.z();
+    rad.values.push_back(P[i].r);
+    for (int d = 0; d < 3; ++d) disp.values.push_back(i < P0.size() ? P[i].x[d] - P0[i].x[d] : 0.0);
+  }
+  write_file_atomic(out / fmt::format("particles_{:03d}.vtp", k), netdem::app::vtp_particles_3d(x, y, &z, {rad, disp}));
+  std::vector<int> ia, ib;
+  Field neck{"neck_x_over_R", 1, {}}, frozen{"frozen", 1, {}}, dlb{"dL_bar", 1, {}};
+  for (const auto& c : s.contacts()) {
+    ia.push_back(c.a);
+    ib.push_back(c.b);
+    neck.values.push_back(c.pair.x_over_R());
+    frozen.values.push_back(c.frozen ? 1.0 : 0.0);
+    dlb.values.push_back(c.dL_bar);
+  }
+  write_file_atomic(out / fmt::format("bonds_{:03d}.vtp", k), netdem::app::vtp_network_3d(x, y, &z, ia, ib, {neck, frozen, dlb}));
+}
+
+std::string pvd(const std::vector<std::pair<int, double>>& snaps) {
+  std::string s = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  for (const auto& [k, t] : snaps) {
+    s += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"0\" file=\"particles_{:03d}.vtp\"/>\n", t, k);
+    s += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"1\" file=\"bonds_{:03d}.vtp\"/>\n", t, k);
+  }
+  return s + "  </Collection>\n</VTKFile>\n";
+}
+
+json options_json(const st::StaggeredOptions& o) {
+  return {{"strategy", o.strategy},
+          {"dt_initial", o.dt_initial},
+          {"dt_max", o.dt_max},
+          {"dt_min", o.dt_min},
+          {"alpha", o.alpha},
+          {"eps_lim", o.eps_lim},
+          {"grow_below", o.grow_below},
+          {"shrink_above", o.shrink_above},
+          {"new_contacts", o.new_contacts},
+          {"x0_over_R", o.x0_over_R},
+          {"x_max_over_R", o.x_max_over_R},
+          {"boundary_planes", o.boundary_planes},
+          {"boundary_factor", o.boundary_factor},
+          {"plane_origin", std::isnan(o.plane_origin[0]) ? json("bounding box of the spheres")
+                                                         : json({o.plane_origin[0], o.plane_origin[1], o.plane_origin[2]})},
+          {"E", o.E},
+          {"nu", o.nu},
+          {"gmres_tolerance", o.gmres_tolerance},
+          {"refactor_iterations", o.refactor_iterations}};
+}
+
+json material_json(const sp::SinterMaterial& m, const std::string& source) {
+  return {{"name", m.name},           {"source", source},          {"Omega", m.omega},         {"gamma_s", m.gamma_s},
+          {"gamma_gb", m.gamma_gb},   {"D_vol0", m.D_vol0},        {"Q_vol", m.Q_vol},         {"deltaD_gb0", m.deltaD_gb0},
+          {"Q_gb", m.Q_gb},           {"deltaD_s0", m.deltaD_s0},  {"Q_s", m.Q_s},             {"c_III", m.c_III},
+          {"c_IV", m.c_IV},           {"E", m.youngs_modulus},     {"nu", m.poisson_ratio}};
+}
+
+}  // namespace netdem::app::netsolve
