@@ -87,14 +87,32 @@ packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& o)
   return fo;
 }
 
+namespace {
+
+/// The mean sphere's mass m, the stiffness k = kappa m g / r and the damping rate eta of a mean
+/// pair (m12 = m / 2) with restitution e = exp(-eta t_c), t_c = pi / sqrt(k / m12 - eta^2).
+struct MeanPair {
+  double m, k, m12, eta;
+};
+MeanPair mean_pair(const GreenBodyOptions& o) {
+  const double r = o.mean_radius;
+  MeanPair p{};
+  p.m = o.solid_density * 4.0 / 3.0 * kPi * r * r * r;
+  p.k = o.stiffness_number * p.m * o.gravity / r;
+  p.m12 = 0.5 * p.m;
+  const double le = std::log(o.restitution);
+  p.eta = -le * std::sqrt(p.k / p.m12) / std::sqrt(kPi * kPi + le * le);
+  return p;
+}
+
+}  // namespace
+
 double green_body_min_steps(const GreenBodyOptions& o) {
   const packing::RandomFill3dOptions fo = green_body_cloud_options(o);
   const double r = o.mean_radius, g = o.gravity;
   // the mean pair's time step, as make_green_body sets the law (material()) and the MeanPair rule
-  const double m = o.solid_density * 4.0 / 3.0 * kPi * r * r * r, m12 = 0.5 * m;
-  const double k = o.stiffness_number * m * g / r, le = std::log(o.restitution);
-  const double eta = -le * std::sqrt(k / m12) / std::sqrt(kPi * kPi + le * le);
-  const double dt = kPi / std::sqrt(k / m12 - eta * eta) / o.steps_per_contact;
+  const MeanPair mp = mean_pair(o);
+  const double dt = kPi / std::sqrt(mp.k / mp.m12 - mp.eta * mp.eta) / o.steps_per_contact;
   const double vs = static_cast<double>(o.n) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + o.dispersion * o.dispersion);
   const double L0 = fo.box.x_max, H_cloud = fo.box.z_max;
   const double fall = std::sqrt(2.0 * std::max(0.0, H_cloud - vs / (o.settled_guess * L0 * L0)) / g);
@@ -131,15 +149,13 @@ class GreenBodyRoute {
   // the mean sphere, the stiffness and the damping of a mean pair
   void material() {
     const double r = o_.mean_radius, g = o_.gravity;
-    m_ = o_.solid_density * 4.0 / 3.0 * kPi * r * r * r;  // the mean sphere
+    const MeanPair mp = mean_pair(o_);
+    m_ = mp.m;  // the mean sphere
     mgr_ = m_ * g * r;
     res_.mean_mass = m_;
     res_.time_unit = std::sqrt(r / g);
-    res_.stiffness = o_.stiffness_number * m_ * g / r;
-    // the restitution e of a mean pair (m12 = m / 2): e = exp(-eta t_c), t_c = pi / sqrt(k / m12 - eta^2)
-    const double m12 = 0.5 * m_, le = std::log(o_.restitution);
-    const double eta = -le * std::sqrt(res_.stiffness / m12) / std::sqrt(kPi * kPi + le * le);
-    res_.gamma_n = 2.0 * m12 * eta;
+    res_.stiffness = mp.k;
+    res_.gamma_n = 2.0 * mp.m12 * mp.eta;
     const double alpha = 2.0 / 7.0;  // k_t / k_n: the tangential and normal periods of a sphere pair match
     res_.gamma_t = alpha * res_.gamma_n;
     lp_.k2 = res_.stiffness;
