@@ -34,8 +34,6 @@ ALLOWED = {
     "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
     "apps/netsolve/yield.cpp:run_yield": 301,
-    "apps/demsolve/compact3d.cpp:run_dem_compact_3d": 301,
-    "apps/demsolve/compact.cpp:run_dem_compact": 279,
     "apps/demsolve/main.cpp:main": 209,
     "apps/netsolve/main.cpp:run_compact": 178,
 }

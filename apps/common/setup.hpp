@@ -193,8 +193,9 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
       ->capture_default_str();
 }
 
-/// The box of --boundary walls (both tools): the packing's box enlarged to enclose every disk (the
-/// ballistic deposition's top disks stick out of its lid), so that no disk starts inside a wall.
+/// The box of --boundary walls (both tools): the packing's box enlarged to enclose every disk or
+/// sphere (the ballistic deposition's top particles stick out of its lid), so that none starts
+/// inside a wall.
 inline packing::Box walls_box(const packing::Packing& pk) {
   packing::Box b = pk.box;
   for (std::size_t i = 0; i < pk.size(); ++i) {
@@ -202,6 +203,10 @@ inline packing::Box walls_box(const packing::Packing& pk) {
     b.x_max = std::max(b.x_max, pk.x[i] + pk.r[i]);
     b.y_min = std::min(b.y_min, pk.y[i] - pk.r[i]);
     b.y_max = std::max(b.y_max, pk.y[i] + pk.r[i]);
+    if (pk.dim == 3) {
+      b.z_min = std::min(b.z_min, pk.z[i] - pk.r[i]);
+      b.z_max = std::max(b.z_max, pk.z[i] + pk.r[i]);
+    }
   }
   return b;
 }

@@ -1,32 +1,25 @@
 // demsolve compact: the explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) as the
 // dynamic referee of netsolve compact: the same packing, strain path, boundary layer, units
 // (sigma_y = 1, R = 1, rho = 1, t* = R sqrt(rho/sigma_y) = 1) and files (history.csv with netsolve's
-// column names and sign convention, summary.json, .vtp snapshots). See docs/dynamic.md
-// "demsolve compact".
+// column names and sign convention, summary.json, .vtp snapshots). Disks (2D) and spheres
+// (--dim 3) alike: the protocol is the library's (netdem/dynamic/compaction.hpp); this file is its
+// command line and its files. See docs/dynamic.md "demsolve compact".
 #include "compact.hpp"
 #include "scene.hpp"
 
-#include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <numbers>
-#include <sstream>
-#include <unordered_map>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/dynamic/compaction.hpp"
 #include "netdem/dynamic/solver.hpp"
-#include "netdem/dynamic/state.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
-#include "netdem/quasistatic/compaction.hpp"
 #include "output.hpp"
 #include "protocol.hpp"
 #include "run_status.hpp"
@@ -37,8 +30,6 @@ using namespace netdem::dem;
 namespace netdem::app::dem {
 
 void check_compact_numbers(const DemCompactArgs& a) {
-  if (!(std::isfinite(a.inertial_number) && a.inertial_number > 0.0 && a.inertial_number <= 1.0))
-    throw UsageError(fmt::format("--inertial-number must be in (0, 1], got {}", a.inertial_number));
   if (!(std::isfinite(a.damping) && a.damping >= 0.0 && a.damping <= 1.0))
     throw UsageError(fmt::format("--damping must be in [0, 1] (fraction of critical damping), got {}", a.damping));
   if (!(std::isfinite(a.drag) && a.drag >= 0.0))
@@ -49,22 +40,197 @@ void check_compact_numbers(const DemCompactArgs& a) {
   if (!(std::isfinite(a.k_t) && a.k_t >= 0.0)) throw UsageError(fmt::format("--k-t must be a finite number >= 0, got {}", a.k_t));
   if (!(std::isfinite(a.steps_per_contact) && a.steps_per_contact >= 10.0 && a.steps_per_contact <= 1e4))
     throw UsageError(fmt::format("--steps-per-contact must be in [10, 1e4], got {}", a.steps_per_contact));
-  if (a.increments < 1 || a.increments > 1000000)
-    throw UsageError(fmt::format("--increments must be in [1, 1e6], got {}", a.increments));
 }
 
-int run_dem_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
-  if (a.pack.dim == 3) return run_dem_compact_3d(command, a, out);
+namespace {
+
+/// The packing: a packing file of the run's dimension, or netsolve pack's deposition.
+template <int D>
+packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) {
+  if constexpr (D == 2) {
+    try {
+      return netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve compact");
+    } catch (const UsageError& e) {  // a 3D packing file: say how to run it
+      if (std::string(e.what()).find("is a 3D packing") != std::string::npos)
+        throw UsageError(std::string(e.what()) + " without --dim 3");
+      throw;
+    }
+  } else {
+    if (!a.packing_file.empty()) {
+      if (fs::is_directory(a.packing_file))
+        throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes "
+                                     "DIR/packing.csv)", packing::quote_input(a.packing_file)));
+      source = a.packing_file;
+      packing::Packing p = packing::read_packing_csv(a.packing_file);
+      if (p.dim != 3)
+        throw UsageError(fmt::format("--packing {} is a 2D packing; --dim 3 needs a 3D packing file (id,x,y,z,r with "
+                                     "'# dim 3', netsolve pack --dim 3)", packing::quote_input(a.packing_file)));
+      for (const auto& c : p.comments)
+        if (c.find("lateral periodic") != std::string::npos)
+          throw UsageError(fmt::format("--packing {} is a periodic deposition; the explicit DEM has no periodic "
+                                       "boundaries (use --lateral walls)", packing::quote_input(a.packing_file)));
+      return p;
+    }
+    source = fmt::format("3D ballistic deposition, W = {} R, r = R[{}, {}], seed {}, lateral walls", a.pack.width,
+                         a.pack.mono ? 1.0 : a.pack.r_min, a.pack.mono ? 1.0 : a.pack.r_max, a.pack.seed);
+    return netdem::app::netsolve::make_packing_3d(a.pack);
+  }
+}
+
+/// The checks of the options that depend on the dimension.
+template <int D>
+void check_boundary(const DemCompactArgs& a, bool walls) {
+  if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
+  if constexpr (D == 3) {
+    if (!walls && !a.affine)
+      throw UsageError("--dim 3 takes --boundary walls or --affine (--boundary layer, netsolve's peripheral layer, is 2D only)");
+    if (a.pack.lateral != "walls")
+      throw UsageError(fmt::format("--lateral '{}': the explicit DEM has no periodic boundaries (demsolve compact --dim 3 "
+                                   "takes --lateral walls)", packing::quote_input(a.pack.lateral)));
+    if (a.pack.lid != "centre" && a.pack.lid != "inside")
+      throw UsageError(fmt::format("--lid '{}' is not 'centre' or 'inside'", packing::quote_input(a.pack.lid)));
+  }
+}
+
+/// The run's files: history.csv rows, snapshots at the --snapshots densities, checkpoints, progress.
+template <int D>
+class CompactFiles : public CompactionObserverT<D> {
+ public:
+  CompactFiles(const DynamicSolverT<D>& s, const fs::path& out, std::vector<double> snaps, bool walls, double t_end,
+               bool quiet)
+      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), progress_("compact", t_end, quiet) {
+    const auto& lab = sys::voigt_labels<D>();
+    csv_ = "increment";
+    for (const char* l : lab) csv_ += fmt::format(",E{}", l);
+    csv_ += ",D";
+    for (const char* l : lab) csv_ += fmt::format(",S{}", l);
+    for (const char* l : lab) csv_ += fmt::format(",S{}_contacts", l);
+    csv_ += ",Z,contacts,sliding,mean_fn,dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,"
+            "samples,dt,outside,D_in_box";
+    if (walls_) csv_ += ",wall_vs_contact_gap";
+    csv_ += "\n";
+  }
+  void row(const CompactionRowT<D>& r) override {
+    const auto& m = r.mean;
+    csv_ += fmt::format("{}", r.increment);
+    for (double e : r.E) csv_ += fmt::format(",{:.9g}", e);
+    csv_ += fmt::format(",{:.9g}", r.density);
+    for (double v : m.S) csv_ += fmt::format(",{:.9g}", v);
+    for (double v : m.Sc) csv_ += fmt::format(",{:.9g}", v);
+    csv_ += fmt::format(",{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},{},{:.4e},{},{},{:.4e}", m.Z,
+                        m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, r.time,
+                        std::isfinite(r.I) ? fmt::format("{:.6g}", r.I) : std::string(), r.kinetic_ratio, r.steps,
+                        r.samples, r.dt);
+    csv_ += fmt::format(",{},{:.9g}", r.outside, r.density_in_box);
+    if (walls_) csv_ += fmt::format(",{:.4e}", r.wall_gap);
+    csv_ += "\n";
+    if (r.increment == 0) return;
+    while (next_snap_ < snaps_.size() && s_.density() >= snaps_[next_snap_] - 1e-9) {
+      write_compact_snapshot(s_, out_, fmt::format("D{:.3f}", snaps_[next_snap_]), cs_);
+      ++next_snap_;
+    }
+  }
+  void progress(double t) override { progress_.update(t); }
+  void checkpoint(int) override { write_file_atomic(out_ / "history.csv", csv_); }
+  void finish(const std::string& stopped) {
+    progress_.finish();
+    if (!stopped.empty()) csv_ += "# stopped: " + stopped + "\n";
+    write_file_atomic(out_ / "history.csv", csv_);
+  }
+  std::vector<ContactInfo>& contacts_buffer() { return cs_; }
+
+ private:
+  const DynamicSolverT<D>& s_;
+  fs::path out_;
+  std::vector<double> snaps_;
+  bool walls_;
+  Progress progress_;
+  std::string csv_;
+  std::size_t next_snap_ = 0;
+  std::vector<ContactInfo> cs_;
+};
+
+/// summary.json: what the run was asked.
+template <int D>
+nlohmann::json compact_summary(const std::string& command, const DemCompactArgs& a, const sys::StrainPathT<D>& path,
+                               const CompactionRateT<D>& rate, const std::string& source, std::uint64_t seed,
+                               std::size_t n, std::size_t prescribed) {
+  const auto& lab = sys::voigt_labels<D>();
+  nlohmann::json j;
+  j["command"] = command;
+  j["dim"] = D;
+  j["packing"] = source;
+  j["seed"] = seed;
+  j["particles"] = n;
+  j["initial_density"] = rate.initial_density;
+  j["sigma_y"] = 1.0;
+  j["friction"] = a.friction;
+  j["mode"] = a.affine ? "affine" : a.boundary == "walls" ? "walls" : "die";
+  j["boundary"] = a.affine ? "affine" : a.boundary;
+  j["prescribed"] = prescribed;
+  j["rotations"] = !a.no_rotation;
+  j["path"] = {{"name", path.name}};
+  j["strain_rate"] = {{"gamma_dot", rate.gamma_dot}};
+  for (std::size_t k = 0; k < lab.size(); ++k) {
+    j["path"][std::string("E") + lab[k]] = path.E[k];
+    j["strain_rate"][std::string("E") + lab[k]] = rate.rate[k];
+  }
+  j["increments"] = a.increments;
+  j["to_density"] = a.to_density;
+  j["k_t"] = a.k_t;
+  j["first_touch"] = a.first_touch;
+  j["normal_unloading"] = a.normal_unloading;
+  j["inertial_number"] = a.inertial_number;
+  j["t_end"] = rate.t_end;
+  j["damping"] = {{"normal", a.damping}, {"tangential", a.damping}};
+  j["drag"] = a.drag;
+  j["steps_per_contact"] = a.steps_per_contact;
+  j["units"] = "sigma_y = 1, R = 1 (lengths of the packing), rho = 1, t* = R sqrt(rho/sigma_y) = 1";
+  j["contact_forces"] =
+      "Z, mean_fn, sliding, the snapshots' normal_force: the loaded particle contacts, spring force without the dashpot";
+  return j;
+}
+
+/// summary.json: what the run did.
+template <int D>
+void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const DynamicSolverT<D>& s, bool walls) {
+  const auto& lab = sys::voigt_labels<D>();
+  const auto& m = r.last.mean;
+  nlohmann::json fin = {{"D", s.density()},         {"Z", m.Z}, {"contacts", m.contacts}, {"sliding", m.sliding},
+                        {"I", r.last.I},            {"kinetic_ratio", m.work > 0 ? m.kinetic / m.work : 0.0},
+                        {"time", s.time()}};
+  for (std::size_t k = 0; k < lab.size(); ++k) {
+    fin[std::string("S") + lab[k]] = m.S[k];
+    fin[std::string("S") + lab[k] + "_contacts"] = m.Sc[k];
+    fin[std::string("E") + lab[k]] = r.last.E[k];
+  }
+  j["final"] = fin;
+  if (walls) {
+    j["wall_vs_contact_gap"] = r.last_wall_gap;
+    j["max_wall_vs_contact_gap"] = r.max_wall_gap;
+    j["wall_vs_contact_warning"] = r.max_wall_gap > 0.02;
+  }
+  j["dt"] = {{"first", r.dt_first}, {"last", s.dt()}};
+  j["steps"] = r.steps;
+  j["neighbour_rebuilds"] = s.rebuilds();
+}
+
+template <int D>
+int run_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
   // ---- the door: every value before anything is written ----------------------------------------
-  const qs::StrainPath path = qs::StrainPath::parse(a.path);
+  const auto path = sys::StrainPathT<D>::parse(a.path);
+  CompactionOptions co;
+  co.target_density = a.to_density;
+  co.inertial_number = a.inertial_number;
+  co.increments = a.increments;
+  co.max_steps = a.max_steps;
+  co.walls = a.boundary == "walls";
+  co.check_numbers();
   check_compact_numbers(a);
   if (a.boundary != "layer" && a.boundary != "walls")
-    throw UsageError(fmt::format("--boundary '{}' is not 'layer' or 'walls'", quote_input(a.boundary)));
+    throw UsageError(fmt::format("--boundary '{}' is not 'layer' or 'walls'", packing::quote_input(a.boundary)));
   const bool walls = a.boundary == "walls";
-  if (walls && path.E12 != 0.0)
-    throw UsageError(fmt::format("--path {}: --boundary walls takes E12 = 0 only (the die walls stay axis-aligned)",
-                                 quote_input(a.path)));
-  if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
+  check_boundary<D>(a, walls);
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
   const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
   RunDirOptions rdo;
@@ -74,58 +240,49 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   if (a.packing_file.empty()) netdem::app::netsolve::check_deposition_size(a.pack);
   activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
   std::string source;
-  const packing::Packing pk = [&] {
-    try {
-      return netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve compact");
-    } catch (const UsageError& e) {  // a 3D packing file: say how to run it
-      if (std::string(e.what()).find("is a 3D packing") != std::string::npos)
-        throw UsageError(std::string(e.what()) + " without --dim 3");
-      throw;
-    }
-  }();
+  const packing::Packing pk = input_packing_of<D>(a, source);
   check_memory(pk.size());
+  const std::size_t n = pk.size();
+  if (n == 0) throw UsageError("the packing has no particles");
 
-  Particles P = particles_from(pk, 1.0);  // rho = 1: areal density of disks of unit depth
-  // the die walls enclose every disk at the start (the deposition's top disks stick out of its box)
+  Particles P = D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);  // rho = 1
+  // the walls enclose every particle at the start (the deposition's top particles stick out of its box)
   Box box(walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
   box.contact_walls = walls;
   box.right.mode = box.top.mode = WallMode::Affine;
+  if constexpr (D == 3) box.back.mode = WallMode::Affine;
   const DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
                                            a.drag, a.steps_per_contact);
-  double area = 0.0;
-  for (double r : P.radius) area += std::numbers::pi * r * r;
-  const double D0 = area / ((box.x_max - box.x_min) * (box.y_max - box.y_min));
-  qs::CompactionOptions co;
-  co.path = path;
-  co.target_density = a.to_density;
-  co.increments = a.increments;
-  try {
-    co.validate(D0);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
-  // the rate: I = gamma' d sqrt(rho/P_ref), gamma' = |E'| (Frobenius), d = 2R, P_ref = sigma_y
-  const double rho = 1.0, sigma_y = 1.0, d_mean = 2.0;
-  const double gdot = a.inertial_number / (d_mean * std::sqrt(rho / sigma_y));
-  const double norm = std::sqrt(path.E11 * path.E11 + path.E22 * path.E22 + 2.0 * path.E12 * path.E12);
-  const double e11 = gdot * path.E11 / norm, e22 = gdot * path.E22 / norm, e12 = gdot * path.E12 / norm;
-  const double T = std::log(D0 / a.to_density) / (e11 + e22);  // D = D0 exp(-(E11 + E22) t)
+  double solid = 0.0;
+  for (double r : P.radius) solid += D == 2 ? std::numbers::pi * r * r : 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  double box_measure = (box.x_max - box.x_min) * (box.y_max - box.y_min);
+  if constexpr (D == 3) box_measure *= box.z_max - box.z_min;
+  const double D0 = solid / box_measure;
+  co.validate(path, D0);
+  const CompactionRateT<D> rate = compaction_rate(path, a.inertial_number, D0, a.to_density);
 
   activity() = "setting up the explicit solver";
-  const std::size_t n = P.size();
-  DynamicSolver s(std::move(P), LudingParams{}, box, o);
-  s.set_strain_rate(e11, e22, e12);
+  DynamicSolverT<D> s(std::move(P), LudingParams{}, box, o);
+  set_strain_rate(s, rate.rate);
   s.set_affine_velocities();
-  const std::vector<std::uint32_t> pre = prescribed_particles(pk, a.affine, walls);
-  // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free but the layer's
-  s.set_prescribed(pre, !a.affine);
-  // affine: every centre prescribed, the spins free except the peripheral layer's, as netsolve and Redanz &
-  // Fleck section 2.4 ("the rotation of particles in the peripheral layer is prevented")
-  if (a.affine) s.hold_spins(prescribed_particles(pk, false, false));
+  std::vector<std::uint32_t> pre;
+  if constexpr (D == 2) {
+    // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free
+    // except the peripheral layer's, as netsolve and Redanz & Fleck section 2.4 ("the rotation of
+    // particles in the peripheral layer is prevented")
+    pre = prescribed_particles(pk, a.affine, walls);
+    s.set_prescribed(pre, !a.affine);
+    if (a.affine) s.hold_spins(prescribed_particles(pk, false, false));
+  } else {
+    // affine: every centre prescribed, every spin free (3D has no peripheral layer); walls: none
+    if (a.affine)
+      for (std::uint32_t p = 0; p < n; ++p) pre.push_back(p);
+    s.set_prescribed(pre, false);
+  }
   s.set_rotations(!a.no_rotation);
   const double dt_first = s.dt();
-  const double steps_est = T / dt_first;
-  if (!(steps_est <= a.max_steps))
+  const double steps_est = rate.t_end / dt_first;
+  if (!(steps_est <= a.max_steps))  // the library refuses it too; here before the folder opens
     throw UsageError(fmt::format("the run needs at least {:.3g} time steps of {:.3g} t* (I = {:g}), more than --max-steps "
                                  "= {:.3g}: raise --inertial-number or --max-steps", steps_est, dt_first,
                                  a.inertial_number, a.max_steps));
@@ -133,204 +290,67 @@ int run_dem_compact(const std::string& command, const DemCompactArgs& a, const f
   open_run_dir(out, command, rdo);
   packing::write_packing_csv(pk, out / "packing.csv");
   if (!a.quiet)
-    std::fprintf(stderr, "demsolve compact: %zu particles, D0 = %.4f, seed %llu (%s); I = %g, gamma' = %.4g, t_end = %.4g, "
-                 "dt = %.3g, about %.3g steps\n", n, D0, static_cast<unsigned long long>(pk.seed), source.c_str(),
-                 a.inertial_number, gdot, T, dt_first, steps_est);
-  // a centre outside the deformed domain: the box, or with shear the parallelogram x_0 + F (box_0 - x_0)
-  const Box box0 = box;
-  auto outside_box = [&](double x, double y) {
-    const Box& b = s.box();
-    if (e12 == 0.0) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max;
-    const auto& F = s.box_deformation();
-    const double det = F[0] * F[3] - F[1] * F[2], dx = x - box0.x_min, dy = y - box0.y_min;
-    const double X = (F[3] * dx - F[1] * dy) / det, Y = (-F[2] * dx + F[0] * dy) / det;
-    return X < 0.0 || X > box0.x_max - box0.x_min || Y < 0.0 || Y > box0.y_max - box0.y_min;
-  };
-  std::vector<ContactInfo> snap_buf;
-  write_compact_snapshot(s, out, "initial", snap_buf);
-  double r_mean = 0.0;
-  for (double r : s.particles().radius) r_mean += r;
-  r_mean /= static_cast<double>(n);
-  Meter meter(walls, r_mean);
-  std::string csv =
-      "increment,E11,E22,E12,D,S11,S22,S12,S11_contacts,S22_contacts,S12_contacts,Z,contacts,sliding,mean_fn,"
-      "dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,samples,dt,outside,D_in_box";
-  if (walls) csv += ",wall_vs_contact_gap";
-  csv += "\n";
-  auto gap_of = [](const Sample& m) {
-    const double d11 = m.S11 - m.S11c, d22 = m.S22 - m.S22c;
-    const double c = std::hypot(m.S11c, m.S22c);
-    return c > 0.0 ? std::hypot(d11, d22) / c : 0.0;
-  };
-  Sample last;
-  double last_I = 0.0, max_gap = 0.0, last_gap = 0.0;
-  std::int64_t steps = 0;
-  int done = 0;
-  auto write_row = [&](int k, const Sample& m, int samples) {
-    const double t = s.time();
-    const double Pc = -0.5 * (m.S11c + m.S22c);
-    // the actual inertial number; undefined (an empty field, no inf in a result file) where P = 0
-    const double I = Pc > 0.0 ? gdot * d_mean * std::sqrt(rho / Pc) : std::numeric_limits<double>::quiet_NaN();
-    const double kr = m.work > 0.0 ? m.kinetic / m.work : 0.0;
-    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.9g},{},{:.4e},{},{},{:.4e}",
-                       k, e11 * t, e22 * t, e12 * t, s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.S12c, m.Z,
-                       m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, t,
-                       std::isfinite(I) ? fmt::format("{:.6g}", I) : std::string(), kr,
-                       steps, samples, s.dt());
-    {  // centres outside the box (squeezed out between the peripheral disks) and the density without them
-      const Particles& Q = s.particles();
-      const Box& b = s.box();
-      int outside = 0;
-      double in = 0.0;
-      for (std::size_t p = 0; p < Q.size(); ++p) {
-        const bool o = outside_box(Q.x[p], Q.y[p]);
-        outside += o;
-        if (!o) in += std::numbers::pi * Q.radius[p] * Q.radius[p];
-      }
-      csv += fmt::format(",{},{:.9g}", outside, in / ((b.x_max - b.x_min) * (b.y_max - b.y_min)));
-    }
-    if (walls) {
-      const double g = gap_of(m);
-      csv += fmt::format(",{:.4e}", g);
-      if (k > 0) {
-        last_gap = g;
-        if (s.density() >= D0 + 0.5 * (a.to_density - D0)) max_gap = std::max(max_gap, g);  // once loaded
-      }
-    }
-    csv += "\n";
-    last = m;
-    last_I = I;
-  };
-  nlohmann::json summary;
-  summary["command"] = command;
-  summary["packing"] = source;
-  summary["seed"] = pk.seed;
-  summary["particles"] = n;
-  summary["initial_density"] = D0;
-  summary["sigma_y"] = 1.0;
-  summary["friction"] = a.friction;
-  summary["mode"] = a.affine ? "affine" : walls ? "walls" : "die";
-  summary["boundary"] = a.affine ? "affine" : a.boundary;
-  summary["prescribed"] = pre.size();
-  summary["rotations"] = !a.no_rotation;
-  summary["path"] = {{"name", path.name}, {"E11", path.E11}, {"E22", path.E22}, {"E12", path.E12}};
-  summary["increments"] = a.increments;
-  summary["to_density"] = a.to_density;
-  summary["k_t"] = a.k_t;
-  summary["first_touch"] = a.first_touch;
-  summary["normal_unloading"] = a.normal_unloading;
-  summary["inertial_number"] = a.inertial_number;
-  summary["strain_rate"] = {{"E11", e11}, {"E22", e22}, {"E12", e12}, {"gamma_dot", gdot}};
-  summary["t_end"] = T;
-  summary["damping"] = {{"normal", a.damping}, {"tangential", a.damping}};
-  summary["drag"] = a.drag;
-  summary["steps_per_contact"] = a.steps_per_contact;
-  summary["units"] = "sigma_y = 1, R = 1 (lengths of the packing), rho = 1, t* = R sqrt(rho/sigma_y) = 1";
+    std::fprintf(stderr, "demsolve compact%s: %zu %s, D0 = %.4f, seed %llu (%s); I = %g, gamma' = %.4g, t_end = %.4g, "
+                 "dt = %.3g, about %.3g steps\n", D == 3 ? " --dim 3" : "", n, D == 2 ? "particles" : "spheres", D0,
+                 static_cast<unsigned long long>(pk.seed), source.c_str(), a.inertial_number, rate.gamma_dot, rate.t_end,
+                 dt_first, steps_est);
+  CompactFiles<D> files(s, out, snaps, walls, rate.t_end, a.quiet);
+  write_compact_snapshot(s, out, "initial", files.contacts_buffer());
+  nlohmann::json summary = compact_summary<D>(command, a, path, rate, source, pk.seed, n, pre.size());
 
   const auto t0 = std::chrono::steady_clock::now();
-  Progress progress("compact", T, a.quiet);
-  write_row(0, meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1);
-  std::size_t next_snap = 0;
-  // samples per window: about every 20 steps, at least 10 per window
-  const auto every = static_cast<std::int64_t>(std::clamp(T / a.increments / dt_first / 10.0, 1.0, 20.0));
   activity() = "compacting";
-  try {
-    for (int k = 1; k <= a.increments; ++k) {
-      const double t_end = T * k / a.increments;
-      Sample acc;
-      int samples = 0;
-      std::int64_t since = 0;
-      while (s.time() < t_end - 1e-12 * T) {
-        s.step();
-        ++steps;
-        if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
-          acc.add(meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1.0);
-          ++samples;
-          progress.update(s.time());
-        }
-      }
-      if (samples == 0) {
-        acc.add(meter.measure(s, e11 * s.time(), e22 * s.time(), e12 * s.time()), 1.0);
-        samples = 1;
-      }
-      Sample mean;
-      mean.add(acc, 1.0 / samples);
-      s.check_health();  // nothing unchecked reaches a file
-      write_row(k, mean, samples);
-      done = k;
-      while (next_snap < snaps.size() && s.density() >= snaps[next_snap] - 1e-9) {
-        write_compact_snapshot(s, out, fmt::format("D{:.3f}", snaps[next_snap]), snap_buf);
-        ++next_snap;
-      }
-      if (k % 20 == 0) write_file_atomic(out / "history.csv", csv);  // checkpoint
-    }
-  } catch (const InstabilityError& e) {
-    progress.finish();
-    csv += "# stopped: " + one_line(e.what()) + "\n";
-    write_file_atomic(out / "history.csv", csv);
-    summary["increments_done"] = done;
-    summary["steps"] = steps;
+  const CompactionSummaryT<D> r = run_compaction(s, rate, co, files);
+  if (r.instability) {
+    files.finish(one_line(r.instability_what));
+    summary["increments_done"] = r.increments_done;
+    summary["steps"] = r.steps;
     // as report_unstable(), without state_last_good.txt (compact writes no state file)
     summary["status"] = "unstable";
-    summary["status_reason"] = e.what();
-    summary["unstable_quantity"] = e.quantity();
-    summary["unstable_step"] = e.step();
-    summary["unstable_time"] = e.time();
+    summary["status_reason"] = r.instability_what;
+    summary["unstable_quantity"] = r.instability_quantity;
+    summary["unstable_step"] = r.instability_step;
+    summary["unstable_time"] = r.instability_time;
     write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
     close_run_dir(out);
-    std::fprintf(stderr, "demsolve: error: %s\n", one_line(e.what()).c_str());
+    std::fprintf(stderr, "demsolve: error: %s\n", one_line(r.instability_what).c_str());
     return exit_code::untrustworthy;
   }
-  progress.finish();
+  files.finish("");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_file_atomic(out / "history.csv", csv);
-  write_compact_snapshot(s, out, "final", snap_buf);
-  // die mode prescribes only the peripheral layer: count centres squeezed out of the box (as netsolve)
-  int outside = 0;
-  for (std::size_t p = 0; p < n; ++p) {
-    outside += outside_box(s.particles().x[p], s.particles().y[p]);
-  }
-  RunStatus status;
-  std::vector<std::string> warnings;
-  if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
-  if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
-  if (walls && max_gap > 0.02)
-    warnings.push_back(fmt::format("wall stress and contact stress differ by up to {:.3g} (above 2 %) in the second half "
-                                   "of the compaction (wall_vs_contact_gap)", max_gap));
-  summary["status"] = status.status;
-  std::string reason = status.ok() ? "every instability check passed" : status.reason();
-  for (const auto& w : warnings) reason += "; warning: " + w;
+  write_compact_snapshot(s, out, "final", files.contacts_buffer());
+  summary["status"] = r.status;
+  std::string reason = r.ok() ? "every instability check passed" : r.reason;
+  for (const auto& w : r.warnings) reason += "; warning: " + w;
   summary["status_reason"] = reason;
-  summary["warnings"] = warnings;
-  summary["increments_done"] = done;
-  summary["centres_outside_box"] = outside;
-  summary["final"] = {{"D", s.density()},         {"S11", last.S11},           {"S22", last.S22},
-                      {"S12", last.S12},          {"S11_contacts", last.S11c}, {"S22_contacts", last.S22c},
-                      {"Z", last.Z},              {"contacts", last.contacts}, {"sliding", last.sliding},
-                      {"E11", e11 * s.time()},    {"E22", e22 * s.time()},     {"E12", e12 * s.time()},
-                      {"I", last_I},              {"kinetic_ratio", last.work > 0 ? last.kinetic / last.work : 0.0},
-                      {"time", s.time()}};
-  if (walls) {
-    summary["wall_vs_contact_gap"] = last_gap;
-    summary["max_wall_vs_contact_gap"] = max_gap;
-    summary["wall_vs_contact_warning"] = max_gap > 0.02;
-  }
-  summary["dt"] = {{"first", dt_first}, {"last", s.dt()}};
-  summary["steps"] = steps;
-  summary["neighbour_rebuilds"] = s.rebuilds();
-  summary["timing_s"] = {{"wall", wall}, {"particle_steps_per_s", static_cast<double>(steps) * n / std::max(wall, 1e-9)}};
+  summary["warnings"] = r.warnings;
+  summary["increments_done"] = r.increments_done;
+  summary["centres_outside_box"] = r.outside;
+  add_results(summary, r, s, walls);
+  summary["timing_s"] = {{"wall", wall}, {"particle_steps_per_s", static_cast<double>(r.steps) * n / std::max(wall, 1e-9)}};
   write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f (contacts %.4f, %.4f), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n",
-              s.density(), last.S11, last.S22, last.S11c, last.S22c, last.Z, last_I, static_cast<long long>(steps), wall,
-              out.c_str());
-  for (const auto& w : warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
-  if (!status.ok()) {
-    std::fprintf(stderr, "demsolve: error: %s: %s\n", status.status.c_str(), status.reason().c_str());
+  const auto& m = r.last.mean;
+  std::string diag = fmt::format("S11/sy = {:.4f}, S22/sy = {:.4f}", m.S[0], m.S[1]);
+  std::string diag_c = fmt::format("{:.4f}, {:.4f}", m.Sc[0], m.Sc[1]);
+  if constexpr (D == 3) {
+    diag += fmt::format(", S33/sy = {:.4f}", m.S[2]);
+    diag_c += fmt::format(", {:.4f}", m.Sc[2]);
+  }
+  std::printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
+              diag_c.c_str(), m.Z, r.last.I, static_cast<long long>(r.steps), wall, out.c_str());
+  for (const auto& w : r.warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+  if (!r.ok()) {
+    std::fprintf(stderr, "demsolve: error: %s: %s\n", r.status.c_str(), r.reason.c_str());
     return exit_code::untrustworthy;
   }
   return exit_code::ok;
+}
+
+}  // namespace
+
+int run_dem_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
+  return a.pack.dim == 3 ? run_compact<3>(command, a, out) : run_compact<2>(command, a, out);
 }
 
 }  // namespace netdem::app::dem

@@ -58,9 +58,9 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const std::
 
 int run_dem_compact(const std::string& command, const DemCompactArgs& a, const std::filesystem::path& out);
 
-/// The --dim 3 branch of run_dem_compact (compact3d.cpp).
-int run_dem_compact_3d(const std::string& command, const DemCompactArgs& a, const std::filesystem::path& out);
-/// The checks of the numeric options both dimensions take (UsageError naming the option).
+/// The checks of the law's and the integrator's numeric options (UsageError naming the option);
+/// the protocol's own (inertial number, increments, target) are the library's
+/// (netdem::dem::CompactionOptions).
 void check_compact_numbers(const DemCompactArgs& a);
 
 }  // namespace netdem::app::dem

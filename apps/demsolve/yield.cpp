@@ -76,7 +76,7 @@ class Windows {
   }
   double strain11() const { return E11 + s_.strain_rate_11() * (s_.time() - t_rate); }
   double strain22() const { return E22 + s_.strain_rate_22() * (s_.time() - t_rate); }
-  Sample measure() { return meter_.measure(s_, strain11(), strain22()); }
+  Sample measure() { return meter_.measure(s_, {strain11(), strain22(), 0.0}); }
   /// Advances to t_end (at least one step) with about `target` samples.
   Window run(double t_end, int target = 10) {
     Window w;
@@ -131,7 +131,7 @@ class Windows {
   Meter& meter_;
 };
 
-double norm3(const Sample& m) { return std::sqrt(m.S11 * m.S11 + m.S22 * m.S22 + 2.0 * m.S12 * m.S12); }
+double norm3(const Sample& m) { return std::sqrt(m.S[0] * m.S[0] + m.S[1] * m.S[1] + 2.0 * m.S[2] * m.S[2]); }
 
 /// qs::fabric_affine_point on the explicit solver's contacts: the stress if every load-bearing
 /// disk contact that the strain rate (cos theta, sin theta) compresses keeps its normal force and
@@ -196,7 +196,7 @@ ProbeRun run_dem_probe(const DynamicSolver& unloaded, const Windows& wref, Meter
   auto sample_of = [&](const Sample& m, double strain, int steps) {
     qs::ProbeSample p;
     p.strain = strain;
-    p.S11 = m.S11, p.S22 = m.S22, p.S12 = m.S12;
+    p.S11 = m.S[0], p.S22 = m.S[1], p.S12 = m.S[2];
     p.stress = p.S11 * ct + p.S22 * st;
     p.density = s.density();
     p.Z = m.Z;
@@ -361,10 +361,10 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   auto t0 = Clock::now();
   std::string hist = "increment,E11,E22,D,S11,S22,S12,S11_contacts,S22_contacts,Z,contacts,time,I,steps,dt\n";
   auto row = [&](int k, const Sample& m, std::int64_t steps) {
-    const double Pc = -0.5 * (m.S11c + m.S22c);
+    const double Pc = -0.5 * (m.Sc[0] + m.Sc[1]);
     const double I = Pc > 0.0 ? gdot * d_mean * std::sqrt(rho / Pc) : kNaN;
     hist += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{},{},{:.4e}\n", k,
-                        win.strain11(), win.strain22(), s.density(), m.S11, m.S22, m.S12, m.S11c, m.S22c, m.Z, m.contacts,
+                        win.strain11(), win.strain22(), s.density(), m.S[0], m.S[1], m.S[2], m.Sc[0], m.Sc[1], m.Z, m.contacts,
                         s.time(), num(I), steps, s.dt());
   };
   Sample loaded = win.measure();
@@ -403,8 +403,8 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   j["particles"] = n;
   j["initial_density"] = D0;
   const double E11l = win.strain11(), E22l = win.strain22();
-  j["precompaction"] = {{"D", s.density()},  {"Z", loaded.Z},       {"S11", loaded.S11},   {"S22", loaded.S22},
-                        {"S12", loaded.S12}, {"E11", E11l},         {"E22", E22l},         {"contacts", loaded.contacts},
+  j["precompaction"] = {{"D", s.density()},  {"Z", loaded.Z},       {"S11", loaded.S[0]},   {"S22", loaded.S[1]},
+                        {"S12", loaded.S[2]}, {"E11", E11l},         {"E22", E22l},         {"contacts", loaded.contacts},
                         {"increments", a.increments}, {"increments_done", done}, {"steps", steps},
                         {"centres_outside_box", outside}, {"inertial_number", a.inertial_number}};
   if (!stopped.empty()) {
@@ -439,7 +439,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   setup["probe_inertial_number"] = 2.0 * gdot_p;
   setup["analytic"] = {{"D0", D0}, {"D", s.density()}, {"Z0", loaded.Z}, {"sigma_y", sigma_y},
                        {"dir11", path.E11}, {"dir22", path.E22}};
-  setup["loading"] = {{"S11", loaded.S11}, {"S22", loaded.S22}, {"S12", loaded.S12}};
+  setup["loading"] = {{"S11", loaded.S[0]}, {"S22", loaded.S[1]}, {"S12", loaded.S[2]}};
   qs::AffineYieldInput an{};
   bool an_ok = false;
   try {
@@ -472,11 +472,11 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   s.set_plastic_law(elastic_law);
   win.set_rate(-gdot_p * path.E11 / norm, -gdot_p * path.E22 / norm);
   const double s0 = norm3(loaded);
-  const double w11 = loaded.S11 / s0, w22 = loaded.S22 / s0, w12 = loaded.S12 / s0;
-  auto proj = [&](const Sample& m) { return m.S11 * w11 + m.S22 * w22 + 2.0 * m.S12 * w12; };
+  const double w11 = loaded.S[0] / s0, w22 = loaded.S[1] / s0, w12 = loaded.S[2] / s0;
+  auto proj = [&](const Sample& m) { return m.S[0] * w11 + m.S[1] * w22 + 2.0 * m.S[2] * w12; };
   std::string ucsv = "increment,strain,S11,S22,S12,D,Z,contacts,steps\n";
   auto urow = [&](int k, double strain, const Sample& m, std::int64_t st) {
-    ucsv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{}\n", k, strain, m.S11, m.S22, m.S12, s.density(),
+    ucsv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{}\n", k, strain, m.S[0], m.S[1], m.S[2], s.density(),
                         m.Z, m.contacts, st);
   };
   urow(0, 0.0, loaded, 0);
@@ -695,7 +695,7 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   close_run_dir(out);
   std::printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e; %d/%zu probes ok; "
               "%.1f s (compaction %.1f, unloading %.1f, probes %.1f) -> %s\n",
-              s.density(), loaded.Z, loaded.S11, loaded.S22, unorm, ok, selection.size(), total, t_compact, t_unload,
+              s.density(), loaded.Z, loaded.S[0], loaded.S[1], unorm, ok, selection.size(), total, t_compact, t_unload,
               t_probes, out.c_str());
   if (!status.ok())
     std::fprintf(stderr, "demsolve: %s: %s: %s\n", a.allow_unconverged || status.status == "incomplete" ? "warning" : "error",

@@ -348,6 +348,8 @@ void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp,
                    in.k1_Tt = k1Tt;
                    const auto r = contact::luding_evaluate<F>(wall ? pw : pp, h, in);
                    c.f_n = r.f_n;
+                   in.delta_dot = 0.0;
+                   c.f_spring = contact::luding_evaluate<F>(wall ? pw : pp, h, in).f_n;
                    set_tangential(c, r.f_t);
                    c.f_min = r.f_min;
                    c.mu = r.mu;
@@ -366,8 +368,13 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
   contacts_of<D>(P, box, keys, hist, whist, out,
                  [&](const contact::PlasticIndentationHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall,
                      ContactInfo& c) {
-                   const auto r = (wall ? lw : lp).evaluate(h, k, nullptr);
+                   const auto& law = wall ? lw : lp;
+                   const auto r = law.evaluate(h, k, nullptr);
                    c.f_n = r.f_n;
+                   auto k0 = k;  // no relative velocity: the spring force without the dashpot
+                   k0.v_n = 0.0;
+                   k0.v_t = contact::tan_zero<typename contact::Dim<D>::Tan>();
+                   c.f_spring = law.evaluate(h, k0, nullptr).f_n;
                    set_tangential(c, r.f_t);
                    c.mu = (wall ? pw : pp).mu_eff();
                    return r.loaded;

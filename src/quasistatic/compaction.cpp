@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "netdem/system/strain_path.hpp"
+
 namespace netdem::qs {
 
 Eigen::Matrix2d StrainPath::rate() const {
@@ -18,17 +20,8 @@ StrainPath StrainPath::hydrostatic() { return {"hydrostatic", -1.0, -1.0, 0.0}; 
 StrainPath StrainPath::closed_die() { return {"closed-die", 0.0, -1.0, 0.0}; }
 
 StrainPath StrainPath::parse(const std::string& text) {
-  if (text == "hydrostatic") return hydrostatic();
-  if (text == "closed-die") return closed_die();
-  std::istringstream in(text);
-  double v[3];
-  char c1 = 0, c2 = 0;
-  if (!(in >> v[0] >> c1 >> v[1] >> c2 >> v[2]) || c1 != ',' || c2 != ',' || !in.eof() ||
-      !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
-    throw std::invalid_argument(
-        fmt::format("strain path '{}' is not 'hydrostatic', 'closed-die' or three finite numbers E11,E22,E12", text));
-  if (v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0) throw std::invalid_argument("strain path 0,0,0 has no direction");
-  return {text, v[0], v[1], v[2]};
+  const auto p = sys::StrainPathT<2>::parse(text);  // the one parser of both solvers and dimensions
+  return {p.name, p.E[0], p.E[1], p.E[2]};
 }
 
 void CompactionOptions::validate(double initial_density) const {

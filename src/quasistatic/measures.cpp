@@ -10,6 +10,7 @@
 
 #include <Eigen/LU>
 
+#include "netdem/system/affine_deviation.hpp"
 #include "solver_impl.hpp"
 
 namespace netdem::qs {
@@ -67,8 +68,9 @@ StateMeasures NetworkSolver::measures() const {
   m.S_asym = 0.5 * (S(0, 1) - S(1, 0));
   // Love-Weber average over the contacts and the affine-deviation measures
   Eigen::Matrix2d SC = Eigen::Matrix2d::Zero();
-  double sum_ratio = 0, sum_absdev = 0, sum_una = 0, sum_tc = 0, sum_tr = 0, sum_ta = 0;
-  int n_ratio = 0, loaded = 0;
+  sys::AffineDeviation dev(s.r_mean);
+  double sum_tc = 0, sum_tr = 0;
+  int loaded = 0;
   double sum_fn = 0;
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
@@ -80,20 +82,10 @@ StateMeasures NetworkSolver::measures() const {
     sum_fn += s.fn_c[k];
     m.sliding += s.slide_c[k];
     // Eq 16 with the strain accumulated since the contact formed
-    const Eigen::Matrix2d dEc = s.E - s.aux[k].E_form;
-    const double Rsum = s.r[i] + s.r[j];
-    const double una = -(g.n.dot(dEc * g.n)) * Rsum;
-    const double uta = g.t.dot(dEc * g.n) * Rsum;
-    const double un = g.overlap;
-    sum_absdev += std::fabs(un - una);
-    sum_una += una;
-    if (una > 1e-12 * s.r_mean) {
-      sum_ratio += std::fabs(un - una) / una;
-      ++n_ratio;
-    }
-    sum_tc += std::fabs(s.aux[k].centre - uta);
-    sum_tr += std::fabs(s.aux[k].slip - uta);
-    sum_ta += std::fabs(uta);
+    const auto a = sys::affine_approach<2>(g.n, s.E - s.aux[k].E_form, s.r[i] + s.r[j]);
+    dev.add(g.overlap, a);
+    sum_tc += std::fabs(s.aux[k].centre - a.tangential);
+    sum_tr += std::fabs(s.aux[k].slip - a.tangential);
   }
   SC += SW;
   SC /= V;
@@ -117,13 +109,11 @@ StateMeasures NetworkSolver::measures() const {
   m.contacts = loaded;
   m.Z = 2.0 * loaded / s.n;
   m.mean_normal_force = loaded > 0 ? sum_fn / loaded : 0.0;
-  const int nl = std::max(loaded, 1);
-  const double una_mean = sum_una / nl;
-  m.dev_normal_mean_ratio = n_ratio > 0 ? sum_ratio / n_ratio : 0.0;
-  m.dev_normal_ratio_of_means = una_mean > 0 ? (sum_absdev / nl) / una_mean : 0.0;
-  m.dev_tangential_centres = una_mean > 0 ? (sum_tc / nl) / una_mean : 0.0;
-  m.dev_tangential_rotations = una_mean > 0 ? (sum_tr / nl) / una_mean : 0.0;
-  m.affine_tangential = una_mean > 0 ? (sum_ta / nl) / una_mean : 0.0;
+  m.dev_normal_mean_ratio = dev.mean_ratio();
+  m.dev_normal_ratio_of_means = dev.ratio_of_means(loaded);
+  m.dev_tangential_centres = dev.of_mean_affine_normal(sum_tc, loaded);
+  m.dev_tangential_rotations = dev.of_mean_affine_normal(sum_tr, loaded);
+  m.affine_tangential = dev.affine_tangential(loaded);
   return m;
 }
 

@@ -238,6 +238,7 @@ struct ContactInfo {
   double nx = 0.0, ny = 0.0;   ///< unit normal from i to j (from the wall into the box)
   double nz = 0.0;             ///< 3D: its z component
   double f_n = 0.0;            ///< normal force on j [N], > 0 repulsive (spring + damping)
+  double f_spring = 0.0;       ///< its spring part: the law at zero relative velocity (no dashpot) [N]
   double f_t = 0.0;            ///< tangential force on j along t = perp(n) [N] (3D: its magnitude)
   double ftx = 0.0, fty = 0.0, ftz = 0.0;  ///< 3D: the tangential force on j [N]
   double f_min = 0.0;          ///< Eq 15 [N] (<= 0)

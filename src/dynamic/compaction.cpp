@@ -1,0 +1,385 @@
+// The DEM compaction protocol and its measures, disks and spheres (compaction.hpp).
+#include "netdem/dynamic/compaction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "netdem/field_error.hpp"
+#include "netdem/system/affine_deviation.hpp"
+
+namespace netdem::dem {
+
+namespace {
+
+/// Voigt components of a solver stress, netsolve's sign (compression negative), the symmetric part.
+template <int D>
+Voigt<D> voigt_of(const typename DynamicSolverT<D>::Stress& b) {
+  Voigt<D> v{};
+  for (int k = 0; k < kVoigt<D>; ++k) {
+    const int r = sys::voigt_row<D>(k), c = sys::voigt_col<D>(k);
+    double brc = 0.0, bcr = 0.0;
+    if constexpr (D == 2) {
+      const double m[2][2] = {{b.xx, b.xy}, {b.yx, b.yy}};
+      brc = m[r][c], bcr = m[c][r];
+    } else {
+      brc = b.s[r][c], bcr = b.s[c][r];
+    }
+    v[static_cast<std::size_t>(k)] = r == c ? -brc : -0.5 * (brc + bcr);
+  }
+  return v;
+}
+
+/// The symmetric D x D tensor of Voigt components a - b.
+template <int D>
+Eigen::Matrix<double, D, D> tensor_of_difference(const Voigt<D>& a, const Voigt<D>& b) {
+  Eigen::Matrix<double, D, D> m;
+  for (int k = 0; k < kVoigt<D>; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    m(sys::voigt_row<D>(k), sys::voigt_col<D>(k)) = m(sys::voigt_col<D>(k), sys::voigt_row<D>(k)) = a[kk] - b[kk];
+  }
+  return m;
+}
+
+/// Kinetic energy of the motion relative to the affine field (the particles not prescribed) and of
+/// the spins.
+template <int D>
+double fluctuating_kinetic(const DynamicSolverT<D>& s, const std::vector<std::uint8_t>& is_pre) {
+  const Particles& P = s.particles();
+  const Box& bx = s.box();
+  double e = 0.0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    if constexpr (D == 2) {
+      e += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
+      if (is_pre[i]) continue;
+      const double dx = P.x[i] - bx.x_min, dy = P.y[i] - bx.y_min;
+      double wx = P.vx[i] - s.strain_rate_11() * dx;
+      double wy = P.vy[i] - s.strain_rate_22() * dy;
+      if (s.strain_rate_12() != 0.0) {
+        wx -= s.strain_rate_12() * dy;
+        wy -= s.strain_rate_12() * dx;
+      }
+      e += 0.5 * P.mass[i] * (wx * wx + wy * wy);
+    } else {
+      e += 0.5 * P.inertia[i] * (P.wx[i] * P.wx[i] + P.wy[i] * P.wy[i] + P.omega[i] * P.omega[i]);
+      if (is_pre[i]) continue;
+      const double x[3] = {P.x[i] - bx.x_min, P.y[i] - bx.y_min, P.z[i] - bx.z_min};
+      const double v[3] = {P.vx[i], P.vy[i], P.vz[i]};
+      for (int a = 0; a < 3; ++a) {
+        double w = v[a];
+        for (int q = 0; q < 3; ++q) w -= s.strain_rate3(a, q) * x[q];
+        e += 0.5 * P.mass[i] * w * w;
+      }
+    }
+  }
+  return e;
+}
+
+template <int D>
+double particle_measure(double r) {
+  if constexpr (D == 2) {
+    return std::numbers::pi * r * r;
+  } else {
+    return 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  }
+}
+
+template <int D>
+double box_measure(const Box& b) {
+  if constexpr (D == 2) {
+    return (b.x_max - b.x_min) * (b.y_max - b.y_min);
+  } else {
+    return (b.x_max - b.x_min) * (b.y_max - b.y_min) * (b.z_max - b.z_min);
+  }
+}
+
+/// Is particle p's centre outside the deformed domain: the box, or with shear rates the
+/// parallelogram (parallelepiped) x_0 + F (box_0 - x_0)?
+template <int D>
+class OutsideTest {
+ public:
+  OutsideTest(const DynamicSolverT<D>& s, bool shear) : s_(s), box0_(s.box()), shear_(shear) {}
+  bool operator()(std::size_t p) const {
+    const Particles& Q = s_.particles();
+    const Box& b = s_.box();
+    if constexpr (D == 2) {
+      const double x = Q.x[p], y = Q.y[p];
+      if (!shear_) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max;
+      const auto& F = s_.box_deformation();
+      const double det = F[0] * F[3] - F[1] * F[2], dx = x - box0_.x_min, dy = y - box0_.y_min;
+      const double X = (F[3] * dx - F[1] * dy) / det, Y = (-F[2] * dx + F[0] * dy) / det;
+      return X < 0.0 || X > box0_.x_max - box0_.x_min || Y < 0.0 || Y > box0_.y_max - box0_.y_min;
+    } else {
+      const double x = Q.x[p], y = Q.y[p], z = Q.z[p];
+      if (!shear_) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max || z < b.z_min || z > b.z_max;
+      const auto& Fm = s_.affine_map3();
+      Eigen::Matrix3d F;
+      F << Fm[0], Fm[1], Fm[2], Fm[3], Fm[4], Fm[5], Fm[6], Fm[7], Fm[8];
+      const Eigen::Vector3d X = F.partialPivLu().solve(Eigen::Vector3d(x - box0_.x_min, y - box0_.y_min, z - box0_.z_min));
+      const double L0[3] = {box0_.x_max - box0_.x_min, box0_.y_max - box0_.y_min, box0_.z_max - box0_.z_min};
+      for (int k = 0; k < 3; ++k)
+        if (X(k) < 0.0 || X(k) > L0[k]) return true;
+      return false;
+    }
+  }
+
+ private:
+  const DynamicSolverT<D>& s_;
+  Box box0_;
+  bool shear_;
+};
+
+/// |S - Sc| / |Sc| over the diagonal (the walls carry no shear).
+template <int D>
+double wall_gap(const CompactionSampleT<D>& m) {
+  if constexpr (D == 2) {
+    const double d11 = m.S[0] - m.Sc[0], d22 = m.S[1] - m.Sc[1];
+    const double c = std::hypot(m.Sc[0], m.Sc[1]);
+    return c > 0.0 ? std::hypot(d11, d22) / c : 0.0;
+  } else {
+    const double d = std::sqrt((m.S[0] - m.Sc[0]) * (m.S[0] - m.Sc[0]) + (m.S[1] - m.Sc[1]) * (m.S[1] - m.Sc[1]) +
+                               (m.S[2] - m.Sc[2]) * (m.S[2] - m.Sc[2]));
+    const double c = std::sqrt(m.Sc[0] * m.Sc[0] + m.Sc[1] * m.Sc[1] + m.Sc[2] * m.Sc[2]);
+    return c > 0.0 ? d / c : 0.0;
+  }
+}
+
+}  // namespace
+
+template <int D>
+void CompactionSampleT<D>::add(const CompactionSampleT& o, double w) {
+  for (std::size_t k = 0; k < S.size(); ++k) S[k] += w * o.S[k], Sc[k] += w * o.Sc[k];
+  Z += w * o.Z, contacts += w * o.contacts, sliding += w * o.sliding, mean_fn += w * o.mean_fn;
+  dev_mean_ratio += w * o.dev_mean_ratio, dev_ratio_of_means += w * o.dev_ratio_of_means, affine_ut += w * o.affine_ut;
+  kinetic += w * o.kinetic, work += w * o.work;
+}
+
+template <int D>
+CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, const Voigt<D>& E) {
+  CompactionSampleT<D> m;
+  m.S = voigt_of<D>(walls_ ? s.wall_stress() : s.boundary_stress());
+  m.Sc = voigt_of<D>(s.contact_stress());
+  s.contacts(cs_);
+  const Particles& P = s.particles();
+  std::unordered_map<std::uint64_t, Voigt<D>> formed;
+  formed.reserve(cs_.size());
+  int loaded = 0;
+  double sum_fn = 0;
+  sys::AffineDeviation dev(r_mean_);
+  for (const auto& ct : cs_) {
+    if (ct.wall >= 0 || !(ct.f_spring > 0.0)) continue;
+    const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
+    Voigt<D> ef = prev_;  // first seen: the strain at the previous sample
+    if (const auto it = form_.find(key); it != form_.end()) ef = it->second;
+    formed.emplace(key, ef);
+    ++loaded;
+    sum_fn += ct.f_spring;
+    m.sliding += ct.sliding ? 1.0 : 0.0;
+    m.work += 0.5 * ct.f_spring * ct.overlap;
+    Eigen::Matrix<double, D, 1> n;
+    if constexpr (D == 2) {
+      n << ct.nx, ct.ny;
+    } else {
+      n << ct.nx, ct.ny, ct.nz;
+    }
+    // Eq 16 with the strain accumulated since the contact formed
+    dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.radius[ct.i] + P.radius[ct.j]));
+  }
+  form_.swap(formed);
+  prev_ = E;
+  m.contacts = loaded;
+  m.Z = 2.0 * loaded / static_cast<double>(P.size());
+  m.mean_fn = loaded > 0 ? sum_fn / loaded : 0.0;
+  m.dev_mean_ratio = dev.mean_ratio();
+  m.dev_ratio_of_means = dev.ratio_of_means(loaded);
+  m.affine_ut = dev.affine_tangential(loaded);
+  is_pre_.assign(P.size(), 0);
+  for (auto p : s.prescribed()) is_pre_[p] = 1;
+  m.kinetic = fluctuating_kinetic<D>(s, is_pre_);
+  return m;
+}
+
+template <int D>
+CompactionRateT<D> compaction_rate(const sys::StrainPathT<D>& path, double inertial_number, double initial_density,
+                                   double target_density) {
+  const double rho = 1.0, sigma_y = 1.0, d_mean = 2.0;
+  CompactionRateT<D> r;
+  r.gamma_dot = inertial_number / (d_mean * std::sqrt(rho / sigma_y));
+  const double norm = path.norm();
+  double tr = 0.0;
+  for (int k = 0; k < kVoigt<D>; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    r.rate[kk] = r.gamma_dot * path.E[kk] / norm;
+    if (k < D) tr += r.rate[kk];
+  }
+  r.initial_density = initial_density;
+  r.t_end = std::log(initial_density / target_density) / tr;  // D = D0 exp(-tr E' t)
+  return r;
+}
+
+template <int D>
+void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& e) {
+  if constexpr (D == 2) {
+    s.set_strain_rate(e[0], e[1], e[2]);
+  } else {
+    s.set_strain_rate3(e[0], e[1], e[2], e[3], e[4], e[5]);
+  }
+}
+
+void CompactionOptions::check_numbers() const {
+  if (!(std::isfinite(inertial_number) && inertial_number > 0.0 && inertial_number <= 1.0))
+    throw FieldError("inertial_number", fmt::format("the inertial number must be in (0, 1], got {}", inertial_number));
+  if (increments < 1 || increments > 1000000)
+    throw FieldError("increments", fmt::format("the number of increments must be in [1, 1e6], got {}", increments));
+  if (!(max_steps >= 1.0))
+    throw FieldError("max_steps", fmt::format("the step limit must be at least 1, got {}", max_steps));
+}
+
+template <int D>
+void CompactionOptions::validate(const sys::StrainPathT<D>& path, double initial_density) const {
+  check_numbers();
+  if (!(std::isfinite(target_density) && target_density > 0.0 && target_density < 1.0))
+    throw FieldError("to_density", fmt::format("the target density must be in (0, 1), got {}", target_density));
+  if (!(target_density > initial_density))
+    throw FieldError("to_density", fmt::format("impossible target: density {} is not above the current density {:.4f}",
+                                               target_density, initial_density));
+  if (!(path.trace() < 0.0))
+    throw FieldError("path", fmt::format("impossible target: strain path {} (trace {}) does not compact, so density {} "
+                                         "is never reached", path.name, path.trace(), target_density));
+  if (walls && path.shear()) {
+    std::string zero;
+    for (int k = D; k < kVoigt<D>; ++k) zero += fmt::format("E{} = ", sys::voigt_labels<D>()[static_cast<std::size_t>(k)]);
+    throw FieldError("path", fmt::format("the strain path {} has shear components; between walls it takes {}0 only (the "
+                                         "walls stay axis-aligned)", path.name, zero));
+  }
+}
+
+template <int D>
+CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT<D>& rate, const CompactionOptions& o,
+                                     CompactionObserverT<D>& obs) {
+  const double T = rate.t_end, D0 = rate.initial_density;
+  CompactionSummaryT<D> sum;
+  sum.dt_first = s.dt();
+  const double steps_est = T / sum.dt_first;
+  if (!(steps_est <= o.max_steps))
+    throw FieldError("max_steps", fmt::format("the run needs at least {:.3g} time steps of {:.3g} t* (inertial number "
+                                              "{:g}), more than the step limit {:.3g}: raise the inertial number or the "
+                                              "step limit", steps_est, sum.dt_first, o.inertial_number, o.max_steps));
+  double r_mean = 0.0;
+  for (double r : s.particles().radius) r_mean += r;
+  r_mean /= static_cast<double>(s.particles().size());
+  CompactionMeterT<D> meter(o.walls, r_mean);
+  bool shear = false;
+  for (int k = D; k < kVoigt<D>; ++k) shear = shear || rate.rate[static_cast<std::size_t>(k)] != 0.0;
+  const OutsideTest<D> outside_box(s, shear);
+  auto strain = [&] {
+    Voigt<D> E{};
+    for (std::size_t k = 0; k < E.size(); ++k) E[k] = rate.rate[k] * s.time();
+    return E;
+  };
+  auto report = [&](int k, const CompactionSampleT<D>& m, int samples) {
+    CompactionRowT<D> r;
+    r.increment = k;
+    r.time = s.time();
+    r.E = strain();
+    r.density = s.density();
+    r.mean = m;
+    double pc = 0.0;
+    for (int a = 0; a < D; ++a) pc += m.Sc[static_cast<std::size_t>(a)];
+    const double Pc = -pc / D;
+    // the actual inertial number (rho = sigma_y = 1, d = 2); undefined where P = 0
+    r.I = Pc > 0.0 ? rate.gamma_dot * 2.0 * std::sqrt(1.0 / Pc) : std::numeric_limits<double>::quiet_NaN();
+    r.kinetic_ratio = m.work > 0.0 ? m.kinetic / m.work : 0.0;
+    r.steps = sum.steps;
+    r.samples = samples;
+    r.dt = s.dt();
+    double in = 0.0;
+    for (std::size_t p = 0; p < s.particles().size(); ++p) {
+      const bool out = outside_box(p);
+      r.outside += out;
+      if (!out) in += particle_measure<D>(s.particles().radius[p]);
+    }
+    r.density_in_box = in / box_measure<D>(s.box());
+    if (o.walls) {
+      r.wall_gap = wall_gap<D>(m);
+      if (k > 0) {
+        sum.last_wall_gap = r.wall_gap;
+        if (s.density() >= D0 + 0.5 * (o.target_density - D0)) sum.max_wall_gap = std::max(sum.max_wall_gap, r.wall_gap);
+      }
+    }
+    sum.last = r;
+    obs.row(r);
+  };
+  report(0, meter.measure(s, strain()), 1);
+  // samples per window: about every 20 steps, at least 10 per window
+  const auto every = static_cast<std::int64_t>(std::clamp(T / o.increments / sum.dt_first / 10.0, 1.0, 20.0));
+  try {
+    for (int k = 1; k <= o.increments; ++k) {
+      const double t_end = T * k / o.increments;
+      CompactionSampleT<D> acc;
+      int samples = 0;
+      std::int64_t since = 0;
+      while (s.time() < t_end - 1e-12 * T) {
+        s.step();
+        ++sum.steps;
+        if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
+          acc.add(meter.measure(s, strain()), 1.0);
+          ++samples;
+          obs.progress(s.time());
+        }
+      }
+      if (samples == 0) {
+        acc.add(meter.measure(s, strain()), 1.0);
+        samples = 1;
+      }
+      CompactionSampleT<D> mean;
+      mean.add(acc, 1.0 / samples);
+      s.check_health();  // nothing unchecked reaches a file
+      report(k, mean, samples);
+      sum.increments_done = k;
+      if (k % 20 == 0) obs.checkpoint(k);
+    }
+  } catch (const InstabilityError& e) {
+    sum.status = "unstable";
+    sum.reason = e.what();
+    sum.instability = true;
+    sum.instability_what = e.what();
+    sum.instability_quantity = e.quantity();
+    sum.instability_step = e.step();
+    sum.instability_time = e.time();
+    return sum;
+  }
+  for (std::size_t p = 0; p < s.particles().size(); ++p) sum.outside += outside_box(p);
+  std::vector<std::string> reasons;
+  if (sum.outside > 0)
+    reasons.push_back(D == 2 ? fmt::format("{} disk centres left the box between the peripheral disks", sum.outside)
+                             : fmt::format("{} sphere centres left the box", sum.outside));
+  if (sum.last.mean.Z < 2.0)
+    reasons.push_back(fmt::format("final Z = {:.3g} < 2: the network is a mechanism", sum.last.mean.Z));
+  if (!reasons.empty()) {
+    sum.status = "unstable";
+    for (const auto& r : reasons) sum.reason += (sum.reason.empty() ? "" : "; ") + r;
+  }
+  if (o.walls && sum.max_wall_gap > 0.02)
+    sum.warnings.push_back(fmt::format("wall stress and contact stress differ by up to {:.3g} (above 2 %) in the second "
+                                       "half of the compaction (wall_vs_contact_gap)", sum.max_wall_gap));
+  return sum;
+}
+
+#define NETDEM_COMPACTION(D)                                                                                           \
+  template struct CompactionSampleT<D>;                                                                                \
+  template class CompactionMeterT<D>;                                                                                  \
+  template CompactionRateT<D> compaction_rate<D>(const sys::StrainPathT<D>&, double, double, double);                  \
+  template void set_strain_rate<D>(DynamicSolverT<D>&, const Voigt<D>&);                                               \
+  template void CompactionOptions::validate<D>(const sys::StrainPathT<D>&, double) const;                              \
+  template CompactionSummaryT<D> run_compaction<D>(DynamicSolverT<D>&, const CompactionRateT<D>&,                      \
+                                                   const CompactionOptions&, CompactionObserverT<D>&);
+NETDEM_COMPACTION(2)
+NETDEM_COMPACTION(3)
+#undef NETDEM_COMPACTION
+
+}  // namespace netdem::dem

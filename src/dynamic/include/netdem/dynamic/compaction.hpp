@@ -1,0 +1,146 @@
+#pragma once
+// The DEM compaction protocol (issue 26: it lived in demsolve as a 2D and a 3D twin): a sample of
+// plastic-indentation particles driven along a strain-rate direction at a fixed inertial number
+// until a target density, measured as netsolve measures its networks (Redanz & Fleck 2001 Eq 13
+// and Eq 16, netsolve's sign: compression negative), for disks and spheres alike.
+//
+// Options in, Summary out (Ceres style); the rows of the run reach the caller through an Observer,
+// which writes the files (the library writes none). docs/dynamic.md "demsolve compact".
+#include <array>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "netdem/dynamic/solver.hpp"
+#include "netdem/system/strain_path.hpp"
+
+namespace netdem::dem {
+
+using sys::kVoigt;
+using sys::Voigt;
+
+/// One sample of the measured state; a history row is the mean of the samples of its window.
+/// Stresses in Voigt order (2D 11, 22, 12; 3D 11, 22, 33, 23, 13, 12), compression negative.
+template <int D>
+struct CompactionSampleT {
+  Voigt<D> S{};   ///< Eq 13: the boundary reactions (layer, affine) or the wall forces (walls)
+  Voigt<D> Sc{};  ///< the contact (Love-Weber) stress
+  double Z = 0, contacts = 0, sliding = 0, mean_fn = 0;
+  double dev_mean_ratio = 0, dev_ratio_of_means = 0, affine_ut = 0;  ///< Eq 16 (sys::AffineDeviation)
+  double kinetic = 0;  ///< kinetic energy of the motion relative to the affine field, spins included
+  double work = 0;     ///< sum F_N u_N / 2 over the loaded particle contacts (spring force)
+  void add(const CompactionSampleT& o, double w);
+};
+
+/// The measures of a state: Z, the mean normal force, the elastic work and the Eq 16 measures over
+/// the loaded particle-particle contacts: those whose spring force (the law on the committed
+/// history at zero relative velocity, without the dashpot: ContactInfo::f_spring) is positive, as
+/// netsolve counts its quasi-static contacts.
+template <int D>
+class CompactionMeterT {
+ public:
+  /// walls: Eq 13 from the wall forces (BoundaryMode walls) instead of the prescribed particles'
+  /// reactions.
+  CompactionMeterT(bool walls, double r_mean) : walls_(walls), r_mean_(r_mean) {}
+  /// E: the macroscopic strain accumulated so far (Voigt); each contact's Eq 16 uses the strain
+  /// since it formed (first seen: the strain of the previous sample).
+  CompactionSampleT<D> measure(const DynamicSolverT<D>& s, const Voigt<D>& E);
+  const std::vector<ContactInfo>& last_contacts() const { return cs_; }
+
+ private:
+  bool walls_;
+  double r_mean_;
+  std::vector<ContactInfo> cs_;
+  std::vector<std::uint8_t> is_pre_;
+  std::unordered_map<std::uint64_t, Voigt<D>> form_;
+  Voigt<D> prev_{};
+};
+
+/// The rate of a compaction at inertial number I = gamma' d sqrt(rho / P_ref) (gamma' = |E'|,
+/// Frobenius; d = 2R = 2, rho = 1, P_ref = sigma_y = 1: netsolve's units) and its duration to the
+/// target density (D = D0 exp(-tr E' t)).
+template <int D>
+struct CompactionRateT {
+  double gamma_dot = 0.0;
+  Voigt<D> rate{};  ///< E' (Voigt)
+  double initial_density = 0.0;
+  double t_end = 0.0;
+};
+template <int D>
+CompactionRateT<D> compaction_rate(const sys::StrainPathT<D>& path, double inertial_number, double initial_density,
+                                   double target_density);
+
+/// Sets the solver's affine strain rate (Voigt).
+template <int D>
+void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& rate);
+
+struct CompactionOptions {
+  double target_density = 0.85;
+  /// I = gamma' d sqrt(rho / P_ref); 1.5e-4: docs/dynamic.md "demsolve compact", the fit
+  double inertial_number = 1.5e-4;
+  int increments = 100;     ///< history rows from the start to the target (equal times)
+  double max_steps = 1e10;  ///< refuse a run estimated to need more time steps
+  bool walls = false;       ///< the stress from the wall forces; the wall-vs-contact gap is recorded
+  /// The numbers alone (inertial number, increments, step limit), before any packing is built.
+  void check_numbers() const;
+  /// Validates every field; the density checks against the initial density and the path.
+  /// Throws netdem::FieldError (field: inertial_number, increments, to_density, max_steps, path).
+  template <int D>
+  void validate(const sys::StrainPathT<D>& path, double initial_density) const;
+};
+
+/// One history row: the window means of the increment just completed.
+template <int D>
+struct CompactionRowT {
+  int increment = 0;
+  Voigt<D> E{};  ///< the macroscopic strain
+  double density = 0, time = 0;
+  CompactionSampleT<D> mean;
+  double I = 0;  ///< the actual inertial number from the contact pressure; NaN where it is not positive
+  double kinetic_ratio = 0;
+  std::int64_t steps = 0;
+  int samples = 0;
+  double dt = 0;
+  int outside = 0;            ///< centres outside the deformed box
+  double density_in_box = 0;  ///< the density of the particles whose centre is inside
+  double wall_gap = 0;        ///< walls: |S - Sc| / |Sc| on the diagonal
+};
+
+template <int D>
+struct CompactionSummaryT {
+  std::string status = "ok";  ///< ok | unstable
+  std::string reason;         ///< why, "; "-separated; empty when ok
+  std::vector<std::string> warnings;
+  int increments_done = 0;
+  std::int64_t steps = 0;
+  int outside = 0;  ///< centres outside the box at the end
+  CompactionRowT<D> last;
+  double max_wall_gap = 0, last_wall_gap = 0;
+  double dt_first = 0;
+  bool instability = false;  ///< the run stopped on an InstabilityError (what, quantity, step, time below)
+  std::string instability_what, instability_quantity;
+  std::int64_t instability_step = 0;
+  double instability_time = 0;
+  bool ok() const { return status == "ok"; }
+};
+
+template <int D>
+class CompactionObserverT {
+ public:
+  virtual ~CompactionObserverT() = default;
+  virtual void row(const CompactionRowT<D>& r) = 0;  ///< after each increment (and increment 0)
+  virtual void progress(double /*time*/) {}           ///< every few steps
+  virtual void checkpoint(int /*increment*/) {}       ///< every 20 increments
+};
+
+/// Runs the compaction of `s` (its particles, box, law, prescribed set and strain rate set up by
+/// the caller, rate from compaction_rate()) to rate.t_end in o.increments windows of equal time.
+/// Each window is measured about every 20 steps (at least 10 samples) and averaged. An
+/// InstabilityError stops the run: the summary says so (status unstable) and the row of the
+/// last completed increment stays the last one reported.
+template <int D>
+CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT<D>& rate, const CompactionOptions& o,
+                                     CompactionObserverT<D>& obs);
+
+}  // namespace netdem::dem

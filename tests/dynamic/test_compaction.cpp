@@ -1,0 +1,205 @@
+// The DEM compaction protocol of the library (netdem/dynamic/compaction.hpp) and the Eq 16
+// measures (netdem/system/affine_deviation.hpp), disks and spheres, against closed forms:
+//  * Eq 16 for one contact: u_N^a = -n.dE.n (r_i + r_j), |u_T^a| = |dE n - (n.dE.n) n| (r_i + r_j);
+//    the same contact in 2D and in the x-y plane in 3D gives the same numbers, and an isotropic dE
+//    no tangential part (exactly, in 2D);
+//  * a square (cubic) lattice in affine hydrostatic compaction: the overlaps follow
+//    u = R_sum - L_0 exp(e t), so the Eq 16 deviation of every contact is the second-order strain
+//    term: |u - u^a| / u^a = (exp(e t) - 1 - e t) / |e t| ~ |e t| / 2; Z = 3 (square), 4 (cubic);
+//    the run ends at the target density D = D_0 exp(-tr E);
+//  * the strain paths and the protocol's options, refused with the field they name.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "netdem/dynamic/compaction.hpp"
+#include "netdem/field_error.hpp"
+#include "netdem/system/affine_deviation.hpp"
+
+using namespace netdem::dem;
+namespace sys = netdem::sys;
+
+namespace {
+
+TEST(AffineApproach, ClosedFormAndDimensionConsistency) {
+  const double th = 0.3, a = -0.02, b = 0.01, c = 0.005, Rsum = 2.5;
+  const Eigen::Vector2d n2(std::cos(th), std::sin(th));
+  Eigen::Matrix2d E2;
+  E2 << a, c, c, b;
+  const auto r2 = sys::affine_approach<2>(n2, E2, Rsum);
+  const double cs = std::cos(th), sn = std::sin(th);
+  EXPECT_NEAR(r2.normal, -(a * cs * cs + b * sn * sn + 2 * c * sn * cs) * Rsum, 1e-15);
+  EXPECT_NEAR(r2.tangential, ((b - a) * sn * cs + c * (cs * cs - sn * sn)) * Rsum, 1e-15);
+  // the same contact in the x-y plane of a 3D sample: the same normal part and |tangential part|
+  const Eigen::Vector3d n3(cs, sn, 0.0);
+  Eigen::Matrix3d E3 = Eigen::Matrix3d::Zero();
+  E3.topLeftCorner<2, 2>() = E2;
+  E3(2, 2) = 0.7;  // a strain along z moves nothing in this contact
+  const auto r3 = sys::affine_approach<3>(n3, E3, Rsum);
+  EXPECT_NEAR(r3.normal, r2.normal, 1e-15);
+  EXPECT_NEAR(r3.tangential_norm(), std::fabs(r2.tangential), 1e-15);
+  EXPECT_NEAR(r3.tangential.dot(n3), 0.0, 1e-15);  // in the tangent plane
+  // isotropic: no tangential part, exactly in 2D
+  const auto iso = sys::affine_approach<2>(n2, Eigen::Matrix2d::Identity() * -0.01, Rsum);
+  EXPECT_EQ(iso.tangential, 0.0);
+  EXPECT_NEAR(iso.normal, 0.01 * Rsum, 1e-15);
+}
+
+TEST(StrainPath, ParsesBothDimensionsAndNamesTheField) {
+  const auto h2 = sys::StrainPathT<2>::parse("hydrostatic");
+  EXPECT_EQ(h2.E, (sys::Voigt<2>{-1, -1, 0}));
+  const auto d3 = sys::StrainPathT<3>::parse("closed-die");  // along z, the gravity axis
+  EXPECT_EQ(d3.E, (sys::Voigt<3>{0, 0, -1, 0, 0, 0}));
+  const auto g3 = sys::StrainPathT<3>::parse("-1,-1,-1,0.5,0,0");
+  EXPECT_TRUE(g3.shear());
+  EXPECT_DOUBLE_EQ(g3.norm(), std::sqrt(3.0 + 2 * 0.25));
+  EXPECT_DOUBLE_EQ(g3.trace(), -3.0);
+  for (const char* bad : {"", "1,2", "1,2,3,4", "a,b,c", "0,0,0", "1,nan,0", "1,2,3,"}) {
+    try {
+      (void)sys::StrainPathT<2>::parse(bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const netdem::FieldError& e) {
+      EXPECT_EQ(e.field(), "path") << bad;
+    }
+  }
+  EXPECT_THROW((void)sys::StrainPathT<3>::parse("1,2,3,4,5"), netdem::FieldError);
+}
+
+/// A square (D = 2) or cubic (D = 3) lattice of m^D unit particles at spacing 2 - u0 in a box
+/// touching the outer ones.
+template <int D>
+netdem::packing::Packing lattice(int m, double u0) {
+  netdem::packing::Packing p;
+  p.dim = D;
+  const double h = 2.0 - u0;
+  const int mz = D == 3 ? m : 1;
+  for (int k = 0; k < mz; ++k)
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) {
+        p.x.push_back(1.0 + i * h);
+        p.y.push_back(1.0 + j * h);
+        if (D == 3) p.z.push_back(1.0 + k * h);
+        p.r.push_back(1.0);
+      }
+  const double L = 2.0 + (m - 1) * h;
+  p.box.x_max = p.box.y_max = L;
+  if (D == 3) p.box.z_max = L;
+  return p;
+}
+
+template <int D>
+class Rows : public CompactionObserverT<D> {
+ public:
+  void row(const CompactionRowT<D>& r) override { rows.push_back(r); }
+  std::vector<CompactionRowT<D>> rows;
+};
+
+template <int D>
+void affine_lattice_compaction() {
+  const int m = 4;
+  const double u0 = 1e-9;
+  const auto pk = lattice<D>(m, u0);
+  Particles P = D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);
+  Box box(pk.box);
+  box.contact_walls = false;  // the box follows the affine field (as demsolve compact --affine)
+  box.right.mode = box.top.mode = WallMode::Affine;
+  if constexpr (D == 3) box.back.mode = WallMode::Affine;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic.sigma_y = 1.0;
+  o.plastic.mu = 0.0;
+  o.plastic.first_touch = 1e-4;
+  o.plastic.damping_n = o.plastic.damping_t = 0.5;
+  DynamicSolverT<D> s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  const double D0 = pk.density();
+  CompactionOptions co;
+  co.target_density = D0 * std::exp(0.06);  // tr E = -0.06
+  co.inertial_number = 1e-3;
+  co.increments = 6;
+  const auto path = sys::StrainPathT<D>::parse("hydrostatic");
+  co.validate(path, D0);
+  const auto rate = compaction_rate(path, co.inertial_number, D0, co.target_density);
+  // |E'| (Frobenius) = gamma' = I / 2 (d = 2, rho = sigma_y = 1)
+  EXPECT_NEAR(std::sqrt(D * rate.rate[0] * rate.rate[0]), co.inertial_number / 2.0, 1e-15);
+  set_strain_rate(s, rate.rate);
+  s.set_affine_velocities();
+  std::vector<std::uint32_t> all;
+  for (std::uint32_t p = 0; p < s.particles().size(); ++p) all.push_back(p);
+  s.set_prescribed(all, false);
+  Rows<D> obs;
+  const auto sum = run_compaction(s, rate, co, obs);
+  ASSERT_TRUE(sum.ok()) << sum.reason;
+  ASSERT_EQ(obs.rows.size(), 7u);
+  // the target density, within the last step's overshoot
+  const double overshoot = std::fabs(D * rate.rate[0]) * s.dt();
+  EXPECT_GE(s.density(), co.target_density * (1.0 - 1e-12));
+  EXPECT_LE(s.density(), co.target_density * (1.0 + 1.01 * overshoot));
+  // every lattice bond loaded, no other contact: Z = 2 D (m - 1) / m
+  const auto& last = obs.rows.back();
+  EXPECT_EQ(last.mean.Z, 2.0 * D * (m - 1) / m);
+  EXPECT_EQ(last.outside, 0);
+  // Eq 16 in affine motion. Along each axis x = -e t > 0 and L = L_0 exp(-x), so with L_0 = R_sum -
+  // u_0: u - u^a = u_0 exp(-x) - R_sum (exp(-x) - 1 + x), u^a = x R_sum, and every contact's
+  // |u - u^a| / u^a = f(x) = (exp(-x) - 1 + x) / x = x/2 - x^2/6 + ... (u_0 adds ~1e-8).
+  auto f = [](double x) { return (std::expm1(-x) + x) / x; };
+  const double x_end = -last.E[0], x_prev = -obs.rows[obs.rows.size() - 2].E[0];
+  {  // at one instant: a fresh meter (every contact first seen now, formed at E = 0)
+    CompactionMeterT<D> meter(false, 1.0);
+    const auto now = meter.measure(s, last.E);
+    EXPECT_NEAR(now.dev_ratio_of_means, f(x_end), 1e-6);
+    EXPECT_NEAR(now.dev_mean_ratio, f(x_end), 1e-6);
+    EXPECT_EQ(now.Z, last.mean.Z);
+  }
+  // the row: the mean over the samples of its window, between the window's ends
+  EXPECT_GT(last.mean.dev_ratio_of_means, f(x_prev));
+  EXPECT_LT(last.mean.dev_ratio_of_means, f(x_end) + 1e-6);
+  EXPECT_LT(last.mean.affine_ut, 1e-12);  // hydrostatic: no tangential affine motion
+  // the compression stress: every bond carries the same force, so Eq 13 from the contacts is
+  // isotropic
+  EXPECT_LT(last.mean.Sc[0], 0.0);
+  EXPECT_NEAR(last.mean.Sc[1], last.mean.Sc[0], 1e-9 * std::fabs(last.mean.Sc[0]));
+}
+
+TEST(DemCompaction, AffineSquareLatticeMatchesEq16Disks) { affine_lattice_compaction<2>(); }
+TEST(DemCompaction, AffineCubicLatticeMatchesEq16Spheres) { affine_lattice_compaction<3>(); }
+
+TEST(DemCompaction, OptionsNameTheirField) {
+  const auto path = sys::StrainPathT<2>::parse("hydrostatic");
+  auto field_of = [&](const CompactionOptions& o, double D0) {
+    try {
+      o.validate(path, D0);
+    } catch (const netdem::FieldError& e) {
+      return e.field();
+    }
+    return std::string("accepted");
+  };
+  CompactionOptions o;
+  EXPECT_EQ(field_of(o, 0.8), "accepted");
+  EXPECT_EQ(field_of(o, 0.9), "to_density");  // impossible: the target is below the start
+  CompactionOptions bad = o;
+  bad.inertial_number = std::nan("");
+  EXPECT_EQ(field_of(bad, 0.8), "inertial_number");
+  bad = o;
+  bad.increments = 0;
+  EXPECT_EQ(field_of(bad, 0.8), "increments");
+  bad = o;
+  bad.walls = true;
+  EXPECT_EQ(field_of(bad, 0.8), "accepted");
+  try {
+    bad.validate(sys::StrainPathT<2>::parse("-1,-1,0.5"), 0.8);  // walls stay axis-aligned
+    ADD_FAILURE();
+  } catch (const netdem::FieldError& e) {
+    EXPECT_EQ(e.field(), "path");
+    EXPECT_NE(std::string(e.what()).find("E12 = 0"), std::string::npos);
+  }
+  try {
+    o.validate(sys::StrainPathT<2>::parse("1,0,0"), 0.8);  // dilates: never reaches the target
+    ADD_FAILURE();
+  } catch (const netdem::FieldError& e) {
+    EXPECT_EQ(e.field(), "path");
+  }
+}
+
+}  // namespace
