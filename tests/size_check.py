@@ -30,7 +30,6 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 ALLOWED = {
     "src/quasistatic/staggered.cpp": 1005,
     "apps/netsolve/yield.cpp": 953,
-    "apps/demsolve/yield.cpp:run_dem_yield": 463,
     "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
     "apps/netsolve/yield.cpp:run_yield": 301,

@@ -80,47 +80,6 @@ std::unique_ptr<NetworkSolver> switch_boundary_mode(const NetworkSolver& solver,
   return out;
 }
 
-ProbeOptions probe_options(const ProbeSettings& a) {
-  ProbeOptions po;
-  po.first_step = a.first_step;
-  po.fine_increments = a.fine;
-  po.growth = a.growth;
-  po.max_strain = a.max_strain;
-  po.offset = a.offset;
-  po.max_step = std::max(a.first_step, a.offset / 4);
-  return po;
-}
-
-ProbeResult evaluate_probe(ProbeCurve curve, int index, const ProbeSettings& a) {
-  ProbeResult res;
-  res.index = index;
-  res.theta = 2 * std::numbers::pi * index / a.directions;
-  res.curve = std::move(curve);
-  std::vector<double> x, y, s11, s22;
-  for (const auto& p : res.curve.samples) {
-    x.push_back(p.strain);
-    y.push_back(p.stress);
-    s11.push_back(p.S11);
-    s22.push_back(p.S22);
-  }
-  YieldOptions yo;
-  yo.offset = a.offset;
-  yo.window = a.window;
-  yo.min_rise = 0.02 * a.loading_norm;
-  res.curvature = yield_by_curvature(x, y, yo);
-  res.offset = yield_by_offset(x, y, yo);
-  res.fit = elastic_fit(x, y, yo.fit_points);
-  res.S11 = res.curvature.found ? interpolate_at(s11, res.curvature.position) : kNaN;
-  res.S22 = res.curvature.found ? interpolate_at(s22, res.curvature.position) : kNaN;
-  res.S11_offset = res.offset.found ? interpolate_at(s11, res.offset.position) : kNaN;
-  res.S22_offset = res.offset.found ? interpolate_at(s22, res.offset.position) : kNaN;
-  std::string status;
-  if (!res.curvature.found) status = "no curvature point: " + res.curvature.reason;
-  if (!res.offset.found) status += (status.empty() ? "" : "; ") + std::string("no offset point: ") + res.offset.reason;
-  res.status = status.empty() ? "ok" : status;
-  return res;
-}
-
 ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& a) {
   const auto t0 = std::chrono::steady_clock::now();
   ProbeCurve curve = probe(solver, 2 * std::numbers::pi * index / a.directions, a.sigma_y, probe_options(a));

@@ -17,7 +17,11 @@
 // contacts active); every rate with both components >= 0 gives the origin (no contact active).
 #include <array>
 
+#include "netdem/system/yield_curve.hpp"
+
 namespace netdem::qs {
+
+using sys::YieldPoint;  // the stress point type of every yield surface
 
 /// State of the precompacted aggregate.
 struct AffineYieldInput {
@@ -28,11 +32,6 @@ struct AffineYieldInput {
   double E22 = 0.0;      ///< accumulated precompaction strain, <= 0
   /// Throws std::invalid_argument with a one-line message if a value is out of range or not finite.
   void validate() const;
-};
-
-/// A stress point (Sigma11, Sigma22) of the yield surface, tension positive; Sigma12 = 0.
-struct YieldPoint {
-  double S11 = 0.0, S22 = 0.0;
 };
 
 /// Input for a proportional precompaction from relative density d0 to d along the strain-rate direction

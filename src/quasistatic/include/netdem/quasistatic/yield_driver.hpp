@@ -21,6 +21,12 @@
 
 namespace netdem::qs {
 
+using sys::ProbeSettings;
+using sys::ProbeResult;
+using sys::probe_options;
+using sys::evaluate_probe;
+
+
 /// What the hand-over from one boundary mode to another did.
 struct HandoverReport {
   int contacts = 0;                 ///< load-bearing contacts before
@@ -40,37 +46,6 @@ struct HandoverReport {
 /// converged one after the first.
 std::unique_ptr<NetworkSolver> switch_boundary_mode(const NetworkSolver& solver, const packing::Box& box0,
                                                     std::uint64_t seed, const SolverOptions& next, HandoverReport& report);
-
-struct ProbeSettings {
-  int directions = 24;     ///< theta_k = 2 pi k / directions
-  double offset = 1e-3;    ///< offset strain of the offset yield point
-  double max_strain = 4e-3;
-  double window = 0.1;     ///< curvature smoothing width
-  double growth = 1.2;
-  int fine = 20;
-  double first_step = 1e-6;    ///< fine step (the command uses the unloading strain / 10)
-  double loading_norm = 0;     ///< |Sigma| / sigma_y at the loading point (knee threshold 2 %)
-  double sigma_y = 1;
-};
-
-/// One probe and its evaluation. S11/S22 (and *_offset) are NaN when the point was not found.
-struct ProbeResult {
-  int index = 0;
-  double theta = 0;  ///< rad
-  ProbeCurve curve;
-  YieldEstimate curvature, offset;
-  ElasticFit fit;
-  double S11 = 0, S22 = 0, S11_offset = 0, S22_offset = 0;
-  std::string status;  ///< "ok", or which point is missing and why, or "error: ..." if it threw
-  double wall_s = 0;
-};
-
-/// The probe() options of the settings: the steps and the stop rule of a probe.
-ProbeOptions probe_options(const ProbeSettings& settings);
-
-/// The yield points (curvature, offset), the elastic fit and the status of a sampled probe curve:
-/// run_probe's evaluation, also applied by demsolve yield to the explicit solver's curves.
-ProbeResult evaluate_probe(ProbeCurve curve, int index, const ProbeSettings& settings);
 
 /// Runs probe `index` from the solver's current state (the solver is advanced).
 ProbeResult run_probe(NetworkSolver& solver, int index, const ProbeSettings& settings);
