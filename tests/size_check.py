@@ -28,7 +28,6 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 
 # path -> lines, or "path:function" -> lines (the sizes when the list was last tightened; they only shrink)
 ALLOWED = {
-    "src/quasistatic/staggered.cpp": 1005,
     "apps/netsolve/yield.cpp": 953,
     "apps/demsolve/yield.cpp:run_dem_yield": 463,
     "apps/netsolve/sinter.cpp:run": 445,
