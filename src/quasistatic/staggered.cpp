@@ -13,6 +13,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "netdem/field_error.hpp"
 #include "netdem/system/archive.hpp"
 #include "staggered_impl.hpp"
 #include "staggered_state.hpp"
@@ -21,35 +22,64 @@ namespace netdem::qs::staggered {
 
 // ================================================================================================
 
+// One set of ranges, here only: the app (netsolve sinter) checks none of these again. A bad value
+// throws netdem::FieldError naming the quantity, with the field's name for the caller.
 void StaggeredOptions::validate() const {
-  auto need = [](bool ok, const std::string& what) {
-    if (!ok) bad("staggered: " + what);
+  auto need = [](bool ok, const char* field, const std::string& what) {
+    if (!ok) throw FieldError(field, what);
   };
   auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
-  need(strategy == 1 || strategy == 2, fmt::format("strategy must be 1 or 2, got {}", strategy));
-  need(pos(dt_initial), fmt::format("dt_initial must be positive [s], got {}", dt_initial));
-  need(pos(dt_max), fmt::format("dt_max must be positive [s], got {}", dt_max));
-  need(pos(dt_min) && dt_min <= dt_initial && dt_min <= dt_max,
-       fmt::format("dt_min must be positive and at most dt_initial and dt_max [s], got {}", dt_min));
-  need(std::isfinite(alpha) && alpha > 1.0 && alpha <= 100.0, fmt::format("alpha must be in (1, 100], got {}", alpha));
-  need(std::isfinite(eps_lim) && eps_lim > 0.0 && eps_lim < 1.0, fmt::format("eps_lim must be in (0, 1), got {}", eps_lim));
+  need(strategy == 1 || strategy == 2, "strategy", fmt::format("the time-marching strategy must be 1 or 2, got {}", strategy));
+  need(pos(dt_min), "dt_min", fmt::format("the smallest (sub-)step must be a positive time in seconds, got {}", dt_min));
+  need(pos(dt_initial) && dt_initial >= dt_min, "dt_initial",
+       fmt::format("the first global step must be a time in seconds of at least the smallest step {}, got {}", dt_min, dt_initial));
+  need(pos(dt_max) && dt_max >= dt_min, "dt_max",
+       fmt::format("the largest global step must be a time in seconds of at least the smallest step {}, got {}", dt_min, dt_max));
+  need(std::isfinite(alpha) && alpha > 1.0 && alpha <= 100.0, "alpha",
+       fmt::format("the step factor alpha of Eqs 45 and 47 must be in (1, 100], got {}", alpha));
+  need(std::isfinite(eps_lim) && eps_lim > 0.0 && eps_lim < 1.0, "eps_lim",
+       fmt::format("the relative error limit per (sub-)step must be in (0, 1), got {}", eps_lim));
   need(std::isfinite(grow_below) && std::isfinite(shrink_above) && grow_below >= 0.0 && grow_below <= shrink_above &&
            shrink_above <= 1.0,
+       "grow_below",
        fmt::format("the sub-step fractions must satisfy 0 <= grow ({}) <= shrink ({}) <= 1", grow_below, shrink_above));
-  need(std::isfinite(x0_over_R) && x0_over_R > 0.0 && x0_over_R < 0.5,
-       fmt::format("x0/R must be in (0, 0.5), got {}", x0_over_R));
+  // x0 is the neck of touching spheres (h = R) that starts a contact (notes section 4.6), the same
+  // initial state as the pair model's make_contact(), which takes x0 / R in (0, 0.5): a seed of the
+  // initial stage, not a grown neck (the model's useful range ends near x / R_min = 0.6). Below
+  // kNeckVanished the model calls the neck vanished, and every contact would be refused as made.
+  need(std::isfinite(x0_over_R) && x0_over_R > cs::kNeckVanished && x0_over_R < 0.5, "x0_over_R",
+       fmt::format("the initial neck x0 / R_min must be in ({:g}, 0.5), got {}", cs::kNeckVanished, x0_over_R));
   need(x_max_over_R == 0.0 || (std::isfinite(x_max_over_R) && x_max_over_R > x0_over_R && x_max_over_R <= 1.0),
-       fmt::format("x_max/R must be 0 (the dihedral limit) or in (x0/R, 1], got {}", x_max_over_R));
-  need(std::isfinite(boundary_factor) && boundary_factor >= 0.0 && boundary_factor < 10.0,
-       fmt::format("boundary_factor must be in [0, 10), got {}", boundary_factor));
+       "x_max_over_R",
+       fmt::format("the freeze limit x_max / R_min must be 0 (the dihedral limit) or in (x0 / R_min = {}, 1], got {}",
+                   x0_over_R, x_max_over_R));
+  need(std::isfinite(boundary_factor) && boundary_factor >= 0.0 && boundary_factor < 10.0, "boundary_factor",
+       fmt::format("the boundary-plane distance factor must be in [0, 10), got {}", boundary_factor));
   for (double v : plane_origin)
-    need(std::isnan(v) || std::isfinite(v), "plane_origin must be finite or NaN (the bounding box)");
-  need(E == 0.0 || pos(E), fmt::format("E must be positive [Pa] (or 0: the material's), got {}", E));
-  need(nu < 0.0 ? nu == -1.0 || (std::isfinite(nu) && nu > -1.0) : std::isfinite(nu) && nu < 0.5,
-       fmt::format("nu must be in (-1, 0.5) (or -1: the material's), got {}", nu));
-  need(std::isfinite(gmres_tolerance) && gmres_tolerance > 0.0 && gmres_tolerance < 1e-3,
-       fmt::format("gmres_tolerance must be in (0, 1e-3), got {}", gmres_tolerance));
-  need(refactor_iterations >= 1, fmt::format("refactor_iterations must be >= 1, got {}", refactor_iterations));
+    need(std::isnan(v) || std::isfinite(v), "plane_origin", "the boundary planes must be at finite coordinates or NaN (the bounding box)");
+  need(E == 0.0 || pos(E), "E", fmt::format("the bonds' Young's modulus must be positive [Pa] (or 0: the material's), got {}", E));
+  // the material's own range (SinterMaterial::validate): a sintered metal or ceramic is not auxetic
+  need(nu == -1.0 || (std::isfinite(nu) && nu >= 0.0 && nu < 0.5), "nu",
+       fmt::format("the bonds' Poisson's ratio must be in [0, 0.5) (or -1: the material's), got {}", nu));
+  need(std::isfinite(gmres_tolerance) && gmres_tolerance > 0.0 && gmres_tolerance < 1e-3, "gmres_tolerance",
+       fmt::format("the GMRES tolerance must be in (0, 1e-3), got {}", gmres_tolerance));
+  need(refactor_iterations >= 1, "refactor_iterations",
+       fmt::format("the GMRES iterations before a refactorisation must be >= 1, got {}", refactor_iterations));
+}
+
+void StaggeredOptions::validate(const cs::SinterMaterial& m) const {
+  validate();
+  m.validate();
+  if (!(E > 0.0 || m.youngs_modulus > 0.0))
+    throw FieldError("E", fmt::format("the bonds need a Young's modulus: the material '{}' has none (give it E, or give the "
+                                      "bonds' own E)", m.name));
+  if (nu == -1.0 && m.poisson_ratio == -1.0)
+    throw FieldError("nu", fmt::format("the bonds need a Poisson's ratio: the material '{}' has none (give it nu, or give "
+                                       "the bonds' own nu)", m.name));
+  const double x_max = freeze_limit(m, *this);
+  if (!(x_max > x0_over_R))
+    throw FieldError("x0_over_R", fmt::format("the initial neck x0 / R_min = {} is not below the freeze limit {} (the "
+                                              "dihedral limit of the material '{}')", x0_over_R, x_max, m.name));
 }
 
 std::pair<double, double> corrected_split(double y4_prev, double y7_prev, double y4_free, double y7_free, double d_new,
@@ -74,15 +104,10 @@ double freeze_limit(const cs::SinterMaterial& m, const StaggeredOptions& o) {
 // Staggered::Impl: set-up and one step (Fig 6)
 
 void Staggered::Impl::setup_material() {
-  mat.validate();
+  opt.validate(mat);
   bmat.E = opt.E > 0.0 ? opt.E : mat.youngs_modulus;
   bmat.nu = opt.nu != -1.0 ? opt.nu : mat.poisson_ratio;
-  if (!(bmat.E > 0.0))
-    bad("staggered: the bond needs Young's modulus: the material '" + mat.name + "' has no E (give the material's E or the option E)");
-  if (bmat.nu == -1.0)
-    bad("staggered: the bond needs Poisson's ratio: the material '" + mat.name + "' has no nu (give the material's nu or the option nu)");
   x_max = freeze_limit(mat, opt);
-  if (!(x_max > opt.x0_over_R)) bad(fmt::format("staggered: the freeze limit x_max/R = {} is below x0/R", x_max));
   cache.m = &mat;
   cscale = std::ldexp(1.0, -std::ilogb(bmat.E));
 }
@@ -152,7 +177,6 @@ Staggered::Staggered(std::vector<Particle> particles, cs::SinterMaterial materia
                      StaggeredOptions options)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
-  options.validate();
   m.opt = options;
   m.mat = std::move(material);
   m.prof = std::move(temperature);
