@@ -30,7 +30,6 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 ALLOWED = {
     "apps/netsolve/yield.cpp": 953,
     "apps/demsolve/yield.cpp:run_dem_yield": 463,
-    "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
     "apps/netsolve/yield.cpp:run_yield": 301,
     "apps/demsolve/compact3d.cpp:run_dem_compact_3d": 301,
