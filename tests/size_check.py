@@ -28,9 +28,7 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 
 # path -> lines, or "path:function" -> lines (the sizes when the list was last tightened; they only shrink)
 ALLOWED = {
-    "src/quasistatic/staggered.cpp": 1005,
     "apps/netsolve/yield.cpp": 953,
-    "apps/netsolve/sinter.cpp:run": 445,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
     "apps/netsolve/yield.cpp:run_yield": 301,
     "apps/demsolve/main.cpp:main": 209,

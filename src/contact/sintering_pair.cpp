@@ -422,7 +422,7 @@ PairStatus check_state(const State& q, double R_min0, double x_over_R_max) {
   if (!particle_geometry(q[kX], q[kRA], q[kHA], g) || !particle_geometry(q[kX], q[kRB], q[kHB], g))
     return PairStatus::ConeDegenerate;
   if (q[kX] / R_min0 > x_over_R_max) return PairStatus::NeckLimit;
-  if (q[kX] / R_min0 < 1e-4) return PairStatus::NeckVanished;
+  if (q[kX] / R_min0 < kNeckVanished) return PairStatus::NeckVanished;
   return PairStatus::Ok;
 }
 

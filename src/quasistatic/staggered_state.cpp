@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "netdem/field_error.hpp"
 #include "netdem/system/archive.hpp"
 
 namespace netdem::qs::staggered {
@@ -175,8 +176,8 @@ void read_options(const Field& f, StaggeredOptions& q) {
   }
   try {
     q.validate();
-  } catch (const std::invalid_argument& e) {
-    f.fail(e.what());
+  } catch (const netdem::FieldError& e) {  // at the member that is wrong (each is in the object)
+    f[e.field()].fail(e.what());
   }
 }
 

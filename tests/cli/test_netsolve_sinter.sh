@@ -40,8 +40,17 @@ check_bad_rc() {  # like check_bad, and the exit status must be 2
 check_bad_rc sn_missing_packing "no_such.csv" sinter --packing "$tmp/no_such.csv" --time 100 --quiet
 check_bad_rc sn_negative_time "time" sinter --packing "$lat" --time -5 --quiet
 check_bad_rc sn_strategy "strategy" sinter --packing "$lat" --time 100 --strategy 3 --quiet
-check_bad_rc sn_time_beyond_max_steps "shorten --time or raise --max-steps" sinter --packing "$lat" --time 1e12 --quiet
-check_bad_rc sn_restart_beyond_max_steps "more than --max-steps 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
+check_bad_rc sn_time_beyond_max_steps "--max-steps: the run of 1e+12 s needs at least 1e+11 steps" sinter --packing "$lat" --time 1e12 --quiet
+check_bad_rc sn_restart_beyond_max_steps "more than the step limit 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
+# the library checks the options once (StaggeredOptions, StaggeredRunOptions) and names the
+# quantity; the message names the option (netdem::FieldError, the field renamed where it differs)
+check_bad_rc sn_x0_range "--x0: the initial neck x0 / R_min must be in (0.0001, 0.5), got 0.7" sinter --packing "$lat" --time 100 --x0 0.7 --quiet
+check_bad_rc sn_x0_vanished "--x0: the initial neck" sinter --packing "$lat" --time 100 --x0 5e-5 --quiet
+check_bad_rc sn_x_max "--x-max: the freeze limit" sinter --packing "$lat" --time 100 --x0 0.05 --x-max 0.04 --quiet
+check_bad_rc sn_dt_initial "--dt-initial: the first global step" sinter --packing "$lat" --time 100 --dt-initial 1e-12 --quiet
+check_bad_rc sn_nu "--nu: the bonds' Poisson's ratio" sinter --packing "$lat" --time 100 --nu -0.2 --quiet
+check_bad_rc sn_checkpoints_twice "--checkpoints: the checkpoint times must increase: 50 s after 50 s" sinter --packing "$lat" --time 100 --checkpoints 50,50 --quiet
+check_bad_rc sn_checkpoints_range "--checkpoints: 150 s is not between" sinter --packing "$lat" --time 100 --checkpoints 150 --quiet
 check_bad_rc sn_nan_temperature "temperature" sinter --packing "$lat" --time 100 --temperature nan --quiet
 check_bad_rc sn_material "material" sinter --packing "$lat" --material unobtainium --quiet
 check_bad_rc sn_new_contacts "new-contacts" sinter --packing "$lat" --new-contacts maybe --quiet

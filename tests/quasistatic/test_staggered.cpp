@@ -11,7 +11,6 @@
 #include <fstream>
 #include <iterator>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -21,6 +20,7 @@
 
 #include "netdem/contact/sintering_pair.hpp"
 #include "netdem/quasistatic/staggered.hpp"
+#include "staggered_test_util.hpp"
 
 namespace {
 
@@ -28,32 +28,15 @@ namespace cs = netdem::contact::sinter;
 namespace st = netdem::qs::staggered;
 using Eigen::Vector3d;
 
-const cs::SinterMaterial& cu() {
-  static const cs::SinterMaterial m = cs::builtin_sinter_material("cu");
-  return m;
-}
-constexpr double kT = 1293.0;  // the Cu benchmark's temperature [K]
+using netdem::test::cu;
+using netdem::test::cubic;
+using netdem::test::expect_same;
+using netdem::test::jittered;
+using netdem::test::kT;
+using netdem::test::same_bits;
 
 double centre_distance(const st::Staggered& s, int a, int b) {
   return (s.particles()[b].x - s.particles()[a].x).norm();
-}
-
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-
-// spheres on a simple cubic grid of spacing 2 r, radii r (1 +- jitter), seeded
-std::vector<st::Particle> cubic(int n, double r, double jitter, unsigned seed) {
-  std::mt19937_64 gen(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<st::Particle> p;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        st::Particle q;
-        q.r = r * (1.0 + jitter * u(gen));
-        q.x = Vector3d(r + 2.0 * r * i, r + 2.0 * r * j, r + 2.0 * r * k);
-        p.push_back(q);
-      }
-  return p;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -205,32 +188,6 @@ TEST(Staggered, LatticeShrinksLikeThePair) {
   EXPECT_GT(-s.homogeneous_strain()(0, 0), 1e-3);
 }
 
-// A polydisperse sample: some neighbours touch, some only later (new contacts), the bonds pull
-// against each other (Eq 44 is not zero).
-st::Staggered jittered(double E, int strategy = 2) {
-  st::StaggeredOptions o;
-  o.strategy = strategy;
-  o.E = E;
-  return st::Staggered(cubic(3, 25e-6, 0.01, 7), cu(), cs::TemperatureProfile::constant(kT), o);
-}
-
-void expect_same(const st::Staggered& a, const st::Staggered& b) {
-  ASSERT_EQ(a.particles().size(), b.particles().size());
-  ASSERT_EQ(a.contacts().size(), b.contacts().size());
-  EXPECT_TRUE(same_bits(a.time(), b.time()));
-  EXPECT_TRUE(same_bits(a.dt(), b.dt()));
-  for (std::size_t i = 0; i < a.particles().size(); ++i)
-    for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.particles()[i].x[k], b.particles()[i].x[k])) << i << " " << k;
-  for (std::size_t i = 0; i < a.contacts().size(); ++i) {
-    const auto &ca = a.contacts()[i], &cb = b.contacts()[i];
-    ASSERT_EQ(ca.a, cb.a);
-    ASSERT_EQ(ca.b, cb.b);
-    ASSERT_EQ(ca.frozen, cb.frozen);
-    for (int k = 0; k < 5; ++k) ASSERT_TRUE(same_bits(ca.pair.q[k], cb.pair.q[k])) << "contact " << i;
-    ASSERT_TRUE(same_bits(ca.dL_bar, cb.dL_bar));
-  }
-}
-
 TEST(Staggered, YoungsModulusDropsOutBitForBit) {
   st::Staggered a = jittered(120e9), b = jittered(8.0 * 120e9);
   int newc = 0;
@@ -352,7 +309,7 @@ TEST(Staggered, StateFieldsAreCheckedAtTheDoor) {
   refuse("/contacts/b/0", 1000, "/contacts/b/0: 1000 is outside");
   refuse("/contacts/q/0", nlohmann::json::array({1.0, 2.0}), "/contacts/q/0: expected 5 elements, found 2");
   refuse("/contacts/h/0", -1.0, "/contacts/h/0: -1.0 is below 0");
-  refuse("/options/dt_max", -1.0, "/options: staggered:");
+  refuse("/options/dt_max", -1.0, "/options/dt_max: the largest global step");
   refuse("/options/strategy", 3, "/options/strategy: 3 is outside [1, 2]");
   refuse("/material/gamma_s", "x", "/material/gamma_s: expected a number");
   refuse("/clock/dt", "inf", "/clock/dt: must be a finite number");

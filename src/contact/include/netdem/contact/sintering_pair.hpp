@@ -190,6 +190,8 @@ const char* to_string(PairStatus s);
 constexpr bool validity_limit(PairStatus s) {
   return s == PairStatus::NeckLimit || s == PairStatus::ConeDegenerate || s == PairStatus::NeckVanished;
 }
+/// The neck x / min(R_A0, R_B0) below which check_state() calls it vanished (PairStatus::NeckVanished).
+inline constexpr double kNeckVanished = 1e-4;
 /// One-sentence reason for a status (for summary.json and messages).
 std::string describe(PairStatus s, double x_over_R_max);
 

@@ -45,7 +45,7 @@ struct StaggeredOptions {
   double grow_below = 0.05;      ///< strategy 2: grow dt when fewer contacts than this needed sub-steps
   double shrink_above = 0.15;    ///< strategy 2: shrink dt when more than this did
   bool new_contacts = true;      ///< detect new contacts at every step (the paper's Fig 11c: off)
-  double x0_over_R = 0.01;       ///< neck of a new or initial contact, x0 / R_min
+  double x0_over_R = 0.01;       ///< neck of a new or initial contact, x0 / R_min, in (1e-4, 0.5)
   /// The neck x / R_min at which a contact freezes (its sintering stops; the bond stays). 0: the
   /// dihedral limit sin(psi/2) with cos(psi/2) = gamma_gb / (2 gamma_s) (notes §4.6).
   double x_max_over_R = 0.0;
@@ -60,13 +60,19 @@ struct StaggeredOptions {
   std::array<double, 3> plane_origin{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
                                      std::numeric_limits<double>::quiet_NaN()};
   double E = 0.0;   ///< Young's modulus of the bond [Pa]; 0: the material's E
-  double nu = -1.0; ///< Poisson's ratio of the bond; -1: the material's nu
+  double nu = -1.0; ///< Poisson's ratio of the bond, in [0, 0.5); -1: the material's nu
   double gmres_tolerance = 1e-12;  ///< relative residual of the network solve with a reused factor
   /// Refactorise for the next step once the solves since the last factorisation took more GMRES
   /// iterations than this, or than a factorisation costs (0.1 nnz(L) / n iterations), the larger.
   int refactor_iterations = 12;
-  /// Throws std::invalid_argument (one line) naming the first bad value.
+  /// The ranges of every option, checked here once (the command line checks none of them again):
+  /// throws netdem::FieldError (a std::invalid_argument, one line naming the quantity; field() is
+  /// the member's name, e.g. "x0_over_R") for the first bad value.
   void validate() const;
+  /// validate(), the material's own validate(), and what the options need of the material: the
+  /// bonds' E and nu (the options' or the material's) and a freeze limit above x0. The constructor
+  /// calls it; a caller that makes the particles later (netsolve sinter's green body) calls it first.
+  void validate(const cs::SinterMaterial& m) const;
 };
 
 struct Particle {
@@ -107,8 +113,9 @@ struct Timers {
 
 class Staggered {
  public:
-  /// Throws std::invalid_argument (one line) for bad particles, options or a material without E
-  /// or nu. Initial contacts (centre distance < r_a + r_b) are created at t = 0.
+  /// Throws std::invalid_argument (one line) for bad particles, and netdem::FieldError (one too)
+  /// for bad options or a material without E or nu (StaggeredOptions::validate(material)).
+  /// Initial contacts (centre distance < r_a + r_b) are created at t = 0.
   Staggered(std::vector<Particle> particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
             StaggeredOptions options);
   ~Staggered();
