@@ -22,12 +22,6 @@ using detail::fail;
 
 // ---- the history stores: one per law family; the model's is used, the other stays empty --------
 namespace {
-template <int D>
-inline bool is_fresh(const contact::LudingHistoryT<D>& h) { return h.fresh(); }
-template <int D>
-inline bool is_fresh(const contact::PlasticIndentationHistoryT<D>& h) {
-  return h.u_max == 0.0 && contact::tan_is_zero(h.f_t) && h.sliding == 0;
-}
 // the store of law family H out of a (Luding, plastic) pair of stores
 template <class H, class L, class P>
 std::vector<H>& family(std::vector<L>& luding, std::vector<P>& plastic) {
@@ -48,10 +42,13 @@ template <int D>
 template <class H>
 std::vector<H>& DynamicSolverT<D>::wall_histories() { return family<H>(wall_hist_, pl_wall_hist_); }
 
-// The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted).
+// The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted); a
+// pair is live (evaluated while apart) when the law says its history holds something
+// (Law::has_history: the lifecycle is the law's).
 template <int D>
-template <class H>
-void DynamicSolverT<D>::carry_histories(std::size_t n_new) {
+template <class Law>
+void DynamicSolverT<D>::carry_histories(const Law& law, std::size_t n_new) {
+  using H = typename Law::History;
   std::vector<H>& old_h = pair_histories<H>();
   std::vector<H>& new_h = new_histories<H>();
   new_h.assign(n_new, H{});
@@ -60,7 +57,7 @@ void DynamicSolverT<D>::carry_histories(std::size_t n_new) {
     while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
     if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
       new_h[b] = old_h[a];
-      pair_live_[b] = is_fresh(new_h[b]) ? 0 : 1;
+      pair_live_[b] = law.has_history(new_h[b]) ? 1 : 0;
     }
   }
   old_h.swap(new_h);
@@ -176,9 +173,9 @@ void DynamicSolverT<D>::build_table() {
   // carry the committed histories of the pairs that stay in the table (both lists sorted)
   pair_live_.assign(new_key_.size(), 0);
   if (plastic())
-    carry_histories<PlasticHist>(new_key_.size());
-  else
-    carry_histories<LudingHist>(new_key_.size());
+    carry_histories(contact::PlasticIndentationLawT<D>(opt_.plastic), new_key_.size());
+  else  // (every feature set of the Luding law has the same history and lifecycle)
+    carry_histories(contact::LudingLaw<contact::kLudingFull, D>(params_, thermal_.k1_Tt), new_key_.size());
   pair_key_.swap(new_key_);
 }
 
@@ -232,19 +229,15 @@ template auto DynamicSolverT<3>::plastic_history(std::uint32_t i, std::uint32_t 
 template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::LudingHist>();
 template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::LudingHist>();
 template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::LudingHist>();
-template void DynamicSolverT<2>::carry_histories<DynamicSolverT<2>::LudingHist>(std::size_t);
 template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::PlasticHist>();
 template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::PlasticHist>();
 template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::PlasticHist>();
-template void DynamicSolverT<2>::carry_histories<DynamicSolverT<2>::PlasticHist>(std::size_t);
 
 template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::LudingHist>();
 template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::LudingHist>();
 template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::LudingHist>();
-template void DynamicSolverT<3>::carry_histories<DynamicSolverT<3>::LudingHist>(std::size_t);
 template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::PlasticHist>();
 template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::PlasticHist>();
 template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::PlasticHist>();
-template void DynamicSolverT<3>::carry_histories<DynamicSolverT<3>::PlasticHist>(std::size_t);
 
 }  // namespace netdem::dem

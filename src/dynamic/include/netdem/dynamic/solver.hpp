@@ -445,8 +445,8 @@ class DynamicSolverT {
   std::vector<H>& new_histories();
   template <class H>
   std::vector<H>& wall_histories();
-  template <class H>
-  void carry_histories(std::size_t n_new);
+  template <class Law>
+  void carry_histories(const Law& law, std::size_t n_new);
   bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
   void update_plastic_time_step();
   void compute_forces_dispatch();
