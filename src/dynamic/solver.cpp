@@ -67,13 +67,11 @@ void DynamicSolverT<D>::compute_forces_dispatch() {
 }
 
 namespace {
-template <class Law>
-constexpr bool kPlasticLaw = std::is_same_v<Law, contact::PlasticIndentationLawT<Law::kDim>>;
-// The law object of a step: the plastic law from its parameters, the Luding law from its
-// parameters and the material state k1(T, t).
+// The law object of a step, from the parameters of its type: the plastic law from its
+// parameters, the Luding law from its parameters and the material state k1(T, t).
 template <class Law>
 Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndentationParams& pp) {
-  if constexpr (kPlasticLaw<Law>)
+  if constexpr (std::is_same_v<typename Law::Params, contact::PlasticIndentationParams>)
     return Law(pp);
   else
     return Law(lp, k1_Tt);
@@ -166,7 +164,7 @@ template <class Law, bool InPlace>
       in.v_t = vt;
       in.dslip = vt * dt;
       in.dt = dt;
-      if constexpr (kPlasticLaw<Law>) {  // (the Luding law reads neither)
+      if constexpr (contact::kReadsPairProperties<Law>) {  // (the Luding law reads neither)
         in.overlap_start = in.overlap - in.v_n * dt;
         in.r_eff = ri * rj / s;
         in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
@@ -174,7 +172,7 @@ template <class Law, bool InPlace>
       double f_n, f_t;
       contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
-      if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+      if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
       p_fx[j] += fx;
       p_fy[j] += fy;
@@ -186,7 +184,7 @@ template <class Law, bool InPlace>
       sxy += fx * dy;
       syx += fy * dx;
       syy += fy * dy;
-      if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
+      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     } else {
       const double L = std::sqrt(L2), iL = 1.0 / L;
       const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
@@ -206,7 +204,7 @@ template <class Law, bool InPlace>
       in.dslip = vt * dt;
       in.dt = dt;
       in.transport = contact::step_transport(n, (n.cross(vrel) + W.dot(n) * n) * (iL * dt));
-      if constexpr (kPlasticLaw<Law>) {
+      if constexpr (contact::kReadsPairProperties<Law>) {
         in.overlap_start = in.overlap - in.v_n * dt;
         in.r_eff = ri * rj / s;
         in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
@@ -215,7 +213,7 @@ template <class Law, bool InPlace>
       Eigen::Vector3d f_t;
       contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
-      if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+      if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const Eigen::Vector3d f = f_n * n + f_t;  // on j
       p_fx[j] += f.x();
       p_fy[j] += f.y();
@@ -230,7 +228,7 @@ template <class Law, bool InPlace>
       p_tx[j] -= dj * m.x();
       p_ty[j] -= dj * m.y();
       p_torque[j] -= dj * m.z();
-      if constexpr (!kPlasticLaw<Law>) el += 0.5 * params_.k2 * in.overlap * in.overlap;
+      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     }
   }
   if constexpr (D == 3) {
@@ -298,14 +296,14 @@ template <class Law, bool InPlace>
         in.v_t = vt;
         in.dslip = vt * dt;
         in.dt = dt;
-        if constexpr (kPlasticLaw<Law>) {
+        if constexpr (contact::kReadsPairProperties<Law>) {
           in.overlap_start = delta - in.v_n * dt;
           in.r_eff = ai;
           in.m_eff = P_.mass[i];
         }
         double f_n, f_t;
         contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
-        if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+        if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
         const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // on particle
         P_.fx[i] += fx;
         P_.fy[i] += fy;
@@ -316,7 +314,7 @@ template <class Law, bool InPlace>
         sxy += fx * ly;
         syx += fy * lx;
         syy += fy * ly;
-        if constexpr (!kPlasticLaw<Law>) el += 0.5 * wall_params_.k2 * delta * delta;
+        if constexpr (contact::kHasElasticEnergy<Law>) el += wall_law.elastic_energy(in);
       }
     }
     }
@@ -371,7 +369,7 @@ template <class Law, bool InPlace>
           in.dslip = vt * dt;
           in.dt = dt;
           in.transport = contact::step_transport(nw, wi.dot(nw) * dt * nw);  // the twist; n is fixed
-          if constexpr (kPlasticLaw<Law>) {
+          if constexpr (contact::kReadsPairProperties<Law>) {
             in.overlap_start = delta - in.v_n * dt;
             in.r_eff = ai;
             in.m_eff = P_.mass[i];
@@ -379,7 +377,7 @@ template <class Law, bool InPlace>
           double f_n;
           Eigen::Vector3d f_t;
           contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
-          if constexpr (kPlasticLaw<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+          if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
           const Eigen::Vector3d f = f_n * nw + f_t;  // on the particle
           P_.fx[i] += f.x();
           P_.fy[i] += f.y();
@@ -392,13 +390,13 @@ template <class Law, bool InPlace>
           const Eigen::Vector3d l = dist * nw;  // contact point -> particle centre
           for (int r = 0; r < 3; ++r)
             for (int cc = 0; cc < 3; ++cc) s3[r][cc] += f(r) * l(cc);
-          if constexpr (!kPlasticLaw<Law>) el += 0.5 * wall_params_.k2 * delta * delta;
+          if constexpr (contact::kHasElasticEnergy<Law>) el += wall_law.elastic_energy(in);
         }
       }
     }
   }
   for (int w = 0; w < kWalls; ++w) wall_force_[w] = wf[w];
-  if constexpr (kPlasticLaw<Law>) area_max_ = fn_max / (3.0 * opt_.plastic.sigma_y);
+  if constexpr (contact::kHasContactArea<Law>) area_max_ = pair_law.contact_area(fn_max);
   sxx_ = sxx;
   sxy_ = sxy;
   syx_ = syx;

@@ -161,6 +161,25 @@ concept ContactLaw = requires(const L& law, const typename L::History& h,
   { L::kHistoryOutlivesSeparation } -> std::convertible_to<bool>;
 };
 
+// ---- what a law offers beyond the concept: a solver asks, it never tests which law it has ------
+/// The law reads the pair's properties in Kinematics (overlap_start, r_eff, m_eff: the plastic law's
+/// branch and dashpots); a hot loop may leave them unset for a law that does not (the Luding law
+/// reads only overlaps, rates and slips).
+template <class L>
+inline constexpr bool kReadsPairProperties = requires { requires L::kReadsPairProperties; };
+/// The law knows the elastic energy stored at a contact: `elastic_energy(k)` (a function of the
+/// kinematics the step ended with).
+template <class L>
+inline constexpr bool kHasElasticEnergy = requires(const L& law, const Kinematics<L::kDim>& k) {
+  { law.elastic_energy(k) } -> std::convertible_to<double>;
+};
+/// The law's contact area (2D: width) follows from its normal force: `contact_area(f_n)` (the
+/// plastic law: the mean contact pressure 3 sigma_y), which bounds its tangential stiffness.
+template <class L>
+inline constexpr bool kHasContactArea = requires(const L& law, double f_n) {
+  { law.contact_area(f_n) } -> std::convertible_to<double>;
+};
+
 /// The step of a solver's hot loop: evaluates the law and commits its history in place, returning
 /// the forces. A law may provide `update(History&, const ContactKinematics&, double& f_n,
 /// double& f_t)`, an in-place form of `evaluate` for a hot loop; it must give the same forces and

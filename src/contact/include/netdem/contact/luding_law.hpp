@@ -43,6 +43,8 @@ class LudingLaw {
   const Params& params() const { return *p_; }
   double k1_Tt() const { return k1_Tt_; }
   bool has_history(const History& h) const { return !h.fresh(); }
+  /// k2 delta^2 / 2: the unloading spring's energy (exact for the linear law).
+  double elastic_energy(const Kin& k) const { return 0.5 * p_->k2 * k.overlap * k.overlap; }
 
   LudingInputT<D> input(const Kin& k) const {
     LudingInputT<D> in;

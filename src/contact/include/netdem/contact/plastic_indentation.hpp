@@ -311,12 +311,17 @@ class PlasticIndentationLawT {
   using Tan = typename Dim<D>::Tan;
   /// u_max outlives separation: a separated contact reloads elastically from its flattening.
   static constexpr bool kHistoryOutlivesSeparation = true;
+  /// The branch needs the start overlap and R*, the dashpots m* (law.hpp kReadsPairProperties).
+  static constexpr bool kReadsPairProperties = true;
 
   PlasticIndentationLawT() = default;
   explicit PlasticIndentationLawT(const Params& p)
       : p_(p), damped_(p.damped()), k_chord_(p.damped() && D == 2 ? p.chord_stiffness() : 0.0) {}
   const Params& params() const { return p_; }
   bool has_history(const History& h) const { return h.u_max > 0.0; }
+  /// The contact area (2D: width per unit depth) of a normal force at the mean contact pressure
+  /// 3 sigma_y (Eq 2); it scales the tangential spring k_t sigma_y A_c.
+  double contact_area(double f_n) const { return f_n / (3.0 * p_.sigma_y); }
 
   /// The history in the current tangent plane (2D: h itself).
   static const History& transported(const History& h, const Kin& k, History& buf) {
