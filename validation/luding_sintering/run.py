@@ -40,7 +40,8 @@ REPO = study.REPO
 
 
 sys.path.insert(0, os.path.join(str(REPO), "apps", "scripts"))
-from report_paths import shown_path  # noqa: E402
+from report_paths import (MISSING, missing_text, provenance, provenance_lines, shown_path, tally,  # noqa: E402
+                          totals_text, verdict)
 
 
 def shown(p):
@@ -527,10 +528,14 @@ class Findings:
         self.rows = []
 
     def add(self, no, finding, source, measured, band, ok, note=""):
-        status = "n/a" if ok is None else ("PASS" if ok else "FAIL")
+        status = verdict(ok)
         if ok is not None and "[investigation" in finding:
             status += " (investigation)"
         self.rows.append((no, finding, source, measured, band, status, note))
+
+    def missing(self, no, finding, source, band, reason):
+        """A line that cannot be evaluated: MISSING, with the reason, counted in the totals."""
+        self.rows.append((no, finding, source, missing_text(reason), band, MISSING, ""))
 
 
 def inband(v, lo, hi):
@@ -586,12 +591,14 @@ def issue15_rows(F, sims, nb, quick):
     # force pdf before and after cool-down, t_s = 1
     for p in (10, 100):
         g = grid_sims(sims, nb, p).get(1.0)
-        if g is None:
-            continue
-        b, a = force_stats(g.contacts("sinter")), force_stats(g.contacts("relax"))
-        if b is None or a is None:
-            continue
+        b, a = (force_stats(g.contacts("sinter")), force_stats(g.contacts("relax"))) if g is not None else (None, None)
         pre = f"N = {nb}, p = {p}, t_s = 1: "
+        if b is None or a is None:
+            why = "the run is missing or failed" if g is None else "no contact file at the end of sintering or relaxation"
+            for fin in ("attractive fraction of the contacts after cool-down (f_n < 0)", "|q05| / q95 of f_n after "
+                        "cool-down (two-sided pdf)", "width q95 - q05 of f_n grows on cool-down"):
+                F.missing("15a", pre + fin, "4.3.2, Figs 14-15", "", why)
+            continue
         F.add("15a", pre + "attractive fraction of the contacts after cool-down (f_n < 0)",
               "abstract; 4.3.2, Figs 14-15; concl. iii ('almost equally strong attractive and repulsive')",
               f"{a['att']:.3f} (end of sintering {b['att']:.3f}; {a['n']} contacts)", ">= 0.2",
@@ -607,6 +614,11 @@ def issue15_rows(F, sims, nb, quick):
     # density through cool-down at the paper's t_s values
     for p in (100, 10):
         g = grid_sims(sims, nb, p)
+        if not g or g.get(1.0) is None and p == 100:
+            for fin in ([f"(information) nu at the end of sintering -> nu(t_f) for every t_s, N = {nb}, p = {p}"] if not g
+                        else []) + ([f"nu(t_f) after the longest sintering, N = {nb}, p = 100, t_s = 1 (primary target)",
+                                     f"rise of nu on cool-down, N = {nb}, p = 100, t_s = 1"] if p == 100 else []):
+                F.missing("15b", fin, "4.1.2-4.1.4, Fig 9", "", "the run is missing or failed")
         if not g:
             continue
         parts = []
@@ -631,6 +643,8 @@ def issue15_rows(F, sims, nb, quick):
         for p in (10, 100):
             g = grid_sims(sims, n, p).get(1.0)
             if g is None:
+                F.missing("15c", f"coordination dips during sintering (t_s = 1, N = {n}, p = {p})",
+                          "abstract; 4.2, Figs 10-11; concl. i", ">= 1 dip", "the run is missing or failed")
                 continue
             dips, dt, worst = coordination_dips(g)
             dw, _, worstw = coordination_dips(g, "C_without_walls")
@@ -645,8 +659,6 @@ def issue15_rows(F, sims, nb, quick):
     # narrowing of the force distribution with t_s
     for p in (10, 100):
         g = grid_sims(sims, nb, p)
-        if len(g) < 3:
-            continue
         tss, wr = [], []
         for ts, s2 in g.items():
             st = force_stats(s2.contacts("sinter"))
@@ -654,6 +666,9 @@ def issue15_rows(F, sims, nb, quick):
                 tss.append(ts)
                 wr.append(st["width"] / st["mean"])
         if len(wr) < 3:
+            F.missing("15d", f"width (q95 - q05)/mean of f_n at the end of sintering narrows with t_s, N = {nb}, p = {p}",
+                      "4.3.2, Fig 15 top; concl. ii", "Spearman <= -0.8", f"force statistics for {len(wr)} t_s values "
+                      "(3 needed)")
             continue
         r = spearman(tss, wr)
         F.add("15d", f"width (q95 - q05)/mean of f_n at the end of sintering narrows with t_s, N = {nb}, p = {p}",
@@ -666,6 +681,8 @@ def issue15_rows(F, sims, nb, quick):
             t3 = sims.get(f"N3_{arr}_p{p:g}_ts1_wallcold")
             ref = sims.get(f"N3_{arr}_p{p:g}_ts1")
             if t3 is None or not t3.ok:
+                F.missing("15e", f"three-particle control ({arr}), p = {p}, wall contacts not creeping [investigation]",
+                          "4.1.3", "", "the run is missing or failed")
                 continue
             F.add("15e", f"three-particle control ({arr}), p = {p}, wall contacts not creeping "
                   "[investigation: --param wall_sintering=0]", "4.1.3 (paper: about 8 % / 0.2 %, data not shown)",
@@ -738,6 +755,8 @@ def evaluate(sims, tests, nb, ns, quick):
         for p in (10, 100):
             g = grid_sims(sims, n, p)
             if not g:
+                F.missing("1a", f"nu after preparation about 0.8 (N = {n}, p = {p})", "4.1.2, Fig 9", "0.78..0.82",
+                          "no grid run")
                 continue
             s = next(iter(g.values()))
             v = s.nu("prepare")
@@ -750,11 +769,16 @@ def evaluate(sims, tests, nb, ns, quick):
               "4.1.2, Fig 9", f"nu(0.3) - nu(0.2) = {jump:+.5f}", "0.001..0.01 (our band for 'visible, small')",
               inband(jump, 0.001, 0.01),
               "mu_w = 0 during preparation (Table 1), so nothing is switched off at t_heat; see the mu_w = 0.5 investigation" + qn)
+    else:
+        F.missing("1b", f"small jump of nu at t_heat, N = {nb}, p = 100", "4.1.2, Fig 9", "0.001..0.01",
+                  "the run is missing or failed")
     # 2 monotonic in t_s
     for n in ns:
         for p in (10, 100):
             g = grid_sims(sims, n, p)
             if len(g) < 2:
+                F.missing("2a", f"nu(t_f) rises monotonically with t_s (N = {n}, p = {p})", "4.1.2, Fig 9",
+                          "strictly increasing over t_s", f"{len(g)} t_s value(s) run (2 needed)")
                 continue
             nus = [s.nu("final") for s in g.values()]
             mono = all(b > a for a, b in zip(nus, nus[1:]))
@@ -771,11 +795,16 @@ def evaluate(sims, tests, nb, ns, quick):
               f"actual radii: {v13:.4f} -> {vf:.4f}; radii at T_melt: {s.nu_ref_radii('sinter'):.4f} -> "
               f"{s.nu_ref_radii('final'):.4f}", "none", None,
               "with fixed radii the cool-down adds +0.012 (the paper: about +0.02); with the current radii +0.0005")
+    else:
+        for no, fin in (("2b", "nu at t = 1.3 (end of sintering)"), ("2c", "nu at t_f = 1.5"), ("2d", "(information) cool-down")):
+            F.missing(no, f"{fin}, N = {nb}, p = 100, t_s = 1", "4.1.4, Fig 9", "", "the run is missing or failed")
     # 3 densification
     for p, lo, hi in ((100, 0.12, 0.20), (10, 0.03, 0.07)):
         for n in ns:
             g = grid_sims(sims, n, p).get(1.0)
             if g is None:
+                F.missing("3a" if p == 100 else "3b", f"densification nu(t_f)/nu(t_heat) - 1, p = {p}, t_s = 1, N = {n}",
+                          "4.1.3", f"{100 * lo:g}..{100 * hi:g} %", "the run is missing or failed")
                 continue
             d = g.densification
             main_ = n == nb
@@ -789,10 +818,15 @@ def evaluate(sims, tests, nb, ns, quick):
                   "4.1.2-4.1.3", f"{g.nu('final'):.4f} (paper ~{0.8 * (1 + dpaper):.3f}); with our nu(t_heat) = "
                   f"{g.nu('prepare'):.4f} the paper's densification would need nu(t_f) = {g.nu('prepare') * (1 + dpaper):.4f}",
                   "none", None, "the final densities agree; the densification differs through the preparation density")
+        else:
+            F.missing("3e", f"(information) nu(t_f) implied by the paper, N = {nb}, p = {p}", "4.1.2-4.1.3", "none",
+                      "the run is missing or failed")
     for p, lo, hi in ((100, 0.05, 0.11), (10, -1.0, 0.01)):
         for arr in ("triangle", "line"):
             t3 = sims.get(f"N3_{arr}_p{p:g}_ts1")
             if t3 is None or not t3.ok:
+                F.missing("3c" if p == 100 else "3d", f"three-particle control ({arr}), p = {p}: densification",
+                          "4.1.3 (data not shown)", "", "the run is missing or failed")
                 continue
             d = t3.densification
             F.add("3c" if p == 100 else "3d", f"three-particle control ({arr}), p = {p}: densification",
@@ -801,11 +835,13 @@ def evaluate(sims, tests, nb, ns, quick):
     for arr in ("triangle", "line"):
         for p in (100, 10):
             t3 = sims.get(f"N3_{arr}_p{p:g}_ts1")
-            if t3 is None or not t3.ok:
-                continue
             try:
+                if t3 is None or not t3.ok:
+                    raise ValueError("the run is missing or failed")
                 est = three_particle_pair_only(t3)
-            except (OSError, KeyError, ValueError, IndexError):
+            except (OSError, KeyError, ValueError, IndexError) as e:
+                F.missing("3g", f"(information) three-particle control ({arr}), p = {p}: densification with the wall "
+                          "overlaps frozen", "4.1.3", "none", str(e) or type(e).__name__)
                 continue
             F.add("3g", f"(information) three-particle control ({arr}), p = {p}: densification with the wall overlaps "
                         "frozen at their t_heat values (pair contacts only)", "4.1.3", f"{100 * est['d_pairs']:.2f} % "
@@ -818,6 +854,7 @@ def evaluate(sims, tests, nb, ns, quick):
         for p in (10, 100):
             g = grid_sims(sims, n, p).get(1.0)
             if g is None:
+                F.missing("4a", f"C at t = 1.3 (t_s = 1), N = {n}, p = {p}", "4.2, Fig 10", "", "the run is missing or failed")
                 continue
             lo, hi = bands[(p, n)]
             c, cw = g.phases["sinter"]["C"], g.phases["sinter"]["C_without_walls"]
@@ -827,6 +864,8 @@ def evaluate(sims, tests, nb, ns, quick):
         for p in (10, 100):
             g = grid_sims(sims, n, p).get(1.0)
             if g is None:
+                F.missing("4b", f"C falls at times while nu rises (sintering, t_s = 1, N = {n}, p = {p})",
+                          "4.2, Figs 10-11", ">= 1 window", "the run is missing or failed")
                 continue
             m = (g.ts["t"] >= 0.3) & (g.ts["t"] <= 1.3)
             t, C, nu = g.ts["t"][m], g.ts["C"][m], g.ts["nu"][m]
@@ -840,6 +879,9 @@ def evaluate(sims, tests, nb, ns, quick):
     for p in (10, 100):
         g = grid_sims(sims, nb, p)
         if len(g) < 3:
+            for no in ("5a", "5b", "5c", "5e", "5d"):
+                F.missing(no, f"contact statistics over t_s, N = {nb}, p = {p}", "4.3", "",
+                          f"{len(g)} t_s value(s) run (3 needed)")
             continue
         tss = list(g)
         std_o, cv, frac, ratio, neg = [], [], [], [], []
@@ -882,8 +924,8 @@ def evaluate(sims, tests, nb, ns, quick):
         for n in ns:
             a, b = test_group(tests, role, n, 100).get(1.0), test_group(tests, role, n, 10).get(1.0)
             if a is None or b is None:
-                F.add("6a", f"stiffness ratio p = 100 / p = 10 at t_s = 1, N = {n}{tag}", "4.4.1-4.4.2, Figs 17, 19",
-                      "not run", "1.5..3", None, "demsolve compress missing or failed")
+                F.missing("6a", f"stiffness ratio p = 100 / p = 10 at t_s = 1, N = {n}{tag}", "4.4.1-4.4.2, Figs 17, 19",
+                          "1.5..3", "demsolve compress missing or failed")
                 continue
             ka, kb = a.summary.get("stiffness", np.nan), b.summary.get("stiffness", np.nan)
             rr = ka / kb if kb else float("nan")
@@ -910,6 +952,9 @@ def evaluate(sims, tests, nb, ns, quick):
             for p in (10, 100):
                 g = test_group(tests, role, n, p)
                 if len(g) < 3:
+                    for no, what in (("6b", "stress"), ("6c", "strain")):
+                        F.missing(no, f"failure {what} rises with t_s (N = {n}, p = {p}){tag}", "4.4.1-4.4.2, Figs 17, 19",
+                                  "Spearman >= 0.8", f"{len(g)} test(s) run (3 needed)")
                     continue
                 ps = [t.summary.get("peak_szz", np.nan) for t in g.values()]
                 pe = [t.summary.get("peak_strain", np.nan) for t in g.values()]
@@ -934,8 +979,10 @@ def evaluate(sims, tests, nb, ns, quick):
     for n in ns:
         for p in (10, 100):
             g = test_group(tests, "vibrate", n, p)
-            if not g:
-                continue
+            for ts, no, what in ((1.0, "7a", "largest cluster holds >= 90 % of N"), (1e-4, "7b", ">= 90 % single grains")):
+                if ts not in g:
+                    F.missing(no, f"vibration, t_s = {ts:g}: {what} (N = {n}, p = {p})", "4.4.3, Figs 21-22", ">= 0.9",
+                              "demsolve vibrate missing or failed")
             if 1.0 in g:
                 v = g[1.0].summary.get("largest_cluster_fraction", np.nan)
                 note = ""
@@ -969,6 +1016,9 @@ def evaluate(sims, tests, nb, ns, quick):
               f"nu(t_f) {ctl.nu('final'):.4f} vs {ref.nu('final'):.4f} (diff {dnu:+.4f}); densification "
               f"{100 * ctl.densification:.2f} % vs {100 * ref.densification:.2f} %",
               "|diff nu(t_f)| <= 0.02 and densification > 5 % (our band)", ok)
+    else:
+        F.missing("8", f"da_T = 0 changes densities slightly, not the outcome (N = {nb}, p = 100, t_s = 1)", "4.1.3",
+                  "|diff nu(t_f)| <= 0.02 and densification > 5 % (our band)", "the run or its reference is missing or failed")
     # investigation: wall friction during the preparation
     inv = sims.get(study.sinter_name(nb if not quick else 100, 100, 1.0, f"_muw{study.INVESTIGATION_MU_WALL:g}"))
     if inv is not None and inv.ok and ref is not None:
@@ -981,12 +1031,18 @@ def evaluate(sims, tests, nb, ns, quick):
         F.add("3f", f"densification with mu_w = {study.INVESTIGATION_MU_WALL:g} [investigation], p = 100, t_s = 1",
               "4.1.3", f"{100 * inv.densification:.2f} % (nu(t_f) = {inv.nu('final'):.4f})", "12..20 %",
               inband(inv.densification, 0.12, 0.20))
+    else:
+        for no in ("1c", "1d", "3f"):
+            F.missing(no, f"wall friction mu_w = {study.INVESTIGATION_MU_WALL:g} during the preparation [investigation], "
+                      f"N = {nb}, p = 100", "4.1.2-4.1.3", "", "the run or its reference is missing or failed")
     issue15_rows(F, sims, nb, quick)
     # 9 Fig 8 numbers
     g = grid_sims(sims, nb, 100)
     for ts, (txt, v, tol) in PAPER_K1.items():
         s2 = g.get(ts)
         if s2 is None:
+            F.missing("9", f"k1(T,t)/k1 at the end of sintering, t_s = {ts:g}", "4.1.1, Fig 8", f"{txt} +- {tol:g}",
+                      "the run is missing or failed")
             continue
         k = s2.phases["sinter"]["k1_over_k1"]
         F.add("9", f"k1(T,t)/k1 at the end of sintering, t_s = {ts:g}", "4.1.1, Fig 8", f"{k:.5g}",
@@ -996,17 +1052,6 @@ def evaluate(sims, tests, nb, ns, quick):
 
 
 # ------------------------------------------------------------------------------------------ report
-def git_rev():
-    try:
-        rev = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                             timeout=20).stdout.strip()
-        dirty = subprocess.run(["git", "-C", REPO, "status", "--porcelain", "--untracked-files=no", "--", "apps", "src"],
-                               capture_output=True, text=True, timeout=20).stdout.strip()
-        return rev + (" (working tree of apps/ src/ modified)" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-
-
 def branching_check(sims):
     a = sims.get(study.sinter_name(100, 100, 0.1, "_unbranched"))
     b = sims.get(study.sinter_name(100, 100, 0.1))
@@ -1024,11 +1069,12 @@ def branching_check(sims):
 def write_report(out, a, runs, sims, tests, figs, F, notes, binary, t_total, nb, ns):
     L = []
     mode = "quick" if a.quick else "full"
+    prov = provenance(REPO, "luding_sintering", [binary])
     L.append("# Validation: long-time sintering (Luding, Manetsberger & Muellers 2005), section 4\n")
     L.append(f"Generated {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')} by "
              f"`/usr/bin/python3 validation/luding_sintering/run.py{' --quick' if a.quick else ''}` ({mode} grid).\n")
     L.append(f"* binary given to this invocation (used for the runs made now): `{shown(binary)}`, git revision "
-             f"{a.revision or git_rev()}")
+             f"{a.revision or (prov['commit'] or 'unknown')[:10] + (' (work tree modified)' if prov['modified'] else '')}")
     shas = {}
     for r in list(sims.values()) + list(tests.values()):
         if r.meta.get("binary_sha256"):
@@ -1051,10 +1097,9 @@ def write_report(out, a, runs, sims, tests, figs, F, notes, binary, t_total, nb,
             L.append(f"* {n}")
         L.append("")
     L.append("## Findings\n")
-    npass = sum(1 for r in F.rows if r[5] == "PASS")
-    nfail = sum(1 for r in F.rows if r[5] == "FAIL")
-    L.append(f"{npass} PASS, {nfail} FAIL, {len(F.rows) - npass - nfail} other (investigation, information or not run). "
-             "Bands are fixed in `run.py` (`evaluate()`) and are never widened to make a finding pass.\n")
+    counts = tally(r[5] for r in F.rows)
+    L.append(f"{totals_text(counts)} (other: investigation or information; MISSING: could not be evaluated, the reason "
+             "in the measured column). Bands are fixed in `run.py` (`evaluate()`) and are never widened to make a finding pass.\n")
     L.append("| # | paper's finding | source | measured | band | result | note |")
     L.append("|---|---|---|---|---|---|---|")
     for r in F.rows:
@@ -1099,6 +1144,7 @@ def write_report(out, a, runs, sims, tests, figs, F, notes, binary, t_total, nb,
     for r in runs:
         L.append(shlex.join([shown(binary)] + [shown(x) for x in r.args]))
     L.append("```\n")
+    L += provenance_lines(prov, counts)
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write("\n".join(L) + "\n")
 

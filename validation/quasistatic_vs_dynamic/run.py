@@ -20,7 +20,7 @@ the distance of the two solvers' points (affine: band 3 %; die: report only).
 
 One folder per run; a run is skipped when its folder holds summary.json and a command.txt with the
 same arguments (the binary's path is not compared); --force reruns. Simulations run under
-`nice -n 10`, --jobs at a time. Missing runs are reported as 'not run'.
+`nice -n 10`, --jobs at a time. A line whose runs are missing is reported as MISSING, with the reason.
 Needs numpy and matplotlib (Debian: /usr/bin/python3 with python3-numpy, python3-matplotlib).
 """
 import argparse
@@ -28,7 +28,6 @@ import concurrent.futures
 import csv
 import datetime
 import fnmatch
-import hashlib
 import json
 import math
 import os
@@ -50,7 +49,7 @@ REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
 sys.path.insert(0, os.path.join(str(REPO), "apps", "scripts"))
-from report_paths import shown_path  # noqa: E402
+from report_paths import MISSING, provenance, provenance_lines, sha256_file, shown_path, tally  # noqa: E402
 
 
 def shown(p):
@@ -152,11 +151,6 @@ def all_runs(mode):
 
 
 # ----------------------------------------------------------------------------------------- running
-def sha256(path):
-    with open(path, "rb") as f:
-        return hashlib.file_digest(f, "sha256").hexdigest()
-
-
 def holds_run(d):
     return any(os.path.exists(os.path.join(d, f)) for f in ("command.txt", "summary.json", ".incomplete"))
 
@@ -196,7 +190,7 @@ def run_one(name, binary, args, d, force, timeout):
     wall = time.time() - t0
     os.makedirs(d, exist_ok=True)
     meta = {"returncode": rc, "wall_s": wall, "output": out[-2000:],
-            "binary": os.path.abspath(binary), "binary_sha256": sha256(binary),
+            "binary": os.path.abspath(binary), "binary_sha256": sha256_file(binary),
             "date": datetime.datetime.now().isoformat(timespec="seconds")}
     with open(os.path.join(d, "meta.json"), "w") as f:
         json.dump(meta, f, indent=2)
@@ -321,11 +315,11 @@ def evaluate(R, mode):
                 nv = [r.at(col, D) if r.ok else float("nan") for r in nets]
                 st = nets[0].status
                 if not nets[0].ok and n == 0:
-                    verdict, note = "not run", "neither solver run"
+                    verdict, note = MISSING, "neither solver run"
                 elif not nets[0].ok:
-                    verdict, note = "not run", "netsolve (default drag) not run"
+                    verdict, note = MISSING, "netsolve (default drag) not run"
                 elif n < 3:
-                    verdict, note = "not run", f"DEM at {n} of {len(INERTIAL)} inertial numbers"
+                    verdict, note = MISSING, f"DEM at {n} of {len(INERTIAL)} inertial numbers"
                 elif not (np.isfinite(nv[0]) and np.isfinite(s0)):
                     verdict, note = "invalid", "D not reached"
                 else:
@@ -383,7 +377,8 @@ def evaluate_yield(R):
                 dist = math.hypot(a[0] - b[0], a[1] - b[1]) / scale if all(map(np.isfinite, a + b + (scale,))) \
                     else float("nan")
                 if not (rd.ok and rn.ok):
-                    verdict = "not run"
+                    verdict = f"{MISSING} (not run: " + ", ".join(
+                        f"yield/{t}_{bc}" for t, r in (("dem", rd), ("net", rn)) if not r.ok) + ")"
                 elif not np.isfinite(dist):
                     verdict = "invalid"
                 elif bc == "affine":
@@ -531,16 +526,18 @@ def write_report(R, rows, yrows, figs, out, mode, runs, cmdline, total, netsolve
       "(1 degree of freedom). Bands (fixed, never widened): Σ11, Σ22 within 2 % of σ₀ (valid only where "
       "se(σ₀) ≤ 0.5 % of |σ₀|), Z within ±0.05 of Z₀ (the same fit), the normal affine deviation "
       "`dev_un_ratio_of_means` within ±20 % of its I → 0 fit. Stresses: netsolve's sign (negative in compression).\n")
-    counts = {v: sum(1 for r in rows + yrows if r["verdict"] == v) for v in ("PASS", "FAIL", "invalid", "not run")}
+    tot = tally(r["verdict"] for r in rows + yrows)
+    counts = {"PASS": tot["PASS"], "FAIL": tot["FAIL"], MISSING: tot[MISSING],
+              "invalid": sum(1 for r in rows + yrows if r["verdict"] == "invalid")}
     w(f"**Summary: {counts['PASS']} PASS, {counts['FAIL']} FAIL, {counts['invalid']} invalid, "
-      f"{counts['not run']} not run** (of {len(rows) + len(yrows)} lines, "
+      f"{counts[MISSING]} MISSING** (of {len(rows) + len(yrows)} lines, "
       f"{sum(1 for r in yrows if r['verdict'] == 'report')} more yield lines report only).\n")
-    w("| case | PASS | FAIL | invalid | not run |")
+    w("| case | PASS | FAIL | invalid | MISSING |")
     w("|---|---|---|---|---|")
     for name, _ in combos(mode):
         cr = [r for r in rows if r["case"] == name]
         w(f"| {name} | " + " | ".join(str(sum(1 for r in cr if r["verdict"] == v))
-                                     for v in ("PASS", "FAIL", "invalid", "not run")) + " |")
+                                     for v in ("PASS", "FAIL", "invalid", MISSING)) + " |")
     w("")
     w("## The table: netsolve (default drag) against the DEM limit σ₀\n")
     w("| case | D | quantity | netsolve (drag 0.01) | σ₀ ± se (DEM, I → 0) | band | verdict | netsolve − σ₀ | "
@@ -697,6 +694,7 @@ def write_report(R, rows, yrows, figs, out, mode, runs, cmdline, total, netsolve
     if missing:
         w(f"**Not run ({len(missing)} runs):** " + ", ".join(f"`{m}`" for m in missing) + ".\n")
         w(f"They are completed by `{cmdline}` (it skips the runs that are up to date).\n")
+    L += provenance_lines(provenance(REPO, "quasistatic_vs_dynamic", [netsolve, demsolve]), tot)
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write("\n".join(L) + "\n")
     return counts

@@ -32,6 +32,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "apps", "scripts"))
+from report_paths import (MISSING, missing_text, provenance, provenance_lines, tally,  # noqa: E402
+                          totals_text, verdict)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
@@ -50,6 +54,7 @@ CASES = {
     "die_LL_inf": ("l.r.-l.r., sticking", "closed-die", "die", "die", "inf"),
     "hydro_AA_inf": ("affine-affine, sticking", "hydrostatic", "affine", "affine", "inf"),
 }
+KINDS = (("curv", "max curvature"), ("off", "0.1% offset"))
 STYLE = {
     "AA_mu0": dict(color="black", marker="o"),
     "AA_inf": dict(color="dimgray", marker="x"),
@@ -110,6 +115,15 @@ def load(runs, name):
                                           "S22_analytic", "S11_fabric", "S22_fabric")} | {"status": r["status"]}
     summ = json.load(open(os.path.join(d, "summary.json")))
     return {"points": pts, "summary": summ, "dir": d}
+
+
+def no_points_reason(runs, name):
+    """Why a case has no yield points: its summary.json status, or no run."""
+    sp = os.path.join(runs, name, "summary.json")
+    if not os.path.exists(sp):
+        return "no run"
+    sj = json.load(open(sp))
+    return f"{sj.get('status', '?')}: {sj.get('status_reason', '')}"
 
 
 def radius(p, kind):
@@ -312,7 +326,15 @@ def main():
     rows = []
 
     def add(finding, measured, band, ok, note=""):
-        rows.append((finding, measured, band, "n/a" if ok is None else ("PASS" if ok else "FAIL"), note))
+        rows.append((finding, measured, band, verdict(ok), note))
+
+    def why(*names):
+        """Why a line resting on these cases cannot be evaluated (their summary.json status)."""
+        return "; ".join(f"no yield points for {n}: {no_points_reason(runs, n)}" for n in names if n not in C)
+
+    def miss(finding, band, names, note=""):
+        """A line that cannot be evaluated: written as MISSING with the reason, and counted."""
+        rows.append((finding, missing_text(why(*names))[:400], band, MISSING, note))
 
     def load_norm(c):
         p = c["summary"]["precompaction"]
@@ -331,7 +353,7 @@ def main():
                              "not a finding of the paper: it separates the solver's probing from the isotropy "
                              "assumption of App. A"))
             for ref, what, note in refs:
-                for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                for kind, kl in KINDS:
                     r = analytic_ratios(aa, kind, ref=ref)
                     vals = [x for _, _, x in r if math.isfinite(x)]
                     worst = max((abs(x - 1) for x in vals), default=math.nan)
@@ -340,53 +362,77 @@ def main():
                         f"{inside}/{len(r)} within; ratios {min(vals, default=math.nan):.2f}-"
                         f"{max(vals, default=math.nan):.2f}",
                         "every |ratio − 1| ≤ 0.10", len(vals) == len(r) and len(r) > 0 and worst <= 0.10, note)
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+            for kind, kl in KINDS:
                 n = vertex_count(aa, kind)
                 add(f"{pname}: vertex at the loading point, affine-affine ({kl})",
                     f"{n} directions within 2% of the loading point", "≥ 2", n >= 2)
+        else:  # the fabric-resolved lines need the run too: they are not listed
+            for kind, kl in KINDS:
+                miss(f"{pname}: affine-affine μ=0 yield points ({kl}) within 10% of the analytic surface radially "
+                     "(probes with analytic |Σ| ≥ 0.1 vertex)", "every |ratio − 1| ≤ 0.10", (f"{pre}_AA_mu0",))
+            for kind, kl in KINDS:
+                miss(f"{pname}: vertex at the loading point, affine-affine ({kl})", "≥ 2", (f"{pre}_AA_mu0",))
         ll = C.get(f"{pre}_LL_mu0")
-        if aa and ll:
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
-                add(f"{pname}: kink angle at the loading point between the secants to the neighbouring yield "
-                    f"points, affine-affine vs l.r.-l.r. μ=0 ({kl})",
-                    f"{kink_angle(aa, kind):.0f}° vs {kink_angle(ll, kind):.0f}°", "-", None,
-                    "the paper: a vertex for affine-affine, rounded for l.r.-l.r. (smaller angle = smoother)")
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+        for kind, kl in KINDS:
+            fin = (f"{pname}: kink angle at the loading point between the secants to the neighbouring yield "
+                   f"points, affine-affine vs l.r.-l.r. μ=0 ({kl})")
+            note = "the paper: a vertex for affine-affine, rounded for l.r.-l.r. (smaller angle = smoother)"
+            if aa and ll:
+                add(fin, f"{kink_angle(aa, kind):.0f}° vs {kink_angle(ll, kind):.0f}°", "-", None, note)
+            else:
+                miss(fin, "-", (f"{pre}_AA_mu0", f"{pre}_LL_mu0"), note)
+        for kind, kl in KINDS:
+            fin = f"{pname}: l.r.-l.r. μ=0 surface / affine-affine size ({kl})"
+            if aa and ll:
                 r, n = size_ratio(ll, aa, kind)
-                add(f"{pname}: l.r.-l.r. μ=0 surface / affine-affine size ({kl})", f"{r:.2f} (median of {n} directions)",
-                    "0.4-0.6", 0.4 <= r <= 0.6)
+                add(fin, f"{r:.2f} (median of {n} directions)", "0.4-0.6", 0.4 <= r <= 0.6)
+            else:
+                miss(fin, "0.4-0.6", (f"{pre}_AA_mu0", f"{pre}_LL_mu0"))
         ai = C.get(f"{pre}_AA_inf")
-        if aa and ai:
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
-                r, n = size_ratio(ai, aa, kind)
-                add(f"{pname}: affine-affine sticking / frictionless size ({kl})", f"{r:.2f} (median of {n})",
-                    "0.9-1.1 (ours)", 0.9 <= r <= 1.1,
-                    "section 3.4 citing [2, 7]: friction has only a minor effect when affine deformation is imposed")
+        if f"{pre}_AA_inf" in CASES:  # run for the hydrostatic precompaction only
+            note = "section 3.4 citing [2, 7]: friction has only a minor effect when affine deformation is imposed"
+            for kind, kl in KINDS:
+                fin = f"{pname}: affine-affine sticking / frictionless size ({kl})"
+                if aa and ai:
+                    r, n = size_ratio(ai, aa, kind)
+                    add(fin, f"{r:.2f} (median of {n})", "0.9-1.1 (ours)", 0.9 <= r <= 1.1, note)
+                else:
+                    miss(fin, "0.9-1.1 (ours)", (f"{pre}_AA_mu0", f"{pre}_AA_inf"), note)
         li = C.get(f"{pre}_LL_inf")
-        if ll and li:
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+        for kind, kl in KINDS:
+            fin = f"{pname}: sticking / frictionless size, l.r.-l.r. ({kl})"
+            if ll and li:
                 r, n = size_ratio(li, ll, kind)
-                add(f"{pname}: sticking / frictionless size, l.r.-l.r. ({kl})", f"{r:.2f} (median of {n})", "1.6-2.4",
-                    1.6 <= r <= 2.4)
-        if li and aa:
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+                add(fin, f"{r:.2f} (median of {n})", "1.6-2.4", 1.6 <= r <= 2.4)
+            else:
+                miss(fin, "1.6-2.4", (f"{pre}_LL_mu0", f"{pre}_LL_inf"))
+        note = "band chosen here: the issue says 'close to affine size'"
+        for kind, kl in KINDS:
+            fin = f"{pname}: sticking l.r.-l.r. / affine-affine size ({kl})"
+            if li and aa:
                 r, n = size_ratio(li, aa, kind)
-                add(f"{pname}: sticking l.r.-l.r. / affine-affine size ({kl})", f"{r:.2f} (median of {n})", "0.8-1.2",
-                    0.8 <= r <= 1.2, "band chosen here: the issue says 'close to affine size'")
+                add(fin, f"{r:.2f} (median of {n})", "0.8-1.2", 0.8 <= r <= 1.2, note)
+            else:
+                miss(fin, "0.8-1.2", (f"{pre}_LL_inf", f"{pre}_AA_mu0"), note)
         # information: the surfaces inherit the precompaction stress (validation/redanz_fleck_compaction)
+        fin = f"{pname}: loading-point |Σ| ratios l.r. μ=0 / affine, sticking / μ=0 (information)"
+        note = "the yield-surface ratios above follow these precompaction ratios"
         if aa and ll and li:
-            add(f"{pname}: loading-point |Σ| ratios l.r. μ=0 / affine, sticking / μ=0 (information)",
-                f"{load_norm(ll) / load_norm(aa):.2f}, {load_norm(li) / load_norm(ll):.2f}", "-", None,
-                "the yield-surface ratios above follow these precompaction ratios")
+            add(fin, f"{load_norm(ll) / load_norm(aa):.2f}, {load_norm(li) / load_norm(ll):.2f}", "-", None, note)
+        else:
+            miss(fin, "-", (f"{pre}_AA_mu0", f"{pre}_LL_mu0", f"{pre}_LL_inf"), note)
     aa = C.get("hydro_AA_mu0")
     for n, lab in (("hydro_LA_mu0", "l.r.-affine"), ("hydro_AL_mu0", "affine-l.r.")):
-        if aa and n in C:
-            for kind, kl in (("curv", "max curvature"), ("off", "0.1% offset")):
+        for kind, kl in KINDS:
+            fin = f"Fig 10: {lab} / affine-affine size, hydrostatic μ=0 ({kl})"
+            if aa and n in C:
                 r, m = size_ratio(C[n], aa, kind)
-                add(f"Fig 10: {lab} / affine-affine size, hydrostatic μ=0 ({kl})", f"{r:.2f} (median of {m})", "0.4-0.6",
-                    0.4 <= r <= 0.6)
+                add(fin, f"{r:.2f} (median of {m})", "0.4-0.6", 0.4 <= r <= 0.6)
+            else:
+                miss(fin, "0.4-0.6", ("hydro_AA_mu0", n))
 
     # ---- report
+    counts = tally(r[3] for r in rows)
     lines = ["# netsolve yield vs Redanz & Fleck (2001) section 3.4, Figs 9-10", "",
              f"Generated {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by "
              f"`validation/redanz_fleck_yield/run.py{' --quick' if a.quick else ''}`: "
@@ -394,6 +440,8 @@ def main():
              f"{scale['directions']} probe directions. Algorithm and definitions: docs/yield.md.", "",
              "Size ratios are medians over the probe directions found in both runs whose analytic affine stress is at "
              "least 0.1 of the vertex value; 'max curvature' is the paper's definition, '0.1% offset' the second one.",
+             "", f"Totals: {totals_text(counts)}. MISSING: a line that could not be evaluated (the reason is in "
+             "its measured column); it counts as neither PASS nor FAIL.",
              "", "| finding | measured | band | result | note |", "|---|---|---|---|---|"]
     for r in rows:
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in r) + " |")
@@ -402,11 +450,7 @@ def main():
     for n in CASES:
         if n not in C:
             # a case without yield points: say why (its summary.json status), not a silent gap
-            why = "no run"
-            sp = os.path.join(runs, n, "summary.json")
-            if os.path.exists(sp):
-                sj = json.load(open(sp))
-                why = f"{sj.get('status', '?')}: {sj.get('status_reason', '')}"
+            why = no_points_reason(runs, n)
             lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | no yield points: {why} | | | | | |")
             continue
         s = C[n]["summary"]
@@ -443,6 +487,7 @@ def main():
             lines.append(f"![{f_}]({f_})")
     lines.append("")
     lines.append(f"Total time of this script: {time.time() - t0:.0f} s.")
+    lines += provenance_lines(provenance(REPO, "redanz_fleck_yield", [a.netsolve]), counts)
     open(os.path.join(outdir, "report.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines[:len(rows) + 10]))
 

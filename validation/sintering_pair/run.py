@@ -31,6 +31,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
+from report_paths import MISSING, missing_text, provenance, provenance_lines, tally, totals_text, verdict  # noqa: E402
 KB = 1.380649e-23
 TIMES = [60.0, 600.0, 3600.0, 14400.0, 57600.0]
 TIME_LABELS = ["1 min", "10 min", "1 h", "4 h", "16 h"]
@@ -108,8 +110,11 @@ class Findings:
         self.rows = []
 
     def add(self, finding, measured, band, ok, construction, note=""):
-        res = "n/a" if ok is None else ("PASS" if ok else "FAIL")
-        self.rows.append((finding, measured, band, res, construction, note))
+        self.rows.append((finding, measured, band, verdict(ok), construction, note))
+
+    def missing(self, finding, band, reason, construction, note=""):
+        """A line that cannot be evaluated: MISSING, with the reason, counted in the totals."""
+        self.rows.append((finding, missing_text(reason), band, MISSING, construction, note))
 
     def table(self):
         s = "| finding | measured | band | result | by construction? | note |\n|---|---|---|---|---|---|\n"
@@ -387,17 +392,22 @@ def main():
         rep.append("## 6. Titanium, the two readings of the note's section 5.2\n\n"
                    "hpsint β-Ti set as shipped in `src/contact/materials/ti.txt` (δ = 0.5 nm assumed for both "
                    "interfaces); the second reading via `--set D_vol0=1.9e-7`. Neither is the paper's Table 4.\n\n" + ttab)
+    else:
+        for lab in ("D_vol0 = 19e-12 (as stored)", "D_vol0 = 1.9e-7"):
+            F.missing(f"Ti (hpsint set, δ = 0.5 nm), {lab}, R = 25 µm, 1300 C, against note 7.3",
+                      "half a unit in the last printed digit", "the Ti runs are not part of --quick",
+                      "yes (same reconstruction)")
 
     # ---- experiment
-    F.add("Kingery & Berg (1955) Cu neck growth / shrinkage", "not compared", "-", None, "-",
-          "the data could not be retrieved here; no numbers are cited")
+    F.missing("Kingery & Berg (1955) Cu neck growth / shrinkage", "-",
+              "the data could not be retrieved here; no numbers are cited", "-")
 
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    npass = sum(r[3] == "PASS" for r in F.rows)
-    nfail = sum(r[3] == "FAIL" for r in F.rows)
+    counts = tally(r[3] for r in F.rows)
     head = (f"# netsolve sinter-pair: validation of the two-particle sintering model\n\n"
             f"Generated {now} by `validation/sintering_pair/run.py`{' --quick' if a.quick else ''}; run folders in "
-            f"`{os.path.relpath(runs_dir, REPO)}`. {npass} PASS, {nfail} FAIL.\n\n"
+            f"`{os.path.relpath(runs_dir, REPO)}`. {totals_text(counts)} (MISSING: a line that could not be "
+            "evaluated, the reason in its measured column).\n\n"
             "**What is validated.** The model is a *documented reconstruction* "
             "(the model note described in `docs/sintering_pair.md`), not the model of Thomsen et al. used by Ivannikov et al. "
             "(whose flux and material tables are not public). Most lines below compare against the note's tables, "
@@ -411,8 +421,9 @@ def main():
             "material set itself (note 5.1) is partly [unverified] (γ_s, γ_gb) and partly derived (δ_s D_s).\n\n"
             "## Findings\n\n" + F.table() + "\n")
     with open(os.path.join(outdir, "report.md"), "w") as f:
-        f.write(head + "\n".join(rep))
-    print(f"report: {os.path.join(outdir, 'report.md')} ({npass} PASS, {nfail} FAIL)")
+        f.write(head + "\n".join(rep) + "\n".join(provenance_lines(provenance(REPO, "sintering_pair", [a.netsolve]),
+                                                                       counts)) + "\n")
+    print(f"report: {os.path.join(outdir, 'report.md')} ({totals_text(counts)})")
     return 0  # FAIL lines are findings of the report; a failed run raises above
 
 
