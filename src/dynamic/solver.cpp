@@ -88,15 +88,10 @@ Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndenta
 template <int D>
 template <class Law, bool InPlace>
 [[gnu::flatten]] void DynamicSolverT<D>::compute_forces() {
-  using H = typename Law::History;
   const std::size_t n = P_.size();
-  const double dt = ts_.dt;
   const Law pair_law = make_law<Law>(params_, thermal_.k1_Tt, opt_.plastic);
   const Law wall_law = make_law<Law>(wall_params_, thermal_.k1_Tt, pl_wall_params_);
-  std::vector<H>& pair_hist = pair_histories<H>();
-  std::vector<H>& wall_hist = wall_histories<H>();
-  double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
-  double s3[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  ForceSums a;
   if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
     for (std::size_t i = 0; i < n; ++i) {
       P_.fx[i] = P_.mass[i] * opt_.gravity_x;
@@ -109,6 +104,33 @@ template <class Law, bool InPlace>
     }
   }
   forces_initialised_ = false;
+  pair_forces<Law, InPlace>(pair_law, a);
+  if constexpr (D == 3) pair_stress_3d(a);
+  if (walls_active()) {
+    if constexpr (D == 2)
+      wall_forces_2d<Law, InPlace>(wall_law, a);
+    else
+      wall_forces_3d<Law, InPlace>(wall_law, a);
+  }
+  for (int w = 0; w < kWalls; ++w) wall_force_[w] = a.wf[w];
+  if constexpr (contact::kHasContactArea<Law>) area_max_ = pair_law.contact_area(a.fn_max);
+  sxx_ = a.sxx;
+  sxy_ = a.sxy;
+  syx_ = a.syx;
+  syy_ = a.syy;
+  if constexpr (D == 3) std::copy(&a.s3[0][0], &a.s3[0][0] + 9, &s3_[0][0]);
+  elastic_ = a.el;
+}
+
+// The particle-particle contacts of the Verlet table: forces, torques, the 2D stress sums, the
+// elastic energy and the largest normal force (the sums in locals: the loop stores forces).
+template <int D>
+template <class Law, bool InPlace>
+[[gnu::flatten]] void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
+  using H = typename Law::History;
+  const double dt = ts_.dt;
+  std::vector<H>& pair_hist = pair_histories<H>();
+  double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
   // particle-particle contacts from the Verlet table
   const std::size_t n_pairs = pair_key_.size();
   if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
@@ -231,29 +253,52 @@ template <class Law, bool InPlace>
       if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     }
   }
-  if constexpr (D == 3) {
-    // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
-    // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
-    // contact. F_i is the accumulator less the m g it started from (the same product), and x_i is
-    // taken from the first particle (exactly translation invariant, and no cancellation of large
-    // coordinates).
-    const double* const p_mass = P_.mass.data();
-    const double gx = opt_.gravity_x, gy = opt_.gravity_y, gz = opt_.gravity_z;
-    const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_y[0] : 0.0, z0 = n > 0 ? p_z[0] : 0.0;
-    double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double Fx = p_fx[i] - p_mass[i] * gx, Fy = p_fy[i] - p_mass[i] * gy, Fz = p_fz[i] - p_mass[i] * gz;
-      const double X = p_x[i] - x0, Y = p_y[i] - y0, Z = p_z[i] - z0;
-      s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
-      s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
-      s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
-    }
-    s3[0][0] = s00, s3[0][1] = s01, s3[0][2] = s02;
-    s3[1][0] = s10, s3[1][1] = s11, s3[1][2] = s12;
-    s3[2][0] = s20, s3[2][1] = s21, s3[2][2] = s22;
+  a.sxx = sxx, a.sxy = sxy, a.syx = syx, a.syy = syy, a.el = el, a.fn_max = fn_max;
+}
+
+template <int D>
+void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
+  const std::size_t n = P_.size();
+  const double* const p_x = P_.x.data();
+  const double* const p_y = P_.y.data();
+  const double* const p_z = P_.z.data();
+  const double* const p_fx = P_.fx.data();
+  const double* const p_fy = P_.fy.data();
+  const double* const p_fz = P_.fz.data();
+  double (&s3)[3][3] = a.s3;
+  // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
+  // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
+  // contact. F_i is the accumulator less the m g it started from (the same product), and x_i is
+  // taken from the first particle (exactly translation invariant, and no cancellation of large
+  // coordinates).
+  const double* const p_mass = P_.mass.data();
+  const double gx = opt_.gravity_x, gy = opt_.gravity_y, gz = opt_.gravity_z;
+  const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_y[0] : 0.0, z0 = n > 0 ? p_z[0] : 0.0;
+  double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double Fx = p_fx[i] - p_mass[i] * gx, Fy = p_fy[i] - p_mass[i] * gy, Fz = p_fz[i] - p_mass[i] * gz;
+    const double X = p_x[i] - x0, Y = p_y[i] - y0, Z = p_z[i] - z0;
+    s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
+    s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
+    s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
   }
+  s3[0][0] = s00, s3[0][1] = s01, s3[0][2] = s02;
+  s3[1][0] = s10, s3[1][1] = s11, s3[1][2] = s12;
+  s3[2][0] = s20, s3[2][1] = s21, s3[2][2] = s22;
+}
+
+// The particle-wall contacts, 2D: the pair (wall, particle), n from the wall into the box.
+template <int D>
+template <class Law, bool InPlace>
+[[gnu::flatten]] void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, ForceSums& a) {
+  using H = typename Law::History;
+  const std::size_t n = P_.size();
+  const double dt = ts_.dt;
+  std::vector<H>& wall_hist = wall_histories<H>();
+  double& sxx = a.sxx; double& sxy = a.sxy; double& syx = a.syx; double& syy = a.syy;
+  double& el = a.el; double& fn_max = a.fn_max;
+  double* const wf = a.wf;
   // walls: the pair (wall, particle), n from the wall into the box
-  double wf[2 * D] = {};
   if (walls_active() && D == 2) {
     const double wnx[4] = {1, -1, 0, 0}, wny[4] = {0, 0, 1, -1};
     const double wvx[4] = {0, wall_v_[0], 0, 0}, wvy[4] = {0, 0, 0, wall_v_[1]};
@@ -319,6 +364,19 @@ template <class Law, bool InPlace>
     }
     }
   }
+}
+
+// The particle-wall contacts, 3D: six walls.
+template <int D>
+template <class Law, bool InPlace>
+[[gnu::flatten]] void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, ForceSums& a) {
+  using H = typename Law::History;
+  const std::size_t n = P_.size();
+  const double dt = ts_.dt;
+  std::vector<H>& wall_hist = wall_histories<H>();
+  double& el = a.el; double& fn_max = a.fn_max;
+  double* const wf = a.wf;
+  double (&s3)[3][3] = a.s3;
   if constexpr (D == 3) {
     if (walls_active()) {
       // wall w: axis a = w / 2; w even: the minimum (normal +e_a), odd: the maximum (normal -e_a,
@@ -395,14 +453,6 @@ template <class Law, bool InPlace>
       }
     }
   }
-  for (int w = 0; w < kWalls; ++w) wall_force_[w] = wf[w];
-  if constexpr (contact::kHasContactArea<Law>) area_max_ = pair_law.contact_area(fn_max);
-  sxx_ = sxx;
-  sxy_ = sxy;
-  syx_ = syx;
-  syy_ = syy;
-  if constexpr (D == 3) std::copy(&s3[0][0], &s3[0][0] + 9, &s3_[0][0]);
-  elastic_ = el;
 }
 
 // ---- integration: velocity Verlet, LMM05 Eq 2 and Eq 1 ------------------------------------------

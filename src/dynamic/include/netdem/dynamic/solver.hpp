@@ -438,6 +438,20 @@ class DynamicSolverT {
   }
   template <class L, bool InPlace>
   void compute_forces();
+  /// The sums of a force evaluation (stress about the contacts, elastic energy, largest normal
+  /// force, the walls' forces), filled by the loops below.
+  struct ForceSums {
+    double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
+    double s3[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    double wf[6] = {0, 0, 0, 0, 0, 0};
+  };
+  template <class L, bool InPlace>
+  void pair_forces(const L& pair_law, ForceSums& a);
+  void pair_stress_3d(ForceSums& a) const;
+  template <class L, bool InPlace>
+  void wall_forces_2d(const L& wall_law, ForceSums& a);
+  template <class L, bool InPlace>
+  void wall_forces_3d(const L& wall_law, ForceSums& a);
   // the history store of a law's history type (one per law family)
   template <class H>
   std::vector<H>& pair_histories();
