@@ -28,9 +28,7 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 
 # path -> lines, or "path:function" -> lines (the sizes when the list was last tightened; they only shrink)
 ALLOWED = {
-    "apps/netsolve/yield.cpp": 953,
     "src/dynamic/solver.cpp:DynamicSolverT<D>::compute_forces": 317,
-    "apps/netsolve/yield.cpp:run_yield": 301,
     "apps/demsolve/main.cpp:main": 209,
     "apps/netsolve/main.cpp:run_compact": 178,
 }
