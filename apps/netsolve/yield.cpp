@@ -478,8 +478,7 @@ void YieldRun::unload_phase() {
 }
 
 /// The probes, each on its own solver restored from the unloaded state: in this process for one
-/// job (or one probe), otherwise in `jobs` worker processes of this program; then
-/// yield_points.csv and the surface plot.
+/// job (or one probe), otherwise in `jobs` worker processes of this program.
 void YieldRun::probe_phase() {
   using namespace netdem;
   const auto t0 = Clock::now();
@@ -532,7 +531,7 @@ int YieldRun::finish() {
     probe_wall_sum += records_[idx].value("wall_s", 0.0);
     ok += records_[idx].value("status", "") == "ok";
   }
-  yr::write_assembly(out_, recs, setup_, yr::setup_title(setup_));
+  yr::write_yield_points(out_, recs);
 
   // ---- status: the precompaction's convergence, the unloading; a failed probe is its own record
   app::netsolve::RunStatus status;
@@ -663,7 +662,7 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--probe-worker", a.probe_worker, "internal: run one probe from the run folder's unloaded state")
         ->group("");
   } else {
-    app.description("netsolve yield-merge: assemble yield_points.csv and surface.svg from the probe files of several yield runs");
+    app.description("netsolve yield-merge: assemble yield_points.csv from the probe files of several yield runs");
     app.add_option("dirs", dirs, "run folders (each with probes/)")->required();
     app.add_option("--out", merge_out, "output folder")->capture_default_str();
     app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier merge in --out (README.md 'Run folders')");

@@ -1,5 +1,5 @@
 // netsolve yield's records and files (yield_records.hpp): one probe's files and record,
-// yield_points.csv and the surface plot assembled from the records, and yield-merge, which does
+// yield_points.csv assembled from the records, and yield-merge, which does
 // the same from the probe files of several runs (docs/yield.md "Outputs").
 #include "yield_records.hpp"
 
@@ -49,7 +49,7 @@ qs::YieldPoint analytic_point(const Analytic& an, double theta) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// yield_points.csv and the surface plot from probe records (the .json of each probe).
+// yield_points.csv from probe records (the .json of each probe); apps/scripts/plot_yield.py plots it.
 const char* kYieldHeader =
     "probe,theta,S11,S22,S11_offset,S22_offset,S11_analytic,S22_analytic,S11_fabric,S22_fabric,strain,strain_offset,"
     "stress,stress_offset,elastic_slope,curvature,increments,unconverged,status,end\n";
@@ -72,77 +72,6 @@ std::string yield_row(const json& r) {
                      num(from_json(r["stress"])), num(from_json(r["stress_offset"])), num(from_json(r["elastic_slope"])),
                      num(from_json(r["curvature"])), r.value("increments", 0), r.value("unconverged", 0),
                      csv_text(r.value("status", "")), csv_text(r.value("end", "")));
-}
-
-/// SVG of the surface: analytic affine curve, yield points by curvature (joined in theta order, as
-/// the paper's linear interpolation, not closed), offset points and the loading point.
-std::string surface_svg(const std::vector<json>& recs, const Analytic& an, double L11, double L22, const std::string& title) {
-  std::vector<std::pair<double, double>> ana, cur, off;
-  if (an.ok)
-    for (int k = 0; k <= 720; ++k) {
-      const auto p = analytic_point(an, 2 * kPi * k / 720.0);
-      ana.emplace_back(p.S11, p.S22);
-    }
-  for (const auto& r : recs) {
-    const double a = from_json(r["S11"]), b = from_json(r["S22"]);
-    if (std::isfinite(a) && std::isfinite(b)) cur.emplace_back(a, b);
-    const double c = from_json(r["S11_offset"]), d = from_json(r["S22_offset"]);
-    if (std::isfinite(c) && std::isfinite(d)) off.emplace_back(c, d);
-  }
-  double lo = 0.0, hi = 0.0;
-  auto grow = [&](double v) {
-    if (std::isfinite(v)) {
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-  };
-  for (const auto* v : {&ana, &cur, &off})
-    for (const auto& p : *v) {
-      grow(p.first);
-      grow(p.second);
-    }
-  grow(L11);
-  grow(L22);
-  const double span = std::max(hi - lo, 1e-6);
-  lo -= 0.08 * span;
-  hi += 0.08 * span;
-  const double W = 520, M = 60;
-  auto X = [&](double v) { return M + (v - lo) / (hi - lo) * W; };
-  auto Y = [&](double v) { return M + (hi - v) / (hi - lo) * W; };
-  std::string s = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{0}\" font-family=\"sans-serif\" font-size=\"12\">\n"
-      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{1}\" y=\"20\" font-size=\"13\">{2}</text>\n",
-      W + 2 * M, M, title);
-  s += fmt::format("<rect x=\"{0}\" y=\"{0}\" width=\"{1}\" height=\"{1}\" fill=\"none\" stroke=\"black\"/>\n", M, W);
-  const double tick = std::pow(10.0, std::floor(std::log10(span / 2))) * (span / std::pow(10.0, std::floor(std::log10(span))) > 5 ? 2 : 1) / 2;
-  for (double t = std::ceil(lo / tick) * tick; t <= hi; t += tick) {
-    s += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1}\" x2=\"{0:.1f}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4:.2g}</text>\n",
-                     X(t), M, M + W, M + W + 16, t);
-    s += fmt::format("<line x1=\"{1}\" y1=\"{0:.1f}\" x2=\"{2}\" y2=\"{0:.1f}\" stroke=\"#ddd\"/><text x=\"{3}\" y=\"{0:.1f}\" text-anchor=\"end\">{4:.2g}</text>\n",
-                     Y(t), M, M + W, M - 4, t);
-  }
-  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">Σ11/σy</text>\n", M + W / 2, M + W + 36);
-  s += fmt::format("<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">Σ22/σy</text>\n", M + W / 2, M + W / 2);
-  auto poly = [&](const std::vector<std::pair<double, double>>& v, const char* style) {
-    if (v.size() < 2) return;
-    s += "<polyline fill=\"none\" " + std::string(style) + " points=\"";
-    for (const auto& p : v) s += fmt::format("{:.1f},{:.1f} ", X(p.first), Y(p.second));
-    s += "\"/>\n";
-  };
-  poly(ana, "stroke=\"#888\" stroke-dasharray=\"5,3\"");
-  poly(cur, "stroke=\"#1f77b4\"");  // open: the part near the origin has no points (tensile probes)
-  for (const auto& p : cur) s += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"#1f77b4\"/>\n", X(p.first), Y(p.second));
-  for (const auto& p : off)
-    s += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"7\" height=\"7\" fill=\"none\" stroke=\"#d62728\"/>\n", X(p.first) - 3.5, Y(p.second) - 3.5);
-  if (std::isfinite(L11) && std::isfinite(L22))
-    s += fmt::format("<path d=\"M{0:.1f},{1:.1f} m-6,0 l12,0 m-6,-6 l0,12\" stroke=\"black\" stroke-width=\"2\"/>\n", X(L11), Y(L22));
-  const double lx = M + 10, ly = M + 16;
-  s += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#888\" stroke-dasharray=\"5,3\"/><text x=\"{3}\" y=\"{4}\">analytic affine (App. A)</text>\n", lx, ly, lx + 24, lx + 30, ly + 4);
-  s += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"3.5\" fill=\"#1f77b4\"/><text x=\"{}\" y=\"{}\">max curvature</text>\n", lx + 12, ly + 18, lx + 30, ly + 22);
-  s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"7\" height=\"7\" fill=\"none\" stroke=\"#d62728\"/><text x=\"{}\" y=\"{}\">offset</text>\n", lx + 8.5, ly + 32.5, lx + 30, ly + 40);
-  s += fmt::format("<path d=\"M{},{} m-6,0 l12,0 m-6,-6 l0,12\" stroke=\"black\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">loading point</text>\n", lx + 12, ly + 54, lx + 30, ly + 58);
-  s += "</svg>\n";
-  return s;
 }
 
 /// Reads probes/probe_*.json of a run folder.
@@ -259,13 +188,10 @@ json write_probe(const qs::ProbeResult& p, int directions, const Analytic& an, c
   return r;
 }
 
-void write_assembly(const fs::path& out, const std::vector<json>& recs, const json& setup, const std::string& title) {
+void write_yield_points(const fs::path& out, const std::vector<json>& recs) {
   std::string csv = kYieldHeader;
   for (const auto& r : recs) csv += yield_row(r);
   netdem::app::write_file_atomic(out / "yield_points.csv", csv);
-  const Analytic an = make_analytic(setup.at("analytic"));
-  netdem::app::write_file_atomic(out / "surface.svg",
-                                 surface_svg(recs, an, from_json(setup["loading"]["S11"]), from_json(setup["loading"]["S22"]), title));
 }
 
 int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, const std::string& command, bool overwrite) {
@@ -309,7 +235,7 @@ int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, 
       missing.push_back(k);
     }
   }
-  write_assembly(out, recs, setup, setup_title(setup) + " (merged)");
+  write_yield_points(out, recs);
   // the merge records each probe's status (yield_points.csv, "probes" below) and does not fail for
   // a failed probe: "incomplete" says that probes are missing or not ok, exit 0 either way
   std::vector<int> not_ok;

@@ -1,7 +1,7 @@
 #pragma once
 // netsolve yield's records and files (yield_records.cpp): the analytic affine surface of a run,
-// one probe's files (probes/probe_NNN.csv and .json) and its record, yield_points.csv and the
-// surface plot assembled from the records, and yield-merge. The run itself: yield.cpp.
+// one probe's files (probes/probe_NNN.csv and .json) and its record, yield_points.csv assembled
+// from the records, and yield-merge. The run itself: yield.cpp.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -39,9 +39,8 @@ nlohmann::json write_probe(const netdem::qs::ProbeResult& p, int directions, con
 /// The record of probe `index` that has no result: every point null, status and end `why`.
 nlohmann::json failed_record(int index, int directions, const std::string& why, const Analytic& an, const nlohmann::json& setup);
 
-/// yield_points.csv and the surface plot of the records (in this order) in `out`.
-void write_assembly(const std::filesystem::path& out, const std::vector<nlohmann::json>& recs, const nlohmann::json& setup,
-                    const std::string& title);
+/// yield_points.csv of the records (in this order) in `out` (apps/scripts/plot_yield.py plots it).
+void write_yield_points(const std::filesystem::path& out, const std::vector<nlohmann::json>& recs);
 
 /// netsolve yield-merge: the probe records of several run folders assembled in `out_dir`.
 int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, const std::string& command, bool overwrite);

@@ -71,11 +71,16 @@ a="$tmp/a"
 run "$a" --time 100
 ok sn_exit [ $? -eq 0 ]
 ok sn_quiet [ ! -s "$tmp/stderr" ]
-for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json report.md history.svg snapshots.pvd \
+for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json report.md snapshots.pvd \
          particles_000.vtp bonds_000.vtp particles_005.vtp bonds_005.vtp; do
   ok "sn_file_$f" [ -s "$a/$f" ]
 done
 ok sn_no_marker [ ! -e "$a/.incomplete" ]
+# the command draws nothing: report.md names the script that plots history.csv
+ok sn_no_svg [ ! -e "$a/history.svg" ]
+ok sn_report_names_plot grep -q "apps/scripts/plot_sinter.py" "$a/report.md"
+ok sn_plot /usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_sinter.py" "$a"
+ok sn_plot_png [ -s "$a/history.png" ]
 ok sn_history_header [ "$(head -1 "$a/history.csv")" = "$hist_header" ]
 ok sn_steps_header [ "$(head -1 "$a/steps.csv")" = "$steps_header" ]
 ok sn_dlbar_header [ "$(head -1 "$a/dL_bar.csv")" = "a,b,L0,dL_bar,dL_bar_over_L0,neck,t_created" ]
