@@ -123,7 +123,8 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
   dcomp->add_option("--drag", dc.drag, "background drag on the motion relative to the affine field [1/t*]")->capture_default_str();
   dcomp->add_option("--steps-per-contact", dc.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
   dcomp->add_option("--increments", dc.increments, "output windows (equal strain, as netsolve's increments)")->capture_default_str();
-  dcomp->add_option("--snapshots", dc.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  netdem::app::netsolve::add_list_option(*dcomp, "--snapshots", dc.snapshots,
+                                         "densities at which VTK snapshots are written, a comma list in any order (\"\": none)");
   dcomp->add_option("--max-steps", dc.max_steps, "refuse a run of more time steps than this")->capture_default_str();
   dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
   dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
@@ -156,7 +157,7 @@ CLI::App* add_dem_yield(CLI::App& app, DemYieldArgs& dy, std::string& out_dyield
   dyield->add_option("--k-t", dy.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
   dyield->add_flag("--no-rotation", dy.no_rotation, "hold every spin at zero");
   dyield->add_option("--directions", dy.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
-  dyield->add_option("--probes", dy.probe_list, "run only these probe indices, e.g. 0,3,5");
+  netdem::app::netsolve::add_list_option(*dyield, "--probes", dy.probe_list, "run only these probe indices, e.g. 0,3,5");
   dyield->add_option("--jobs", dy.jobs, "probes run at the same time on threads (0: number of cores)")->capture_default_str();
   dyield->add_option("--offset", dy.offset, "offset strain of the offset yield point")->capture_default_str();
   dyield->add_option("--max-strain", dy.max_strain, "longest probe |dE|")->capture_default_str();

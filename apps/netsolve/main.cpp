@@ -60,7 +60,8 @@ struct RunArgs {
 // (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
-  std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85", boundary = "layer";
+  std::string path = "hydrostatic", packing_file, boundary = "layer";
+  std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
   int increments = 100;
   netdem::qs::SolverOptions solver = netdem::qs::SolverOptions::compact();  // bound directly by the command line
@@ -270,7 +271,8 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   qs::SolverOptions so;
   qs::CompactionOptions co;
   compact_options(a, so, co);
-  const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
+  std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
+  std::sort(snaps.begin(), snaps.end());
 
   app::check_run_dir(out, run_dir_options(ra, a.packing_file));
   std::string source;
@@ -483,7 +485,8 @@ int main(int argc, char** argv) {
                                     "of to a density, in [1e-9, 1]; any direction, e.g. pure shear --path 1,-1,0 at constant volume");
   o_strain->excludes(o_density);
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
-  comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  netdem::app::netsolve::add_list_option(*comp, "--snapshots", ca.snapshots,
+                                         "densities at which VTK snapshots are written, a comma list in any order (\"\": none)");
   comp->add_option("--slide-fraction", ca.solver.slide_stiffness_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
   comp->add_option("--linear-tol", ca.solver.linear_tolerance, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_option("--max-step", ca.solver.max_step, "cap on a Newton step's translation of one particle [R]")->capture_default_str();

@@ -64,7 +64,8 @@ using netdem::app::write_file_atomic;
 using nlohmann::json;
 
 struct Args {
-  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", planes = "box", restart, checkpoints, out = "results/sinter";
+  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", planes = "box", restart, out = "results/sinter";
+  std::vector<double> checkpoints;  ///< in the order given: the library refuses times that do not increase
   std::vector<std::string> set;
   double green_density = 0.58, temperature = 1293.0, t_end = 5000.0, dt_max = 10.0, dt_initial = st::StaggeredOptions{}.dt_initial,
          eps_lim = st::StaggeredOptions{}.eps_lim, alpha = st::StaggeredOptions{}.alpha, x0 = st::StaggeredOptions{}.x0_over_R,
@@ -283,7 +284,7 @@ Setup setup(const Args& a, const CLI::App& app) {
   u.ro.t_end = a.t_end;
   u.ro.max_steps = a.max_steps;
   u.ro.snapshots = a.snapshots;
-  u.ro.checkpoints = netdem::app::netsolve::parse_number_list(a.checkpoints, "--checkpoints");
+  u.ro.checkpoints = a.checkpoints;
   if (u.restart)
     setup_restart(a, u);
   else
@@ -649,7 +650,8 @@ int run_sinter_command(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--snapshots", a.snapshots, "particles_K.vtp / bonds_K.vtp at N equally spaced times, plus the last")->capture_default_str();
   app.add_option("--restart", a.restart, "continue from a state.txt of an earlier run to --time, into a new --out folder");
-  app.add_option("--checkpoints", a.checkpoints, "comma list of times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
+  netdem::app::netsolve::add_list_option(app, "--checkpoints", a.checkpoints,
+                                         "comma list of increasing times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
   app.add_option("--max-steps", a.max_steps, "stop (incomplete, exit 3) after this many steps")->capture_default_str();
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");

@@ -43,11 +43,11 @@ namespace {
 namespace fs = std::filesystem;
 namespace sp = netdem::contact::sinter;
 using nlohmann::json;
-using netdem::app::netsolve::parse_double;
 
 struct Args {
-  std::string material = "cu", radii, profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
+  std::string material = "cu", profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
   std::vector<std::string> set;
+  std::vector<double> radii;  ///< --radii RA,RB (empty: --radius for both)
   double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
          force = 0.0, t_first = 1.0;
   int per_decade = 20;
@@ -173,9 +173,10 @@ int run(const Args& a, const std::string& command) {
   const sp::SinterMaterial mat = load_material(a, mat_source);
   double RA = a.radius, RB = a.radius;
   if (!a.radii.empty()) {
-    const auto c = a.radii.find(',');
-    if (c == std::string::npos || !parse_double(a.radii.substr(0, c), RA) || !parse_double(a.radii.substr(c + 1), RB))
-      throw std::invalid_argument(fmt::format("--radii '{}' is not RA,RB in metres", a.radii));
+    if (a.radii.size() != 2)
+      throw std::invalid_argument(fmt::format("--radii: {} values given, not RA,RB in metres", a.radii.size()));
+    RA = a.radii[0];
+    RB = a.radii[1];
   }
   for (double r : {RA, RB})
     if (!(std::isfinite(r) && r >= 1e-9 && r <= 0.1))
@@ -315,7 +316,7 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format)")->capture_default_str();
   app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
   auto* o_r = app.add_option("--radius", a.radius, "radius of both particles [m]")->capture_default_str();
-  auto* o_rr = app.add_option("--radii", a.radii, "RA,RB radii of the two particles [m]");
+  auto* o_rr = netdem::app::netsolve::add_list_option(app, "--radii", a.radii, "RA,RB radii of the two particles [m]");
   o_r->excludes(o_rr);
   auto* o_T = app.add_option("--temperature", a.temperature, "constant temperature [K]")->capture_default_str();
   auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows");

@@ -24,7 +24,6 @@
 #include <memory>
 #include <numbers>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -78,7 +77,8 @@ struct YieldArgs {
   netdem::app::netsolve::LawArgs law;
   // probing
   int directions = 24;
-  std::string probe_slice, probe_list;
+  std::string probe_slice;
+  std::vector<int> probe_list;  ///< --probes: a set of indices (empty: every direction)
   int jobs = 0;
   double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
   int fine = 20;
@@ -118,17 +118,13 @@ std::vector<int> select_probes(const YieldArgs& a) {
     return sel;
   }
   if (!a.probe_list.empty()) {
-    std::stringstream in(a.probe_list);
-    std::string item;
-    std::set<int> s;
-    while (std::getline(in, item, ',')) {
-      long v = -1;
-      if (!parse_int(item, v) || v < 0 || v >= a.directions)
+    std::set<int> s;  // a set: sorted, each index once
+    for (int v : a.probe_list) {
+      if (v < 0 || v >= a.directions)
         throw std::invalid_argument(
-            fmt::format("--probes: '{}' is not a probe index in [0, {}) (--directions {})", item, a.directions, a.directions));
-      s.insert(static_cast<int>(v));
+            fmt::format("--probes: '{}' is not a probe index in [0, {}) (--directions {})", v, a.directions, a.directions));
+      s.insert(v);
     }
-    if (s.empty()) throw std::invalid_argument("--probes: empty list");
     return {s.begin(), s.end()};
   }
   for (int k = 0; k < a.directions; ++k) sel.push_back(k);
@@ -642,7 +638,7 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--probe-bc", a.probe_bc, "affine | die during unloading and probing (default: --compact-bc)");
     app.add_option("--directions", a.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
     app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays)");
-    app.add_option("--probes", a.probe_list, "run only these probe indices, e.g. 0,3,5");
+    netdem::app::netsolve::add_list_option(app, "--probes", a.probe_list, "run only these probe indices, e.g. 0,3,5");
     app.add_option("--jobs", a.jobs, "probes run at the same time (0: number of cores)")->capture_default_str();
     app.add_option("--offset", a.offset, "offset strain of the offset yield point")->capture_default_str();
     app.add_option("--max-strain", a.max_strain, "longest probe |dE|")->capture_default_str();

@@ -50,6 +50,8 @@ check_bad_rc sn_x_max "--x-max: the freeze limit" sinter --packing "$lat" --time
 check_bad_rc sn_dt_initial "--dt-initial: the first global step" sinter --packing "$lat" --time 100 --dt-initial 1e-12 --quiet
 check_bad_rc sn_nu "--nu: the bonds' Poisson's ratio" sinter --packing "$lat" --time 100 --nu -0.2 --quiet
 check_bad_rc sn_checkpoints_twice "--checkpoints: the checkpoint times must increase: 50 s after 50 s" sinter --packing "$lat" --time 100 --checkpoints 50,50 --quiet
+check_bad_rc sn_checkpoints_order "--checkpoints: the checkpoint times must increase: 50 s after 80 s" sinter --packing "$lat" --time 100 --checkpoints 80,50 --quiet
+check_bad_rc sn_checkpoints_item "--checkpoints: '5x' is not a number" sinter --packing "$lat" --time 100 --checkpoints 20,5x --quiet
 check_bad_rc sn_checkpoints_range "--checkpoints: 150 s is not between" sinter --packing "$lat" --time 100 --checkpoints 150 --quiet
 check_bad_rc sn_nan_temperature "temperature" sinter --packing "$lat" --time 100 --temperature nan --quiet
 check_bad_rc sn_material "material" sinter --packing "$lat" --material unobtainium --quiet
