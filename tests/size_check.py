@@ -28,10 +28,6 @@ EXTS = (".cpp", ".hpp", ".h", ".cc", ".in")
 
 # path -> lines, or "path:function" -> lines (the sizes when the list was last tightened; they only shrink)
 ALLOWED = {
-    "apps/netsolve/yield.cpp": 953,
-    "apps/netsolve/yield.cpp:run_yield": 301,
-    "apps/demsolve/main.cpp:main": 209,
-    "apps/netsolve/main.cpp:run_compact": 178,
 }
 
 CONTROL = {"if", "for", "while", "switch", "catch", "return", "sizeof", "decltype", "alignof", "noexcept",

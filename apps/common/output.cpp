@@ -182,7 +182,7 @@ bool netdem_name(const std::string& n) {
     const std::string s(e);
     return n.size() > s.size() && n.compare(n.size() - s.size(), s.size(), s) == 0;
   };
-  if (ends(".csv") || ends(".vtp") || ends(".pvd") || ends(".svg")) return true;
+  if (ends(".csv") || ends(".vtp") || ends(".pvd") || ends(".svg")) return true;  // .svg: plots of versions before issue 26
   if (n.size() > 1 && n[0] == '.' && n.find(".tmp") != std::string::npos) return true;  // write_file_atomic's, of a killed run
   return n.rfind("state", 0) == 0 && ends(".txt");
 }

@@ -232,7 +232,8 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const bool walls = a.boundary == "walls";
   check_boundary<D>(a, walls);
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
-  const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
+  std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
+  std::sort(snaps.begin(), snaps.end());
   RunDirOptions rdo;
   rdo.overwrite = a.overwrite;
   if (!a.packing_file.empty()) rdo.inputs.emplace_back(a.packing_file);

@@ -16,7 +16,7 @@ struct DemCompactArgs {
   std::string boundary = "layer";  ///< layer | walls
   std::string friction = netdem::app::netsolve::LawArgs{}.friction;
   std::string normal_unloading = netdem::app::netsolve::LawArgs{}.normal_unloading;
-  std::string snapshots = "0.82,0.84,0.85";
+  std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   bool affine = false, no_rotation = false, quiet = false, overwrite = false;
   double to_density = 0.85;
   double first_touch = netdem::app::netsolve::LawArgs{}.first_touch;
@@ -41,7 +41,7 @@ struct DemYieldArgs {
   std::string friction = DemCompactArgs{}.friction, normal_unloading = DemCompactArgs{}.normal_unloading;
   double first_touch = DemCompactArgs{}.first_touch, k_t = DemCompactArgs{}.k_t;
   int directions = 24;
-  std::string probe_list;
+  std::vector<int> probe_list;  ///< empty: every direction
   int jobs = 1;
   double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
   int fine = 20;

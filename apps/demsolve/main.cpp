@@ -79,6 +79,107 @@ CLI::App* add_vibrate(CLI::App& app, VibrateArgs& va, std::string& out_vibrate) 
   return vib;
 }
 
+/// demsolve compact's options (docs/dynamic.md); the subcommand and the options checked after parsing.
+struct DemCompactCli {
+  CLI::App* app;
+  CLI::Option* lid;
+  CLI::Option* lateral;
+};
+
+DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& out_dcompact) {
+  auto* dcomp = app.add_subcommand("compact", "explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) on "
+                                              "netsolve compact's scene, units and files (docs/dynamic.md)");
+  dcomp->add_option("--width", dc.pack.width, "box width W of a new deposition in units of the mean radius R (netsolve pack)")->capture_default_str();
+  dcomp->add_option("--r-min", dc.pack.r_min, "smallest radius / R")->capture_default_str();
+  dcomp->add_option("--r-max", dc.pack.r_max, "largest radius / R")->capture_default_str();
+  dcomp->add_flag("--mono", dc.pack.mono, "monosized disks (r = R)");
+  dcomp->add_option("--seed", dc.pack.seed, "random seed of the deposition")
+      ->check(netdem::app::netsolve::seed_validator())
+      ->capture_default_str();
+  auto* dcomp_lid = dcomp->add_option("--lid", dc.pack.lid, "deposition stop rule: centre | inside (netsolve pack)")->capture_default_str();
+  dcomp->add_option("--dim", dc.pack.dim, "2: disks; 3: spheres (netsolve pack --dim 3's deposition or a 3D --packing; "
+                                          "--boundary walls or --affine)")
+      ->check(CLI::IsMember({2, 3}))
+      ->capture_default_str();
+  auto* dcomp_lateral = dcomp->add_option("--lateral", dc.pack.lateral, "3D only: side boundary of the deposition (walls; "
+                                                                        "the explicit DEM has no periodic boundaries)")
+                            ->capture_default_str();
+  dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
+  dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
+  dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (walls: E12 = 0 only); "
+                                       "--dim 3: E11,E22,E33[,E23,E13,E12] (closed-die along z)")->capture_default_str();
+  dcomp->add_option("--friction", dc.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
+  dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
+  dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
+                                               "frictionless walls driven along the path")->capture_default_str();
+  dcomp->add_option("--normal-unloading", dc.normal_unloading, "reversible (Eq 2 retraced) | elastic (section 3.4 branch)")
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
+  dcomp->add_option("--first-touch", dc.first_touch, "first-touch overlap u_c/(2R*) of the linear chord (bounded stiffness)")->capture_default_str();
+  dcomp->add_option("--k-t", dc.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
+  dcomp->add_option("--inertial-number", dc.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) sets the strain rate gamma' = |E'|")->capture_default_str();
+  dcomp->add_option("--damping", dc.damping, "contact dashpots (normal and tangential): fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
+  dcomp->add_option("--drag", dc.drag, "background drag on the motion relative to the affine field [1/t*]")->capture_default_str();
+  dcomp->add_option("--steps-per-contact", dc.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
+  dcomp->add_option("--increments", dc.increments, "output windows (equal strain, as netsolve's increments)")->capture_default_str();
+  netdem::app::netsolve::add_list_option(*dcomp, "--snapshots", dc.snapshots,
+                                         "densities at which VTK snapshots are written, a comma list in any order (\"\": none)");
+  dcomp->add_option("--max-steps", dc.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
+  dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
+  dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");
+  return {dcomp, dcomp_lid, dcomp_lateral};
+}
+
+/// demsolve yield's options (docs/dynamic.md).
+CLI::App* add_dem_yield(CLI::App& app, DemYieldArgs& dy, std::string& out_dyield) {
+  auto* dyield = app.add_subcommand("yield", "yield-surface probes after precompaction with the explicit DEM and the "
+                                             "plastic-indentation law: netsolve yield's scene, probes and files (docs/dynamic.md)");
+  dyield->add_option("--width", dy.pack.width, "box width W of a new deposition in units of R (netsolve pack)")->capture_default_str();
+  dyield->add_option("--r-min", dy.pack.r_min, "smallest radius / R")->capture_default_str();
+  dyield->add_option("--r-max", dy.pack.r_max, "largest radius / R")->capture_default_str();
+  dyield->add_flag("--mono", dy.pack.mono, "monosized disks (r = R)");
+  dyield->add_option("--seed", dy.pack.seed, "random seed of the deposition")
+      ->check(netdem::app::netsolve::seed_validator())
+      ->capture_default_str();
+  dyield->add_option("--packing", dy.packing_file, "packing CSV instead of a new deposition");
+  dyield->add_option("--precompact", dy.precompact, "hydrostatic | closed-die")->capture_default_str();
+  dyield->add_option("--to-density", dy.to_density, "precompaction density D")->capture_default_str();
+  dyield->add_option("--increments", dy.increments, "precompaction output windows (netsolve's increments)")->capture_default_str();
+  dyield->add_option("--compact-bc", dy.compact_bc, "affine | die (the peripheral layer prescribed)")->capture_default_str();
+  dyield->add_option("--probe-bc", dy.probe_bc, "affine | die during unloading and probing (must equal --compact-bc)");
+  dyield->add_option("--friction", dy.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
+  dyield->add_option("--normal-unloading", dy.normal_unloading, "the law during the precompaction: reversible | elastic")
+      ->check(CLI::IsMember({"reversible", "elastic"}))
+      ->capture_default_str();
+  dyield->add_option("--first-touch", dy.first_touch, "first-touch overlap u_c/(2R*)")->capture_default_str();
+  dyield->add_option("--k-t", dy.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
+  dyield->add_flag("--no-rotation", dy.no_rotation, "hold every spin at zero");
+  dyield->add_option("--directions", dy.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
+  netdem::app::netsolve::add_list_option(*dyield, "--probes", dy.probe_list, "run only these probe indices, e.g. 0,3,5");
+  dyield->add_option("--jobs", dy.jobs, "probes run at the same time on threads (0: number of cores)")->capture_default_str();
+  dyield->add_option("--offset", dy.offset, "offset strain of the offset yield point")->capture_default_str();
+  dyield->add_option("--max-strain", dy.max_strain, "longest probe |dE|")->capture_default_str();
+  dyield->add_option("--window", dy.window, "curvature smoothing width (normalised arc length)")->capture_default_str();
+  dyield->add_option("--fine", dy.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
+  dyield->add_option("--growth", dy.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
+  dyield->add_option("--unload-tol", dy.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
+  dyield->add_option("--inertial-number", dy.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) of the precompaction")->capture_default_str();
+  dyield->add_option("--probe-inertial-number", dy.probe_inertial_number, "the same for the unloading and the probes (0: --inertial-number)")->capture_default_str();
+  dyield->add_option("--relax-drag", dy.relax_drag, "drag of the hold after each unloading and probe increment [1/t*]")->capture_default_str();
+  dyield->add_option("--settle-tol", dy.settle_tol, "a hold ends when the RMS unbalanced force is below this x the mean contact force of the loading point (and the kinetic energy below its square x the elastic work)")->capture_default_str();
+  dyield->add_option("--settle-time", dy.settle_time, "longest hold [t*]; a sample that did not settle counts as unconverged")->capture_default_str();
+  dyield->add_option("--damping", dy.damping, "contact dashpots: fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
+  dyield->add_option("--steps-per-contact", dy.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
+  dyield->add_option("--max-steps", dy.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  dyield->add_flag("--quiet", dy.quiet, "no progress on stderr");
+  dyield->add_flag("--allow-unconverged", dy.allow_unconverged, "exit 0 even if the status is unconverged or unstable");
+  dyield->add_flag("--overwrite", dy.overwrite, "clear an output folder that holds another run's files first");
+  dyield->add_option("--out", out_dyield, "output folder")->default_val("results/dem_yield");
+  return dyield;
+}
+
 int main(int argc, char** argv) {
   std::string command;
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
@@ -160,92 +261,11 @@ int main(int argc, char** argv) {
   auto* vib = add_vibrate(app, va, out_vibrate);
   DemCompactArgs dc;
   std::string out_dcompact;
-  auto* dcomp = app.add_subcommand("compact", "explicit DEM with the plastic-indentation law (Redanz & Fleck 2001) on "
-                                              "netsolve compact's scene, units and files (docs/dynamic.md)");
-  dcomp->add_option("--width", dc.pack.width, "box width W of a new deposition in units of the mean radius R (netsolve pack)")->capture_default_str();
-  dcomp->add_option("--r-min", dc.pack.r_min, "smallest radius / R")->capture_default_str();
-  dcomp->add_option("--r-max", dc.pack.r_max, "largest radius / R")->capture_default_str();
-  dcomp->add_flag("--mono", dc.pack.mono, "monosized disks (r = R)");
-  dcomp->add_option("--seed", dc.pack.seed, "random seed of the deposition")
-      ->check(netdem::app::netsolve::seed_validator())
-      ->capture_default_str();
-  auto* dcomp_lid = dcomp->add_option("--lid", dc.pack.lid, "deposition stop rule: centre | inside (netsolve pack)")->capture_default_str();
-  dcomp->add_option("--dim", dc.pack.dim, "2: disks; 3: spheres (netsolve pack --dim 3's deposition or a 3D --packing; "
-                                          "--boundary walls or --affine)")
-      ->check(CLI::IsMember({2, 3}))
-      ->capture_default_str();
-  auto* dcomp_lateral = dcomp->add_option("--lateral", dc.pack.lateral, "3D only: side boundary of the deposition (walls; "
-                                                                        "the explicit DEM has no periodic boundaries)")
-                            ->capture_default_str();
-  dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
-  dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
-  dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (walls: E12 = 0 only); "
-                                       "--dim 3: E11,E22,E33[,E23,E13,E12] (closed-die along z)")->capture_default_str();
-  dcomp->add_option("--friction", dc.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
-  dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
-  dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
-  dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
-                                               "frictionless walls driven along the path")->capture_default_str();
-  dcomp->add_option("--normal-unloading", dc.normal_unloading, "reversible (Eq 2 retraced) | elastic (section 3.4 branch)")
-      ->check(CLI::IsMember({"reversible", "elastic"}))
-      ->capture_default_str();
-  dcomp->add_option("--first-touch", dc.first_touch, "first-touch overlap u_c/(2R*) of the linear chord (bounded stiffness)")->capture_default_str();
-  dcomp->add_option("--k-t", dc.k_t, "tangential spring on the shear stress, tau = k_t u_T [sigma_y/R]")->capture_default_str();
-  dcomp->add_option("--inertial-number", dc.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) sets the strain rate gamma' = |E'|")->capture_default_str();
-  dcomp->add_option("--damping", dc.damping, "contact dashpots (normal and tangential): fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
-  dcomp->add_option("--drag", dc.drag, "background drag on the motion relative to the affine field [1/t*]")->capture_default_str();
-  dcomp->add_option("--steps-per-contact", dc.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
-  dcomp->add_option("--increments", dc.increments, "output windows (equal strain, as netsolve's increments)")->capture_default_str();
-  dcomp->add_option("--snapshots", dc.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
-  dcomp->add_option("--max-steps", dc.max_steps, "refuse a run of more time steps than this")->capture_default_str();
-  dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
-  dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
-  dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");
+  const DemCompactCli dcli = add_dem_compact(app, dc, out_dcompact);
+  auto* dcomp = dcli.app;
   DemYieldArgs dy;
   std::string out_dyield;
-  auto* dyield = app.add_subcommand("yield", "yield-surface probes after precompaction with the explicit DEM and the "
-                                             "plastic-indentation law: netsolve yield's scene, probes and files (docs/dynamic.md)");
-  dyield->add_option("--width", dy.pack.width, "box width W of a new deposition in units of R (netsolve pack)")->capture_default_str();
-  dyield->add_option("--r-min", dy.pack.r_min, "smallest radius / R")->capture_default_str();
-  dyield->add_option("--r-max", dy.pack.r_max, "largest radius / R")->capture_default_str();
-  dyield->add_flag("--mono", dy.pack.mono, "monosized disks (r = R)");
-  dyield->add_option("--seed", dy.pack.seed, "random seed of the deposition")
-      ->check(netdem::app::netsolve::seed_validator())
-      ->capture_default_str();
-  dyield->add_option("--packing", dy.packing_file, "packing CSV instead of a new deposition");
-  dyield->add_option("--precompact", dy.precompact, "hydrostatic | closed-die")->capture_default_str();
-  dyield->add_option("--to-density", dy.to_density, "precompaction density D")->capture_default_str();
-  dyield->add_option("--increments", dy.increments, "precompaction output windows (netsolve's increments)")->capture_default_str();
-  dyield->add_option("--compact-bc", dy.compact_bc, "affine | die (the peripheral layer prescribed)")->capture_default_str();
-  dyield->add_option("--probe-bc", dy.probe_bc, "affine | die during unloading and probing (must equal --compact-bc)");
-  dyield->add_option("--friction", dy.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
-  dyield->add_option("--normal-unloading", dy.normal_unloading, "the law during the precompaction: reversible | elastic")
-      ->check(CLI::IsMember({"reversible", "elastic"}))
-      ->capture_default_str();
-  dyield->add_option("--first-touch", dy.first_touch, "first-touch overlap u_c/(2R*)")->capture_default_str();
-  dyield->add_option("--k-t", dy.k_t, "tangential spring on the shear stress [sigma_y/R]")->capture_default_str();
-  dyield->add_flag("--no-rotation", dy.no_rotation, "hold every spin at zero");
-  dyield->add_option("--directions", dy.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
-  dyield->add_option("--probes", dy.probe_list, "run only these probe indices, e.g. 0,3,5");
-  dyield->add_option("--jobs", dy.jobs, "probes run at the same time on threads (0: number of cores)")->capture_default_str();
-  dyield->add_option("--offset", dy.offset, "offset strain of the offset yield point")->capture_default_str();
-  dyield->add_option("--max-strain", dy.max_strain, "longest probe |dE|")->capture_default_str();
-  dyield->add_option("--window", dy.window, "curvature smoothing width (normalised arc length)")->capture_default_str();
-  dyield->add_option("--fine", dy.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
-  dyield->add_option("--growth", dy.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
-  dyield->add_option("--unload-tol", dy.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
-  dyield->add_option("--inertial-number", dy.inertial_number, "I = gamma' 2R sqrt(rho/sigma_y) of the precompaction")->capture_default_str();
-  dyield->add_option("--probe-inertial-number", dy.probe_inertial_number, "the same for the unloading and the probes (0: --inertial-number)")->capture_default_str();
-  dyield->add_option("--relax-drag", dy.relax_drag, "drag of the hold after each unloading and probe increment [1/t*]")->capture_default_str();
-  dyield->add_option("--settle-tol", dy.settle_tol, "a hold ends when the RMS unbalanced force is below this x the mean contact force of the loading point (and the kinetic energy below its square x the elastic work)")->capture_default_str();
-  dyield->add_option("--settle-time", dy.settle_time, "longest hold [t*]; a sample that did not settle counts as unconverged")->capture_default_str();
-  dyield->add_option("--damping", dy.damping, "contact dashpots: fraction of critical damping of the first-touch chord stiffness")->capture_default_str();
-  dyield->add_option("--steps-per-contact", dy.steps_per_contact, "time step: the stiffest contact period / this")->capture_default_str();
-  dyield->add_option("--max-steps", dy.max_steps, "refuse a run of more time steps than this")->capture_default_str();
-  dyield->add_flag("--quiet", dy.quiet, "no progress on stderr");
-  dyield->add_flag("--allow-unconverged", dy.allow_unconverged, "exit 0 even if the status is unconverged or unstable");
-  dyield->add_flag("--overwrite", dy.overwrite, "clear an output folder that holds another run's files first");
-  dyield->add_option("--out", out_dyield, "output folder")->default_val("results/dem_yield");
+  auto* dyield = add_dem_yield(app, dy, out_dyield);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -273,9 +293,9 @@ int main(int argc, char** argv) {
     if (dcomp->parsed()) {
       if (dcomp->count("--packing") > 0 && dc.packing_file.empty())
         throw netdem::app::UsageError("--packing is empty: give a packing CSV file, or leave --packing out for a new deposition");
-      if (dc.pack.dim == 2 && dcomp_lateral->count() > 0)
+      if (dc.pack.dim == 2 && dcli.lateral->count() > 0)
         throw netdem::app::UsageError("--lateral is for --dim 3 only (the 2D deposition has side walls)");
-      if (dc.pack.dim == 3 && dcomp_lid->count() > 0 && dc.pack.lid != "inside")
+      if (dc.pack.dim == 3 && dcli.lid->count() > 0 && dc.pack.lid != "inside")
         throw netdem::app::UsageError("--lid '" + quote_input(dc.pack.lid) +
                                       "': the 3D deposition implements only --lid inside (whole spheres below the lid)");
       return run_dem_compact(command, dc, out_dcompact);

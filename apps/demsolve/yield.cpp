@@ -58,10 +58,10 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 std::vector<int> select_probes(const DemYieldArgs& a) {
   std::vector<int> sel;
   if (!a.probe_list.empty()) {
-    for (double v : netdem::app::netsolve::parse_number_list(a.probe_list, "--probes")) {
-      if (!(v >= 0 && v < a.directions && v == std::floor(v)))
+    for (int v : a.probe_list) {  // a set of indices: sorted, each once
+      if (!(v >= 0 && v < a.directions))
         throw UsageError(fmt::format("--probes: {} is not a probe index in [0, {})", v, a.directions));
-      if (std::find(sel.begin(), sel.end(), static_cast<int>(v)) == sel.end()) sel.push_back(static_cast<int>(v));
+      if (std::find(sel.begin(), sel.end(), v) == sel.end()) sel.push_back(v);
     }
     std::sort(sel.begin(), sel.end());
   } else {

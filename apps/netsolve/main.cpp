@@ -60,7 +60,8 @@ struct RunArgs {
 // (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
-  std::string path = "hydrostatic", packing_file, snapshots = "0.82,0.84,0.85", boundary = "layer";
+  std::string path = "hydrostatic", packing_file, boundary = "layer";
+  std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
   int increments = 100;
   netdem::qs::SolverOptions solver = netdem::qs::SolverOptions::compact();  // bound directly by the command line
@@ -163,9 +164,10 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
   netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
 }
 
-int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
-  using namespace netdem;
-  qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
+/// The solver and compaction options of `compact`, checked (before the output folder exists).
+void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem::qs::CompactionOptions& co) {
+  namespace qs = netdem::qs;
+  so = a.solver;  // the Newton knobs bound directly by the command line
   so.mode = a.affine ? qs::BoundaryMode::Affine
                      : a.boundary == "walls" ? qs::BoundaryMode::Walls : qs::BoundaryMode::Die;
   if (a.affine && a.boundary == "walls")
@@ -174,7 +176,6 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   netdem::app::netsolve::apply_law_args(a.law, so);
   so.verbose = a.verbose;
   so.validate();
-  qs::CompactionOptions co;
   co.path = qs::StrainPath::parse(a.path);
   co.target_density = a.to_density;
   co.target_strain = a.to_strain;
@@ -184,7 +185,94 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
                                             co.path.E12));
   if (so.mode == qs::BoundaryMode::Walls && a.save_state)
     throw std::invalid_argument("--save-state: the state file does not hold wall contacts (--boundary walls) yet");
-  const auto snaps = netdem::app::netsolve::parse_number_list(a.snapshots, "--snapshots");
+}
+
+/// Disk centres outside the initial box: die mode prescribes only the peripheral layer, and a
+/// (frictionless) packing can squeeze disks out of the box between peripheral disks
+/// (docs/quasistatic.md).
+int centres_outside(const netdem::qs::NetworkSolver& solver, const netdem::packing::Box& box) {
+  int outside = 0;
+  const Eigen::Matrix2d Finv = solver.box_deformation().inverse();
+  for (std::size_t p = 0; p < solver.size(); ++p) {
+    const Eigen::Vector2d q = Finv * Eigen::Vector2d(solver.x()[p], solver.y()[p]);  // in the initial box
+    outside += q.x() < box.x_min || q.x() > box.x_max || q.y() < box.y_min || q.y() > box.y_max;
+  }
+  return outside;
+}
+
+/// What a `compact` run measured, for its summary.json.
+struct CompactRecord {
+  std::string source;
+  int done = 0, unconverged = 0, outside = 0;
+  double max_residual = 0.0, wall = 0.0;
+  netdem::qs::StateMeasures last;
+  netdem::app::netsolve::ConvergenceRecord conv;
+  netdem::app::netsolve::EquilibriumRecord equilibrium;
+  std::string stopped;
+};
+
+/// summary.json of a `compact` run (docs/quasistatic.md).
+nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const netdem::qs::SolverOptions& so,
+                               const netdem::qs::CompactionOptions& co, const netdem::packing::Packing& pk,
+                               const netdem::qs::NetworkSolver& solver, const netdem::app::RunStatus& status, const CompactRecord& r) {
+  namespace qs = netdem::qs;
+  const double sy = so.law.sigma_y;
+  const auto& tm = solver.timings();
+  const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped] = r;
+  nlohmann::json j;
+  j["command"] = g_command;
+  status.write(j);
+  j["allow_unconverged"] = ra.allow_unconverged;
+  j["increments_done"] = done;
+  j["centres_outside_box"] = outside;
+  j["packing"] = source;
+  j["seed"] = pk.seed;
+  j["particles"] = pk.size();
+  j["initial_density"] = solver.initial_density();
+  j["sigma_y"] = sy;
+  j["friction"] = a.law.friction;
+  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : "die";
+  j["rotations"] = !a.no_rotation;
+  j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
+  j["increments"] = co.increments;
+  if (co.target_strain > 0.0) j["to_strain"] = co.target_strain;
+  j["k_t"] = so.law.k_t;
+  j["first_touch"] = so.law.first_touch;
+  j["normal_unloading"] = a.law.normal_unloading;
+  j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
+                {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
+                {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
+                {"E22", last.E22},          {"E12", last.E12}};
+  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
+                 {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
+                 {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
+                 {"solves", tm.solves},                 {"tol", so.residual_tol},
+                 {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
+                 {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
+  {
+    std::string why;
+    const bool inl = qs::cholmod_inline_openmp(&why);
+    j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
+  }
+  j["solver"]["max_newton_residual"] = conv.max_newton_residual;
+  j["solver"]["last_increment_converged"] = conv.last_converged;
+  j["solver"]["eq13_vs_contacts"] = equilibrium.last;  // judged in the run status (origin-free Eq 13)
+  j["solver"]["max_eq13_vs_contacts"] = equilibrium.max;
+  j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
+  j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
+  j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
+                   {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
+  return j;
+}
+
+int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const fs::path& out) {
+  using namespace netdem;
+  qs::SolverOptions so;
+  qs::CompactionOptions co;
+  compact_options(a, so, co);
+  std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
+  std::sort(snaps.begin(), snaps.end());
 
   app::check_run_dir(out, run_dir_options(ra, a.packing_file));
   std::string source;
@@ -264,17 +352,10 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
     write_snapshot(solver, out, "final");
     if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
   }
-  const auto& tm = solver.timings();
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
-  int outside = 0;
-  {
-    const Eigen::Matrix2d Finv = solver.box_deformation().inverse();
-    for (std::size_t p = 0; p < solver.size(); ++p) {
-      const Eigen::Vector2d q = Finv * Eigen::Vector2d(solver.x()[p], solver.y()[p]);  // in the initial box
-      outside += q.x() < pk.box.x_min || q.x() > pk.box.x_max || q.y() < pk.box.y_min || q.y() > pk.box.y_max;
-    }
-  }
+  // die mode can squeeze disks out between the peripheral disks: count them and say so
+  const int outside = centres_outside(solver, pk.box);
   if (outside > 0)
     std::fprintf(stderr, "netsolve: warning: %d disk centres left the box between the peripheral disks (die mode)\n",
                  outside);
@@ -284,50 +365,8 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   if (stopped.empty()) equilibrium.judge(status);
   if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
   if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
-  nlohmann::json j;
-  j["command"] = g_command;
-  status.write(j);
-  j["allow_unconverged"] = ra.allow_unconverged;
-  j["increments_done"] = done;
-  j["centres_outside_box"] = outside;
-  j["packing"] = source;
-  j["seed"] = pk.seed;
-  j["particles"] = pk.size();
-  j["initial_density"] = solver.initial_density();
-  j["sigma_y"] = sy;
-  j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : "die";
-  j["rotations"] = !a.no_rotation;
-  j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
-  j["increments"] = co.increments;
-  if (co.target_strain > 0.0) j["to_strain"] = co.target_strain;
-  j["k_t"] = so.law.k_t;
-  j["first_touch"] = so.law.first_touch;
-  j["normal_unloading"] = a.law.normal_unloading;
-  j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
-                {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
-                {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
-                {"E22", last.E22},          {"E12", last.E12}};
-  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
-                 {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
-                 {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
-                 {"solves", tm.solves},                 {"tol", so.residual_tol},
-                 {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
-                 {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
-  {
-    std::string why;
-    const bool inl = qs::cholmod_inline_openmp(&why);
-    j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
-  }
-  j["solver"]["max_newton_residual"] = conv.max_newton_residual;
-  j["solver"]["last_increment_converged"] = conv.last_converged;
-  j["solver"]["eq13_vs_contacts"] = equilibrium.last;  // the check above (origin-free Eq 13)
-  j["solver"]["max_eq13_vs_contacts"] = equilibrium.max;
-  j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
-  j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
-  j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
-  j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
-                   {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
+  const nlohmann::json j = compact_summary(a, ra, so, co, pk, solver, status,
+                                           {source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped});
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   app::close_run_dir(out);
   std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
@@ -446,7 +485,8 @@ int main(int argc, char** argv) {
                                     "of to a density, in [1e-9, 1]; any direction, e.g. pure shear --path 1,-1,0 at constant volume");
   o_strain->excludes(o_density);
   comp->add_option("--increments", ca.increments, "number of strain increments to the target density")->capture_default_str();
-  comp->add_option("--snapshots", ca.snapshots, "densities at which VTK snapshots are written")->capture_default_str();
+  netdem::app::netsolve::add_list_option(*comp, "--snapshots", ca.snapshots,
+                                         "densities at which VTK snapshots are written, a comma list in any order (\"\": none)");
   comp->add_option("--slide-fraction", ca.solver.slide_stiffness_fraction, "tangential stiffness kept by sliding contacts in the iteration matrix")->capture_default_str();
   comp->add_option("--linear-tol", ca.solver.linear_tolerance, "GMRES tolerance relative to the Newton residual")->capture_default_str();
   comp->add_option("--max-step", ca.solver.max_step, "cap on a Newton step's translation of one particle [R]")->capture_default_str();

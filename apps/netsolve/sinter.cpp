@@ -14,7 +14,8 @@
 // solver's record of every step), dL_bar.csv (Eq 44 per contact at the end), particles_K.vtp and
 // bonds_K.vtp snapshots with snapshots.pvd (at the first step end at or after each of N equally
 // spaced times, and the last: snapshots do not change the steps), state.txt (the restart state;
-// state_K.txt at each --checkpoints time, where the steps end), history.svg, report.md and
+// state_K.txt at each --checkpoints time, where the steps end), report.md (which names
+// apps/scripts/plot_sinter.py, the plot of history.csv) and
 // summary.json (last); with --generate also packing.csv and laminar.csv. Bad input: one line
 // on stderr, exit 2, no output folder; exit 1 for an error during the run; a run that could not
 // reach --time ("unstable": a step failed or gave non-finite values; "incomplete": --max-steps, or
@@ -47,7 +48,6 @@
 #include "output.hpp"
 #include "sinter_material.hpp"
 #include "sinter_files.hpp"
-#include "sinter_plot.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
 #include "status.hpp"
@@ -64,7 +64,8 @@ using netdem::app::write_file_atomic;
 using nlohmann::json;
 
 struct Args {
-  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", planes = "box", restart, checkpoints, out = "results/sinter";
+  std::string packing, generate = "cu", material = "cu", profile, new_contacts = "on", planes = "box", restart, out = "results/sinter";
+  std::vector<double> checkpoints;  ///< in the order given: the library refuses times that do not increase
   std::vector<std::string> set;
   double green_density = 0.58, temperature = 1293.0, t_end = 5000.0, dt_max = 10.0, dt_initial = st::StaggeredOptions{}.dt_initial,
          eps_lim = st::StaggeredOptions{}.eps_lim, alpha = st::StaggeredOptions{}.alpha, x0 = st::StaggeredOptions{}.x0_over_R,
@@ -112,18 +113,6 @@ json moments(const std::vector<double>& v) {
           {"std", std::sqrt(m2)},
           {"skewness", spread ? json(m3 / std::pow(m2, 1.5)) : json(nullptr)},
           {"excess_kurtosis", spread ? json(m4 / (m2 * m2) - 3.0) : json(nullptr)}};
-}
-
-std::string plot_svg(const std::vector<st::StaggeredMeasures>& rows, const std::string& title) {
-  std::vector<double> t, sx, sy, sz, neck;
-  for (const auto& r : rows) {
-    t.push_back(r.t);
-    sx.push_back(r.shrink_x);
-    sy.push_back(r.shrink_y);
-    sz.push_back(r.shrink_z);
-    neck.push_back(r.neck_mean);
-  }
-  return netdem::app::netsolve::history_svg(t, sx, sy, sz, neck, title);
 }
 
 // ---- inputs
@@ -295,7 +284,7 @@ Setup setup(const Args& a, const CLI::App& app) {
   u.ro.t_end = a.t_end;
   u.ro.max_steps = a.max_steps;
   u.ro.snapshots = a.snapshots;
-  u.ro.checkpoints = netdem::app::netsolve::parse_number_list(a.checkpoints, "--checkpoints");
+  u.ro.checkpoints = a.checkpoints;
   if (u.restart)
     setup_restart(a, u);
   else
@@ -498,7 +487,7 @@ json summary_json(const Outcome& o, const fs::path& out) {
   j["green_body_wall_s"] = o.green_wall;
   j["files"] = {{"history", "history.csv"}, {"steps", "steps.csv"},   {"dL_bar", "dL_bar.csv"},
                 {"state", o.sum && o.sum->failed() ? "state_stopped.txt" : "state.txt"},
-                {"snapshots", "snapshots.pvd"}, {"plot", "history.svg"}, {"report", "report.md"}};
+                {"snapshots", "snapshots.pvd"}, {"report", "report.md"}};
   o.judged.write(j);
   return j;
 }
@@ -538,8 +527,8 @@ std::string report_md(const Outcome& o, const std::string& title, const json& j)
     if (o.u->generate) md += fmt::format("| green-body packing | {:.3f} | |\n", o.green_wall);
     md += fmt::format("| whole run | {:.3f} | |\n\n", o.wall);
   }
-  md += "![history](history.svg)\n\n*Left: shrinkage per axis (least-squares homogeneous strain of the centres); right: the mean neck "
-        "x / R_min.*\n";
+  md += "Plot: `/usr/bin/python3 apps/scripts/plot_sinter.py DIR` (DIR: this run folder) writes history.png: left, the shrinkage "
+        "per axis (least-squares homogeneous strain of the centres); right, the mean neck x / R_min.\n";
   return md;
 }
 
@@ -590,11 +579,10 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
 
   o.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   const json j = summary_json(o, out);
-  // ---- plot and report
+  // ---- the report (apps/scripts/plot_sinter.py draws the plot)
   const std::string title = fmt::format("netsolve sinter: {}, {}, {} particles", u.mat ? u.mat->name : std::string("?"),
                                         u.restart ? std::string("restart") : a.profile.empty() ? fmt::format("T = {:g} K", a.temperature) : "T(t) profile",
                                         u.sim ? u.sim->particles().size() : u.pk.size());
-  write_file_atomic(out / "history.svg", plot_svg(rec.rows, title));
   write_file_atomic(out / "report.md", report_md(o, title, j));
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   na::close_run_dir(out);
@@ -662,7 +650,8 @@ int run_sinter_command(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--snapshots", a.snapshots, "particles_K.vtp / bonds_K.vtp at N equally spaced times, plus the last")->capture_default_str();
   app.add_option("--restart", a.restart, "continue from a state.txt of an earlier run to --time, into a new --out folder");
-  app.add_option("--checkpoints", a.checkpoints, "comma list of times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
+  netdem::app::netsolve::add_list_option(app, "--checkpoints", a.checkpoints,
+                                         "comma list of increasing times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
   app.add_option("--max-steps", a.max_steps, "stop (incomplete, exit 3) after this many steps")->capture_default_str();
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");

@@ -9,7 +9,8 @@
 //
 // SI units everywhere (m, s, K, N). Writes command.txt, pair.csv (one row per output time: a log
 // grid from --t-first, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
-// range), pair.svg (x/R and Delta L/L0 against t, log-log) and summary.json (last). A contact that
+// range) and summary.json (last); apps/scripts/plot_sinter_pair.py DIR draws pair.png (x/R and
+// Delta L/L0 against t, log-log). A contact that
 // leaves the validity limits (note section 4.6) stops there; summary.json says why ("status":
 // "incomplete", exit 0: the rows up to the limit are valid). A non-finite state or a failed step:
 // "unstable", exit 3. Bad input: one line on stderr, exit 2, no output folder; exit 1 for an
@@ -42,11 +43,11 @@ namespace {
 namespace fs = std::filesystem;
 namespace sp = netdem::contact::sinter;
 using nlohmann::json;
-using netdem::app::netsolve::parse_double;
 
 struct Args {
-  std::string material = "cu", radii, profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
+  std::string material = "cu", profile, integrator = "dp45", out = "results/sinter-pair", paths = "all";
   std::vector<std::string> set;
+  std::vector<double> radii;  ///< --radii RA,RB (empty: --radius for both)
   double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
          force = 0.0, t_first = 1.0;
   int per_decade = 20;
@@ -76,43 +77,6 @@ std::vector<double> output_times(double t_end, double t_first_in, const sp::Temp
   for (double v : t)
     if (u.empty() || v > u.back() * (1.0 + 1e-12)) u.push_back(v);
   return u;
-}
-
-// log-log plot of x/R and Delta L/L0 against t (SVG, no dependencies)
-std::string plot_svg(const std::vector<Row>& rows, const std::string& title) {
-  std::vector<const Row*> pts;
-  for (const auto& r : rows)
-    if (r.t > 0.0 && r.x_over_R > 0.0 && r.shrinkage > 0.0) pts.push_back(&r);
-  const double W = 640, H = 440, L = 70, Rm = 20, T = 40, B = 50;
-  std::string s = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"12\">\n"
-      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"20\" text-anchor=\"middle\">{}</text>\n",
-      W, H, W / 2, title);
-  if (pts.size() < 2) return s + "<text x=\"100\" y=\"200\">fewer than two points to plot</text>\n</svg>\n";
-  double t0 = pts.front()->t, t1 = pts.back()->t, v0 = 1e300, v1 = 0;
-  for (const Row* r : pts) v0 = std::min({v0, r->x_over_R, r->shrinkage}), v1 = std::max({v1, r->x_over_R, r->shrinkage});
-  const double lt0 = std::floor(std::log10(t0)), lt1 = std::ceil(std::log10(t1));
-  const double lv0 = std::floor(std::log10(v0)), lv1 = std::ceil(std::log10(v1));
-  auto X = [&](double t) { return L + (std::log10(t) - lt0) / std::max(lt1 - lt0, 1.0) * (W - L - Rm); };
-  auto Y = [&](double v) { return H - B - (std::log10(v) - lv0) / std::max(lv1 - lv0, 1.0) * (H - T - B); };
-  s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", L, T, W - L - Rm, H - T - B);
-  for (double e = lt0; e <= lt1; e += 1.0)
-    s += fmt::format("<line x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">1e{4}</text>\n",
-                     X(std::pow(10.0, e)), T, H - B, H - B + 16, static_cast<int>(e));
-  for (double e = lv0; e <= lv1; e += 1.0)
-    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{3}\" y=\"{4}\" text-anchor=\"end\">1e{5}</text>\n",
-                     L, W - Rm, Y(std::pow(10.0, e)), L - 6, Y(std::pow(10.0, e)) + 4, static_cast<int>(e));
-  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">t [s]</text>\n", (L + W - Rm) / 2, H - 12);
-  auto line = [&](auto get, const char* colour, const char* label, int k) {
-    std::string p;
-    for (const Row* r : pts) p += fmt::format("{:.1f},{:.1f} ", X(r->t), Y(get(*r)));
-    s += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"2\" points=\"{}\"/>\n", colour, p);
-    s += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"{3}\" stroke-width=\"2\"/><text x=\"{4}\" y=\"{5}\">{6}</text>\n",
-                     L + 10, L + 40, T + 16 + 18 * k, colour, L + 46, T + 20 + 18 * k, label);
-  };
-  line([](const Row& r) { return r.x_over_R; }, "#1f77b4", "x / R_min", 0);
-  line([](const Row& r) { return r.shrinkage; }, "#d62728", "shrinkage Delta L / L0", 1);
-  return s + "</svg>\n";
 }
 
 // --paths: "all" or a comma list of I, II, III, IV, V (the path types of note section 3)
@@ -209,9 +173,10 @@ int run(const Args& a, const std::string& command) {
   const sp::SinterMaterial mat = load_material(a, mat_source);
   double RA = a.radius, RB = a.radius;
   if (!a.radii.empty()) {
-    const auto c = a.radii.find(',');
-    if (c == std::string::npos || !parse_double(a.radii.substr(0, c), RA) || !parse_double(a.radii.substr(c + 1), RB))
-      throw std::invalid_argument(fmt::format("--radii '{}' is not RA,RB in metres", a.radii));
+    if (a.radii.size() != 2)
+      throw std::invalid_argument(fmt::format("--radii: {} values given, not RA,RB in metres", a.radii.size()));
+    RA = a.radii[0];
+    RB = a.radii[1];
   }
   for (double r : {RA, RB})
     if (!(std::isfinite(r) && r >= 1e-9 && r <= 0.1))
@@ -260,9 +225,6 @@ int run(const Args& a, const std::string& command) {
     csv += "\n";
   }
   netdem::app::write_file_atomic(out / "pair.csv", csv);
-  const std::string title = fmt::format("sinter-pair {}: R = {:g}, {:g} m, {} (documented reconstruction)", mat.name, RA, RB,
-                                        a.profile.empty() ? fmt::format("T = {:g} K", a.temperature) : "T(t) profile");
-  netdem::app::write_file_atomic(out / "pair.svg", plot_svg(rows, title));
 
   json j;
   j["command"] = command;
@@ -331,7 +293,7 @@ int run(const Args& a, const std::string& command) {
   }
   j["stats"] = {{"steps", c.steps}, {"rejected", c.rejected}, {"rhs_evals", c.rhs_evals}, {"restarts", c.restarts}};
   j["wall_s"] = wall;
-  j["files"] = {{"csv", "pair.csv"}, {"plot", "pair.svg"}};
+  j["files"] = {{"csv", "pair.csv"}};  // plotted by apps/scripts/plot_sinter_pair.py
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   netdem::app::close_run_dir(out);
   const Row* last = rows.empty() ? nullptr : &rows.back();
@@ -354,7 +316,7 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format)")->capture_default_str();
   app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
   auto* o_r = app.add_option("--radius", a.radius, "radius of both particles [m]")->capture_default_str();
-  auto* o_rr = app.add_option("--radii", a.radii, "RA,RB radii of the two particles [m]");
+  auto* o_rr = netdem::app::netsolve::add_list_option(app, "--radii", a.radii, "RA,RB radii of the two particles [m]");
   o_r->excludes(o_rr);
   auto* o_T = app.add_option("--temperature", a.temperature, "constant temperature [K]")->capture_default_str();
   auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows");

@@ -1,12 +1,18 @@
 #!/usr/bin/env python3
-"""Plots a demsolve sinter (or prepare) run and writes its short report.
+"""Plots a sintering run: `demsolve sinter` (or prepare) or `netsolve sinter`.
 
 usage: /usr/bin/python3 apps/scripts/plot_sinter.py RUN_DIR [--label final]
 
-Reads RUN_DIR/timeseries.csv, summary.json, state_<label>.txt or state.txt and contacts_<label>.csv;
-writes sintering.png (temperature, k1(T,t)/k1, density and coordination against time, in the
-style of LMM05 Figs 8-11), sample.png (the sample in the style of Fig 20: disks coloured by
-their average stress, contacts blue = attractive, red = repulsive) and report.md.
+demsolve sinter / prepare (RUN_DIR holds timeseries.csv): reads timeseries.csv, summary.json,
+state_<label>.txt or state.txt and contacts_<label>.csv; writes sintering.png (temperature,
+k1(T,t)/k1, density and coordination against time, in the style of LMM05 Figs 8-11), sample.png
+(the sample in the style of Fig 20: disks coloured by their average stress, contacts blue =
+attractive, red = repulsive) and report.md.
+
+netsolve sinter (RUN_DIR holds history.csv; the command writes its own report.md, which names
+this script): reads history.csv and writes history.png, two linear panels against t [s]: the
+shrinkage per axis shrink_x, shrink_y, shrink_z (-F_ii, the least-squares homogeneous strain of
+the centres) and the mean neck x / R_min (docs/staggered.md "Files of a run folder").
 """
 import csv
 import json
@@ -112,11 +118,58 @@ def plot_sample(state, contacts, out, title):
     save(fig, out)
 
 
+def read_history(path):
+    """The columns of netsolve sinter's history.csv (a '# stopped:' line of a stopped run skipped)."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(line for line in f if not line.startswith("#")))
+    head, data = rows[0], rows[1:]
+    return {h: [float(r[k]) for r in data] for k, h in enumerate(head)}
+
+
+def run_title(run):
+    """The title of a netsolve sinter run: the first line of its report.md, else the folder."""
+    try:
+        with open(os.path.join(run, "report.md")) as f:
+            first = f.readline().strip()
+        if first.startswith("# "):
+            return first[2:]
+    except OSError:
+        pass
+    return f"netsolve sinter: {os.path.basename(os.path.normpath(run))}"
+
+
+def plot_history(run, out):
+    """history.png of a netsolve sinter run: shrinkage per axis and the mean neck against t."""
+    h = read_history(os.path.join(run, "history.csv"))
+    t = h["t"]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.5))
+    fig.suptitle(run_title(run), fontsize=10)
+    if len(t) < 2:
+        a1.text(0.5, 0.5, "fewer than two rows to plot", ha="center", transform=a1.transAxes)
+    else:
+        for key, colour in (("shrink_x", "tab:blue"), ("shrink_y", "tab:green"), ("shrink_z", "tab:red")):
+            a1.plot(t, h[key], color=colour, lw=2, label=key)
+        a2.plot(t, h["neck_mean"], color="tab:purple", lw=2, label="mean neck x / R_min")
+        a1.legend(fontsize=8, loc="upper left")
+        a2.legend(fontsize=8, loc="upper left")
+    a1.set_ylabel("shrinkage -F_ii (homogeneous strain)")
+    a2.set_ylabel("neck x / R_min")
+    for a in (a1, a2):
+        a.set_xlabel("t [s]")
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    save(fig, out)
+
+
 def main():
     if len(sys.argv) < 2 or sys.argv[1] in ("-h", "--help"):
         print(__doc__)
         return 0 if len(sys.argv) >= 2 else 2
     run = sys.argv[1]
+    if not os.path.exists(os.path.join(run, "timeseries.csv")) and os.path.exists(os.path.join(run, "history.csv")):
+        plot_history(run, os.path.join(run, "history.png"))  # netsolve sinter: its report.md is the command's
+        print(f"wrote {run}/history.png")
+        return 0
     label = sys.argv[sys.argv.index("--label") + 1] if "--label" in sys.argv else "final"
     ts = read_csv(os.path.join(run, "timeseries.csv"))
     with open(os.path.join(run, "summary.json")) as f:

@@ -10,6 +10,10 @@ source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 check_bad unknown_option "bogus" compact --bogus
 check_bad negative_friction "friction" compact --friction -1
 check_bad nan_friction "friction" compact --friction nan
+# comma lists (CLI11, apps/common/parse.hpp): a bad item, a non-finite item, the option twice
+check_bad bad_snapshot "--snapshots: '0.8x' is not a number" compact --snapshots 0.82,0.8x
+check_bad inf_snapshot "--snapshots: 'inf' is not a number" compact --snapshots inf
+check_bad snapshots_twice "--snapshots: given more than once" compact --snapshots 0.82 --snapshots 0.84
 check_bad bad_path "strain path" compact --path 1,foo,0
 check_bad dilatant_path "impossible target" compact --path 1,1,0
 check_bad low_target "impossible target" compact --to-density 0.5

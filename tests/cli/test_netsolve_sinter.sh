@@ -50,6 +50,8 @@ check_bad_rc sn_x_max "--x-max: the freeze limit" sinter --packing "$lat" --time
 check_bad_rc sn_dt_initial "--dt-initial: the first global step" sinter --packing "$lat" --time 100 --dt-initial 1e-12 --quiet
 check_bad_rc sn_nu "--nu: the bonds' Poisson's ratio" sinter --packing "$lat" --time 100 --nu -0.2 --quiet
 check_bad_rc sn_checkpoints_twice "--checkpoints: the checkpoint times must increase: 50 s after 50 s" sinter --packing "$lat" --time 100 --checkpoints 50,50 --quiet
+check_bad_rc sn_checkpoints_order "--checkpoints: the checkpoint times must increase: 50 s after 80 s" sinter --packing "$lat" --time 100 --checkpoints 80,50 --quiet
+check_bad_rc sn_checkpoints_item "--checkpoints: '5x' is not a number" sinter --packing "$lat" --time 100 --checkpoints 20,5x --quiet
 check_bad_rc sn_checkpoints_range "--checkpoints: 150 s is not between" sinter --packing "$lat" --time 100 --checkpoints 150 --quiet
 check_bad_rc sn_nan_temperature "temperature" sinter --packing "$lat" --time 100 --temperature nan --quiet
 check_bad_rc sn_material "material" sinter --packing "$lat" --material unobtainium --quiet
@@ -71,11 +73,16 @@ a="$tmp/a"
 run "$a" --time 100
 ok sn_exit [ $? -eq 0 ]
 ok sn_quiet [ ! -s "$tmp/stderr" ]
-for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json report.md history.svg snapshots.pvd \
+for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json report.md snapshots.pvd \
          particles_000.vtp bonds_000.vtp particles_005.vtp bonds_005.vtp; do
   ok "sn_file_$f" [ -s "$a/$f" ]
 done
 ok sn_no_marker [ ! -e "$a/.incomplete" ]
+# the command draws nothing: report.md names the script that plots history.csv
+ok sn_no_svg [ ! -e "$a/history.svg" ]
+ok sn_report_names_plot grep -q "apps/scripts/plot_sinter.py" "$a/report.md"
+ok sn_plot /usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_sinter.py" "$a"
+ok sn_plot_png [ -s "$a/history.png" ]
 ok sn_history_header [ "$(head -1 "$a/history.csv")" = "$hist_header" ]
 ok sn_steps_header [ "$(head -1 "$a/steps.csv")" = "$steps_header" ]
 ok sn_dlbar_header [ "$(head -1 "$a/dL_bar.csv")" = "a,b,L0,dL_bar,dL_bar_over_L0,neck,t_created" ]

@@ -42,7 +42,9 @@ if "$tool" sinter-pair --quiet --out "$good" >/dev/null 2>"$tmp/stderr" &&
    has_times "$good/pair.csv" 60 600 3600 14400 57600 &&
    ! grep -qi "nan\|inf" "$good/pair.csv" &&
    [ "$(awk -F, 'NR > 1 && NF != 14' "$good/pair.csv" | wc -l)" -eq 0 ] &&
-   [ -s "$good/pair.svg" ] && [ -s "$good/command.txt" ] &&
+   [ ! -e "$good/pair.svg" ] && [ -s "$good/command.txt" ] &&
+   /usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_sinter_pair.py" "$good" >/dev/null 2>>"$tmp/stderr" &&
+   [ -s "$good/pair.png" ] &&
    grep -q '"status": "ok"' "$good/summary.json" && grep -q '"completed": true' "$good/summary.json" &&
    grep -q 'documented reconstruction' "$good/summary.json"; then
   ok
@@ -79,7 +81,7 @@ for integ in dp45 rk4 cvode arkode; do
   "$tool" sinter-pair --quiet --radii 1e-9,1e-3 --integrator "$integ" --out "$d" >/dev/null 2>"$tmp/stderr"
   rc=$?
   if [ "$rc" -eq 0 ] && grep -q '"status": "incomplete"' "$d/summary.json" && grep -q '"stop": "cone_degenerate"' "$d/summary.json" &&
-     [ "$(head -1 "$d/pair.csv")" = "$header" ] && [ -s "$d/pair.svg" ] && [ ! -e "$d/.incomplete" ] &&
+     [ "$(head -1 "$d/pair.csv")" = "$header" ] && [ ! -e "$d/.incomplete" ] &&
      grep -q "validity limit" "$d/summary.json" && ! grep -qi "nan" "$d/pair.csv"; then
     ok
   else

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Command-line checks of `netsolve yield` and `netsolve yield-merge` (docs/yield.md): bad input gives
 # one clear line on stderr, a non-zero exit and no output folder; a tiny good run writes
-# yield_points.csv with the documented columns, one curve per probe, summary.json and the plot;
-# two job-array slices merged give the same points as the whole run.
+# yield_points.csv with the documented columns, one curve per probe and summary.json, and no plot
+# (apps/scripts/plot_yield.py draws surface.png from it); two job-array slices merged give the same
+# points as the whole run.
 # usage: test_yield.sh PATH/TO/netsolve
 set -u
 ns="$1"
@@ -38,8 +39,10 @@ if "$ns" "${args[@]}" --out "$good" >/dev/null 2>"$tmp/stderr" &&
    ! grep -qiE '(^|,)[-+]?(nan|inf)(,|$)' "$good"/yield_points.csv "$good"/probes/probe_*.csv &&
    [ "$(ls "$good"/probes/probe_*.csv | wc -l)" -eq 4 ] &&
    [ -s "$good/summary.json" ] && grep -q '"unloading"' "$good/summary.json" && grep -q '"share"' "$good/summary.json" &&
-   [ -s "$good/surface.svg" ] && [ -s "$good/unload.csv" ] &&
-   [ "$(find "$good" -name '.*tmp*' | wc -l)" -eq 0 ]; then
+   [ ! -e "$good/surface.svg" ] && [ -s "$good/unload.csv" ] &&
+   [ "$(find "$good" -name '.*tmp*' | wc -l)" -eq 0 ] &&
+   /usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_yield.py" "$good" >/dev/null 2>>"$tmp/stderr" &&
+   [ -s "$good/surface.png" ]; then
   ok
 else
   ko yield_good_run
