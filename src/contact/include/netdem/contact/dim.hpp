@@ -28,6 +28,7 @@ struct Dim<2> {
   static constexpr int kDim = 2;
   static constexpr int kRotDofs = 1;
   static constexpr int kNodeDofs = kDim + kRotDofs;  // (u1, u2, theta)
+  static constexpr int kPairDofs = 2 * kNodeDofs;    // a contact element: (node i, node j)
   using Vec = Eigen::Vector2d;
   using Rot = double;   ///< rotation increment: angle about e3
   using Tan = double;   ///< tangential quantity: component along t = perp(n)
@@ -41,6 +42,7 @@ struct Dim<3> {
   static constexpr int kDim = 3;
   static constexpr int kRotDofs = 3;
   static constexpr int kNodeDofs = kDim + kRotDofs;  // (u1, u2, u3, rotation vector)
+  static constexpr int kPairDofs = 2 * kNodeDofs;    // a contact element: (node i, node j)
   using Vec = Eigen::Vector3d;
   using Rot = Eigen::Vector3d;  ///< rotation increment: rotation vector
   using Tan = Eigen::Vector3d;  ///< tangential quantity: global axes, in the tangent plane
@@ -53,6 +55,14 @@ struct Dim<3> {
 /// 1 / (1 + 1 / kInertia): 1/3 for a disk, 2/7 for a sphere.
 template <int D>
 inline constexpr double kTangentialMassRatio = 1.0 / (1.0 + 1.0 / Dim<D>::kInertia);
+
+/// The generalized vector and matrix of a contact element over the DOFs of its two nodes:
+/// 6 = (u_i, theta_i, u_j, theta_j) in 2D, 12 = (u_i (3), rotation vector of i (3), u_j, rotation
+/// of j) in 3D (element.hpp).
+template <int D>
+using PairVecT = Eigen::Matrix<double, Dim<D>::kPairDofs, 1>;
+template <int D>
+using PairMatT = Eigen::Matrix<double, Dim<D>::kPairDofs, Dim<D>::kPairDofs>;
 
 // ---- tangential quantities: the same expression in both dimensions -------------------------
 template <class T>
@@ -89,8 +99,8 @@ inline constexpr int kNodeDofs = Dim<2>::kNodeDofs;  // (u1, u2, theta) per node
 inline constexpr int kPairDofs = 2 * kNodeDofs;      // 6 for a 2D contact element
 
 using Vec = Dim<2>::Vec;
-using PairVec = Eigen::Matrix<double, kPairDofs, 1>;
-using PairMat = Eigen::Matrix<double, kPairDofs, kPairDofs>;
+using PairVec = PairVecT<2>;
+using PairMat = PairMatT<2>;
 
 /// In-plane perpendicular: rotates v by +90 degrees (t = J n).
 inline Vec perp(const Vec& v) { return Vec(-v.y(), v.x()); }

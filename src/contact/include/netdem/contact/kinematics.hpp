@@ -13,13 +13,16 @@
 //  * the slip xi is the tangential displacement of j's contact point relative to i's, along t:
 //    dxi = (dx_j - dx_i).t - d_i dtheta_i - d_j dtheta_j   (Redanz & Fleck Eq 5 up to the sign of
 //    u_T: their u_T is the slip of 1 relative to 2, i.e. -xi). A rigid rotation gives dxi = 0.
-//  * pair DOF order for 6-vectors and 6x6 matrices: (x_i, y_i, theta_i, x_j, y_j, theta_j).
+//  * pair DOF order for 6-vectors and 6x6 matrices: (x_i, y_i, theta_i, x_j, y_j, theta_j); in 3D
+//    for 12-vectors and 12x12 matrices: (u_i (3), rotation vector of i (3), u_j (3), rotation of j).
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/Geometry>
 
 #include "netdem/contact/dim.hpp"
 #include "netdem/contact/law.hpp"
+#include "netdem/contact/rotation.hpp"
 
 namespace netdem::contact {
 
@@ -102,6 +105,28 @@ inline PairGeometry3 pair_geometry(const Eigen::Vector3d& xi, const Eigen::Vecto
   return g;
 }
 
+/// The pair geometry of dimension D (a solver written once for both dimensions names it so).
+template <int D>
+using PairGeometryT = std::conditional_t<D == 2, PairGeometry, PairGeometry3>;
+
+/// 3D b_n: du_N = b_n . dq over the 12 pair DOFs (u_i, rotation of i, u_j, rotation of j).
+inline PairVecT<3> normal_gradient(const PairGeometry3& g) {
+  PairVecT<3> b = PairVecT<3>::Zero();
+  b.segment<3>(0) = g.n;
+  b.segment<3>(6) = -g.n;
+  return b;
+}
+/// 3D B_t (3 x 12): the instantaneous slip of j's contact point relative to i's, in the tangent
+/// plane, dxi = P (du_j - du_i) + n x (d_i dth_i + d_j dth_j), P = I - n n^T: the derivative of
+/// pair_increment()'s dslip at a zero increment (tests/contact/test_element3d.cpp).
+inline Eigen::Matrix<double, 3, 12> slip_gradient(const PairGeometry3& g) {
+  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - g.n * g.n.transpose();
+  const Eigen::Matrix3d N = skew<double>(g.n);
+  Eigen::Matrix<double, 3, 12> B;
+  B << -P, g.d_i * N, P, g.d_j * N;
+  return B;
+}
+
 /// The rotation matrix of a rotation vector w (angle |w| about w / |w|; Euler-Rodrigues).
 inline Eigen::Matrix3d rotation_of(const Eigen::Vector3d& w) {
   const double a = w.norm();
@@ -146,6 +171,71 @@ inline PairIncrement3 pair_increment(const PairGeometry3& g0, const PairGeometry
     out.transport.R = Q;
   }
   return out;
+}
+
+/// The derivatives of an increment g0 -> g1 (pair_increment()) by the end configuration q_end =
+/// (x_i, dth_i, x_j, dth_j) (12 columns; g0 held), for the consistent tangent of the 3D contact
+/// element (element.hpp; derivation in docs/contact.md "The 3D contact element"):
+///  * dslip: d dslip / d q_end;
+///  * spin: the spatial variation dw of the Transport's rotation R, dR R^T = [dw]x; since
+///    R n0 = n1, dn1 = dw x n1, and its component along n1 is the twist of the pair;
+///  * dn: d n1 / d q_end = P (dx_j - dx_i) / L.
+struct IncrementJacobian3 {
+  Eigen::Matrix<double, 3, 12> dslip, spin, dn;
+};
+
+/// (sin psi - psi cos psi) / sin^3 psi = -d(psi / sin psi) / d(cos psi), s = sin psi (series below
+/// 1e-3: 1/3 + 2 psi^2 / 15, error O(psi^4)).
+inline double slip_angle_factor(double psi, double s) {
+  if (psi < 1e-3) return 1.0 / 3.0 + (2.0 / 15.0) * psi * psi;
+  return (s - psi * std::cos(psi)) / (s * s * s);
+}
+
+/// The Jacobians of pair_increment(g0, g1, dth_i, dth_j). With m = Q n0 (Q = exp(W), W the
+/// lever-arm weighted rotation), C = m . n1, psi the angle from m to n1 and g = psi / sin psi:
+///   dslip = -Lm g P m                       (= Lm psi e x n1, Lm = (L0 + L1)/2)
+///   dm = dq_W x m, dq_W = J_l(W) dW         (J_l the left Jacobian of SO(3))
+///   d dslip = -g P m dLm + Lm h(psi) P m dC - Lm g (P dm - C dn1 - n1 (m . dn1)),  h = -dg/dC
+///   spin = n1 (m . dq_W + (n1 x m) . (dm + dn1) / (1 + C)) + n1 x dn1
+/// (the twist: that of Q about n1 plus that of the minimal rotation m -> n1, from its quaternion
+/// (1 + C, m x n1)). Singular only at psi = pi.
+inline IncrementJacobian3 increment_jacobian(const PairGeometry3& g0, const PairGeometry3& g1,
+                                             const Eigen::Vector3d& dth_i, const Eigen::Vector3d& dth_j) {
+  using M312 = Eigen::Matrix<double, 3, 12>;
+  using R12 = Eigen::Matrix<double, 1, 12>;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d& n = g1.n;
+  const Eigen::Matrix3d P = I - n * n.transpose();
+  IncrementJacobian3 J;
+  J.dn.setZero();
+  J.dn.block<3, 3>(0, 0) = -P / g1.L;
+  J.dn.block<3, 3>(0, 6) = P / g1.L;
+  R12 dL = R12::Zero();  // d L1 / d q
+  dL.segment<3>(0) = -n.transpose();
+  dL.segment<3>(6) = n.transpose();
+  // the mean rotation W = (d_i dth_i + d_j dth_j) / Lm with mid-increment d and Lm; dd/dL1 = 1 - d/L1
+  const double Lm = 0.5 * (g0.L + g1.L);
+  const double di = 0.5 * (g0.d_i + g1.d_i), dj = 0.5 * (g0.d_j + g1.d_j);
+  const double ai = 1.0 - g1.d_i / g1.L, aj = 1.0 - g1.d_j / g1.L;
+  const Eigen::Vector3d W = (di * dth_i + dj * dth_j) / Lm;
+  M312 dW = ((0.5 * (ai * dth_i + aj * dth_j) - 0.5 * W) / Lm) * dL;
+  dW.block<3, 3>(0, 3) += (di / Lm) * I;
+  dW.block<3, 3>(0, 9) += (dj / Lm) * I;
+  const M312 dqW = left_jacobian<double>(W) * dW;
+  const Eigen::Vector3d m = rotation_of(W) * g0.n;
+  const M312 dm = -skew<double>(m) * dqW;
+  // the rest of the normal's motion: the rotation psi from m to n1
+  const double C = m.dot(n);
+  const double s = m.cross(n).norm();
+  const double psi = std::atan2(s, C);
+  const double g = s > 0.0 ? psi / s : 1.0;
+  const Eigen::Vector3d Pm = P * m;
+  const R12 dC = m.transpose() * J.dn + n.transpose() * dm;
+  const M312 dPm = P * dm - C * J.dn - n * (m.transpose() * J.dn);
+  J.dslip = (-0.5 * g) * Pm * dL + (Lm * slip_angle_factor(psi, s)) * Pm * dC - (Lm * g) * dPm;
+  const R12 twist = m.transpose() * dqW + (n.cross(m)).transpose() * (dm + J.dn) / (1.0 + C);
+  J.spin = n * twist + skew<double>(n) * J.dn;
+  return J;
 }
 
 /// The Transport of one explicit time step of a pair of spheres (or of a sphere and a wall) from
