@@ -224,6 +224,31 @@ void check_new_run(const Args& a) {
     throw UsageError(fmt::format("--nu must be a Poisson's ratio in [0, 0.5), got {}", a.nu));
 }
 
+/// The record of origin of a restart state: the seed (false if it has none) and the packing into
+/// restart_json. Checked: a seed that is not a whole number in [0, 2^64), a packing that is not an
+/// object, whose source is not a string or whose particles are not the state's count is refused
+/// (the campaign of issue 27: a seed of -1 or 1e300 became "seed": null, a 27-sphere state claimed 100).
+bool read_origin(const std::string& state, const std::string& record, std::size_t n, std::uint64_t& seed,
+                 json& restart_json) {
+  const json origin = json::parse(record);
+  if (!origin.is_object()) return false;
+  const auto bad = [&](const std::string& what) {
+    return UsageError(fmt::format("restart state '{}': /origin/{}", netdem::packing::quote_input(state), what));
+  };
+  if (origin.contains("packing")) {
+    const json& pk = origin["packing"];
+    if (!pk.is_object()) throw bad("packing: expected an object");
+    if (pk.contains("source") && !pk["source"].is_string()) throw bad("packing/source: expected a string");
+    if (pk.contains("particles") && !(pk["particles"].is_number_unsigned() && pk["particles"].get<std::uint64_t>() == n))
+      throw bad(fmt::format("packing/particles: expected {}, the number of particles of the state", n));
+    restart_json["packing"] = pk;
+  }
+  if (!origin.contains("seed")) return false;
+  if (!origin["seed"].is_number_unsigned()) throw bad("seed: expected a whole number in [0, 2^64)");
+  seed = origin["seed"].get<std::uint64_t>();
+  return true;
+}
+
 int run(const Args& a, const CLI::App& app, const std::string& command) {
   namespace na = netdem::app;
   const auto w0 = std::chrono::steady_clock::now();
@@ -268,15 +293,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
     packing_source = fmt::format("restart state {}", a.restart);
     restart_json = {{"state", a.restart}, {"t_start", sim->time()}, {"steps_before", sim->steps()}};
     // the seed and the packing of the run that made the sample: the state's record of origin
-    seed_known = false;
-    const json origin = json::parse(sim->origin_record());
-    if (origin.is_object()) {
-      if (origin.contains("seed") && origin["seed"].is_number_unsigned()) {
-        seed = origin["seed"].get<std::uint64_t>();
-        seed_known = true;
-      }
-      if (origin.contains("packing")) restart_json["packing"] = origin["packing"];
-    }
+    seed_known = read_origin(a.restart, sim->origin_record(), sim->particles().size(), seed, restart_json);
   } else {
     check_new_run(a);
     mat = load_material(a, mat_source);
