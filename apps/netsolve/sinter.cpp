@@ -171,6 +171,30 @@ struct Setup {
   std::array<int, 3> box_fixed{-1, -1, -1};  ///< particles fixed on the box planes (-1: --planes spheres, or a restart)
 };
 
+/// The record of origin of a restart state (its run's packing and seed), checked against the state:
+/// a field of the wrong type, or a particle count that is not the state's, is refused. false: no
+/// seed recorded.
+bool read_origin(const std::string& state, const std::string& record, std::size_t n, std::uint64_t& seed,
+                 json& restart_json) {
+  const json origin = json::parse(record);
+  if (!origin.is_object()) return false;
+  const auto bad = [&](const std::string& what) {
+    return UsageError(fmt::format("restart state '{}': /origin/{}", netdem::packing::quote_input(state), what));
+  };
+  if (origin.contains("packing")) {
+    const json& pk = origin["packing"];
+    if (!pk.is_object()) throw bad("packing: expected an object");
+    if (pk.contains("source") && !pk["source"].is_string()) throw bad("packing/source: expected a string");
+    if (pk.contains("particles") && !(pk["particles"].is_number_unsigned() && pk["particles"].get<std::uint64_t>() == n))
+      throw bad(fmt::format("packing/particles: expected {}, the number of particles of the state", n));
+    restart_json["packing"] = pk;
+  }
+  if (!origin.contains("seed")) return false;
+  if (!origin["seed"].is_number_unsigned()) throw bad("seed: expected a whole number in [0, 2^64)");
+  seed = origin["seed"].get<std::uint64_t>();
+  return true;
+}
+
 void setup_restart(const Args& a, Setup& u) {
   const std::string text = read_text(a.restart, "--restart");
   try {
@@ -184,15 +208,7 @@ void setup_restart(const Args& a, Setup& u) {
   u.packing_source = fmt::format("restart state {}", a.restart);
   u.restart_json = {{"state", a.restart}, {"t_start", u.sim->time()}, {"steps_before", u.sim->steps()}};
   // the seed and the packing of the run that made the sample: the state's record of origin
-  u.seed_known = false;
-  const json origin = json::parse(u.sim->origin_record());
-  if (origin.is_object()) {
-    if (origin.contains("seed") && origin["seed"].is_number_unsigned()) {
-      u.seed = origin["seed"].get<std::uint64_t>();
-      u.seed_known = true;
-    }
-    if (origin.contains("packing")) u.restart_json["packing"] = origin["packing"];
-  }
+  u.seed_known = read_origin(a.restart, u.sim->origin_record(), u.sim->particles().size(), u.seed, u.restart_json);
 }
 
 void read_packing(const Args& a, Setup& u) {

@@ -341,15 +341,24 @@ void check_particles(const Field& r, const SolverState& st, bool plastic) {
     const double far = StateLimits::kMaxBox * L;
     if (!(std::fabs(P.x[i]) <= far && std::fabs(P.y[i]) <= far && std::fabs(zc(i)) <= far))
       pc["x"][i].fail(fmt::format("particle {}: the centre must be within +-{:g} L", i, StateLimits::kMaxBox));
-    double v = 0.0, f = 0.0;
+    double v = 0.0, f = 0.0, tq = 0.0;
     if constexpr (D == 2) {
       v = std::hypot(P.vx[i], P.vy[i]) + std::fabs(P.omega[i]) * P.radius[i];
       f = std::hypot(P.fx[i], P.fy[i]);
+      tq = std::fabs(P.torque[i]);
     } else {
       v = std::sqrt(P.vx[i] * P.vx[i] + P.vy[i] * P.vy[i] + P.vz[i] * P.vz[i]) +
           std::sqrt(P.wx[i] * P.wx[i] + P.wy[i] * P.wy[i] + P.omega[i] * P.omega[i]) * P.radius[i];
       f = std::sqrt(P.fx[i] * P.fx[i] + P.fy[i] * P.fy[i] + P.fz[i] * P.fz[i]);
+      tq = std::sqrt(P.tx[i] * P.tx[i] + P.ty[i] * P.ty[i] + P.torque[i] * P.torque[i]);
     }
+    // the torque, as the force: its half kick must not turn the surface by 0.1 r_min in a step (a torque of
+    // 1e300 passed before and wrote inf into vibrate's timeseries.csv: campaign of issue 27)
+    const double dw = 0.5 * dt * tq / P.inertia[i];
+    if (!(dw * dt * P.radius[i] < travel))
+      pc[D == 2 ? "torque" : "tx"][i].fail(fmt::format(
+          "particle {}: torque {:.3g} would turn its surface {:.3g} in the next step, not below 0.1 r_min", i, tq,
+          dw * dt * P.radius[i]));
     if (!(v * dt < travel))
       pc["vx"][i].fail(fmt::format("particle {}: speed {:.3g} moves it {:.3g} per step, not below 0.1 r_min = {:.3g}",
                                    i, v, v * dt, travel));

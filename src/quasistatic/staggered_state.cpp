@@ -305,6 +305,8 @@ StaggeredState parse_staggered_state(std::string_view text, const std::string& o
   ck.object({"t", "dt", "steps", "need_factor", "last_iterations", "rhs_evals"});
   s.t = ck["t"].real(0.0, kMax);
   s.dt = ck["dt"].real(0.0, kMax);
+  // a step of 0 never grows (dt alpha^k = 0): a restart from it hung (campaign of issue 27)
+  if (!(s.dt > 0.0)) ck["dt"].fail("must be > 0");
   s.nsteps = ck["steps"].integer(0, kBig);
   s.need_factor = ck["need_factor"].boolean();
   s.last_iterations = static_cast<int>(ck["last_iterations"].integer(0, 1000000000));

@@ -29,8 +29,12 @@ std::string escape_key(std::string_view key) {
   return s;
 }
 const char* type_name(const Json& j) { return j.type_name(); }
-// A value quoted for a message: its JSON text cut to 80 characters.
-std::string shown(const Json& j) { return quote(j.dump()); }
+// A value quoted for a message: its JSON text cut to 80 characters; an array or an object by its type and
+// size (dump() recurses, and the whole of a large value is not needed to say it is the wrong type).
+std::string shown(const Json& j) {
+  if (j.is_structured()) return fmt::format("({} of {} elements)", j.type_name(), j.size());
+  return quote(j.dump());
+}
 }  // namespace
 
 FieldError::FieldError(std::string file, std::string pointer, std::string problem)
@@ -151,6 +155,27 @@ Json parse_archive(std::string_view text, const std::string& file) {
     if (text.substr(0, old.size()) == old)
       throw FieldError(file, "", "an old text state file (before issue 26): convert it with "
                                  "apps/scripts/convert_state.py OLD NEW");
+  // the nesting depth, by the brackets outside strings, before parsing: nlohmann parses any depth, but a value
+  // nested 1e5 deep overflowed the stack where it was dumped (a message, the record of origin; SIGSEGV found by
+  // the campaign of issue 27). A state archive is at most 5 levels deep.
+  std::size_t depth = 0;
+  bool in_string = false, escaped = false;
+  for (std::size_t at = 0; at < text.size(); ++at) {
+    const char c = text[at];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxArchiveDepth)
+        throw FieldError(file, "", fmt::format("not a state archive (nested more than {} levels deep at byte {})",
+                                               kMaxArchiveDepth, at));
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
   try {
     return Json::parse(text);
   } catch (const Json::exception& e) {
@@ -164,7 +189,7 @@ Json parse_archive(std::string_view text, const std::string& file) {
 int check_header(const Field& root, std::string_view kind, int max_version) {
   if (!root.json().is_object()) root.fail(fmt::format("not a state archive (a JSON {}, not an object)", root.json().type_name()));
   if (root["format"].string() != kArchiveFormat)
-    root["format"].fail(fmt::format("expected \"{}\", found {}", kArchiveFormat, quote(root.json()["format"].dump())));
+    root["format"].fail(fmt::format("expected \"{}\", found {}", kArchiveFormat, shown(root.json()["format"])));
   const std::string k = root["kind"].string();
   if (k != kind) root["kind"].fail(fmt::format("a {} state, expected a {} state", quote(k), kind));
   return static_cast<int>(root["version"].integer(1, max_version));

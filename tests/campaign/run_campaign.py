@@ -44,6 +44,9 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import surfaces27  # noqa: E402  (the surfaces of issue 27: sinter, sinter-pair, pack --dim 3, demsolve 3D, run folders)
+
 # ---- the bad values of every numeric option and field -------------------------------------------
 BAD_VALUES = ["0", "-1", "1e-300", "4.9e-324", "1e300", "inf", "-inf", "nan", "", "abc",
               "2147483648", "18446744073709551616", "1" + "0" * 40]
@@ -77,12 +80,14 @@ CATEGORIES = [
     ("unclear_error", "unclear error: non-zero exit with several stderr lines, raw exception text, or an unmarked folder"),
     ("no_summary", "exit 0 without summary.json"),
     ("exit3_no_status", "exit 3 without a status in summary.json"),
+    ("wrong", "wrong result: contradicts the documented answer (exit status, status, a kept file, a refused folder)"),
 ]
-FAILURES = {"crash", "hang", "nan_exit0", "unclear_error", "no_summary", "exit3_no_status"}
+FAILURES = {"crash", "hang", "nan_exit0", "unclear_error", "no_summary", "exit3_no_status", "wrong"}
 FATAL = {"crash", "hang", "nan_exit0"}
 
 RAW_EXCEPTION = re.compile(r"bad_alloc|what\(\)|terminate called|std::|basic_string|stoi|stod|Segmentation|Aborted|"
                            r"Assertion|--help for more|Run with --help")
+TEXT_KEYS = {"name", "source"}  # JSON strings a user chooses (a material's name, a file name): "nan" there is text
 NONFINITE = re.compile(r"(?<![A-Za-z0-9_.])[-+]?(nan|inf|infinity)(?![A-Za-z0-9_])", re.IGNORECASE)
 
 # small base command lines: each varied option replaces its value here or is appended
@@ -141,7 +146,7 @@ def scan_outputs(folder, null_ok):
                     text = fh.read(50_000_000)
             except OSError:
                 continue
-            if f.endswith(".json"):
+            if f.endswith(".json") or (f.startswith("state") and text.startswith("{")):  # state*.txt: JSON too
                 try:
                     j = json.loads(text)
                 except ValueError:
@@ -152,6 +157,8 @@ def scan_outputs(folder, null_ok):
                         bad.append(f"{rel}: {key} = {v}")
                     elif v is None and key not in null_ok:
                         bad.append(f"{rel}: {key} = null")
+                    elif isinstance(v, str) and v.lower() in ("nan", "-nan") and key.split(".")[-1] not in TEXT_KEYS:
+                        bad.append(f"{rel}: {key} = '{v}'")
             else:
                 lines = text.splitlines()
                 status_col = None  # a CSV with a 'status' column: NaN in a row that says why is documented
@@ -193,6 +200,7 @@ def run_one(task):
     t0 = time.monotonic()
     res = dict(id=task["id"], tool=task["tool"], sub=task["sub"], kind=task["kind"], cmd=cmd)
     mem = task["mem_bytes"]
+    ctx = surfaces27.before_run(task)
 
     def limits():  # own session (killed as a group), and an address-space cap that protects the machine
         if mem:
@@ -210,19 +218,23 @@ def run_one(task):
     res["seconds"] = round(time.monotonic() - t0, 3)
     res["rc"] = rc
     err = stderr.decode("utf-8", "replace")
+    chk = task.get("out_check", out).replace("{out}", out)  # the --out of the run
+    exists0 = os.path.exists(chk)
     lines = [ln for ln in err.splitlines() if ln.strip()]
     res["stderr"] = (lines[0][:300] if lines else "") + (f" (+{len(lines) - 1} lines)" if len(lines) > 1 else "")
     res["stderr_bytes"] = len(stderr)
-    exists = os.path.exists(out)
-    marked = exists and os.path.exists(os.path.join(out, ".incomplete"))
+    exists = os.path.exists(chk)
+    marked = exists and os.path.exists(os.path.join(chk, ".incomplete"))
     status = None
-    if exists and os.path.isfile(os.path.join(out, "summary.json")):
+    if exists and os.path.isfile(os.path.join(chk, "summary.json")):
         try:
-            with open(os.path.join(out, "summary.json")) as fh:
+            with open(os.path.join(chk, "summary.json")) as fh:
                 status = json.load(fh).get("status", "(no status)")
         except (ValueError, OSError, AttributeError):
             status = "(unreadable summary.json)"
     res["status"] = status
+    wrong = surfaces27.after_run(task, res, ctx, err)
+    exists = exists and not res["untouched"]  # a prepared --out the run left as it was is not its folder
     detail = ""
     if rc is None:
         cat = "hang"
@@ -231,7 +243,7 @@ def run_one(task):
         cat = "crash"
         detail = f"signal {-rc}"
     elif rc == 0:
-        bad = scan_outputs(out, task["null_ok"]) if exists else []
+        bad = scan_outputs(chk, task["null_ok"]) if exists0 and os.path.isdir(chk) else []
         if bad:
             cat = "nan_exit0"
             detail = "; ".join(bad[:3])
@@ -240,7 +252,8 @@ def run_one(task):
         else:
             cat = "fine"
     elif rc == 3:
-        cat = "flagged" if status in ("unconverged", "unstable", "incomplete") else "exit3_no_status"
+        # "unreachable": pack --route green-body's documented exit 3 (README, docs/packing.md)
+        cat = "flagged" if status in ("unconverged", "unstable", "incomplete", "unreachable") else "exit3_no_status"
     elif rc in (1, 2):
         why = []
         if len(lines) != 1:
@@ -253,13 +266,15 @@ def run_one(task):
             why.append("control characters on stderr")
         if exists and not marked and rc == 2:
             why.append("output folder written for a refused command line")
-        if exists and not marked and rc == 1 and not os.path.isfile(os.path.join(out, "summary.json")):
+        if exists and not marked and rc == 1 and not os.path.isfile(os.path.join(chk, "summary.json")):
             why.append("unmarked partial output folder")
         cat = "unclear_error" if why else "clear_error"
         detail = ", ".join(why)
     else:
         cat = "unclear_error"
         detail = f"exit status {rc}"
+    if wrong and cat in ("clear_error", "fine", "flagged"):
+        cat, detail = "wrong", "; ".join(wrong)
     res["category"] = cat
     res["detail"] = detail
     if cat in ("clear_error", "fine", "flagged") and os.path.isdir(out) and not task.get("keep"):
@@ -298,7 +313,7 @@ def make_bases(a, work):
         if not cand:
             sys.exit("run_campaign: demsolve prepare wrote no state*.txt")
         b["dem_state"] = os.path.join(base, "prepare", "state.txt" if "state.txt" in cand else sorted(cand)[0])
-    return b
+    return surfaces27.make_bases(a, work, b, must_run)
 
 
 def null_keys(a, work, bases):
@@ -308,17 +323,18 @@ def null_keys(a, work, bases):
     if "ns_state" in bases:  # yield from a state file: no precompaction, its keys are null
         runs.append((("netsolve", "yield"), ["yield", "--directions", "2", "--jobs", "1", "--quiet", "--from-state",
                                              bases["ns_state"]]))
+    runs += [((t, s), args) for t, s, args in surfaces27.null_runs(bases)]
     for n, ((tool, sub), base) in enumerate(runs):
         exe = getattr(a, tool)
         if not exe:
             continue
-        out = os.path.join(work, "base", f"null_{sub}_{n}")
+        out = os.path.join(work, "base", f"null_{n}")
         cmd = [exe] + [x.format(**bases) for x in base] + ["--out", out]
         subprocess.run(cmd, cwd=work, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=120)
         ks = set()
         for root, _d, files in os.walk(out) if os.path.isdir(out) else []:
             for f in files:
-                if f.endswith(".json"):
+                if f.endswith(".json") or (f.startswith("state") and f.endswith(".txt")):
                     try:
                         with open(os.path.join(root, f)) as fh:
                             ks |= {k for k, v in walk_json(json.load(fh)) if v is None}
@@ -468,12 +484,13 @@ def build_tasks(a, work, bases):
     def add(tool, sub, kind, args, add_out=True, timeout=None):
         exe = getattr(a, tool)
         if not exe:
-            return
+            return None
         tid = len(tasks)
+        ok = set().union(*nulls.values()) if sub == "run folders" else nulls.get((tool, sub), set())
         tasks.append(dict(id=tid, tool=tool, sub=sub, kind=kind, exe=exe, args=args, add_out=add_out,
                           out=os.path.join(work, "runs", f"{tid:05d}"), timeout=timeout or a.timeout, cwd=work,
-                          mem_bytes=int(a.mem_limit_gb * 2**30),
-                          null_ok=nulls.get((tool, sub), set())))
+                          mem_bytes=int(a.mem_limit_gb * 2**30), null_ok=ok))
+        return tasks[-1]
 
     # 1. every numeric option of every subcommand x BAD_VALUES
     for (tool, sub), base in BASE.items():
@@ -494,8 +511,11 @@ def build_tasks(a, work, bases):
                     add(tool, sub, "option --param", base + ["--param", f"{pn}={v}"])
 
     # 2. the readers: mutated copies of valid files
+    written = [0]
+
     def write(label, data):
-        p = os.path.join(inputs, f"{len(os.listdir(inputs)):05d}.txt")
+        written[0] += 1
+        p = os.path.join(inputs, f"{written[0]:05d}.txt")
         with open(p, "wb") as fh:
             fh.write(data)
         return p
@@ -537,49 +557,28 @@ def build_tasks(a, work, bases):
         add("demsolve", "prepare", "packing file", dbase[:-1] + ["--packing", ""])
         tasks[-1]["label"] = "packing: --packing ''"
 
+    # the state archives (one JSON line since issue 26): every member, the first and last particle rows
     if "ns_state" in bases:
         with open(bases["ns_state"]) as fh:
             stext = fh.read()
-        slines = stext.rstrip("\n").split("\n")
-        head = [k for k in range(min(len(slines), 12))]
-        muts = mutate_text(stext, "netsolve state", head, 2, ["nan", "inf", "-1", "0", "1e300", "abc", ""], rng)
         sbase = ["yield", "--directions", "2", "--jobs", "1", "--quiet", "--from-state"]
-        for label, data in muts:
-            add("netsolve", "yield", "state file", sbase + [write(label, data)])
-            tasks[-1]["label"] = label
+        for label, data in surfaces27.json_mutations(stext, "netsolve state", rng):
+            add("netsolve", "yield", "state file", sbase + [write(label, data)])["label"] = label
         for label, p in special[:3]:
-            add("netsolve", "yield", "state file", sbase + [p])
-            tasks[-1]["label"] = "netsolve state: " + label
+            add("netsolve", "yield", "state file", sbase + [p])["label"] = "netsolve state: " + label
 
     if "dem_state" in bases:
         with open(bases["dem_state"]) as fh:
             dtext = fh.read()
-        dlines = dtext.rstrip("\n").split("\n")
-        k0 = next(k for k, ln in enumerate(dlines) if ln.startswith("id,")) + 1
-        head = [k for k, ln in enumerate(dlines[:k0]) if not ln.startswith(("#", "param "))]
-        head += [k for k, ln in enumerate(dlines[:k0]) if ln.startswith("param ")][::3]
-        muts = mutate_text(dtext, "dem state", head, 3, ["nan", "inf", "-1", "0", "1e300", "abc"], rng)
-        f = dlines[k0].split(",")
-        for col in range(1, len(f)):  # every field of a particle line
-            for v in FIELD_VALUES:
-                g = list(f)
-                g[col] = v
-                m = list(dlines)
-                m[k0] = ",".join(g)
-                muts.append((f"dem state: particle line field {col + 1} = '{v}'", ("\n".join(m) + "\n").encode()))
-        muts += dem_state_reproducers(dtext)
+        muts = surfaces27.json_mutations(dtext, "dem state", rng) + dem_state_reproducers(dtext)
         subs = ["compress", "vibrate", "sinter"]
         for n, (label, data) in enumerate(muts):
-            sub = subs[n % 3]
-            base = [x.format(**bases) for x in BASE[("demsolve", sub)]]
-            p = write(label, data)
-            add("demsolve", sub, "state file", with_option(base, "--state", p))
-            tasks[-1]["label"] = label
+            base = [x.format(**bases) for x in BASE[("demsolve", subs[n % 3])]]
+            add("demsolve", subs[n % 3], "state file", with_option(base, "--state", write(label, data)))["label"] = label
         for sub in subs:
             base = [x.format(**bases) for x in BASE[("demsolve", sub)]]
             for label, p in special[:3]:
-                add("demsolve", sub, "state file", with_option(base, "--state", p))
-                tasks[-1]["label"] = "dem state: " + label
+                add("demsolve", sub, "state file", with_option(base, "--state", p))["label"] = "dem state: " + label
 
     # 3. the command-line reproducers of issue 13 and hostile command lines
     st = bases.get("dem_state", "")
@@ -635,6 +634,9 @@ def build_tasks(a, work, bases):
     ]
     for tool, sub, args in repro:
         add(tool, sub, "reproducer", args, add_out="--out" not in args)
+    surfaces27.PARAMS = PARAM_NAMES
+    surfaces27.with_option, surfaces27.field_mutations, surfaces27.mutate_text = with_option, field_mutations, mutate_text
+    surfaces27.add_tasks(a, work, bases, add, write, rng, BAD_VALUES)
     return tasks
 
 
@@ -660,7 +662,8 @@ def write_reports(a, results, wall, started):
         w.writerow(["all", "all", sum(tot.values())] + [tot[k] for k in cats])
     heads = {"clear_error": "clear error", "fine": "fine", "flagged": "flagged (exit 3)", "crash": "crash",
              "hang": "hang", "nan_exit0": "NaN/inf exit 0", "unclear_error": "unclear error",
-             "no_summary": "exit 0, no summary", "exit3_no_status": "exit 3, no status"}
+             "no_summary": "exit 0, no summary", "exit3_no_status": "exit 3, no status",
+             "wrong": "wrong result"}
     md = ["| tool | subcommand | inputs | " + " | ".join(heads[k] for k in cats) + " |",
           "|---|---|---:|" + "---:|" * len(cats)]
     for (tool, sub), c in rows.items():

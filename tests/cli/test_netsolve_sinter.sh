@@ -123,6 +123,14 @@ mkdir -p "$tmp/lone" && cp "$tmp/r1/state.txt" "$tmp/lone/state.txt"
 "$tool" sinter --restart "$tmp/lone/state.txt" --time 100 --quiet --out "$tmp/r4" >/dev/null 2>"$tmp/stderr"
 ok sn_restart_origin_in_state grep -q '"seed": 7' "$tmp/r4/summary.json"
 ok sn_restart_origin_packing grep -q '"source": ".*lattice.csv"' "$tmp/r4/summary.json"
+# a record of origin that does not describe the state is refused (campaign of issue 27: a seed of -1 or
+# 1e300 was dropped to null, a packing of 100 particles was recorded for a 27-sphere state)
+sed 's/"particles":27,/"particles":100,/' "$tmp/lone/state.txt" >"$tmp/lone/count.txt"
+check_bad_rc sn_restart_origin_count "/origin/packing/particles: expected 27" sinter --restart "$tmp/lone/count.txt" --time 100 --quiet
+sed 's/"seed":7}/"seed":-1}/' "$tmp/lone/state.txt" >"$tmp/lone/seed.txt"
+check_bad_rc sn_restart_origin_seed "/origin/seed: expected a whole number" sinter --restart "$tmp/lone/seed.txt" --time 100 --quiet
+sed 's/"seed":7}/"seed":1e300}/' "$tmp/lone/state.txt" >"$tmp/lone/seed2.txt"
+check_bad_rc sn_restart_origin_seed_float "/origin/seed" sinter --restart "$tmp/lone/seed2.txt" --time 100 --quiet
 ok sn_restart_old_untouched [ "$(tail -1 "$tmp/r1/history.csv")" = "$(grep '^50,' "$c/history.csv")" ]
 # the same from the checkpoint's state
 "$tool" sinter --restart "$c/state_1.txt" --time 100 --quiet --out "$tmp/r3" >/dev/null 2>&1

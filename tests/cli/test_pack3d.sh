@@ -43,6 +43,10 @@ ok periodic_summary grep -q '"lateral": "periodic"' "$tmp/pp/summary.json"
 # the 2D default output has no dim key (unchanged format)
 "$ns" pack --width 10 --out "$tmp/p2" >/dev/null 2>&1
 ok pack2d_no_dim bash -c "! grep -q '\"dim\"' '$tmp/p2/summary.json' && grep -qx 'id,x,y,r' '$tmp/p2/packing.csv'"
+# r_max / r_min above the packing limit of 100 is refused before depositing (a 3D deposition with
+# --r-min 1e-300 never ended: campaign of issue 27)
+check_bad pack3d_ratio "r_max / r_min" pack --dim 3 --width 5 --r-min 1e-300
+check_bad pack2d_ratio "r_max / r_min" pack --width 5 --r-min 1e-3
 # 2D-only subcommands refuse the 3D file (it is read as 3D: the reader accepted it)
 check_bad compact_3d "packing.csv is a 3D packing; netsolve compact is 2D only" compact --packing "$p3"
 check_bad yield_3d "is a 3D packing; netsolve yield is 2D only" yield --packing "$p3"

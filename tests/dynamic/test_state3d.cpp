@@ -225,6 +225,12 @@ TEST(DynamicState3D, BadStateFilesGiveOneLineErrors) {
     st.particles.z[0] = st.box.z_max + 0.5 * st.particles.radius[0];
     refuse(format_state(st), "outside the box");
   }
+  {  // a torque of 1e300 about x (campaign of issue 27: accepted before, inf in the outputs)
+    std::istringstream in(good);
+    SolverState st = parse_state(in, "s3");
+    st.particles.tx[1] = 1e300;
+    refuse(format_state(st), "/particles/tx/1: particle 1: torque");
+  }
   {  // the 2D solver refuses a sphere state
     std::istringstream in(good);
     const SolverState st = parse_state(in, "s3");

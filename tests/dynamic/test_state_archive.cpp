@@ -187,6 +187,8 @@ TEST(StateArchive, CorruptFieldsAreRefusedAtTheDoorOnOneLine) {
   refuse("inertia", [](J& j) { j["particles"]["inertia"][1] = -1.0; }, "/particles/inertia/1: inertia");
   refuse("column size", [](J& j) { j["particles"]["vy"].erase(0); }, "/particles/vy: expected 36 elements, found 35");
   refuse("speed", [](J& j) { j["particles"]["vx"][5] = 1e6; }, "/particles/vx/5: particle 5: speed");
+  // a torque as the force (campaign of issue 27: a torque of 1e300 wrote inf into vibrate's timeseries.csv)
+  refuse("torque", [](J& j) { j["particles"]["torque"][5] = 1e300; }, "/particles/torque/5: particle 5: torque");
   refuse("duplicate", [](J& j) { j["particles"]["x"][1] = j["particles"]["x"][0]; j["particles"]["y"][1] = j["particles"]["y"][0]; },
          "/particles/x/1: particles 0 and 1");
   refuse("outside", [](J& j) { j["particles"]["x"][4] = -5.0; }, "/particles/x/4: particle 4: the centre");
@@ -209,6 +211,29 @@ TEST(StateArchive, CorruptFieldsAreRefusedAtTheDoorOnOneLine) {
   refuse("mu negative", [](J& j) { j["plastic_indentation"]["mu"] = "-inf"; }, "/plastic_indentation/mu: \"-inf\" is outside");
   refuse("missing", [](J& j) { j["plastic_indentation"].erase("k_t"); }, "/plastic_indentation/k_t: missing");
   refuse("unknown", [](J& j) { j["extra"] = 1; }, "/extra: unknown member");
+  {  // a member nested 1e5 deep: SIGSEGV where the value was dumped for the message (campaign of issue 27)
+    std::string text = good.dump();
+    const std::string from = "\"version\":1";
+    ASSERT_NE(text.find(from), std::string::npos);
+    text.replace(text.find(from), from.size(), "\"version\":" + std::string(100000, '[') + std::string(100000, ']'));
+    try {
+      (void)parse_state(text, "mem");
+      ADD_FAILURE() << "deep nesting: accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("mem: /: not a state archive (nested more than 64 levels deep at byte"),
+                std::string::npos) << e.what();
+    }
+    // a wrong type is named by its type and size, not dumped
+    J j = good;
+    j["version"] = J::array({1, 2, 3});
+    try {
+      (void)parse_state(j.dump(), "mem");
+      ADD_FAILURE() << "array version: accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("/version: expected an integer, found array (array of 3 elements)"),
+                std::string::npos) << e.what();
+    }
+  }
   refuse("wall mode", [](J& j) { j["moving_walls"][1]["mode"] = std::string(500, 'z'); }, "/moving_walls/1/mode: \"zzzz");
   refuse("box", [](J& j) { j["box"]["max"][0] = -1.0; }, "/box: box must have x_max > x_min");
   refuse("format", [](J& j) { j["format"] = "other"; }, "/format: expected \"netdem-state\"");

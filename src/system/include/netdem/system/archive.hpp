@@ -26,6 +26,8 @@ using Json = nlohmann::json;
 
 /// The format field of every archive; its version is per kind.
 inline constexpr const char* kArchiveFormat = "netdem-state";
+/// The deepest nesting parse_archive accepts (a state is at most 5 levels deep).
+inline constexpr std::size_t kMaxArchiveDepth = 64;
 
 /// A refused field: std::invalid_argument with what() = "FILE: POINTER: problem" ("POINTER:
 /// problem" without a file).
