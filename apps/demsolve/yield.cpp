@@ -101,7 +101,11 @@ YieldDoor check_yield_args(const DemYieldArgs& a) {
     throw UsageError(fmt::format("--damping must be in [0, 1] (fraction of critical damping), got {}", a.damping));
   if (!(std::isfinite(a.first_touch) && a.first_touch > 0.0 && a.first_touch <= 0.01))
     throw UsageError(fmt::format("--first-touch must be in (0, 0.01], got {}", a.first_touch));
-  if (!(std::isfinite(a.k_t) && a.k_t >= 0.0)) throw UsageError(fmt::format("--k-t must be a finite number >= 0, got {}", a.k_t));
+  // the explicit step follows the stiffest tangential spring k_t sigma_y A_c: 1e6 (1e3 x the
+  // default) keeps a run within reach of --max-steps
+  if (!(std::isfinite(a.k_t) && a.k_t >= 0.0 && a.k_t <= 1e6))
+    throw UsageError(fmt::format("--k-t must be in [0, 1e6] sigma_y/R for the explicit solver (its time step follows "
+                                 "k_t sigma_y A_c), got {}", a.k_t));
   if (!(std::isfinite(a.steps_per_contact) && a.steps_per_contact >= 10.0 && a.steps_per_contact <= 1e4))
     throw UsageError(fmt::format("--steps-per-contact must be in [10, 1e4], got {}", a.steps_per_contact));
   if (a.increments < 1 || a.increments > 1000000)

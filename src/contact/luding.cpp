@@ -18,7 +18,9 @@ bool fin(double v) { return std::isfinite(v); }
 void LudingParams::validate() const {
   need(fin(k2) && k2 > 0.0, "k2", "positive and finite", k2);
   need(fin(k1_ratio) && k1_ratio > 0.0 && k1_ratio <= 1.0, "k1/k2", "in (0, 1]", k1_ratio);
-  need(fin(kc_ratio) && kc_ratio >= 0.0, "k_c/k2", ">= 0 and finite", kc_ratio);
+  // (an attractive branch 1e3 times stiffer than the unloading spring has no physical use and
+  // overflows the attraction limit f_min)
+  need(fin(kc_ratio) && kc_ratio >= 0.0 && kc_ratio <= 1e3, "k_c/k2", "in [0, 1e3]", kc_ratio);
   need(fin(alpha) && alpha > 0.0, "k_t/k2 (alpha)", "positive and finite", alpha);
   need(fin(gamma_n) && gamma_n >= 0.0, "gamma_0", ">= 0 and finite", gamma_n);
   need(fin(gamma_t) && gamma_t >= 0.0, "gamma_t", ">= 0 and finite", gamma_t);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -175,6 +176,20 @@ void NetworkState::validate() const {
   if (!(std::isfinite(solid_area) && solid_area > 0 && std::isfinite(box_area0) && box_area0 > 0 &&
         std::isfinite(initial_density) && initial_density > 0))
     bad("solid area, box area and initial density must be positive");
+  {  // the recorded sums agree with the particles and the box they were made from
+    auto near = [](double a, double b) { return std::fabs(a - b) <= 1e-9 * std::fabs(b); };
+    double area = 0.0;
+    for (const double rp : r) area += std::numbers::pi * rp * rp;
+    if (!near(solid_area, area))
+      bad(fmt::format("the solid area {} is not the particles' sum pi r^2 = {}", solid_area, area));
+    const double box_area = (box0.x_max - box0.x_min) * (box0.y_max - box0.y_min);
+    if (!near(box_area0, box_area)) bad(fmt::format("the initial box area {} is not the initial box's {}", box_area0, box_area));
+    if (!near(initial_density, solid_area / box_area0))
+      bad(fmt::format("the initial density {} is not solid area / box area = {}", initial_density, solid_area / box_area0));
+    const double density = solid_area / (box_area0 * box_deformation.determinant());
+    if (!(density > 0.0 && density <= 1.0))
+      bad(fmt::format("the density after the box deformation is {}, outside (0, 1]", density));
+  }
   if (!(std::isfinite(box0.x_min) && std::isfinite(box0.y_min) && std::isfinite(box0.x_max) && std::isfinite(box0.y_max) &&
         box0.x_max > box0.x_min && box0.y_max > box0.y_min))
     bad("the initial box must be finite with positive size");

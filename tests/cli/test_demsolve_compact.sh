@@ -30,6 +30,7 @@ result() {  # name ok?
 }
 
 check_bad walls_shear "E12 = 0" compact --width 12 --boundary walls --path=-1,-0.5,0.4
+check_bad kt_huge "--k-t must be in \[0, 1e6\]" compact --width 12 --k-t 1e300
 check_bad negative_inertial_number "inertial-number" compact --width 12 --inertial-number -1e-3
 check_bad nan_inertial_number "inertial-number" compact --width 12 --inertial-number nan
 check_bad density_below_d0 "impossible target" compact --width 12 --to-density 0.5

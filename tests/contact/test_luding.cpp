@@ -694,4 +694,5 @@ TEST(Luding, Table1DefaultsAndValidation) {
   bad([](LudingParams& q) { q.T_var = 0.0; });
   bad([](LudingParams& q) { q.mu = std::nan(""); });
   bad([](LudingParams& q) { q.t0 = 0.0; });
+  bad([](LudingParams& q) { q.kc_ratio = 1e300; });  // f_min overflowed to -inf (issue 27 campaign)
 }

@@ -631,3 +631,21 @@ TEST(NetworkSolverState, FileRoundTripAndBadFiles) {
 // with lever arms from the origin moved S22 from -0.839 to -0.532 under the shift. The contact
 // law, the prescribed motion (about the origin: a rigid translation is added) and the drag
 // (relative to the affine field) are objective, so the runs are the same network up to rounding.
+
+// A state's recorded sums must agree with its particles and box (robustness campaign, issue 27:
+// inconsistent but positive values reached the analytic yield surface as null).
+TEST(NetworkSolverState, InconsistentSumsAreRefused) {
+  const auto pk = square_lattice(4, 4);
+  qs::NetworkSolver s(pk, qs::SolverOptions{});
+  const qs::NetworkState good = s.state();
+  EXPECT_NO_THROW(good.validate());
+  auto refused = [&](auto&& change) {
+    qs::NetworkState st = good;
+    change(st);
+    EXPECT_THROW(st.validate(), std::invalid_argument);
+  };
+  refused([](qs::NetworkState& st) { st.box_area0 *= 1.01; });
+  refused([](qs::NetworkState& st) { st.solid_area *= 0.99; });
+  refused([](qs::NetworkState& st) { st.initial_density *= 1.001; });
+  refused([](qs::NetworkState& st) { st.box_deformation *= 0.5; });  // density 4 x: above 1
+}
