@@ -252,7 +252,11 @@ void read_contacts(const Field& f, StaggeredState& s) {
     k.pair.rhs_evals = f["rhs_evals"][i].integer(0, kBig);
     k.pair.restarts = f["restarts"][i].integer(0, kBig);
     k.t_created = f["t_created"][i].real();
-    k.L_created = f["L_created"][i].real();
+    {  // the centre distance at creation: about r_a + r_b (the pair touched then); a factor 4 either
+       // way is generous and keeps dL_bar / L_created finite
+      const double rab = s.p[static_cast<std::size_t>(k.a)].r + s.p[static_cast<std::size_t>(k.b)].r;
+      k.L_created = f["L_created"][i].real(0.25 * rab, 4.0 * rab);
+    }
     k.dL_bar = f["dL_bar"][i].real();
     k.x_start = f["x_start"][i].real();
   }

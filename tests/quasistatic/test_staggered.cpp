@@ -314,6 +314,7 @@ TEST(Staggered, StateFieldsAreCheckedAtTheDoor) {
   refuse("/material/gamma_s", "x", "/material/gamma_s: expected a number");
   refuse("/clock/dt", "inf", "/clock/dt: must be a finite number");
   refuse("/clock/dt", 0.0, "/clock/dt: must be > 0");  // the restart hung (campaign of issue 27)
+  refuse("/contacts/L_created/0", 1e-300, "/contacts/L_created/0: 1e-300 is outside");  // dL_bar/L0 overflowed to null
   refuse("/factor/fixed", nlohmann::json::array({0}), "/factor/fixed: expected 0 or");
   refuse("/origin", 5, "/origin: expected an object or null");
   refuse("/kind", "dem", "/kind: a dem state, expected a staggered state");
