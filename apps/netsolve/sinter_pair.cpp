@@ -276,7 +276,7 @@ int run(const Args& a, const std::string& command) {
     for (double v : {60.0, 600.0, 3600.0, 14400.0, 57600.0})
       if (r.t == v)
         at[fmt::format("{:g}", v)] = {{"x_over_R", r.x_over_R}, {"shrinkage", r.shrinkage}, {"sintering_force", r.F_s},
-                                      {"viscosity", num(r.eta)}, {"viscosity_bouvard_mcmeeking", r.eta_BM}};
+                                      {"viscosity", num(r.eta)}, {"viscosity_bouvard_mcmeeking", num(r.eta_BM)}};
   j["at"] = at;
   if (!rows.empty()) {
     const Row& r = rows.back();
@@ -287,7 +287,7 @@ int run(const Args& a, const std::string& command) {
                   {"R_B_over_R_B0", r.y[4] / RB},
                   {"sintering_force", r.F_s},
                   {"viscosity", num(r.eta)},
-                  {"viscosity_bouvard_mcmeeking", r.eta_BM}};
+                  {"viscosity_bouvard_mcmeeking", num(r.eta_BM)}};
     if (mat.youngs_modulus > 0.0)
       j["final"]["equivalent_bar_force"] = sp::equivalent_bar_force(mat.youngs_modulus, c.q0, c.q);  // Eq 17
   }
