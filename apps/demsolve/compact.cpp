@@ -238,12 +238,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
   std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
   std::sort(snaps.begin(), snaps.end());
-  RunDirOptions rdo;
-  rdo.overwrite = a.overwrite;
-  if (!a.packing_file.empty()) rdo.inputs.emplace_back(a.packing_file);
-  check_run_dir(out, rdo);
-  if (a.packing_file.empty()) netdem::app::netsolve::check_deposition_size(a.pack);
-  activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
+  const RunDirOptions rdo = check_scene_run_dir(out, a.overwrite, a.packing_file, a.pack);
   std::string source;
   const packing::Packing pk = input_packing_of<D>(a, source);
   check_memory(pk.size());

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "output.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 using namespace netdem::dem;
@@ -74,6 +75,17 @@ DynamicOptions plastic_options(double mu, double k_t, bool reversible, double fi
   o.affine_drag = drag;
   o.validate();
   return o;
+}
+
+RunDirOptions check_scene_run_dir(const fs::path& out, bool overwrite, const std::string& packing_file,
+                                  const netdem::app::netsolve::PackArgs& pack) {
+  RunDirOptions rdo;
+  rdo.overwrite = overwrite;
+  if (!packing_file.empty()) rdo.inputs.emplace_back(packing_file);
+  check_run_dir(out, rdo);
+  if (packing_file.empty()) netdem::app::netsolve::check_deposition_size(pack);
+  activity() = packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + packing_file;
+  return rdo;
 }
 
 std::vector<std::uint32_t> prescribed_particles(const packing::Packing& pk, bool affine, bool walls) {

@@ -12,6 +12,8 @@
 #include "netdem/dynamic/compaction.hpp"
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/packing/packing.hpp"
+#include "output.hpp"
+#include "setup.hpp"
 
 namespace netdem::app::dem {
 
@@ -34,6 +36,12 @@ void write_compact_snapshot(const netdem::dem::DynamicSolverT<D>& s, const std::
 /// frictionless die walls); damping: both dashpots, fractions of critical damping of the chord.
 netdem::dem::DynamicOptions plastic_options(double mu, double k_t, bool reversible, double first_touch, double damping,
                                             double drag, double steps_per_contact);
+
+/// The run folder's door for a run on a packing file or netsolve's deposition: the folder is free
+/// (or --overwrite), the deposition's size is within reach; returns the folder options to open it
+/// with once every value is checked.
+RunDirOptions check_scene_run_dir(const std::filesystem::path& out, bool overwrite, const std::string& packing_file,
+                                  const netdem::app::netsolve::PackArgs& pack);
 
 /// The prescribed particles: every one (affine), none (walls) or netsolve's peripheral layer.
 std::vector<std::uint32_t> prescribed_particles(const packing::Packing& pk, bool affine, bool walls);

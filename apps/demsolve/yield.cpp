@@ -514,12 +514,7 @@ int YieldRun::finish() {
 int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::path& out) {
   // ---- the door
   const YieldDoor d = check_yield_args(a);
-  RunDirOptions rdo;
-  rdo.overwrite = a.overwrite;
-  if (!a.packing_file.empty()) rdo.inputs.emplace_back(a.packing_file);
-  check_run_dir(out, rdo);
-  if (a.packing_file.empty()) netdem::app::netsolve::check_deposition_size(a.pack);
-  activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
+  const RunDirOptions rdo = check_scene_run_dir(out, a.overwrite, a.packing_file, a.pack);
   std::string source;
   const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve yield");
   check_memory(pk.size());
