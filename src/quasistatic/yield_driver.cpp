@@ -17,10 +17,6 @@
 
 namespace netdem::qs {
 
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-}  // namespace
-
 std::unique_ptr<NetworkSolver> switch_boundary_mode(const NetworkSolver& solver, const packing::Box& box0,
                                                     std::uint64_t seed, const SolverOptions& next, HandoverReport& rep) {
   if (next.law.frictional())
