@@ -23,7 +23,7 @@ and exits 1 if any crash, hang or NaN-with-exit-0 occurred (0 otherwise; 2 for a
 
 usage:
   /usr/bin/python3 tests/campaign/run_campaign.py --netsolve build/apps/netsolve --demsolve build/apps/demsolve \
-      --out /tmp/campaign --jobs 2 [--timeout 20] [--filter REGEX] [--limit N] [--list]
+      --out results/campaign --jobs 2 [--timeout 20] [--filter REGEX] [--limit N] [--list]
 
 Python standard library only. Runs are small (W = 20 packings, 20-disk DEM samples, short times)
 so that the whole campaign takes about 10-15 minutes on 2 cores. Nothing outside --out is written.
