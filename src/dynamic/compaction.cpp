@@ -165,7 +165,8 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
   m.Sc = voigt_of<D>(s.contact_stress());
   s.contacts(cs_);
   const Particles& P = s.particles();
-  std::unordered_map<std::uint64_t, Voigt<D>> formed;
+  auto& formed = formed_;  // (a member: its buckets are reused from sample to sample)
+  formed.clear();
   formed.reserve(cs_.size());
   int loaded = 0;
   double sum_fn = 0;

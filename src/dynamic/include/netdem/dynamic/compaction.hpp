@@ -53,7 +53,7 @@ class CompactionMeterT {
   double r_mean_;
   std::vector<ContactInfo> cs_;
   std::vector<std::uint8_t> is_pre_;
-  std::unordered_map<std::uint64_t, Voigt<D>> form_;
+  std::unordered_map<std::uint64_t, Voigt<D>> form_, formed_;  ///< strain at formation: last sample, this one
   Voigt<D> prev_{};
 };
 
