@@ -316,6 +316,17 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
     std::fprintf(stderr, "demsolve: error: %s\n", one_line(r.instability_what).c_str());
     return exit_code::untrustworthy;
   }
+  if (r.status == "incomplete") {  // --max-steps reached during the run: the rows so far, no final snapshot
+    files.finish(r.reason);
+    summary["increments_done"] = r.increments_done;
+    summary["steps"] = r.steps;
+    summary["status"] = r.status;
+    summary["status_reason"] = r.reason;
+    write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+    close_run_dir(out);
+    std::fprintf(stderr, "demsolve: error: incomplete: %s\n", r.reason.c_str());
+    return exit_code::untrustworthy;
+  }
   files.finish("");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_compact_snapshot(s, out, "final", files.contacts_buffer());

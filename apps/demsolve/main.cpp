@@ -125,7 +125,7 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
   dcomp->add_option("--increments", dc.increments, "output windows (equal strain, as netsolve's increments)")->capture_default_str();
   netdem::app::netsolve::add_list_option(*dcomp, "--snapshots", dc.snapshots,
                                          "densities at which VTK snapshots are written, a comma list in any order (\"\": none)");
-  dcomp->add_option("--max-steps", dc.max_steps, "refuse a run of more time steps than this")->capture_default_str();
+  dcomp->add_option("--max-steps", dc.max_steps, "refuse a run estimated to need more time steps; stop at it (incomplete, exit 3)")->capture_default_str();
   dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
   dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
   dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");

@@ -325,6 +325,13 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
       int samples = 0;
       std::int64_t since = 0;
       while (s.time() < t_end - 1e-12 * T) {
+        if (!(static_cast<double>(sum.steps) < o.max_steps)) {  // the time step fell below the door's estimate
+          sum.status = "incomplete";
+          sum.reason = fmt::format("stopped at the step limit of {:.3g} time steps at t = {:.4g} of {:.4g} (density {:.4f}, "
+                                   "target {}; the time step fell from {:.3g} to {:.3g})", o.max_steps, s.time(), T,
+                                   s.density(), o.target_density, sum.dt_first, s.dt());
+          return sum;
+        }
         s.step();
         ++sum.steps;
         if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {

@@ -49,6 +49,24 @@ check_bad too_many_steps "max-steps" compact --width 12 --max-steps 100
 result pack $?
 pk="$tmp/pk/packing.csv"
 
+# --max-steps bounds the run, not only the door's estimate t_end / dt_first: the time step falls as
+# contacts form (W = 12, I = 1e-2: about 12,100 steps estimated, 14,200 run). A limit between the two
+# passes the door and stops the run: exit 3, "incomplete", history.csv with a "# stopped:" line.
+"$ns" pack --width 12 --out "$tmp/pk12" >/dev/null 2>"$tmp/stderr"
+result pack12 $?
+"$ds" compact --packing "$tmp/pk12/packing.csv" --inertial-number 1e-2 --quiet --out "$tmp/ms_ref" >/dev/null 2>"$tmp/stderr"
+max=$(/usr/bin/env python3 -c 'import json, math, sys; s = json.load(open(sys.argv[1]))
+m = math.ceil(1.02 * s["t_end"] / s["dt"]["first"]); print(m if m < s["steps"] - 100 else 0)' "$tmp/ms_ref/summary.json")
+"$ds" compact --packing "$tmp/pk12/packing.csv" --inertial-number 1e-2 --max-steps "$max" --quiet --out "$tmp/ms" \
+  >/dev/null 2>"$tmp/stderr"
+rc=$?
+[ "$max" -gt 0 ] && [ "$rc" -eq 3 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -q "incomplete: stopped at the step limit" "$tmp/stderr" &&
+  [ ! -e "$tmp/ms/.incomplete" ] && grep -q "^# stopped: stopped at the step limit" "$tmp/ms/history.csv" &&
+  /usr/bin/env python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+sys.exit(0 if s["status"] == "incomplete" and s["steps"] == int(sys.argv[2]) and s["increments_done"] < 100 else 1)' \
+    "$tmp/ms/summary.json" "$max"
+result max_steps_enforced $?
+
 # layer mode (the default boundary), a small scene
 "$ds" compact --packing "$pk" --inertial-number 1e-3 --quiet --out "$tmp/l" >/dev/null 2>"$tmp/stderr" &&
   files_ok "$tmp/l" command.txt packing.csv history.csv summary.json particles_initial.vtp particles_final.vtp \

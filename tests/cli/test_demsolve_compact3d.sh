@@ -38,6 +38,16 @@ check_bad dim3_periodic "no periodic boundaries" compact --dim 3 --affine --widt
 check_bad dim2_lateral "--lateral is for --dim 3 only" compact --width 6 --lateral walls
 check_bad dim4 "--dim" compact --dim 4
 check_bad dim3_target "not above the current density" compact --dim 3 --affine --packing "$p3" --to-density 0.3
+# --max-steps bounds the run (the time step falls as contacts form: W = 6, I = 1e-2, to 0.6: about
+# 3,100 steps estimated, 30,000 run): exit 3, "incomplete", history.csv with a "# stopped:" line
+"$ds" compact --dim 3 --affine --packing "$p3" --inertial-number 1e-2 --to-density 0.6 --max-steps 5000 --quiet \
+  --out "$tmp/ms" >/dev/null 2>"$tmp/stderr"
+rc=$?
+[ "$rc" -eq 3 ] && [ "$(grep -c . "$tmp/stderr")" -eq 1 ] && grep -q "incomplete: stopped at the step limit" "$tmp/stderr" &&
+  [ ! -e "$tmp/ms/.incomplete" ] && grep -q "^# stopped: stopped at the step limit" "$tmp/ms/history.csv" &&
+  /usr/bin/env python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+sys.exit(0 if s["status"] == "incomplete" and s["steps"] == 5000 else 1)' "$tmp/ms/summary.json"
+result dim3_max_steps_enforced $?
 
 check_history() {  # dir mode: files, columns, no NaN, target density, compression, Eq 13 = contacts (affine)
   /usr/bin/env python3 - "$1" "$2" <<'PY'

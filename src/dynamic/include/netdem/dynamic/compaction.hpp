@@ -80,7 +80,8 @@ struct CompactionOptions {
   /// I = gamma' d sqrt(rho / P_ref); 1.5e-4: docs/dynamic.md "demsolve compact", the fit
   double inertial_number = 1.5e-4;
   int increments = 100;     ///< history rows from the start to the target (equal times)
-  double max_steps = 1e10;  ///< refuse a run estimated to need more time steps
+  /// refuse a run estimated to need more time steps; a run that reaches it stops ("incomplete")
+  double max_steps = 1e10;
   bool walls = false;       ///< the stress from the wall forces; the wall-vs-contact gap is recorded
   /// The numbers alone (inertial number, increments, step limit), before any packing is built.
   void check_numbers() const;
@@ -109,7 +110,7 @@ struct CompactionRowT {
 
 template <int D>
 struct CompactionSummaryT {
-  std::string status = "ok";  ///< ok | unstable
+  std::string status = "ok";  ///< ok | unstable | incomplete (the step limit reached; `last`: the last full window)
   std::string reason;         ///< why, "; "-separated; empty when ok
   std::vector<std::string> warnings;
   int increments_done = 0;
@@ -138,7 +139,8 @@ class CompactionObserverT {
 /// the caller, rate from compaction_rate()) to rate.t_end in o.increments windows of equal time.
 /// Each window is measured about every 20 steps (at least 10 samples) and averaged. An
 /// InstabilityError stops the run: the summary says so (status unstable) and the row of the
-/// last completed increment stays the last one reported.
+/// last completed increment stays the last one reported. So does o.max_steps time steps (status
+/// incomplete): the time step can fall below the first one, on which the door's estimate rests.
 template <int D>
 CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT<D>& rate, const CompactionOptions& o,
                                      CompactionObserverT<D>& obs);
