@@ -161,21 +161,41 @@ void check_temperature(double T, const LudingParams& p, const std::string& what)
                                  "above 0.05 (Eq 9 is a small-strain law)", what, T, std::fabs(e)));
 }
 
-template <int D>
-void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps, bool allow_long) {
-  const double dt = s.dt();
+namespace {
+// The steps and the work (particles x steps) against --max-steps and kMaxParticleSteps; `about`:
+// "about" for the solver's time step, "at least" for the estimate before placing.
+void check_work(std::size_t n, double steps, double dt, double max_steps, bool allow_long, const char* about) {
   if (!(std::isfinite(dt) && dt > 0.0))
     throw UsageError(fmt::format("the time step is {:g} s: check --steps-per-contact, k2 and rho_p", dt));
   if (!(std::isfinite(max_steps) && max_steps >= 1.0)) throw UsageError("--max-steps must be a number >= 1");
   if (!(steps <= max_steps))
-    throw UsageError(fmt::format("the run needs about {:.3g} time steps of {:.3g} s, more than --max-steps = {:.3g}",
-                                 steps, dt, max_steps));
-  const double work = steps * static_cast<double>(s.particles().size());
+    throw UsageError(fmt::format("the run needs {} {:.3g} time steps of {:.3g} s, more than --max-steps = {:.3g}",
+                                 about, steps, dt, max_steps));
+  const double work = steps * static_cast<double>(n);
   if (!allow_long && !(work <= kMaxParticleSteps))
-    throw UsageError(fmt::format("the run needs about {:.3g} particle-steps ({} particles x {:.3g} time steps of {:.3g} s), "
+    throw UsageError(fmt::format("the run needs {} {:.3g} particle-steps ({} particles x {:.3g} time steps of {:.3g} s), "
                                  "more than {:.3g}, about {:.1f} to {:.1f} h of one core: pass --allow-long to run it",
-                                 work, s.particles().size(), steps, dt, kMaxParticleSteps, work / 2e7 / 3600.0,
-                                 work / 1e7 / 3600.0));
+                                 about, work, n, steps, dt, kMaxParticleSteps, work / 2e7 / 3600.0, work / 1e7 / 3600.0));
+}
+
+// check_run_limits' steps and work before a random sample of n particles is placed (placing 1e6
+// spheres takes a minute), over `duration` seconds
+template <int D>
+void check_work_before_placing(int n, const LudingParams& lp, const DynamicOptions& opt, double duration,
+                               double max_steps, bool allow_long) {
+  // the time step of the heaviest possible pair (radius a0 (1 + w0)) bounds the solver's, which
+  // takes the lightest pair: so the steps below are at most the run's (choose_time_step)
+  const double a = lp.a0 * (1.0 + lp.w0);
+  const double m = D == 2 ? lp.rho_p * std::numbers::pi * a * a : lp.rho_p * 4.0 / 3.0 * std::numbers::pi * a * a * a;
+  const double dt = contact_duration(lp.k2, lp.gamma_n, 0.5 * m) / opt.steps_per_contact;
+  check_work(static_cast<std::size_t>(std::max(n, 1)), duration / dt, dt, max_steps, allow_long, "at least");
+}
+}  // namespace
+
+template <int D>
+void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps, bool allow_long) {
+  const double dt = s.dt();
+  check_work(s.particles().size(), steps, dt, max_steps, allow_long, "about");
   const Particles& P = s.particles();
   const LudingParams& lp = s.params();
   double m_lo = std::numeric_limits<double>::infinity();
@@ -426,7 +446,11 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
     // 3D default: 100 N/m over 2 a0 (the 2D default's overlap ratio)
     const double pressure = D == 3 && !args.pressure_given ? args.pressure / (2.0 * lp.a0) : args.pressure;
     warning = check_loading(pressure, lp, "--pressure", D);
-    if (sample.packing_file.empty()) check_memory(static_cast<std::size_t>(std::max(sample.n, 1)));
+    if (sample.packing_file.empty()) {  // before placing: 1e6 spheres take a minute to place
+      check_memory(static_cast<std::size_t>(std::max(sample.n, 1)));
+      check_work_before_placing<D>(sample.n, lp, opt, phase_end(phases, phases.size() - 1), args.max_steps,
+                                   args.allow_long);
+    }
     Box box;
     double length_unit = 0.0;
     Particles P = D == 2 ? make_sample(sample, lp, box, &length_unit) : make_sample3(sample, lp, box, &length_unit);

@@ -68,6 +68,11 @@ usage m_wall_1e-9 "wall" prepare "${small[@]}" --param m_wall=1e-9
 usage gamma_wall_1e6 "gamma_wall dt / m_wall" prepare "${small[@]}" --param gamma_wall=1e6
 usage T_hot_1e6 "thermal radius change" sinter --state "$S" --T-hot 1e6
 usage steps_per_contact_inf "steps-per-contact" prepare "${small[@]}" --steps-per-contact inf
+# issue 27: the work of a random sample is estimated before it is placed (placing 1e6 spheres took
+# ~46 s before the refusal "needs about ..."); "at least": the heaviest pair's time step
+usage prepare_3d_1e6_door "the run needs at least 3.*particle-steps (1000000 particles x" prepare --dim 3 --n 1000000
+usage prepare_3d_1e6_max_steps "needs at least .* time steps of .* more than --max-steps = 1e+03" \
+  prepare --dim 3 --n 1000000 --allow-long --max-steps 1000
 usage rho_p_1e-300 "time step" prepare "${small[@]}" --param rho_p=1e-300
 # (k2 = 1e300 would also need 7e152 steps, beyond --max-steps; the loading-ratio floor refuses it first)
 usage k2_1e300 "loading ratio 2p/k2 = 2e-298, below 1e-9" prepare "${small[@]}" --param k2=1e300
