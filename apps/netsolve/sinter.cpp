@@ -287,6 +287,27 @@ void setup_new(const Args& a, Setup& u) {
   }
 }
 
+// StaggeredRunOptions::validate's estimate, span / dt_max, with the profile's breakpoints: each ends
+// a global step, so the run takes at least the sum over the pieces between them of ceil(piece / dt_max)
+void check_profile_steps(const sp::TemperatureProfile& tp, double t_start, const st::StaggeredRunOptions& ro,
+                         double dt_max) {
+  double steps = 0.0, prev = t_start;
+  long breakpoints = 0;
+  for (double b : tp.times()) {
+    if (!(b > prev && b < ro.t_end)) continue;  // outside the run, or a jump's second row
+    steps += std::ceil((b - prev) / dt_max);
+    prev = b;
+    ++breakpoints;
+  }
+  if (breakpoints == 0) return;
+  steps += std::ceil((ro.t_end - prev) / dt_max);
+  if (!(steps <= static_cast<double>(ro.max_steps)))
+    throw UsageError(fmt::format("--max-steps: the run of {:.6g} s needs at least {:.3g} steps of at most {:.6g} s (the "
+                                 "largest global step; each of the {} breakpoints of the temperature profile within the "
+                                 "run ends one), more than the step limit {}: shorten the run or the profile, or raise the "
+                                 "limit", ro.t_end - t_start, steps, dt_max, breakpoints, ro.max_steps));
+}
+
 Setup setup(const Args& a, const CLI::App& app) {
   Setup u;
   u.restart = !a.restart.empty();
@@ -305,6 +326,10 @@ Setup setup(const Args& a, const CLI::App& app) {
     setup_restart(a, u);
   else
     setup_new(a, u);
+  if (u.sim)
+    check_profile_steps(u.sim->temperature(), u.sim->time(), u.ro, u.sim->options().dt_max);
+  else
+    check_profile_steps(u.prof, 0.0, u.ro, u.so.dt_max);
   return u;
 }
 

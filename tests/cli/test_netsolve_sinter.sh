@@ -41,6 +41,11 @@ check_bad_rc sn_missing_packing "no_such.csv" sinter --packing "$tmp/no_such.csv
 check_bad_rc sn_negative_time "time" sinter --packing "$lat" --time -5 --quiet
 check_bad_rc sn_strategy "strategy" sinter --packing "$lat" --time 100 --strategy 3 --quiet
 check_bad_rc sn_time_beyond_max_steps "--max-steps: the run of 1e+12 s needs at least 1e+11 steps" sinter --packing "$lat" --time 1e12 --quiet
+# issue 27: each breakpoint of a profile ends a step: 2000 rows within 100 s are at least 2000 steps
+# (the estimate --time / --dt-max alone is 10)
+awk 'BEGIN { print "time,T"; for (k = 0; k < 2000; k++) printf "%.17g,1293\n", 0.05 * k }' >"$tmp/dense_profile.csv"
+check_bad_rc sn_profile_breakpoints "--max-steps: the run of 100 s needs at least 2e+03 steps .*each of the 1999 breakpoints" \
+  sinter --packing "$lat" --time 100 --profile "$tmp/dense_profile.csv" --max-steps 500 --quiet
 check_bad_rc sn_restart_beyond_max_steps "more than the step limit 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
 # the library checks the options once (StaggeredOptions, StaggeredRunOptions) and names the
 # quantity; the message names the option (netdem::FieldError, the field renamed where it differs)
