@@ -89,6 +89,25 @@ for integ in dp45 rk4 cvode arkode; do
   fi
 done
 
+# a failed step, whatever the integrator (issue 27, campaign27): radii 5e-5 and 1e-3 m fail near
+# t = 7e-5 s; CVODE stalled there (1e7 steps of ~1e-20 s, 42 s) before the step cap; now a stalled
+# integration is a step failure: exit 3, "unstable", "step_failure", the files written, in seconds
+# (dp45 ends so too, after 8-12 s of small steps: not run here)
+for integ in rk4 cvode arkode; do
+  d="$tmp/sp_stall_$integ"
+  timeout 30 "$tool" sinter-pair --quiet --radii 5e-5,1e-3 --integrator "$integ" --out "$d" >/dev/null 2>"$tmp/stderr"
+  rc=$?
+  if [ "$rc" -eq 3 ] && grep -q '"status": "unstable"' "$d/summary.json" && grep -q '"stop": "step_failure"' "$d/summary.json" &&
+     [ "$(head -1 "$d/pair.csv")" = "$header" ] && [ ! -e "$d/.incomplete" ] && ! grep -qi "nan" "$d/pair.csv"; then
+    ok
+  else
+    ko "sp_step_failure_$integ rc=$rc"
+  fi
+done
+start=$SECONDS
+timeout 30 "$tool" sinter-pair --quiet --radii 5e-5,1e-3 --integrator cvode --out "$tmp/sp_stall_time" >/dev/null 2>&1
+if [ $((SECONDS - start)) -le 3 ]; then ok; else ko "sp_stall_cvode_seconds $((SECONDS - start)) s"; fi
+
 # profiles and material files are held to the command line's ranges (issue 27 items 6, 8): exit 2,
 # one line naming the file's line, a bad input quoted to at most 80 characters
 usage2() {  # NAME WORD ARGS...: exit 2, one line containing WORD, under 300 bytes, no output folder

@@ -46,6 +46,8 @@ class SundialsPairIntegrator {
   /// As sinter::advance(): from c.t to t_end, stopping at every temperature breakpoint, checking
   /// the validity limits after every internal step. Returns c.status. Throws SundialsError on a
   /// non-recoverable SUNDIALS failure (a step failure inside the domain sets StepFailure instead).
+  /// 1000 steps in a row shorter than 1e-12 t are a step size underflow (StepFailure): CVODE
+  /// itself only warns that t + h = t and goes on, to the step cap.
   PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const IntegratorOptions& opts);
 
   IntegratorKind kind() const { return kind_; }
