@@ -253,6 +253,11 @@ void check_globals(const Field& r, const SolverState& st, bool plastic) {
     if (!plastic && w[k]->mode == WallMode::Stress && !(ratio <= StateLimits::kMaxLoading))
       r["moving_walls"][k]["pressure"].fail(fmt::format("loading ratio {} = {:.3g} is above {} (Luding section 4)",
                                                         D == 2 ? "2p/k2" : "4 p a0/k2", ratio, StateLimits::kMaxLoading));
+    // a pressure that cannot hold the sample, and the stresses over p overflow (4.9e-324: inf in timeseries.csv)
+    if (!plastic && w[k]->mode == WallMode::Stress && !(ratio >= StateLimits::kMinLoading))
+      r["moving_walls"][k]["pressure"].fail(fmt::format("pressure {:g} gives the loading ratio {} = {:.3g}, below {}: the "
+                                                        "wall would not hold the sample", w[k]->pressure,
+                                                        D == 2 ? "2p/k2" : "4 p a0/k2", ratio, StateLimits::kMinLoading));
   }
   const Field th = r["thermal"];
   if (!(st.thermal.T > StateLimits::kAbsoluteZero))
@@ -391,6 +396,19 @@ void check_particles(const Field& r, const SolverState& st, bool plastic) {
   }
 }
 
+// A Luding history's force-free overlap delta_0 against the contact's geometry: the law keeps it in
+// [0, max(the largest overlap, delta_fluid)], and an overlap is below r_i + r_j (a wall contact: 2 r_i).
+// Unchecked, delta_0 = 1e300 gave f_min = -k_c delta_0 / (1 + c) = -inf in contacts_*.csv.
+template <class H>
+void check_history(const Field& h, const H& v, double reach, double delta_fluid, const std::string& pair) {
+  if constexpr (requires { v.delta0; }) {
+    const double bound = std::max(reach, delta_fluid);
+    if (!(v.delta0 >= 0.0 && v.delta0 <= bound))
+      h["delta0"].fail(fmt::format("the force-free overlap {:.6g} m is outside [0, {:.6g} m], the largest overlap of {} "
+                                   "(the radii sum) or the fluid limit", v.delta0, bound, pair));
+  }
+}
+
 // The pair table (sorted i < j < N) and the wall contacts (particle < N, wall < 2D, sorted), with
 // the histories of the state's law.
 template <int D, class H>
@@ -408,6 +426,8 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     st.pair_key.push_back((i << 32) | j);
     if (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])) pr["i"][k].fail("pairs must be sorted by (i, j)");
     pair.push_back(pr["history"][k].get<H>());
+    check_history(pr["history"][k], pair.back(), st.particles.radius[i] + st.particles.radius[j],
+                  st.params.delta_fluid(), fmt::format("particles {} and {}", i, j));
   }
   constexpr std::size_t W = 2 * D;
   wall.assign(W * n, H{});
@@ -423,6 +443,8 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     if (k > 0 && !(W * i + w > last)) wc["particle"][k].fail("wall contacts must be sorted by (particle, wall)");
     last = W * i + w;
     wall[last] = wc["history"][k].get<H>();
+    check_history(wc["history"][k], wall[last], 2.0 * st.particles.radius[i], st.params.delta_fluid(),
+                  fmt::format("particle {} on a wall", i));
   }
 }
 

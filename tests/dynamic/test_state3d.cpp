@@ -231,6 +231,34 @@ TEST(DynamicState3D, BadStateFilesGiveOneLineErrors) {
     st.particles.tx[1] = 1e300;
     refuse(format_state(st), "/particles/tx/1: particle 1: torque");
   }
+  {  // a Luding history's delta0 against the contact's geometry (campaign of issue 27: delta0 = 1e300
+     // was accepted and gave f_min = -inf in contacts_*.csv)
+    std::istringstream in(good);
+    const SolverState st0 = parse_state(in, "s3");
+    ASSERT_FALSE(st0.pair_history3.empty());
+    SolverState st = st0;
+    st.pair_history3[0].delta0 = 1e300;
+    refuse(format_state(st), "/pairs/history/0/delta0: the force-free overlap 1e+300 m is outside [0, ");
+    st = st0;
+    st.pair_history3.back().delta0 = -1e-9;
+    refuse(format_state(st), "/delta0: the force-free overlap -1e-09 m is outside");
+    st = st0;
+    std::size_t w = 0;
+    while (w < st.wall_history3.size() && st.wall_history3[w].fresh()) ++w;
+    ASSERT_LT(w, st.wall_history3.size());
+    st.wall_history3[w].delta0 = 1e300;
+    refuse(format_state(st), "/wall_contacts/history/0/delta0: the force-free overlap 1e+300 m");
+  }
+  {  // a stress-controlled wall's pressure is held to --pressure's range (campaign of issue 27: 4.9e-324
+     // was accepted and gave inf in timeseries.csv, the stresses over p)
+    std::istringstream in(good);
+    SolverState st = parse_state(in, "s3");
+    ASSERT_EQ(st.box.top.mode, WallMode::Stress);
+    st.box.top.pressure = 4.9e-324;
+    refuse(format_state(st), "/moving_walls/2/pressure: pressure 4.94066e-324 gives the loading ratio 4 p a0/k2 = 0, below 1e-09");
+    st.box.top.pressure = 0.0;
+    refuse(format_state(st), "/pressure: pressure 0 gives the loading ratio");
+  }
   {  // the 2D solver refuses a sphere state
     std::istringstream in(good);
     const SolverState st = parse_state(in, "s3");

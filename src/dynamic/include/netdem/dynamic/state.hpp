@@ -24,6 +24,7 @@ struct StateLimits {
   static constexpr double kMaxDt = 1.0;           ///< dt in (0, 1] s
   static constexpr double kMaxBox = 1.0e6;        ///< box corners and free centres within +-1e6 L
   static constexpr double kMaxLoading = 0.1;      ///< stress-wall loading ratio 2p/k2 <= 0.1 (Luding)
+  static constexpr double kMinLoading = 1e-9;     ///< ... >= 1e-9, as --pressure (stresses over p overflow)
   static constexpr double kAbsoluteZero = -273.15;  ///< T > -273.15 deg C
   static constexpr double kMaxThermalStrain = 0.05;  ///< |da_T (T - T_radius_ref)| <= 0.05
   static constexpr std::size_t kMaxParticles = 10000000;  ///< 1 .. 1e7 particles
