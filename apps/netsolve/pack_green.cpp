@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "netdem/dynamic/solver.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/laminar.hpp"
 #include "netdem/packing/random_fill.hpp"
@@ -66,8 +67,9 @@ void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
                                  "particle-steps ({:.3g} time steps), more than {:.3g} (hours of one core): pass --allow-long "
                                  "to run it",
                                  o.n, o.steps_per_contact, o.wall_speed, work, steps, kMaxGreenParticleSteps));
+  packing::Packing cloud;
   try {
-    (void)packing::random_fill_3d(dem::green_body_cloud_options(o));
+    cloud = packing::random_fill_3d(dem::green_body_cloud_options(o));
   } catch (const std::exception& e) {
     std::string why = e.what();
     if (why.rfind("random_fill_3d: ", 0) == 0) why = why.substr(16);
@@ -76,6 +78,14 @@ void check_green_door(const dem::GreenBodyOptions& o, const GreenArgs& a) {
                                  "cloud cannot be made ({}); change these options",
                                  o.n, o.dispersion, o.cloud_fraction, o.aspect, packing::quote_input(why, 200)));
   }
+  // the solver's time step rule (the mean pair's period / --steps-per-contact, >= 10 steps for the
+  // lightest pair): a wide dispersion failed it after the folder existed (issue 27 item 8)
+  const double spc = dem::green_body_lightest_steps_per_contact(o, cloud), spc_min = dem::DynamicOptions{}.min_steps_per_contact;
+  if (!(spc >= spc_min))
+    throw UsageError(fmt::format("--dispersion {:g} with --steps-per-contact {:g}: the lightest pair of the route's cloud gets "
+                                 "{:.3g} steps per contact from the mean pair's time step, fewer than {:g}: lower --dispersion "
+                                 "or raise --steps-per-contact",
+                                 o.dispersion, o.steps_per_contact, spc, spc_min));
 }
 
 }  // namespace

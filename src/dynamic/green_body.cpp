@@ -123,6 +123,27 @@ double green_body_min_steps(const GreenBodyOptions& o) {
   return (fall + compress) / dt;
 }
 
+double green_body_lightest_steps_per_contact(const GreenBodyOptions& o, const packing::Packing& cloud) {
+  if (cloud.size() == 0) throw std::invalid_argument("green body: the cloud has no spheres");
+  const MeanPair mp = mean_pair(o);  // the law of material(); the masses as add_sphere's
+  double mean = 0.0, lo = HUGE_VAL, lo2 = HUGE_VAL;
+  for (double r : cloud.r) {
+    const double m = o.solid_density * (4.0 / 3.0) * kPi * r * r * r;
+    mean += m;
+    if (m < lo) {
+      lo2 = lo;
+      lo = m;
+    } else if (m < lo2) {
+      lo2 = m;
+    }
+  }
+  mean /= static_cast<double>(cloud.size());
+  if (cloud.size() < 2) lo2 = lo;
+  const double gamma_n = 2.0 * mp.m12 * mp.eta;
+  return o.steps_per_contact * contact_duration(mp.k, gamma_n, lo * lo2 / (lo + lo2)) /
+         contact_duration(mp.k, gamma_n, 0.5 * mean);
+}
+
 namespace {
 
 /// The phases of make_green_body, in order (the numbers are the comments' of the route).

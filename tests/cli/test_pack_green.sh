@@ -81,6 +81,11 @@ door() {  # NAME WORD ARGS...
 door green_gravity_1e300 "--gravity must be in [1e-6, 1e4]" --gravity 1e300
 door green_lamina_1e-12 "--lamina 1e-12 m" --lamina 1e-12
 door green_dispersion_0.999 "--dispersion 0.999" --dispersion 0.999
+# a cloud that can be made, whose lightest pair gets fewer than 10 steps per contact (the solver's
+# rule): exit 1 after the folder existed, "time step ... 0.28 steps per contact" (campaign27)
+door green_dispersion_0.999_n30 "--dispersion 0.999 with --steps-per-contact 25: the lightest pair of the route's cloud gets 0.28 steps" \
+  --n 30 --target-density 0.4 --dispersion 0.999
+door green_dispersion_0.6 "--dispersion 0.6 with --steps-per-contact 25: the lightest pair of the route's cloud gets 7.41 steps" --n 30 --target-density 0.4 --dispersion 0.6
 door green_n_1 "--n 1 " --n 1
 # a body too small for its bulk window (100 spheres, 2 diameters from every wall) reports no bulk
 # density rather than one from a window under one sphere (issue 27 item 9)

@@ -126,6 +126,11 @@ packing::RandomFill3dOptions green_body_cloud_options(const GreenBodyOptions& op
 /// are not counted). Throws std::invalid_argument for bad options (validate()).
 double green_body_min_steps(const GreenBodyOptions& options);
 
+/// The steps per contact that the lightest pair of `cloud` (the route's cloud, green_body_cloud_options)
+/// gets from the mean pair's time step, as the route's solver computes it; the solver refuses fewer
+/// than 10 (DynamicOptions::min_steps_per_contact), which a wide dispersion gives.
+double green_body_lightest_steps_per_contact(const GreenBodyOptions& options, const packing::Packing& cloud);
+
 /// Runs the route. Deterministic for the options (one thread). Throws std::invalid_argument for
 /// bad options (validate(), the cloud's checks), std::runtime_error when the cloud cannot be
 /// placed, InstabilityError if the DEM breaks down. An unreachable target or a phase that does not
