@@ -399,13 +399,15 @@ void check_particles(const Field& r, const SolverState& st, bool plastic) {
 // A Luding history's force-free overlap delta_0 against the contact's geometry: the law keeps it in
 // [0, max(the largest overlap, delta_fluid)], and an overlap is below r_i + r_j (a wall contact: 2 r_i).
 // Unchecked, delta_0 = 1e300 gave f_min = -k_c delta_0 / (1 + c) = -inf in contacts_*.csv.
+// i, j: the pair's particles (j < 0: particle i on a wall).
 template <class H>
-void check_history(const Field& h, const H& v, double reach, double delta_fluid, const std::string& pair) {
+void check_history(const Field& h, const H& v, double reach, double delta_fluid, std::uint64_t i, std::int64_t j) {
   if constexpr (requires { v.delta0; }) {
     const double bound = std::max(reach, delta_fluid);
     if (!(v.delta0 >= 0.0 && v.delta0 <= bound))
       h["delta0"].fail(fmt::format("the force-free overlap {:.6g} m is outside [0, {:.6g} m], the largest overlap of {} "
-                                   "(the radii sum) or the fluid limit", v.delta0, bound, pair));
+                                   "(the radii sum) or the fluid limit", v.delta0, bound,
+                                   j < 0 ? fmt::format("particle {} on a wall", i) : fmt::format("particles {} and {}", i, j)));
   }
 }
 
@@ -427,7 +429,7 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     if (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])) pr["i"][k].fail("pairs must be sorted by (i, j)");
     pair.push_back(pr["history"][k].get<H>());
     check_history(pr["history"][k], pair.back(), st.particles.radius[i] + st.particles.radius[j],
-                  st.params.delta_fluid(), fmt::format("particles {} and {}", i, j));
+                  st.params.delta_fluid(), i, static_cast<std::int64_t>(j));
   }
   constexpr std::size_t W = 2 * D;
   wall.assign(W * n, H{});
@@ -443,8 +445,7 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     if (k > 0 && !(W * i + w > last)) wc["particle"][k].fail("wall contacts must be sorted by (particle, wall)");
     last = W * i + w;
     wall[last] = wc["history"][k].get<H>();
-    check_history(wc["history"][k], wall[last], 2.0 * st.particles.radius[i], st.params.delta_fluid(),
-                  fmt::format("particle {} on a wall", i));
+    check_history(wc["history"][k], wall[last], 2.0 * st.particles.radius[i], st.params.delta_fluid(), i, -1);
   }
 }
 
