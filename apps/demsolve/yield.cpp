@@ -214,7 +214,7 @@ void YieldRun::setup() {
   // the probes run on the elastic branch, whose stiffness bound sets a smaller step
   contact::PlasticIndentationParams elastic_law = o_.plastic;
   elastic_law.reversible = false;
-  dt_elastic_ = plastic_time_step(s_->particles(), elastic_law, o_, 0.0).dt;
+  dt_elastic_ = choose_time_step(s_->particles(), contact::PlasticIndentationLawT<2>(elastic_law), o_).dt;
   const double steps_est = T_ / dt_first_ + d_.selection.size() * 2.0 * a_.max_strain / gdot_p_ / dt_elastic_;
   if (!(steps_est <= a_.max_steps))
     throw UsageError(fmt::format("the run needs up to {:.3g} time steps (precompaction dt {:.3g}, probes dt {:.3g} t*), more "

@@ -127,8 +127,8 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
   pl_wall_params_.mu = opt_.plastic_wall_mu;
   choose_friction();
   const double dt_fixed = opt_.dt;
-  ts_ = plastic_time_step(P_, opt_.plastic, opt_, area_max_);
-  if (!(dt_fixed > 0.0)) update_plastic_time_step();
+  choose_time_step_of_law(opt_, area_max_);
+  if (!(dt_fixed > 0.0)) update_time_step();
 }
 
 template <int D>

@@ -70,7 +70,8 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   DynamicOptions o = opt_;
   o.dt = st.dt;
   // checks the stored dt against the stability rule
-  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, o, 0.0) : choose_time_step(P_, params_, o);
+  if (plastic()) opt_.plastic.validate();
+  choose_time_step_of_law(o, 0.0);
   thermal_ = st.thermal;
   time_ = st.time;
   radius_ref_ = st.radius_ref;

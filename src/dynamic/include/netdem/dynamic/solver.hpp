@@ -87,7 +87,7 @@ enum class ContactModel : std::uint8_t {
   Full,        ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
   /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw) with
   /// DynamicOptions::plastic; any consistent units (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)).
-  /// The Luding parameters are not used; the time step is the law's (plastic_time_step()).
+  /// The Luding parameters are not used.
   PlasticIndentation
 };
 
@@ -154,24 +154,38 @@ struct DynamicOptions {
 
 struct TimeStepInfo {
   double dt = 0.0;                          ///< chosen time step [s]
-  double tc_tangential = 0.0;  ///< plastic law: tangential period pi sqrt(m_t/(k_t A_max)) (0: none)
+  /// the tangential period of the lightest pair (tangential_period) with the law's tangential
+  /// bound (0: none)
+  double tc_tangential = 0.0;
   double tc_mean = 0.0;                     ///< Eq 6 contact duration of the mean pair [s]
   double tc_lightest = 0.0;                 ///< Eq 6 contact duration of the lightest pair [s]
-  double steps_per_contact_lightest = 0.0;  ///< tc_lightest / dt
+  /// the lightest pair's shorter period (normal or tangential) / dt
+  double steps_per_contact_lightest = 0.0;
 };
 /// Eq 6 contact duration pi/omega, omega = sqrt(k2/m12 - eta0^2), eta0 = gamma0/(2 m12);
 /// for an over-damped pair the undamped omega is used (shorter, stricter).
 double contact_duration(double k2, double gamma0, double m12);
-/// The time step of the rule (or options.dt); throws std::invalid_argument if the lightest pair
-/// gets fewer than options.min_steps_per_contact steps per contact.
-TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o);
-/// The time step of ContactModel::PlasticIndentation: t = pi sqrt(m/k) / steps_per_contact for
-/// the lightest pair with the law's largest normal stiffness (the first-touch chord, times
-/// unload_ratio with the elastic unloading branch) and with the tangential spring k_t sigma_y
-/// A_max on the tangential effective mass m*/3 (rotation included), A_max the largest contact
-/// width; or options.dt, refused (std::invalid_argument) below min_steps_per_contact.
-TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
-                               const DynamicOptions& o, double area_max);
+/// The tangential half period pi sqrt(m_t / k_t) of a pair of effective mass m_eff, m_t its
+/// tangential effective mass with the rotations (dim.hpp): m_eff / 3 for disks (dim 2), 2/7 m_eff
+/// for spheres (dim 3).
+double tangential_period(double m_eff, double k_t, int dim);
+/// The time step from a law's a-priori stiffness bound (law.hpp kHasExplicitBound), for any law:
+/// the normal period of the bound's k_n (damped by its gamma_n as Eq 6: contact_duration; pi
+/// sqrt(m/k_n) without a dashpot) and the tangential period (tangential_period) of k_t + k_t_area
+/// area_max, both for the pair of the rule (the mean pair only where the law allows it,
+/// `mean_pair`: kMeanPairTimeStep; else the lightest pair); dt = the shorter / steps_per_contact,
+/// or options.dt. The lightest pair's periods are checked (TimeStepInfo::tc_lightest, tc_tangential). Throws std::invalid_argument if the lightest pair gets fewer
+/// than options.min_steps_per_contact steps per period, or if the bound is not finite.
+TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound& bound, bool mean_pair,
+                              const DynamicOptions& o, double area_max = 0.0);
+/// The same with the law's bound for the largest particle radius (a wall contact's R* = r_i).
+template <class Law>
+TimeStepInfo choose_time_step(const Particles& P, const Law& law, const DynamicOptions& o, double area_max = 0.0) {
+  static_assert(contact::kHasExplicitBound<Law>, "an explicit time step needs the law's stiffness_bound(r_eff)");
+  double r_max = 0.0;
+  for (double r : P.radius) r_max = r > r_max ? r : r_max;
+  return choose_time_step(P, law.stiffness_bound(r_max), contact::kMeanPairTimeStep<Law>, o, area_max);
+}
 
 struct Stress2 {
   double xx = 0.0, xy = 0.0, yx = 0.0, yy = 0.0;  ///< [N/m], compression positive
@@ -222,7 +236,7 @@ struct SolverState {
   contact::PlasticIndentationParams plastic;
   double plastic_wall_mu = 0.0;
   /// The plastic law: the largest contact width A_c of the last force evaluation (the tangential
-  /// bound of the next step's time step, plastic_time_step).
+  /// bound of the next step's time step, law.hpp StiffnessBound::k_t_area).
   double plastic_area_max = 0.0;
   int dim() const { return particles.dim; }
   /// A state of the plastic-indentation law (its wall histories are filled, the Luding ones empty).
@@ -462,7 +476,11 @@ class DynamicSolverT {
   template <class Law>
   void carry_histories(const Law& law, std::size_t n_new);
   bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
-  void update_plastic_time_step();
+  /// A law whose tangential bound grows with the contact area: the time step follows the largest
+  /// area of the last force evaluation (StiffnessBound::k_t_area, with 10 % margin).
+  void update_time_step();
+  /// bound_, mean_pair_ and ts_ from the law's a-priori bound (choose_time_step) with options o.
+  void choose_time_step_of_law(const DynamicOptions& o, double area);
   void compute_forces_dispatch();
   void choose_friction();
   void finish_setup();
@@ -491,8 +509,11 @@ class DynamicSolverT {
   // ContactModel::PlasticIndentation: its histories (the Luding ones stay empty) and laws
   std::vector<PlasticHist> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
   contact::PlasticIndentationParams pl_wall_params_;
-  double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
-  double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
+  double area_max_ = 0.0;  ///< largest contact width of the last force evaluation (kHasContactArea)
+  double m12_ = 0.0;       ///< effective mass of the two lightest particles
+  double m_rule_ = 0.0;    ///< effective mass of the time step rule's pair (choose_time_step)
+  contact::StiffnessBound bound_;  ///< the law's a-priori stiffness bound (the time step)
+  bool mean_pair_ = false;         ///< the law's time step may take the mean pair (kMeanPairTimeStep)
   // macroscopic strain rate, prescribed particles
   double edot_[3] = {0.0, 0.0, 0.0};  ///< e11, e22, e12
   std::array<double, 4> F_ = {1.0, 0.0, 0.0, 1.0};
