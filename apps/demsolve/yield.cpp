@@ -202,7 +202,7 @@ void YieldRun::setup() {
   T_ = std::log(D0_ / a_.to_density) / (e11 + e22);
 
   activity() = "setting up the explicit solver";
-  s_ = std::make_unique<DynamicSolver>(std::move(P), LudingParams{}, box, o_);
+  s_ = std::make_unique<DynamicSolver>(std::move(P), o_.plastic, box, o_);
   s_->set_strain_rate(e11, e22);
   s_->set_affine_velocities();
   s_->set_prescribed(prescribed_particles(pk_, d_.affine, false), !d_.affine);

@@ -197,22 +197,41 @@ template <int D>
 void DynamicSolverT<D>::choose_time_step_of_law(const DynamicOptions& o, double area) {
   double r_max = 0.0;
   for (double r : P_.radius) r_max = std::max(r_max, r);
-  // (the one choice of law outside the force loop's dispatch; every Luding feature set has k2's bound)
-  if (plastic()) {
-    const contact::PlasticIndentationLawT<D> law(opt_.plastic);
+  visit_law([&](const auto& law) {
     bound_ = law.stiffness_bound(r_max);
-    mean_pair_ = contact::kMeanPairTimeStep<contact::PlasticIndentationLawT<D>>;
-  } else {
-    const contact::LudingLaw<contact::kLudingFull, D> law(params_, thermal_.k1_Tt);
-    bound_ = law.stiffness_bound(r_max);
-    mean_pair_ = contact::kMeanPairTimeStep<contact::LudingLaw<contact::kLudingFull, D>>;
-  }
+    mean_pair_ = contact::kMeanPairTimeStep<std::decay_t<decltype(law)>>;
+  });
   ts_ = choose_time_step(P_, bound_, mean_pair_, o, area);
 }
+
+namespace {
+// The options of a Luding run (its model one of the Luding feature sets) and of a plastic one.
+const DynamicOptions& luding_options(const DynamicOptions& o) {
+  if (o.model == ContactModel::PlasticIndentation)
+    fail("DynamicSolver: the plastic-indentation law takes its own parameters (PlasticIndentationParams), not the "
+         "Luding law's");
+  return o;
+}
+DynamicOptions plastic_options(DynamicOptions o, const contact::PlasticIndentationParams& law) {
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic = law;
+  return o;
+}
+}  // namespace
 
 template <int D>
 DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
                                   const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), params, box, luding_options(options), Setup{}) {}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
+                                  const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), LudingParams{}, box, plastic_options(options, law), Setup{}) {}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                                  const DynamicOptions& options, Setup)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
   opt_.validate();
@@ -252,10 +271,7 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
-  if (plastic())
-    pl_wall_hist_.assign(kWalls * n, PlasticHist{});
-  else
-    wall_hist_.assign(kWalls * n, LudingHist{});
+  make_tables(n);
   finish_setup();
   build_table();
   compute_forces_dispatch();
@@ -296,11 +312,15 @@ void DynamicSolverT<D>::choose_friction() {
 }
 
 template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<2>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
 template void DynamicSolverT<2>::finish_setup();
 template void DynamicSolverT<2>::choose_friction();
 template void DynamicSolverT<2>::choose_time_step_of_law(const DynamicOptions& o, double area);
 
 template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
 template void DynamicSolverT<3>::finish_setup();
 template void DynamicSolverT<3>::choose_friction();
 template void DynamicSolverT<3>::choose_time_step_of_law(const DynamicOptions& o, double area);

@@ -28,11 +28,13 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <type_traits>
 
 #include "netdem/contact/luding.hpp"
+#include "netdem/contact/luding_law.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
@@ -301,8 +303,13 @@ class DynamicSolverT {
   /// The complete state at the current time (for state files and restarts).
   SolverState state() const;
 
-  /// Validates, chooses the time step, builds the neighbour table, computes the first forces.
+  /// The Luding law (options.model: Linear, Hysteretic or Full) with its parameters. Validates,
+  /// chooses the time step, builds the neighbour table, computes the first forces.
   DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                 const DynamicOptions& options);
+  /// The plastic-indentation law with its parameters `law` (options.model and options.plastic are
+  /// set from it; the walls' friction is options.plastic_wall_mu). As above.
+  DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
                  const DynamicOptions& options);
 
   /// One velocity-Verlet step (Eq 2, Eq 1). Every options.check_every steps it runs
@@ -466,13 +473,33 @@ class DynamicSolverT {
   void wall_forces_2d(const L& wall_law, ForceSums& a);
   template <class L, bool InPlace>
   void wall_forces_3d(const L& wall_law, ForceSums& a);
-  // the history store of a law's history type (one per law family)
+  /// The contact histories of one law: one per pair of the Verlet table (pair_key_), the scratch
+  /// of a table build, kWalls per particle for the walls (x_min, x_max, y_min, ...).
   template <class H>
-  std::vector<H>& pair_histories();
+  struct HistoryTable {
+    std::vector<H> pair, next, wall;
+  };
+  /// One history table per law, chosen at construction (the law's history type); a force
+  /// evaluation takes its table once (std::get), not per contact. A new law adds its entry here.
+  using HistoryTables = std::variant<HistoryTable<LudingHist>, HistoryTable<PlasticHist>>;
   template <class H>
-  std::vector<H>& new_histories();
+  HistoryTable<H>& table() { return std::get<HistoryTable<H>>(hist_); }
   template <class H>
-  std::vector<H>& wall_histories();
+  const HistoryTable<H>* table_if() const { return std::get_if<HistoryTable<H>>(&hist_); }
+  /// f(law) with the solver's law object (the Luding law with the full feature set: every feature
+  /// set has the same history, lifecycle and bound): the table's lifecycle (has_history), the time
+  /// step's bound, the table of a new solver. The one choice of law besides the force loop's
+  /// dispatch (compute_forces_dispatch) and the output of contacts().
+  template <class F>
+  decltype(auto) visit_law(F&& f) const {
+    if (plastic()) return f(contact::PlasticIndentationLawT<D>(opt_.plastic));
+    return f(contact::LudingLaw<contact::kLudingFull, D>(params_, thermal_.k1_Tt));
+  }
+  struct Setup {};  ///< the constructors' common part: the law is in options.model
+  DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options,
+                 Setup);
+  /// A new table of the law's history type, with fresh wall histories for n particles.
+  void make_tables(std::size_t n);
   template <class Law>
   void carry_histories(const Law& law, std::size_t n_new);
   bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
@@ -505,9 +532,8 @@ class DynamicSolverT {
   double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
-  std::vector<LudingHist> pair_hist_, new_hist_;
-  // ContactModel::PlasticIndentation: its histories (the Luding ones stay empty) and laws
-  std::vector<PlasticHist> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
+  HistoryTables hist_;  ///< the law's histories of the pairs (one per pair_key_) and of the walls
+  // ContactModel::PlasticIndentation: the walls' law
   contact::PlasticIndentationParams pl_wall_params_;
   double area_max_ = 0.0;  ///< largest contact width of the last force evaluation (kHasContactArea)
   double m12_ = 0.0;       ///< effective mass of the two lightest particles
@@ -537,15 +563,13 @@ class DynamicSolverT {
   void impose_affine_motion(double dt);
   void apply_affine_drag();
   void affine_velocity3(std::size_t i, double* a) const;  ///< 3D: L (x_i - x_0)
-  /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
+  /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_, z_build_;
   /// over the positions of the last table build (storage reused)
   packing::CellGridT<D> grid_;
-  // wall histories: 2D per particle (2D: left, right, bottom, top; 3D: x_min .. z_max); wall state
-  std::vector<LudingHist> wall_hist_;
-  /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force
+  /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
   /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
   /// histories of the other particles. Particles with no bit and no overlap are skipped by the
   /// wall loop (their histories are already fresh).
