@@ -87,9 +87,9 @@ enum class ContactModel : std::uint8_t {
   Linear,      ///< luding_evaluate<kLudingLinear>: k2 delta + gamma0 delta', Cundall-Strack spring
   Hysteretic,  ///< {hysteresis}: Eq 4 and Eq 7 without cohesion or temperature
   Full,        ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
-  /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw) with
-  /// DynamicOptions::plastic; any consistent units (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)).
-  /// The Luding parameters are not used.
+  /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw), set by
+  /// the constructor that takes its parameters (DynamicOptions::plastic); any consistent units
+  /// (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)). The Luding parameters are not used.
   PlasticIndentation
 };
 
@@ -146,8 +146,9 @@ struct DynamicOptions {
   /// E' (x - x_0)), torque -affine_drag I omega, on the particles that are not prescribed [1/time];
   /// 0: none.
   double affine_drag = 0.0;
-  /// ContactModel::PlasticIndentation: the law (first_touch > 0: the explicit solver needs the
-  /// bounded first-touch stiffness) and the friction of the walls (flat, R* = r_i).
+  /// ContactModel::PlasticIndentation: the law (the constructor's PlasticIndentationParams;
+  /// first_touch > 0: the explicit solver needs the bounded first-touch stiffness) and the
+  /// friction of the walls (flat, R* = r_i).
   contact::PlasticIndentationParams plastic;
   double plastic_wall_mu = 0.0;
   /// Throws std::invalid_argument with one line for an invalid value.
