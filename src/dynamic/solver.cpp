@@ -129,7 +129,7 @@ template <class Law, bool InPlace>
 [[gnu::flatten]] void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   using H = typename Law::History;
   const double dt = ts_.dt;
-  std::vector<H>& pair_hist = table<H>().pair;  // (the law's table, once per evaluation)
+  H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
   // particle-particle contacts from the Verlet table
   const std::size_t n_pairs = pair_key_.size();
@@ -294,7 +294,7 @@ template <class Law, bool InPlace>
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  std::vector<H>& wall_hist = table<H>().wall;
+  H* const wall_hist = table<H>().wall.data();
   double& sxx = a.sxx; double& sxy = a.sxy; double& syx = a.syx; double& syy = a.syy;
   double& el = a.el; double& fn_max = a.fn_max;
   double* const wf = a.wf;
@@ -373,7 +373,7 @@ template <class Law, bool InPlace>
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  std::vector<H>& wall_hist = table<H>().wall;
+  H* const wall_hist = table<H>().wall.data();
   double& el = a.el; double& fn_max = a.fn_max;
   double* const wf = a.wf;
   double (&s3)[3][3] = a.s3;

@@ -484,7 +484,7 @@ class DynamicSolverT {
   /// evaluation takes its table once (std::get), not per contact. A new law adds its entry here.
   using HistoryTables = std::variant<HistoryTable<LudingHist>, HistoryTable<PlasticHist>>;
   template <class H>
-  HistoryTable<H>& table() { return std::get<HistoryTable<H>>(hist_); }
+  HistoryTable<H>& table() { return *std::get_if<HistoryTable<H>>(&hist_); }  ///< (the law's: by construction)
   template <class H>
   const HistoryTable<H>* table_if() const { return std::get_if<HistoryTable<H>>(&hist_); }
   /// f(law) with the solver's law object (the Luding law with the full feature set: every feature
