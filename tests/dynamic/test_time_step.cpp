@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <random>
+#include <utility>
 #include <vector>
 
 #include "netdem/contact/luding_law.hpp"
@@ -188,4 +191,59 @@ TEST(TimeStep, PlasticLawBoundsTheLightestPair) {
   ct::PlasticIndentationParams sharp = pp;
   sharp.first_touch = 0.0;
   EXPECT_THROW((void)choose_time_step(P, ct::PlasticIndentationLawT<2>(sharp), o), std::invalid_argument);
+}
+
+// In a run: a frictional plastic packing compressed by its affine walls (the contacts flatten, so
+// the tangential spring k_t sigma_y A_c grows and the step follows it). At every step each touching
+// pair's own stiffnesses from the law's per-contact bound (stiffness_bound(h, k) at its current
+// overlap and history) get at least steps_per_contact steps per period on the pair's masses, and
+// the step shrinks as the contacts grow.
+TEST(TimeStep, EveryContactOfARunIsResolved) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Particles P;
+  const int side = 6;
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i)
+      P.add_disk(1.0 + 2.0 * i + 0.02 * u(rng), 1.0 + 2.0 * j + 0.02 * u(rng), 0.97 + 0.03 * u(rng), 1.0);
+  Box box;
+  box.x_max = box.y_max = 2.0 * side;
+  box.right.mode = box.top.mode = WallMode::Affine;
+  ct::PlasticIndentationParams law;
+  law.mu = 0.5;
+  law.first_touch = 1e-4;
+  law.damping_n = law.damping_t = 0.3;
+  law.reversible = true;  // the normal bound is the chord 6 sigma_y / sqrt(first_touch) = 600
+  DynamicOptions o;
+  DynamicSolver s(P, law, box, o);
+  s.set_strain_rate(-0.04, -0.04);
+  s.set_affine_velocities();
+  const ct::PlasticIndentationLawT<2> pl(law);
+  const double dt0 = s.dt();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  double worst = 1e300, kt_max = 0.0;
+  for (int step = 0; step < 3000; ++step) {
+    s.step();
+    s.touching_pairs(pairs);
+    const Particles& Q = s.particles();
+    for (const auto& [i, j] : pairs) {
+      const ct::PlasticIndentationHistory* h = s.plastic_history(i, j);
+      ASSERT_NE(h, nullptr);
+      ct::ContactKinematics k;
+      const double dx = Q.x[j] - Q.x[i], dy = Q.y[j] - Q.y[i];
+      k.overlap = Q.radius[i] + Q.radius[j] - std::sqrt(dx * dx + dy * dy);
+      k.r_eff = Q.radius[i] * Q.radius[j] / (Q.radius[i] + Q.radius[j]);
+      const double m = Q.mass[i] * Q.mass[j] / (Q.mass[i] + Q.mass[j]);
+      const ct::StiffnessBound b = pl.stiffness_bound(*h, k);
+      kt_max = std::max(kt_max, b.k_t);
+      const double t_n = std::numbers::pi * std::sqrt(m / b.k_n);
+      const double t_t = b.k_t > 0.0 ? std::numbers::pi * std::sqrt(m / 3.0 / b.k_t) : 1e300;
+      worst = std::min(worst, std::min(t_n, t_t) / s.dt());
+    }
+  }
+  std::printf("  dt %.4g -> %.4g, largest tangential spring %.4g, fewest steps per period of a contact %.1f\n", dt0,
+              s.dt(), kt_max, worst);
+  EXPECT_GT(kt_max, 0.0);
+  EXPECT_LT(s.dt(), dt0);  // the tangential spring of the flattened contacts now sets the step
+  EXPECT_GE(worst, o.steps_per_contact * (1.0 - 1e-9));
 }
