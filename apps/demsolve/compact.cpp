@@ -262,7 +262,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const CompactionRateT<D> rate = compaction_rate(path, a.inertial_number, D0, a.to_density);
 
   activity() = "setting up the explicit solver";
-  DynamicSolverT<D> s(std::move(P), LudingParams{}, box, o);
+  DynamicSolverT<D> s(std::move(P), o.plastic, box, o);
   set_strain_rate(s, rate.rate);
   s.set_affine_velocities();
   std::vector<std::uint32_t> pre;

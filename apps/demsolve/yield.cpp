@@ -202,7 +202,7 @@ void YieldRun::setup() {
   T_ = std::log(D0_ / a_.to_density) / (e11 + e22);
 
   activity() = "setting up the explicit solver";
-  s_ = std::make_unique<DynamicSolver>(std::move(P), LudingParams{}, box, o_);
+  s_ = std::make_unique<DynamicSolver>(std::move(P), o_.plastic, box, o_);
   s_->set_strain_rate(e11, e22);
   s_->set_affine_velocities();
   s_->set_prescribed(prescribed_particles(pk_, d_.affine, false), !d_.affine);
@@ -214,7 +214,7 @@ void YieldRun::setup() {
   // the probes run on the elastic branch, whose stiffness bound sets a smaller step
   contact::PlasticIndentationParams elastic_law = o_.plastic;
   elastic_law.reversible = false;
-  dt_elastic_ = plastic_time_step(s_->particles(), elastic_law, o_, 0.0).dt;
+  dt_elastic_ = choose_time_step(s_->particles(), contact::PlasticIndentationLawT<2>(elastic_law), o_).dt;
   const double steps_est = T_ / dt_first_ + d_.selection.size() * 2.0 * a_.max_strain / gdot_p_ / dt_elastic_;
   if (!(steps_est <= a_.max_steps))
     throw UsageError(fmt::format("the run needs up to {:.3g} time steps (precompaction dt {:.3g}, probes dt {:.3g} t*), more "

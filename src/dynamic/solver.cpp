@@ -129,7 +129,7 @@ template <class Law, bool InPlace>
 [[gnu::flatten]] void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   using H = typename Law::History;
   const double dt = ts_.dt;
-  std::vector<H>& pair_hist = pair_histories<H>();
+  H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
   // particle-particle contacts from the Verlet table
   const std::size_t n_pairs = pair_key_.size();
@@ -294,7 +294,7 @@ template <class Law, bool InPlace>
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  std::vector<H>& wall_hist = wall_histories<H>();
+  H* const wall_hist = table<H>().wall.data();
   double& sxx = a.sxx; double& sxy = a.sxy; double& syx = a.syx; double& syy = a.syy;
   double& el = a.el; double& fn_max = a.fn_max;
   double* const wf = a.wf;
@@ -373,7 +373,7 @@ template <class Law, bool InPlace>
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
-  std::vector<H>& wall_hist = wall_histories<H>();
+  H* const wall_hist = table<H>().wall.data();
   double& el = a.el; double& fn_max = a.fn_max;
   double* const wf = a.wf;
   double (&s3)[3][3] = a.s3;
@@ -572,22 +572,20 @@ int kick_drift_pass3(std::size_t n, double h, double dt, double lim2, Particles&
 }
 }  // namespace
 
-// ContactModel::PlasticIndentation: the tangential bound k_t sigma_y A_c grows with the contact
-// width; the step follows it (with 10 % margin for the growth within a step).
+// A law whose tangential spring grows with its contact area (StiffnessBound::k_t_area, the plastic
+// law's k_t sigma_y A_c): the step follows the largest area of the last force evaluation (with 10 %
+// margin for the growth within a step). A smaller area keeps the step.
 template <int D>
-void DynamicSolverT<D>::update_plastic_time_step() {
-  const contact::PlasticIndentationParams& law = opt_.plastic;
-  const double kt = law.frictional() ? law.shear_stiffness() * 1.1 * area_max_ : 0.0;
+void DynamicSolverT<D>::update_time_step() {
+  const double kt = bound_.k_t + bound_.k_t_area * 1.1 * area_max_;
   if (kt <= 0.0) return;
-  const double m12 = pl_m12_;
-  if constexpr (D == 2) {
-    ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 / 3.0 / kt);
-  } else {  // the sphere's tangential mass m* 2/7 (dim.hpp)
-    ts_.tc_tangential = std::numbers::pi * std::sqrt(m12 * contact::kTangentialMassRatio<3> / kt);
-  }
-  const double tc = std::min(ts_.tc_lightest, ts_.tc_tangential);
+  ts_.tc_tangential = tangential_period(m12_, kt, D);
+  const bool use_mean = mean_pair_ && opt_.rule == TimeStepRule::MeanPair;
+  const double tc_rule = use_mean ? ts_.tc_mean : ts_.tc_lightest;
+  const double tc = std::min(tc_rule, use_mean ? tangential_period(m_rule_, kt, D) : ts_.tc_tangential);
+  const double tc_check = std::min(ts_.tc_lightest, ts_.tc_tangential);
   if (opt_.dt > 0.0) {
-    ts_.steps_per_contact_lightest = tc / ts_.dt;
+    ts_.steps_per_contact_lightest = tc_check / ts_.dt;
     if (ts_.steps_per_contact_lightest < opt_.min_steps_per_contact)
       breach("time step",
              fmt::format("the fixed time step {:.4g} gives the stiffest tangential spring {:.3g} steps per period, "
@@ -597,13 +595,13 @@ void DynamicSolverT<D>::update_plastic_time_step() {
     return;
   }
   ts_.dt = tc / opt_.steps_per_contact;
-  ts_.steps_per_contact_lightest = opt_.steps_per_contact;
+  ts_.steps_per_contact_lightest = tc_check == tc ? opt_.steps_per_contact : tc_check / ts_.dt;
 }
 
 template <int D>
 void DynamicSolverT<D>::step() {
   const std::size_t n = P_.size();
-  if (plastic()) update_plastic_time_step();
+  if (bound_.k_t_area > 0.0) update_time_step();
   impose_affine_motion(ts_.dt);
   const bool checking = opt_.check_every > 0;
   if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());

@@ -105,11 +105,12 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
     fail("set_plastic_law: the explicit solver needs the plastic law's first-touch overlap > 0");
   if (opt_.plastic.reversible && !law.reversible) {
     using L = contact::PlasticIndentationLawT<D>;
+    HistoryTable<PlasticHist>& t = table<PlasticHist>();
     for (std::size_t k = 0; k < pair_key_.size(); ++k) {
       const auto i = static_cast<std::size_t>(pair_key_[k] >> 32), j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
       double L2 = (P_.x[j] - P_.x[i]) * (P_.x[j] - P_.x[i]) + (P_.y[j] - P_.y[i]) * (P_.y[j] - P_.y[i]);
       if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
-      pl_pair_hist_[k] = L::start_unloading_branch(pl_pair_hist_[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
+      t.pair[k] = L::start_unloading_branch(t.pair[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
     }
     if (walls_active())
       for (std::size_t i = 0; i < P_.size(); ++i) {
@@ -119,7 +120,7 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
           dw[5] = box_.z_max - P_.z[i];
         }
         for (std::size_t w = 0; w < kWalls; ++w)
-          pl_wall_hist_[kWalls * i + w] = L::start_unloading_branch(pl_wall_hist_[kWalls * i + w], P_.radius[i] - dw[w]);
+          t.wall[kWalls * i + w] = L::start_unloading_branch(t.wall[kWalls * i + w], P_.radius[i] - dw[w]);
       }
   }
   opt_.plastic = law;
@@ -127,8 +128,8 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
   pl_wall_params_.mu = opt_.plastic_wall_mu;
   choose_friction();
   const double dt_fixed = opt_.dt;
-  ts_ = plastic_time_step(P_, opt_.plastic, opt_, area_max_);
-  if (!(dt_fixed > 0.0)) update_plastic_time_step();
+  choose_time_step_of_law(opt_, area_max_);
+  if (!(dt_fixed > 0.0)) update_time_step();
 }
 
 template <int D>

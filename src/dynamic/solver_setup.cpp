@@ -145,74 +145,93 @@ void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
 }
 }  // namespace
 
-TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o) {
+namespace {
+// The half period pi / omega of a spring k on the mass m: with a dashpot gamma, Eq 6
+// (contact_duration); without, pi sqrt(m / k).
+double period(double k, double gamma, double m) {
+  return gamma > 0.0 ? contact_duration(k, gamma, m) : std::numbers::pi * std::sqrt(m / k);
+}
+}  // namespace
+
+double tangential_period(double m_eff, double k_t, int dim) {
+  // the tangential effective mass with the rotations (dim.hpp): m*/3 for disks, 2/7 m* for spheres
+  return dim == 3 ? std::numbers::pi * std::sqrt(m_eff * contact::kTangentialMassRatio<3> / k_t)
+                  : std::numbers::pi * std::sqrt(m_eff / 3.0 / k_t);
+}
+
+TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound& b, bool mean_pair,
+                              const DynamicOptions& o, double area_max) {
   o.validate();
   const std::size_t n = P.size();
   if (n == 0) fail("choose_time_step: no particles");
+  if (!(b.k_n > 0.0) || !std::isfinite(b.k_n))
+    fail(fmt::format("the contact law's largest normal stiffness {:g} is not a positive finite bound for an explicit "
+                     "time step (the plastic law: a first-touch overlap > 0)",
+                     b.k_n));
   double mean = 0.0, m_lo = 0.0, m_lo2 = 0.0;
   for (double m : P.mass) mean += m;
   mean /= static_cast<double>(n);
   lightest_pair(P, m_lo, m_lo2);
-  TimeStepInfo ts;
-  // k2 is the largest stiffness of the law (cap of Eq 7); gamma_0 of Eq 5.
-  ts.tc_mean = contact_duration(p.k2, p.gamma_n, 0.5 * mean);
-  ts.tc_lightest = contact_duration(p.k2, p.gamma_n, m_lo * m_lo2 / (m_lo + m_lo2));
-  if (o.dt > 0.0) {
-    ts.dt = o.dt;
-  } else {
-    const double tc = o.rule == TimeStepRule::MeanPair ? ts.tc_mean : ts.tc_lightest;
-    ts.dt = tc / o.steps_per_contact;  // LMM05 section 3.1.2: t_MD = pi / (50 omega)
-  }
-  ts.steps_per_contact_lightest = ts.tc_lightest / ts.dt;
-  if (ts.steps_per_contact_lightest < o.min_steps_per_contact) {
-    std::ostringstream s;
-    s << "time step " << ts.dt << " s gives the lightest pair " << ts.steps_per_contact_lightest
-      << " steps per contact (t_c = " << ts.tc_lightest << " s), fewer than "
-      << o.min_steps_per_contact;
-    fail(s.str());
-  }
-  return ts;
-}
-
-TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
-                               const DynamicOptions& o, double area_max) {
-  o.validate();
-  law.validate();
-  if (P.size() == 0) fail("plastic_time_step: no particles");
-  if (!(law.first_touch > 0.0))
-    fail("the explicit solver needs the plastic law's first-touch overlap > 0 (Eq 2 has an infinite stiffness "
-         "at first touch)");
-  double m_lo, m_lo2, mean = 0.0;
-  lightest_pair(P, m_lo, m_lo2);
-  for (double m : P.mass) mean += m;
-  mean /= static_cast<double>(P.size());
   const double m12 = m_lo * m_lo2 / (m_lo + m_lo2);
-  // the stiffest normal branch: the first-touch chord, times unload_ratio on the elastic branch
-  // (3D: the loading stiffness 6 pi sigma_y R* with the largest R*, a wall contact's r_max)
-  double r_max = 0.0;
-  for (double r : P.radius) r_max = std::max(r_max, r);
-  const double kn = (P.dim == 3 ? law.chord_stiffness_3d(r_max) : law.chord_stiffness()) *
-                    (law.reversible ? 1.0 : law.unload_ratio);
   TimeStepInfo ts;
-  ts.tc_mean = std::numbers::pi * std::sqrt(0.5 * mean / kn);
-  ts.tc_lightest = std::numbers::pi * std::sqrt(m12 / kn);
-  const double kt = law.frictional() ? law.shear_stiffness() * area_max : 0.0;
-  ts.tc_tangential = kt > 0.0 ? (P.dim == 3 ? std::numbers::pi * std::sqrt(m12 * contact::kTangentialMassRatio<3> / kt)
-                                            : std::numbers::pi * std::sqrt(m12 / 3.0 / kt))
-                              : 0.0;
-  const double tc = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
-  ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;
-  ts.steps_per_contact_lightest = tc / ts.dt;
+  ts.tc_mean = period(b.k_n, b.gamma_n, 0.5 * mean);
+  ts.tc_lightest = period(b.k_n, b.gamma_n, m12);
+  // the pair of the rule: its normal and tangential periods set dt; the lightest pair's are checked
+  const bool use_mean = mean_pair && o.rule == TimeStepRule::MeanPair;
+  const double tc_rule = use_mean ? ts.tc_mean : ts.tc_lightest;
+  const double kt = b.k_t + b.k_t_area * area_max;
+  const double tc_t_rule = kt > 0.0 ? tangential_period(use_mean ? 0.5 * mean : m12, kt, P.dim) : 0.0;
+  if (kt > 0.0) ts.tc_tangential = tangential_period(m12, kt, P.dim);
+  const double tc = tc_t_rule > 0.0 ? std::min(tc_rule, tc_t_rule) : tc_rule;
+  const double tc_check = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
+  ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;  // LMM05 section 3.1.2: t_MD = pi / (50 omega)
+  ts.steps_per_contact_lightest = tc_check / ts.dt;
   if (ts.steps_per_contact_lightest < o.min_steps_per_contact)
-    fail(fmt::format("time step {:.6g} gives the stiffest contact {:.3g} steps per period (t_c = {:.6g}), fewer "
-                     "than {:g}",
-                     ts.dt, ts.steps_per_contact_lightest, tc, o.min_steps_per_contact));
+    fail(fmt::format("time step {:.6g} gives the lightest pair {:.3g} steps per contact (its shorter period t_c = "
+                     "{:.6g}), fewer than {:g}",
+                     ts.dt, ts.steps_per_contact_lightest, tc_check, o.min_steps_per_contact));
   return ts;
 }
 
 template <int D>
+void DynamicSolverT<D>::choose_time_step_of_law(const DynamicOptions& o, double area) {
+  double r_max = 0.0;
+  for (double r : P_.radius) r_max = std::max(r_max, r);
+  visit_law([&](const auto& law) {
+    bound_ = law.stiffness_bound(r_max);
+    mean_pair_ = contact::kMeanPairTimeStep<std::decay_t<decltype(law)>>;
+  });
+  ts_ = choose_time_step(P_, bound_, mean_pair_, o, area);
+}
+
+namespace {
+// The options of a Luding run (its model one of the Luding feature sets) and of a plastic one.
+const DynamicOptions& luding_options(const DynamicOptions& o) {
+  if (o.model == ContactModel::PlasticIndentation)
+    fail("DynamicSolver: the plastic-indentation law takes its own parameters (PlasticIndentationParams), not the "
+         "Luding law's");
+  return o;
+}
+DynamicOptions plastic_options(DynamicOptions o, const contact::PlasticIndentationParams& law) {
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic = law;
+  return o;
+}
+}  // namespace
+
+template <int D>
 DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
                                   const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), params, box, luding_options(options), Setup{}) {}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
+                                  const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), LudingParams{}, box, plastic_options(options, law), Setup{}) {}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                                  const DynamicOptions& options, Setup)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
   opt_.validate();
@@ -233,8 +252,9 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
       fail("DynamicSolver: a stress-controlled wall needs mass > 0 and damping >= 0");
-  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, opt_, 0.0) : choose_time_step(P_, params_, opt_);
   thermal_ = contact::luding_thermal_start(params_, opt_.temperature);
+  if (plastic()) opt_.plastic.validate();
+  choose_time_step_of_law(opt_, 0.0);
   // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
   radius_ref_ = P_.radius;
   if (opt_.model == ContactModel::Full) {
@@ -251,10 +271,7 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
-  if (plastic())
-    pl_wall_hist_.assign(kWalls * n, PlasticHist{});
-  else
-    wall_hist_.assign(kWalls * n, LudingHist{});
+  make_tables(n);
   finish_setup();
   build_table();
   compute_forces_dispatch();
@@ -266,10 +283,13 @@ void DynamicSolverT<D>::finish_setup() {
   wall_params_ = params_.wall_params();
   pl_wall_params_ = opt_.plastic;
   pl_wall_params_.mu = opt_.plastic_wall_mu;
-  if (plastic() && n > 0) {
-    double m_lo = 0.0, m_lo2 = 0.0;
+  if (n > 0) {
+    double m_lo = 0.0, m_lo2 = 0.0, mean = 0.0;
     lightest_pair(P_, m_lo, m_lo2);
-    pl_m12_ = m_lo * m_lo2 / (m_lo + m_lo2);
+    m12_ = m_lo * m_lo2 / (m_lo + m_lo2);
+    for (double m : P_.mass) mean += m;
+    mean /= static_cast<double>(n);
+    m_rule_ = mean_pair_ && opt_.rule == TimeStepRule::MeanPair ? 0.5 * mean : m12_;
   }
   choose_friction();
   double rmean = 0.0;
@@ -292,11 +312,17 @@ void DynamicSolverT<D>::choose_friction() {
 }
 
 template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<2>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
 template void DynamicSolverT<2>::finish_setup();
 template void DynamicSolverT<2>::choose_friction();
+template void DynamicSolverT<2>::choose_time_step_of_law(const DynamicOptions& o, double area);
 
 template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
 template void DynamicSolverT<3>::finish_setup();
 template void DynamicSolverT<3>::choose_friction();
+template void DynamicSolverT<3>::choose_time_step_of_law(const DynamicOptions& o, double area);
 
 }  // namespace netdem::dem

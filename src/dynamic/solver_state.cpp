@@ -70,7 +70,8 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   DynamicOptions o = opt_;
   o.dt = st.dt;
   // checks the stored dt against the stability rule
-  ts_ = plastic() ? plastic_time_step(P_, opt_.plastic, o, 0.0) : choose_time_step(P_, params_, o);
+  if (plastic()) opt_.plastic.validate();
+  choose_time_step_of_law(o, 0.0);
   thermal_ = st.thermal;
   time_ = st.time;
   radius_ref_ = st.radius_ref;
@@ -87,9 +88,7 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
       for (int b = 0; b < 3; ++b) s3_[a][b] = st.stress_sum3[3 * a + b];
   }
   elastic_ = st.elastic;
-  if (plastic()) area_max_ = st.plastic_area_max;
-  wall_hist_ = wh;
-  pl_wall_hist_ = pwh;
+  area_max_ = st.plastic_area_max;  // (0 for a law without a contact area)
   centre0_[0] = 0.5 * (box_.x_min + box_.x_max);  // the affine map starts again at the restart
   centre0_[1] = 0.5 * (box_.y_min + box_.y_max);
   if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
@@ -97,8 +96,12 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).
   pair_key_ = st.pair_key;
-  pair_hist_ = S::pair(st);
-  pl_pair_hist_ = S::pl_pair(st);
+  visit_law([&](const auto& law) {
+    using H = typename std::decay_t<decltype(law)>::History;
+    hist_.template emplace<HistoryTable<H>>();
+    table<H>().pair = S::template pairs<H>(st);
+    table<H>().wall = S::template walls<H>(st);
+  });
   build_table();
   rebuilds_ = 0;
 }
@@ -131,24 +134,18 @@ SolverState DynamicSolverT<D>::state() const {
     st.plastic_wall_mu = opt_.plastic_wall_mu;
     st.plastic_area_max = area_max_;
   }
-  // only the pairs with a live history (touching); the others are rebuilt from positions
-  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
-    if (plastic()) {
-      const PlasticHist& h = pl_pair_hist_[k];
-      if (h.u_max != 0.0 || !contact::tan_is_zero(h.f_t) || h.sliding != 0) {
+  // only the pairs with a live history (law.has_history); the others are rebuilt from positions
+  visit_law([&](const auto& law) {
+    using H = typename std::decay_t<decltype(law)>::History;
+    const HistoryTable<H>& t = *table_if<H>();
+    auto& pairs = S::template pairs<H>(st);
+    for (std::size_t k = 0; k < pair_key_.size(); ++k)
+      if (law.has_history(t.pair[k])) {
         st.pair_key.push_back(pair_key_[k]);
-        S::pl_pair(st).push_back(h);
+        pairs.push_back(t.pair[k]);
       }
-      continue;
-    }
-    const LudingHist& h = pair_hist_[k];
-    if (!h.fresh()) {
-      st.pair_key.push_back(pair_key_[k]);
-      S::pair(st).push_back(h);
-    }
-  }
-  S::wall(st) = wall_hist_;
-  S::pl_wall(st) = pl_wall_hist_;
+    S::template walls<H>(st) = t.wall;
+  });
   return st;
 }
 
@@ -384,21 +381,24 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
 
 template <int D>
 void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
+  // (the output's own choice of law: the Luding law reports f_min and mu of its response)
+  if (const HistoryTable<PlasticHist>* t = table_if<PlasticHist>()) {
+    plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, t->pair, t->wall, out);
+    return;
+  }
+  const HistoryTable<LudingHist>& t = *table_if<LudingHist>();
   switch (opt_.model) {
     case ContactModel::Linear:
-      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
-                                                 pair_hist_, wall_hist_, out);
+      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
+                                                 t.wall, out);
       break;
     case ContactModel::Hysteretic:
-      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, pair_hist_,
-                                         wall_hist_, out);
+      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair, t.wall,
+                                         out);
       break;
-    case ContactModel::Full:
-      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_,
-                                               pair_hist_, wall_hist_, out);
-      break;
-    case ContactModel::PlasticIndentation:
-      plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, pl_pair_hist_, pl_wall_hist_, out);
+    default:
+      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
+                                               t.wall, out);
       break;
   }
 }

@@ -20,27 +20,15 @@ namespace netdem::dem {
 using detail::displacement_limit;
 using detail::fail;
 
-// ---- the history stores: one per law family; the model's is used, the other stays empty --------
-namespace {
-// the store of law family H out of a (Luding, plastic) pair of stores
-template <class H, class L, class P>
-std::vector<H>& family(std::vector<L>& luding, std::vector<P>& plastic) {
-  if constexpr (std::is_same_v<H, L>)
-    return luding;
-  else
-    return plastic;
+// ---- the history table of the law (HistoryTables) ------------------------------------------------
+template <int D>
+void DynamicSolverT<D>::make_tables(std::size_t n) {
+  visit_law([&](const auto& law) {
+    using H = typename std::decay_t<decltype(law)>::History;
+    hist_.template emplace<HistoryTable<H>>();
+    table<H>().wall.assign(kWalls * n, H{});
+  });
 }
-}  // namespace
-
-template <int D>
-template <class H>
-std::vector<H>& DynamicSolverT<D>::pair_histories() { return family<H>(pair_hist_, pl_pair_hist_); }
-template <int D>
-template <class H>
-std::vector<H>& DynamicSolverT<D>::new_histories() { return family<H>(new_hist_, pl_new_hist_); }
-template <int D>
-template <class H>
-std::vector<H>& DynamicSolverT<D>::wall_histories() { return family<H>(wall_hist_, pl_wall_hist_); }
 
 // The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted); a
 // pair is live (evaluated while apart) when the law says its history holds something
@@ -49,8 +37,8 @@ template <int D>
 template <class Law>
 void DynamicSolverT<D>::carry_histories(const Law& law, std::size_t n_new) {
   using H = typename Law::History;
-  std::vector<H>& old_h = pair_histories<H>();
-  std::vector<H>& new_h = new_histories<H>();
+  std::vector<H>& old_h = table<H>().pair;
+  std::vector<H>& new_h = table<H>().next;
   new_h.assign(n_new, H{});
   std::size_t a = 0;
   for (std::size_t b = 0; b < n_new; ++b) {
@@ -110,10 +98,9 @@ void DynamicSolverT<D>::build_wall_list() {
       wall_list_.push_back(static_cast<std::uint32_t>(i));
       wall_touch_[i] = kAll;  // the next evaluation visits its wall histories
     } else if (wall_touch_[i] != 0) {
-      if (plastic())
-        for (std::size_t w = 0; w < kWalls; ++w) pl_wall_hist_[kWalls * i + w] = PlasticHist{};
-      else
-        for (std::size_t w = 0; w < kWalls; ++w) wall_hist_[kWalls * i + w] = LudingHist{};
+      std::visit([&](auto& t) {
+        for (std::size_t w = 0; w < kWalls; ++w) t.wall[kWalls * i + w] = {};
+      }, hist_);
       wall_touch_[i] = 0;
     }
   }
@@ -172,10 +159,7 @@ void DynamicSolverT<D>::build_table() {
   }
   // carry the committed histories of the pairs that stay in the table (both lists sorted)
   pair_live_.assign(new_key_.size(), 0);
-  if (plastic())
-    carry_histories(contact::PlasticIndentationLawT<D>(opt_.plastic), new_key_.size());
-  else  // (every feature set of the Luding law has the same history and lifecycle)
-    carry_histories(contact::LudingLaw<contact::kLudingFull, D>(params_, thermal_.k1_Tt), new_key_.size());
+  visit_law([&](const auto& law) { carry_histories(law, new_key_.size()); });
   pair_key_.swap(new_key_);
 }
 
@@ -198,16 +182,18 @@ template <int D>
 auto DynamicSolverT<D>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist* {
   const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
   auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
-  if (plastic() || it == pair_key_.end() || *it != key) return nullptr;
-  return &pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
+  const HistoryTable<LudingHist>* t = table_if<LudingHist>();
+  if (!t || it == pair_key_.end() || *it != key) return nullptr;
+  return &t->pair[static_cast<std::size_t>(it - pair_key_.begin())];
 }
 
 template <int D>
 auto DynamicSolverT<D>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist* {
   const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
   auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
-  if (!plastic() || it == pair_key_.end() || *it != key) return nullptr;
-  return &pl_pair_hist_[static_cast<std::size_t>(it - pair_key_.begin())];
+  const HistoryTable<PlasticHist>* t = table_if<PlasticHist>();
+  if (!t || it == pair_key_.end() || *it != key) return nullptr;
+  return &t->pair[static_cast<std::size_t>(it - pair_key_.begin())];
 }
 
 template bool DynamicSolverT<2>::needs_rebuild() const;
@@ -226,18 +212,7 @@ template void DynamicSolverT<3>::touching_pairs( std::vector<std::pair<std::uint
 template auto DynamicSolverT<3>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist*;
 template auto DynamicSolverT<3>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist*;
 
-template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::LudingHist>();
-template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::LudingHist>();
-template std::vector<DynamicSolverT<2>::LudingHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::LudingHist>();
-template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::pair_histories<DynamicSolverT<2>::PlasticHist>();
-template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::new_histories<DynamicSolverT<2>::PlasticHist>();
-template std::vector<DynamicSolverT<2>::PlasticHist>& DynamicSolverT<2>::wall_histories<DynamicSolverT<2>::PlasticHist>();
-
-template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::LudingHist>();
-template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::LudingHist>();
-template std::vector<DynamicSolverT<3>::LudingHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::LudingHist>();
-template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::pair_histories<DynamicSolverT<3>::PlasticHist>();
-template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::new_histories<DynamicSolverT<3>::PlasticHist>();
-template std::vector<DynamicSolverT<3>::PlasticHist>& DynamicSolverT<3>::wall_histories<DynamicSolverT<3>::PlasticHist>();
+template void DynamicSolverT<2>::make_tables(std::size_t n);
+template void DynamicSolverT<3>::make_tables(std::size_t n);
 
 }  // namespace netdem::dem

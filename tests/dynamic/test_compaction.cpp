@@ -112,7 +112,7 @@ void affine_lattice_compaction() {
   o.plastic.mu = 0.0;
   o.plastic.first_touch = 1e-4;
   o.plastic.damping_n = o.plastic.damping_t = 0.5;
-  DynamicSolverT<D> s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  DynamicSolverT<D> s(std::move(P), o.plastic, box, o);
   const double D0 = pk.density();
   CompactionOptions co;
   co.target_density = D0 * std::exp(0.06);  // tr E = -0.06

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "netdem/contact/luding_law.hpp"
 #include "netdem/dynamic/solver.hpp"
 
 using namespace netdem::dem;
@@ -90,6 +91,11 @@ Collision two_disk(const LudingParams& p, ContactModel model, double steps_per_c
 
 }  // namespace
 
+namespace {
+// The law of a Luding time step (the bound is k2 for every feature set).
+netdem::contact::LudingLaw<netdem::contact::kLudingFull, 2> luding(const LudingParams& p) { return {p, 0.0}; }
+}  // namespace
+
 // ---- time step rule (Eq 6)
 // ------------------------------------------------------------------------
 TEST(Dynamic, TimeStepRuleEq6AndRefusal) {
@@ -99,7 +105,7 @@ TEST(Dynamic, TimeStepRuleEq6AndRefusal) {
   P.add(1.0, 0.0, 1.0e-3, p);
   P.add(2.0, 0.0, 1.5e-3, p);
   DynamicOptions o;
-  const TimeStepInfo ts = choose_time_step(P, p, o);
+  const TimeStepInfo ts = choose_time_step(P, luding(p), o);
   const double mmean = (P.mass[0] + P.mass[1] + P.mass[2]) / 3.0, m12 = 0.5 * mmean;
   const double eta = p.gamma_n / (2.0 * m12);
   const double w = std::sqrt(p.k2 / m12 - eta * eta);
@@ -110,17 +116,17 @@ TEST(Dynamic, TimeStepRuleEq6AndRefusal) {
   std::printf("  Table 1 tri-disperse: dt = %.3e s, lightest pair %.1f steps per contact\n", ts.dt,
               ts.steps_per_contact_lightest);
   o.rule = TimeStepRule::LightestPair;
-  EXPECT_NEAR(choose_time_step(P, p, o).steps_per_contact_lightest, 50.0, 1e-9);
+  EXPECT_NEAR(choose_time_step(P, luding(p), o).steps_per_contact_lightest, 50.0, 1e-9);
   o.rule = TimeStepRule::MeanPair;
   o.dt = ts.tc_lightest / 9.0;  // 9 steps per lightest contact: refused
   try {
-    (void)choose_time_step(P, p, o);
+    (void)choose_time_step(P, luding(p), o);
     FAIL() << "expected std::invalid_argument";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("steps per contact"), std::string::npos) << e.what();
   }
   o.dt = ts.tc_lightest / 11.0;
-  EXPECT_NO_THROW((void)choose_time_step(P, p, o));
+  EXPECT_NO_THROW((void)choose_time_step(P, luding(p), o));
 }
 
 TEST(Dynamic, InvalidInputsThrow) {
@@ -139,7 +145,7 @@ TEST(Dynamic, InvalidInputsThrow) {
   bad.right.mode = WallMode::Stress;
   bad.right.mass = 0.0;
   EXPECT_THROW(DynamicSolver(P, p, bad, o), std::invalid_argument);
-  EXPECT_THROW(choose_time_step(Particles{}, p, o), std::invalid_argument);
+  EXPECT_THROW(choose_time_step(Particles{}, luding(p), o), std::invalid_argument);
   EXPECT_NO_THROW(DynamicSolver(P, p, box, o));
 }
 

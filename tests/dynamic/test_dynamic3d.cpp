@@ -396,7 +396,7 @@ TEST(Dynamic3D, CubicLatticeAffineCompactionClosedForm) {
   DynamicOptions o;
   o.model = ContactModel::PlasticIndentation;
   o.plastic.sigma_y = 1.0;
-  DynamicSolver3 s(std::move(P), LudingParams{}, box, o);
+  DynamicSolver3 s(std::move(P), o.plastic, box, o);
   std::vector<std::uint32_t> all(static_cast<std::size_t>(n * n * n));
   for (std::uint32_t p = 0; p < all.size(); ++p) all[p] = p;
   s.set_prescribed(all);

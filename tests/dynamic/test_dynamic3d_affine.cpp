@@ -67,7 +67,7 @@ LatticeRun run_lattice(double s, const std::array<double, 6>& e, double T, doubl
   o.plastic.mu = 0.0;
   o.plastic.reversible = true;
   o.gravity_z = gravity_z;
-  DynamicSolver3 sv(std::move(P), LudingParams{}, box, o);
+  DynamicSolver3 sv(std::move(P), o.plastic, box, o);
   std::vector<std::uint32_t> all(X.size());
   for (std::uint32_t p = 0; p < all.size(); ++p) all[p] = p;
   sv.set_prescribed(all);
@@ -201,7 +201,7 @@ TEST(Dynamic3DAffine, ShearRateRefusedWithContactWalls) {
   box.x_max = box.y_max = box.z_max = 4.0;
   DynamicOptions o;
   o.model = ContactModel::PlasticIndentation;
-  DynamicSolver3 sv(P, LudingParams{}, box, o);
+  DynamicSolver3 sv(P, o.plastic, box, o);
   EXPECT_THROW(sv.set_strain_rate3(-1e-3, -1e-3, -1e-3, 0.0, 1e-4, 0.0), std::invalid_argument);
   EXPECT_NO_THROW(sv.set_strain_rate3(-1e-3, -1e-3, -1e-3));
   EXPECT_THROW(sv.set_strain_rate3(-1e-3, -1e-3, -1e-3, std::nan(""), 0.0, 0.0), std::invalid_argument);
@@ -221,7 +221,7 @@ TEST(Dynamic3DAffine, AffineVelocitiesAndDragUseTheFullField) {
   DynamicOptions o;
   o.model = ContactModel::PlasticIndentation;
   o.affine_drag = 2.0;
-  DynamicSolver3 sv(P, LudingParams{}, box, o);
+  DynamicSolver3 sv(P, o.plastic, box, o);
   const double e11 = -1e-3, e22 = -2e-3, e33 = 5e-4, e23 = 3e-4, e13 = -4e-4, e12 = 6e-4;
   sv.set_strain_rate3(e11, e22, e33, e23, e13, e12);
   sv.set_affine_velocities();

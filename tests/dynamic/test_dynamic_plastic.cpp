@@ -34,11 +34,9 @@ Collision collide(const ct::PlasticIndentationParams& law, double v0, double dt,
   Box box;
   box.enabled = false;
   DynamicOptions o;
-  o.model = ContactModel::PlasticIndentation;
-  o.plastic = law;
   o.dt = dt;
   o.min_steps_per_contact = 1.0;
-  DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  DynamicSolver s(std::move(P), law, box, o);  // (the law's parameters: the model follows)
   auto overlap = [&] { return 2.0 - (s.particles().x[1] - s.particles().x[0]); };
   double d_prev = overlap(), t_in = -1.0, t_out = -1.0;
   Collision c;
@@ -156,7 +154,7 @@ TEST(DynamicPlastic, RestartIsBitIdentical) {
   o.plastic.reversible = true;
   o.plastic.mu = 0.3;
   o.plastic.damping_n = o.plastic.damping_t = 0.3;
-  DynamicSolver a(std::move(P), netdem::contact::LudingParams{}, box, o);
+  DynamicSolver a(std::move(P), o.plastic, box, o);
   a.run(2000);
   DynamicSolver b(a.state(), o);
   a.run(3000);
@@ -201,7 +199,7 @@ DynamicSolver affine_scene(double x0, double y0, bool walls, std::vector<std::ui
   o.plastic.reversible = true;
   o.plastic.mu = 0.3;
   o.plastic.damping_n = o.plastic.damping_t = 0.5;
-  DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  DynamicSolver s(std::move(P), o.plastic, box, o);
   if (all) {
     all->clear();
     for (std::uint32_t p = 0; p < s.particles().size(); ++p) all->push_back(p);
@@ -264,7 +262,7 @@ TEST(DynamicPlastic, AffineDragActsOnTheRelativeMotion) {
       o.affine_drag = c;
       o.plastic.reversible = true;
       o.dt = 1e-3;
-      DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+      DynamicSolver s(std::move(P), o.plastic, box, o);
       s.set_strain_rate(e, e);
       s.set_affine_velocities();
       SolverState st = s.state();
@@ -377,7 +375,7 @@ TEST(DynamicPlastic, InstabilityNamesThePlasticLawAndTheStepTaken) {
   o.dt = 1e-3;
   o.min_steps_per_contact = 1.0;
   o.check_every = 1;
-  DynamicSolver s(std::move(P), netdem::contact::LudingParams{}, box, o);
+  DynamicSolver s(std::move(P), o.plastic, box, o);
   std::int64_t taken = 0;
   try {
     for (; taken < 100000; ++taken) s.step();
@@ -389,4 +387,26 @@ TEST(DynamicPlastic, InstabilityNamesThePlasticLawAndTheStepTaken) {
     EXPECT_EQ(m.find("k2"), std::string::npos) << m;
     EXPECT_EQ(e.step(), taken + 1) << m;  // the step that failed its check is the (taken + 1)-th
   }
+}
+
+// The constructor takes the law's parameters: the plastic law's set the model and the law (and
+// its time step: the first-touch chord of the lightest pair); the Luding law's parameters for a
+// plastic model are refused.
+TEST(DynamicPlastic, ConstructorTakesTheLawsParameters) {
+  Particles P;
+  P.add_disk(0.0, 0.0, 1.0, 1.0);
+  P.add_disk(2.5, 0.0, 0.5, 1.0);
+  Box box;
+  box.enabled = false;
+  ct::PlasticIndentationParams law;
+  law.sigma_y = 2.0;
+  law.first_touch = 1e-4;
+  DynamicOptions o;  // model Full: the law's parameters decide
+  const DynamicSolver s(P, law, box, o);
+  EXPECT_EQ(s.plastic_law().sigma_y, 2.0);
+  const double m12 = P.mass[0] * P.mass[1] / (P.mass[0] + P.mass[1]);
+  const double kn = law.chord_stiffness() * law.unload_ratio;
+  EXPECT_NEAR(s.dt(), std::numbers::pi * std::sqrt(m12 / kn) / o.steps_per_contact, 1e-14 * s.dt());
+  o.model = ContactModel::PlasticIndentation;
+  EXPECT_THROW(DynamicSolver(P, ct::LudingParams{}, box, o), std::invalid_argument);
 }

@@ -57,7 +57,7 @@ DynamicSolverT<D> plastic_box(double mu) {
   o.plastic.unload_ratio = 20.0;
   o.plastic.damping_n = o.plastic.damping_t = 0.3;
   o.plastic_wall_mu = 0.3;
-  return DynamicSolverT<D>(std::move(P), ct::LudingParams{}, box, o);
+  return DynamicSolverT<D>(std::move(P), o.plastic, box, o);
 }
 
 template <int D>

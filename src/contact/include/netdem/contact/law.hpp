@@ -136,6 +136,14 @@ struct ContactResponse {
 /// Stiffness bounds for an explicit time step: normal and tangential, force per length.
 struct StiffnessBound {
   double k_n = 0.0, k_t = 0.0;
+  /// The a-priori bound (`stiffness_bound(r_eff)`, kHasExplicitBound) of a law whose tangential
+  /// spring grows with its contact area (the plastic law: k_t sigma_y A_c): the tangential
+  /// stiffness per unit contact area (2D: width); a solver adds k_t_area times the largest area
+  /// it sees to k_t. 0 for a per-contact bound.
+  double k_t_area = 0.0;
+  /// The normal dashpot [force / velocity] by which a period of the normal spring may be taken
+  /// damped (LMM05 Eq 6: omega = sqrt(k_n/m - (gamma_n/2m)^2)); 0: the undamped period (stricter).
+  double gamma_n = 0.0;
 };
 
 /// What an implicit solver's iteration matrix takes from the law beyond the consistent tangent.
@@ -179,6 +187,21 @@ template <class L>
 inline constexpr bool kHasContactArea = requires(const L& law, double f_n) {
   { law.contact_area(f_n) } -> std::convertible_to<double>;
 };
+
+/// The law bounds every contact it can form, before the contacts are known: `stiffness_bound(r_eff)`
+/// returns the largest normal stiffness of any contact of effective radius up to r_eff, over every
+/// history and overlap, and the tangential bound (k_t, plus k_t_area per unit contact area). An
+/// explicit solver takes its time step from it (docs/dynamic.md "Time step"), so that a new law
+/// needs no solver edit.
+template <class L>
+inline constexpr bool kHasExplicitBound = requires(const L& law, double r_eff) {
+  { law.stiffness_bound(r_eff) } -> std::same_as<StiffnessBound>;
+};
+/// The law's explicit time step may be taken from the contact duration of the mean pair when the
+/// solver's rule says so (LMM05 Eq 6 and section 3.1.2, the Luding law); a law without it bounds
+/// the lightest pair whatever the rule.
+template <class L>
+inline constexpr bool kMeanPairTimeStep = requires { requires L::kMeanPairTimeStep; };
 
 /// The step of a solver's hot loop: evaluates the law and commits its history in place, returning
 /// the forces. A law may provide `update(History&, const ContactKinematics&, double& f_n,

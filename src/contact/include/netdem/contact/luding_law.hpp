@@ -96,6 +96,16 @@ class LudingLaw {
     return s;
   }
 
+  /// The explicit time step (law.hpp kHasExplicitBound): every contact's normal stiffness is at
+  /// most k2, with the dashpot gamma_0 of Eq 5 (Eq 6 takes the damped period); the tangential
+  /// spring alpha k2 (Eq 23). Eq 6 may take the mean pair (kMeanPairTimeStep). r_eff is not used.
+  StiffnessBound stiffness_bound(double /*r_eff*/) const {
+    StiffnessBound s = stiffness_bound(History{}, Kin{});
+    s.gamma_n = p_->gamma_n;
+    return s;
+  }
+  static constexpr bool kMeanPairTimeStep = true;
+
   /// Newton needs a non-negative normal stiffness: on the attractive branch (tangent -k_c, Eq 4)
   /// the iteration matrix gets k_c added (zero normal stiffness). The tangential spring is k_t of
   /// Eq 23. (No solver runs this law implicitly yet; this re-evaluates the law for its tangent.)

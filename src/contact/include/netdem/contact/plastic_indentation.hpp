@@ -384,6 +384,19 @@ class PlasticIndentationLawT {
     return s;
   }
 
+  /// The explicit time step (law.hpp kHasExplicitBound): the stiffest normal branch of any contact
+  /// of effective radius up to r_eff is the first-touch chord 6 sigma_y / sqrt(first_touch) (2D,
+  /// whatever R*; 3D: the loading stiffness 6 pi sigma_y R*), times unload_ratio with the elastic
+  /// unloading branch; infinite for first_touch = 0 (Eq 2 at first touch). The tangential spring
+  /// k_t sigma_y A_c grows with the contact area: k_t_area = k_t sigma_y. No dashpot is counted
+  /// (the undamped period: stricter).
+  StiffnessBound stiffness_bound(double r_eff) const {
+    StiffnessBound s;
+    s.k_n = (D == 3 ? p_.chord_stiffness_3d(r_eff) : p_.chord_stiffness()) * (p_.reversible ? 1.0 : p_.unload_ratio);
+    s.k_t_area = p_.frictional() ? p_.shear_stiffness() : 0.0;
+    return s;
+  }
+
   /// Eq 2 is concave with a tangent that is singular at first touch, and Newton on the tangent
   /// overshoots into separation: on the plastic branch the normal stiffness is raised to the secant
   /// of Eq 2 over the step (from the start overlap, or from the force-free overlap) when that is

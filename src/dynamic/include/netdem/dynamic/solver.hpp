@@ -28,11 +28,13 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <type_traits>
 
 #include "netdem/contact/luding.hpp"
+#include "netdem/contact/luding_law.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
@@ -85,9 +87,9 @@ enum class ContactModel : std::uint8_t {
   Linear,      ///< luding_evaluate<kLudingLinear>: k2 delta + gamma0 delta', Cundall-Strack spring
   Hysteretic,  ///< {hysteresis}: Eq 4 and Eq 7 without cohesion or temperature
   Full,        ///< kLudingFull: Eq 4-24 with k1(T, t) from the solver's thermal state
-  /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw) with
-  /// DynamicOptions::plastic; any consistent units (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)).
-  /// The Luding parameters are not used; the time step is the law's (plastic_time_step()).
+  /// The plastic-indentation law of Redanz & Fleck 2001 (contact::PlasticIndentationLaw), set by
+  /// the constructor that takes its parameters (DynamicOptions::plastic); any consistent units
+  /// (netdem's: sigma_y, R, t* = R sqrt(rho/sigma_y)). The Luding parameters are not used.
   PlasticIndentation
 };
 
@@ -144,8 +146,9 @@ struct DynamicOptions {
   /// E' (x - x_0)), torque -affine_drag I omega, on the particles that are not prescribed [1/time];
   /// 0: none.
   double affine_drag = 0.0;
-  /// ContactModel::PlasticIndentation: the law (first_touch > 0: the explicit solver needs the
-  /// bounded first-touch stiffness) and the friction of the walls (flat, R* = r_i).
+  /// ContactModel::PlasticIndentation: the law (the constructor's PlasticIndentationParams;
+  /// first_touch > 0: the explicit solver needs the bounded first-touch stiffness) and the
+  /// friction of the walls (flat, R* = r_i).
   contact::PlasticIndentationParams plastic;
   double plastic_wall_mu = 0.0;
   /// Throws std::invalid_argument with one line for an invalid value.
@@ -154,24 +157,38 @@ struct DynamicOptions {
 
 struct TimeStepInfo {
   double dt = 0.0;                          ///< chosen time step [s]
-  double tc_tangential = 0.0;  ///< plastic law: tangential period pi sqrt(m_t/(k_t A_max)) (0: none)
+  /// the tangential period of the lightest pair (tangential_period) with the law's tangential
+  /// bound (0: none)
+  double tc_tangential = 0.0;
   double tc_mean = 0.0;                     ///< Eq 6 contact duration of the mean pair [s]
   double tc_lightest = 0.0;                 ///< Eq 6 contact duration of the lightest pair [s]
-  double steps_per_contact_lightest = 0.0;  ///< tc_lightest / dt
+  /// the lightest pair's shorter period (normal or tangential) / dt
+  double steps_per_contact_lightest = 0.0;
 };
 /// Eq 6 contact duration pi/omega, omega = sqrt(k2/m12 - eta0^2), eta0 = gamma0/(2 m12);
 /// for an over-damped pair the undamped omega is used (shorter, stricter).
 double contact_duration(double k2, double gamma0, double m12);
-/// The time step of the rule (or options.dt); throws std::invalid_argument if the lightest pair
-/// gets fewer than options.min_steps_per_contact steps per contact.
-TimeStepInfo choose_time_step(const Particles& P, const LudingParams& p, const DynamicOptions& o);
-/// The time step of ContactModel::PlasticIndentation: t = pi sqrt(m/k) / steps_per_contact for
-/// the lightest pair with the law's largest normal stiffness (the first-touch chord, times
-/// unload_ratio with the elastic unloading branch) and with the tangential spring k_t sigma_y
-/// A_max on the tangential effective mass m*/3 (rotation included), A_max the largest contact
-/// width; or options.dt, refused (std::invalid_argument) below min_steps_per_contact.
-TimeStepInfo plastic_time_step(const Particles& P, const contact::PlasticIndentationParams& law,
-                               const DynamicOptions& o, double area_max);
+/// The tangential half period pi sqrt(m_t / k_t) of a pair of effective mass m_eff, m_t its
+/// tangential effective mass with the rotations (dim.hpp): m_eff / 3 for disks (dim 2), 2/7 m_eff
+/// for spheres (dim 3).
+double tangential_period(double m_eff, double k_t, int dim);
+/// The time step from a law's a-priori stiffness bound (law.hpp kHasExplicitBound), for any law:
+/// the normal period of the bound's k_n (damped by its gamma_n as Eq 6: contact_duration; pi
+/// sqrt(m/k_n) without a dashpot) and the tangential period (tangential_period) of k_t + k_t_area
+/// area_max, both for the pair of the rule (the mean pair only where the law allows it,
+/// `mean_pair`: kMeanPairTimeStep; else the lightest pair); dt = the shorter / steps_per_contact,
+/// or options.dt. The lightest pair's periods are checked (TimeStepInfo::tc_lightest, tc_tangential). Throws std::invalid_argument if the lightest pair gets fewer
+/// than options.min_steps_per_contact steps per period, or if the bound is not finite.
+TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound& bound, bool mean_pair,
+                              const DynamicOptions& o, double area_max = 0.0);
+/// The same with the law's bound for the largest particle radius (a wall contact's R* = r_i).
+template <class Law>
+TimeStepInfo choose_time_step(const Particles& P, const Law& law, const DynamicOptions& o, double area_max = 0.0) {
+  static_assert(contact::kHasExplicitBound<Law>, "an explicit time step needs the law's stiffness_bound(r_eff)");
+  double r_max = 0.0;
+  for (double r : P.radius) r_max = r > r_max ? r : r_max;
+  return choose_time_step(P, law.stiffness_bound(r_max), contact::kMeanPairTimeStep<Law>, o, area_max);
+}
 
 struct Stress2 {
   double xx = 0.0, xy = 0.0, yx = 0.0, yy = 0.0;  ///< [N/m], compression positive
@@ -222,7 +239,7 @@ struct SolverState {
   contact::PlasticIndentationParams plastic;
   double plastic_wall_mu = 0.0;
   /// The plastic law: the largest contact width A_c of the last force evaluation (the tangential
-  /// bound of the next step's time step, plastic_time_step).
+  /// bound of the next step's time step, law.hpp StiffnessBound::k_t_area).
   double plastic_area_max = 0.0;
   int dim() const { return particles.dim; }
   /// A state of the plastic-indentation law (its wall histories are filled, the Luding ones empty).
@@ -287,8 +304,13 @@ class DynamicSolverT {
   /// The complete state at the current time (for state files and restarts).
   SolverState state() const;
 
-  /// Validates, chooses the time step, builds the neighbour table, computes the first forces.
+  /// The Luding law (options.model: Linear, Hysteretic or Full) with its parameters. Validates,
+  /// chooses the time step, builds the neighbour table, computes the first forces.
   DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+                 const DynamicOptions& options);
+  /// The plastic-indentation law with its parameters `law` (options.model and options.plastic are
+  /// set from it; the walls' friction is options.plastic_wall_mu). As above.
+  DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
                  const DynamicOptions& options);
 
   /// One velocity-Verlet step (Eq 2, Eq 1). Every options.check_every steps it runs
@@ -452,17 +474,41 @@ class DynamicSolverT {
   void wall_forces_2d(const L& wall_law, ForceSums& a);
   template <class L, bool InPlace>
   void wall_forces_3d(const L& wall_law, ForceSums& a);
-  // the history store of a law's history type (one per law family)
+  /// The contact histories of one law: one per pair of the Verlet table (pair_key_), the scratch
+  /// of a table build, kWalls per particle for the walls (x_min, x_max, y_min, ...).
   template <class H>
-  std::vector<H>& pair_histories();
+  struct HistoryTable {
+    std::vector<H> pair, next, wall;
+  };
+  /// One history table per law, chosen at construction (the law's history type); a force
+  /// evaluation takes its table once (std::get), not per contact. A new law adds its entry here.
+  using HistoryTables = std::variant<HistoryTable<LudingHist>, HistoryTable<PlasticHist>>;
   template <class H>
-  std::vector<H>& new_histories();
+  HistoryTable<H>& table() { return *std::get_if<HistoryTable<H>>(&hist_); }  ///< (the law's: by construction)
   template <class H>
-  std::vector<H>& wall_histories();
+  const HistoryTable<H>* table_if() const { return std::get_if<HistoryTable<H>>(&hist_); }
+  /// f(law) with the solver's law object (the Luding law with the full feature set: every feature
+  /// set has the same history, lifecycle and bound): the table's lifecycle (has_history), the time
+  /// step's bound, the table of a new solver. The one choice of law besides the force loop's
+  /// dispatch (compute_forces_dispatch) and the output of contacts().
+  template <class F>
+  decltype(auto) visit_law(F&& f) const {
+    if (plastic()) return f(contact::PlasticIndentationLawT<D>(opt_.plastic));
+    return f(contact::LudingLaw<contact::kLudingFull, D>(params_, thermal_.k1_Tt));
+  }
+  struct Setup {};  ///< the constructors' common part: the law is in options.model
+  DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options,
+                 Setup);
+  /// A new table of the law's history type, with fresh wall histories for n particles.
+  void make_tables(std::size_t n);
   template <class Law>
   void carry_histories(const Law& law, std::size_t n_new);
   bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
-  void update_plastic_time_step();
+  /// A law whose tangential bound grows with the contact area: the time step follows the largest
+  /// area of the last force evaluation (StiffnessBound::k_t_area, with 10 % margin).
+  void update_time_step();
+  /// bound_, mean_pair_ and ts_ from the law's a-priori bound (choose_time_step) with options o.
+  void choose_time_step_of_law(const DynamicOptions& o, double area);
   void compute_forces_dispatch();
   void choose_friction();
   void finish_setup();
@@ -487,12 +533,14 @@ class DynamicSolverT {
   double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
-  std::vector<LudingHist> pair_hist_, new_hist_;
-  // ContactModel::PlasticIndentation: its histories (the Luding ones stay empty) and laws
-  std::vector<PlasticHist> pl_pair_hist_, pl_new_hist_, pl_wall_hist_;
+  HistoryTables hist_;  ///< the law's histories of the pairs (one per pair_key_) and of the walls
+  // ContactModel::PlasticIndentation: the walls' law
   contact::PlasticIndentationParams pl_wall_params_;
-  double area_max_ = 0.0;  ///< largest contact width of the last force evaluation
-  double pl_m12_ = 0.0;    ///< effective mass of the two lightest particles
+  double area_max_ = 0.0;  ///< largest contact width of the last force evaluation (kHasContactArea)
+  double m12_ = 0.0;       ///< effective mass of the two lightest particles
+  double m_rule_ = 0.0;    ///< effective mass of the time step rule's pair (choose_time_step)
+  contact::StiffnessBound bound_;  ///< the law's a-priori stiffness bound (the time step)
+  bool mean_pair_ = false;         ///< the law's time step may take the mean pair (kMeanPairTimeStep)
   // macroscopic strain rate, prescribed particles
   double edot_[3] = {0.0, 0.0, 0.0};  ///< e11, e22, e12
   std::array<double, 4> F_ = {1.0, 0.0, 0.0, 1.0};
@@ -516,15 +564,13 @@ class DynamicSolverT {
   void impose_affine_motion(double dt);
   void apply_affine_drag();
   void affine_velocity3(std::size_t i, double* a) const;  ///< 3D: L (x_i - x_0)
-  /// pair_live_[k] == 0: pair_hist_[k] is fresh, so a separated pair needs no history access
+  /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> x_build_, y_build_, z_build_;
   /// over the positions of the last table build (storage reused)
   packing::CellGridT<D> grid_;
-  // wall histories: 2D per particle (2D: left, right, bottom, top; 3D: x_min .. z_max); wall state
-  std::vector<LudingHist> wall_hist_;
-  /// Bit w of wall_touch_[i]: wall_hist_[4 i + w] may be non-fresh (touching at the last force
+  /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
   /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
   /// histories of the other particles. Particles with no bit and no overlap are skipped by the
   /// wall loop (their histories are already fresh).
