@@ -88,8 +88,8 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
   Element e;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const int i = pi[k], j = pj[k];
-    const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                  ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+    const ct::PairGeometry g1 = ct::pair_geometry(moved(i),
+                                                  moved(j), ps.r[i], ps.r[j]);
     // pairs that are apart and have never touched cost only the geometry
     if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
       set_apart(k);
@@ -174,16 +174,17 @@ void NetworkSolver::Impl::set_apart(std::size_t k) {
 void NetworkSolver::Impl::pair_forces(std::size_t k, Element& e) {
   const int i = pi[k], j = pj[k];
   if (!law.has_history(hist[k])) {
-    const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
-    const double rs = r[i] + r[j];
+    const double dx = ps.pos[2 * j] + du[3 * j] - ps.pos[2 * i] - du[3 * i],
+                 dy = ps.pos[2 * j + 1] + du[3 * j + 1] - ps.pos[2 * i + 1] - du[3 * i + 1];
+    const double rs = ps.r[i] + ps.r[j];
     if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
       if (!apart[k]) set_apart(k);
       return;
     }
   }
   apart[k] = 0;
-  const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+  const ct::PairGeometry g1 = ct::pair_geometry(moved(i),
+                                                moved(j), ps.r[i], ps.r[j]);
   if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
     set_apart(k);
     return;

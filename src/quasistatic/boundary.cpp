@@ -39,7 +39,7 @@ void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
   Fbox_trial = small_expm(dE) * Fbox;  // the walls of BoundaryMode::Walls at the end of the increment
   du_aff.assign(3 * n, 0.0);
   for (int p = 0; p < n; ++p) {
-    const Eigen::Vector2d u = A * Eigen::Vector2d(x[p], y[p]);
+    const Eigen::Vector2d u = A * at(p);
     du_aff[3 * p] = u.x();
     du_aff[3 * p + 1] = u.y();
   }
@@ -53,7 +53,7 @@ void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
   const Eigen::Matrix2d A_prev = small_expm(dE_prev) - Eigen::Matrix2d::Identity();
   for (int p = 0; p < n; ++p) {
     const Eigen::Vector2d up(du_prev[3 * p], du_prev[3 * p + 1]);
-    const Eigen::Vector2d na = up - A_prev * (Eigen::Vector2d(x[p], y[p]) - up);
+    const Eigen::Vector2d na = up - A_prev * (at(p) - up);
     if (dof[3 * p] >= 0) du[3 * p] += scale * na.x();
     if (dof[3 * p + 1] >= 0) du[3 * p + 1] += scale * na.y();
     if (dof[3 * p + 2] >= 0) du[3 * p + 2] = scale * du_prev[3 * p + 2];
@@ -66,7 +66,7 @@ void NetworkSolver::set_reversible_normal(bool reversible) {
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
       const double u =
-          ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]).overlap;
+          ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]).overlap;
       s.hist[k] = Law::start_unloading_branch(s.hist[k], u);
     }
   }

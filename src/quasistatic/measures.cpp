@@ -36,7 +36,7 @@ StateMeasures NetworkSolver::measures() const {
   for (int p = 0; p < s.n; ++p) {
     if (s.dof[3 * p] >= 0) continue;
     const Eigen::Vector2d Fapp(-s.f_c[3 * p], -s.f_c[3 * p + 1]);
-    S += Fapp * (Eigen::Vector2d(s.x[p], s.y[p]) - xc).transpose();
+    S += Fapp * (s.at(p) - xc).transpose();
     Fnet += Fapp;
     Fabs += Fapp.norm();
   }
@@ -51,8 +51,8 @@ StateMeasures NetworkSolver::measures() const {
       for (int w = 0; w < 4; ++w) {
         const double fn = s.wfn_c[4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
         if (!(fn > 0.0)) continue;
-        const Eigen::Vector2d xp(s.x[p], s.y[p]);
-        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], s.y[p]) : Eigen::Vector2d(s.x[p], faces[w]);
+        const Eigen::Vector2d xp = s.at(p);
+        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], xp.y()) : Eigen::Vector2d(xp.x(), faces[w]);
         const Eigen::Vector2d Fapp = fn * normal[w];
         S += Fapp * (cp - xc).transpose();
         SW -= Fapp * (xp - cp).transpose();
@@ -75,14 +75,14 @@ StateMeasures NetworkSolver::measures() const {
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const auto g = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
+    const auto g = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]);
     const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
     SC -= fj * (g.L * g.n).transpose();
     ++loaded;
     sum_fn += s.fn_c[k];
     m.sliding += s.slide_c[k];
     // Eq 16 with the strain accumulated since the contact formed
-    const auto a = sys::affine_approach<2>(g.n, s.E - s.aux[k].E_form, s.r[i] + s.r[j]);
+    const auto a = sys::affine_approach<2>(g.n, s.E - s.aux[k].E_form, s.ps.r[i] + s.ps.r[j]);
     dev.add(g.overlap, a);
     sum_tc += std::fabs(s.aux[k].centre - a.tangential);
     sum_tr += std::fabs(s.aux[k].slip - a.tangential);
@@ -102,8 +102,8 @@ StateMeasures NetworkSolver::measures() const {
   if (loaded == 0) {  // initial state: count geometric contacts
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
-      const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
-      if (L <= (s.r[i] + s.r[j]) * (1.0 + 1e-6)) ++loaded;
+      const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+      if (L <= (s.ps.r[i] + s.ps.r[j]) * (1.0 + 1e-6)) ++loaded;
     }
   }
   m.contacts = loaded;
@@ -123,8 +123,8 @@ std::vector<ContactView> NetworkSolver::contacts() const {
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
-    out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.r[i] + s.r[j] - L, s.slide_c[k] != 0});
+    const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+    out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
   }
   return out;
 }

@@ -20,8 +20,8 @@ void NetworkSolver::Impl::init_linear_solver() {
   LinearSolverOptions lo;
   lo.gmres_tolerance = opt.linear_tolerance;
   lin = LinearSolver(lo);
-  r_mean = std::accumulate(r.begin(), r.end(), 0.0) / n;
-  r_max = *std::max_element(r.begin(), r.end());
+  r_mean = std::accumulate(ps.r.begin(), ps.r.end(), 0.0) / n;
+  r_max = *std::max_element(ps.r.begin(), ps.r.end());
   DofMap::build(opt.mode, opt.rotations && opt.law.frictional(), periph);
   std::vector<int> particle_of_dof(static_cast<std::size_t>(nfree));
   for (int q = 0; q < 3 * n; ++q)
@@ -46,10 +46,7 @@ NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& op
   auto& s = *impl_;
   s.set_options(options);
   s.n = static_cast<int>(pk.size());
-  s.x = pk.x;
-  s.y = pk.y;
-  s.r = pk.r;
-  s.th.assign(s.n, 0.0);
+  s.ps = sys::ParticleSet<2>::from_packing(pk);
   s.periph = packing::peripheral_layer(pk);
   s.solid_area = pk.solid_area();
   s.box_area0 = pk.box.area();
@@ -67,10 +64,13 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   auto& s = *impl_;
   s.set_options(options);
   s.n = static_cast<int>(st.x.size());
-  s.x = st.x;
-  s.y = st.y;
-  s.th = st.theta;
-  s.r = st.r;
+  s.ps.pos.resize(2 * st.x.size());
+  for (int p = 0; p < s.n; ++p) {
+    s.ps.pos[2 * p] = st.x[p];
+    s.ps.pos[2 * p + 1] = st.y[p];
+  }
+  s.ps.rot = st.theta;
+  s.ps.r = st.r;
   s.periph = st.peripheral;
   s.solid_area = st.solid_area;
   s.box_area0 = st.box_area0;
@@ -87,9 +87,12 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   s.fn_c = st.f_n;
   s.ft_c = st.f_t;
   s.slide_c = st.sliding;
-  s.xb = st.x_build;
-  s.yb = st.y_build;
-  s.Fb = st.box_deformation_build;
+  s.pos_build.resize(2 * st.x.size());
+  for (int p = 0; p < s.n; ++p) {
+    s.pos_build[2 * p] = st.x_build[p];
+    s.pos_build[2 * p + 1] = st.y_build[p];
+  }
+  s.F_build = st.box_deformation_build;
   s.build_adjacency(s.n);
   s.apart.assign(s.pi.size(), 0);
   s.build_pattern();
@@ -109,10 +112,10 @@ NetworkSolver::~NetworkSolver() = default;
 NetworkState NetworkSolver::state() const {
   const auto& s = *impl_;
   NetworkState st;
-  st.x = s.x;
-  st.y = s.y;
-  st.theta = s.th;
-  st.r = s.r;
+  st.x = s.ps.axis(0);
+  st.y = s.ps.axis(1);
+  st.theta = s.ps.rot;
+  st.r = s.ps.r;
   st.peripheral = s.periph;
   st.solid_area = s.solid_area;
   st.initial_density = s.D0;
@@ -130,9 +133,13 @@ NetworkState NetworkSolver::state() const {
   st.f_n = s.fn_c;
   st.f_t = s.ft_c;
   st.sliding = s.slide_c;
-  st.x_build = s.xb;
-  st.y_build = s.yb;
-  st.box_deformation_build = s.Fb;
+  st.x_build.resize(s.ps.size());
+  st.y_build.resize(s.ps.size());
+  for (std::size_t p = 0; p < s.ps.size(); ++p) {
+    st.x_build[p] = s.pos_build[2 * p];
+    st.y_build[p] = s.pos_build[2 * p + 1];
+  }
+  st.box_deformation_build = s.F_build;
   st.f_contact = s.f_c;
   st.du_prev = s.du_prev;
   st.dE_prev = s.dE_prev;
@@ -202,10 +209,11 @@ void NetworkState::validate() const {
 const SolverOptions& NetworkSolver::options() const { return impl_->opt; }
 const SolverTimings& NetworkSolver::timings() const { return impl_->tim; }
 std::size_t NetworkSolver::size() const { return static_cast<std::size_t>(impl_->n); }
-const std::vector<double>& NetworkSolver::x() const { return impl_->x; }
-const std::vector<double>& NetworkSolver::y() const { return impl_->y; }
-const std::vector<double>& NetworkSolver::theta() const { return impl_->th; }
-const std::vector<double>& NetworkSolver::radius() const { return impl_->r; }
+std::vector<double> NetworkSolver::x() const { return impl_->ps.axis(0); }
+std::vector<double> NetworkSolver::y() const { return impl_->ps.axis(1); }
+const std::vector<double>& NetworkSolver::theta() const { return impl_->ps.rot; }
+const std::vector<double>& NetworkSolver::radius() const { return impl_->ps.r; }
+const sys::ParticleSet<2>& NetworkSolver::particles() const { return impl_->ps; }
 const std::vector<std::uint8_t>& NetworkSolver::peripheral() const { return impl_->periph; }
 Eigen::Matrix2d NetworkSolver::box_deformation() const { return impl_->Fbox; }
 double NetworkSolver::solid_area() const { return impl_->solid_area; }

@@ -26,7 +26,7 @@ IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
 IncrementReport NetworkSolver::Impl::attempt(const Eigen::Matrix2d& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
-  if (needs_rebuild(x, y, Fbox, opt.skin * r_mean, r_max)) {
+  if (needs_rebuild(ps, Fbox, opt.skin * r_mean, r_max)) {
     build_neighbours();
     rep.reanalysed = true;
   }
@@ -81,7 +81,7 @@ void NetworkSolver::Impl::begin_increment(const Eigen::Matrix2d& dE) {
   trial_slip.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pi[k], j = pj[k];
-    g0[k] = ct::pair_geometry(ct::Vec(x[i], y[i]), ct::Vec(x[j], y[j]), r[i], r[j]);
+    g0[k] = ct::pair_geometry(at(i), at(j), ps.r[i], ps.r[j]);
   }
   prescribe(dE);
   last_sliding.assign(np, 0);
@@ -201,8 +201,8 @@ void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep
       // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
       const int i = pi[k], j = pj[k];
       const ct::PairGeometry& g = g0[k];
-      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+      const ct::PairGeometry g1 = ct::pair_geometry(moved(i),
+                                                    moved(j), ps.r[i], ps.r[j]);
       aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
     }
     fn_c[k] = t.f_n;
@@ -212,9 +212,9 @@ void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep
   }
   commit_walls();
   for (int p = 0; p < n; ++p) {
-    x[p] += du[3 * p];
-    y[p] += du[3 * p + 1];
-    th[p] += du[3 * p + 2];
+    ps.pos[2 * p] += du[3 * p];
+    ps.pos[2 * p + 1] += du[3 * p + 1];
+    ps.rot[p] += du[3 * p + 2];
   }
   f_c = f;
   E += dE;

@@ -13,23 +13,23 @@ namespace netdem::qs {
 
 /// Residual (contact force - drag) and tangent of a set of m particles (1 or 2) alone, with all
 /// other particles held at their current trial positions: 3 entries per particle.
-void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
+void NetworkSolver::Impl::local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
   res.setZero(3 * m);
   Kl.setZero(3 * m, 3 * m);
   const ct::TangentOptions topt;
   Element e;
   auto slot = [&](int p) {
     for (int t = 0; t < m; ++t)
-      if (ps[t] == p) return t;
+      if (group[t] == p) return t;
     return -1;
   };
   for (int sp = 0; sp < m; ++sp)
-    for (int q = adj_start[ps[sp]]; q < adj_start[ps[sp] + 1]; ++q) {
+    for (int q = adj_start[group[sp]]; q < adj_start[group[sp] + 1]; ++q) {
       const int k = adj_pair[q], i = pi[k], j = pj[k];
       const int si = slot(i), sj = slot(j);
       if ((si >= 0 && si < sp) || (sj >= 0 && sj < sp)) continue;  // pair inside the set: once
-      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+      const ct::PairGeometry g1 = ct::pair_geometry(moved(i),
+                                                    moved(j), ps.r[i], ps.r[j]);
       if (g1.overlap <= 0.0 && !law.has_history(hist[k])) continue;
       ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
       const int sl[2] = {si, sj};
@@ -48,7 +48,7 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
   if (walls())
     for (int t = 0; t < m; ++t)
       for (int w = 0; w < 4; ++w) {
-        const WallEval we = wall_eval(ps[t], w);
+        const WallEval we = wall_eval(group[t], w);
         const int a = w < 2 ? 0 : 1;
         res(3 * t + a) += we.force;
         Kl(3 * t + a, 3 * t + a) += we.k;
@@ -56,7 +56,7 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
   const double eta_t = std::max(eta, 0.0);
   for (int t = 0; t < m; ++t)
     for (int a = 0; a < 3; ++a) {
-      const int p = ps[t];
+      const int p = group[t];
       const double ea = a == 2 ? eta_t * r_mean * r_mean : eta_t;
       res(3 * t + a) -= ea * (du[3 * p + a] - du_aff[3 * p + a]);
       Kl(3 * t + a, 3 * t + a) += ea + 1e-9 * kl_ref * (a == 2 ? r_mean * r_mean : 1.0);
@@ -64,21 +64,21 @@ void NetworkSolver::Impl::local_eval(const int* ps, int m, Eigen::VectorXd& res,
 }
 
 /// Nonlinear Gauss-Seidel on a set of particles: damped Newton on their own free DOFs.
-void NetworkSolver::Impl::relax_set(const int* ps, int m, double fbar) {
+void NetworkSolver::Impl::relax_set(const int* group, int m, double fbar) {
   int idx[6], nf = 0;  // local index 3 t + a of the free DOFs
   for (int t = 0; t < m; ++t)
     for (int a = 0; a < 3; ++a)
-      if (dof[3 * ps[t] + a] >= 0) idx[nf++] = 3 * t + a;
+      if (dof[3 * group[t] + a] >= 0) idx[nf++] = 3 * t + a;
   if (nf == 0) return;
   auto norm = [&](const Eigen::VectorXd& v) {
     double s2 = 0.0;
     for (int c = 0; c < nf; ++c) s2 += std::pow(v(idx[c]) / (idx[c] % 3 == 2 ? r_mean : 1.0), 2);
     return std::sqrt(s2);
   };
-  auto at = [&](int c) -> double& { return du[3 * ps[idx[c] / 3] + idx[c] % 3]; };
+  auto at = [&](int c) -> double& { return du[3 * group[idx[c] / 3] + idx[c] % 3]; };
   Eigen::VectorXd res, res2;
   Eigen::MatrixXd Kl, Kl2;
-  local_eval(ps, m, res, Kl);
+  local_eval(group, m, res, Kl);
   double rn = norm(res);
   for (int it = 0; it < opt.local_iterations && rn > 0.1 * opt.residual_tol * fbar; ++it) {
     Eigen::MatrixXd A(nf, nf);
@@ -101,7 +101,7 @@ void NetworkSolver::Impl::relax_set(const int* ps, int m, double fbar) {
     bool accepted = false;
     for (double alpha = 1.0; alpha > 0.01; alpha *= 0.5) {
       for (int c = 0; c < nf; ++c) at(c) = old[c] + alpha * step(c);
-      local_eval(ps, m, res2, Kl2);
+      local_eval(group, m, res2, Kl2);
       const double rn2 = norm(res2);
       if (rn2 < rn) {
         rn = rn2;

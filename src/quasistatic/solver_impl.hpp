@@ -1,8 +1,8 @@
 #pragma once
 // Private: the parts of the network solver (NetworkSolver::Impl) and which file owns what.
 //
-//   contact_table.cpp  ContactTable: the neighbour pairs and their committed history, and its
-//                      lifecycle across neighbour rebuilds
+//   contact_table.cpp  ContactTable: the system layer's table (netdem/system/contact_table.hpp)
+//                      with the solver's per-row data, and the neighbour rebuild
 //   boundary.cpp       DofMap and the prescribed motion of an increment (boundary conditions)
 //   assembly.cpp       sparsity pattern, trial forces, iteration matrix, drag and regularisation
 //   newton.cpp         the Newton driver of one increment (predictor, iterations, line search, commit)
@@ -20,9 +20,10 @@
 
 #include "netdem/contact/element.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
-#include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/contact_table.hpp"
+#include "netdem/system/particle_set.hpp"
 
 namespace netdem::qs {
 
@@ -34,34 +35,20 @@ using Law = ct::PlasticIndentationLaw;
 using Element = ct::PairElement<Law>;
 using Response = Law::Response;
 
-/// The contact table: one row per neighbour pair (i < j, sorted by (i, j)), i.e. every pair with
-/// a gap below the skin at the last rebuild, touching or not. Per row it holds the committed
-/// history of the contact law, the affine-deviation bookkeeping and the committed forces.
-/// Lifecycle: a row is created (zero history, E_form = the strain at creation) when a pair comes
-/// within the skin; it keeps its history across rebuilds while the pair stays within the skin;
-/// it is dropped, history and all, when a rebuild finds the pair farther apart than the skin
-/// (plastic flattening u_max included: a pair that far apart cannot touch again before the next
-/// rebuild). The adjacency (pairs of each particle, CSR) follows every rebuild.
-struct ContactTable {
-  std::vector<int> pi, pj;
-  std::vector<Law::History> hist;
+/// The contact table of the network solver: the system layer's table (netdem/system/
+/// contact_table.hpp: rows i < j sorted, every pair with a gap below the skin at the last rebuild,
+/// touching or not; their committed history; the adjacency; the lifecycle, read from the law)
+/// plus the solver's own per-row data, carried across rebuilds with the history: the
+/// affine-deviation bookkeeping (a new row starts with E_form = the strain at its creation) and
+/// the committed forces.
+struct ContactTable : sys::ContactTable<Law::History, 2> {
   std::vector<PairAux> aux;
   std::vector<double> fn_c, ft_c;   ///< committed normal and tangential forces
   std::vector<std::uint8_t> slide_c;  ///< committed sliding flag
-  std::vector<int> adj_start, adj_pair;  ///< pairs of each particle (CSR, increasing pair index)
-  std::vector<double> xb, yb;       ///< positions at the last rebuild
-  Eigen::Matrix2d Fb = Eigen::Matrix2d::Identity();  ///< box deformation at the last rebuild
-  packing::CellGrid grid;           ///< neighbour search (storage reused across rebuilds)
 
-  std::size_t pairs() const { return pi.size(); }
-  /// New neighbour list (gap < skin) merged with the committed history (both sorted).
-  void rebuild(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& r,
-               double skin, double r_max, const Eigen::Matrix2d& E, const Eigen::Matrix2d& Fbox);
-  void build_adjacency(int n);
-  /// Displacement relative to the affine motion since the last rebuild, plus the affine part of
-  /// the relative motion of two neighbours, exceeds the skin.
-  bool needs_rebuild(const std::vector<double>& x, const std::vector<double>& y, const Eigen::Matrix2d& Fbox,
-                     double skin, double r_max) const;
+  /// New rows (gap < skin) merged with the committed history and the per-row data above.
+  void rebuild(const Law& law, const sys::ParticleSet<2>& ps, double skin, double r_max, const Eigen::Matrix2d& E,
+               const Eigen::Matrix2d& Fbox);
 };
 
 /// The boundary conditions as a DOF map: dof[3p + c] = free index or -1 (prescribed).
@@ -89,7 +76,7 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   Law law;       ///< the law of opt.law (set_options keeps both together)
   Law wall_law;  ///< the same law without friction (the walls are frictionless)
   int n = 0;
-  std::vector<double> x, y, th, r;
+  sys::ParticleSet<2> ps;  ///< centres, rotations, radii (committed state)
   std::vector<std::uint8_t> periph;
   double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;
   packing::Box box0;
@@ -131,6 +118,10 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   LinearSolver lin;
   SolverTimings tim;
   SolverTimings lin_base;  ///< linear-solver counters of the solver(s) this one was restored from
+
+  /// Centre of p in the committed state and at the end of the trial increment du.
+  ct::Vec at(int p) const { return ct::Vec(ps.pos[2 * p], ps.pos[2 * p + 1]); }
+  ct::Vec moved(int p) const { return ct::Vec(ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1]); }
 
   // construction (network_solver.cpp)
   void set_options(const SolverOptions& o);
@@ -175,8 +166,8 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   void wall_stiffness();                   ///< the wall contacts' stiffness into K and M
   void commit_walls();
   // relaxation.cpp
-  void local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
-  void relax_set(const int* ps, int m, double fbar);
+  void local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
+  void relax_set(const int* group, int m, double fbar);
   int relax_worst(double fbar, double rms);
   // measures.cpp
   double unbalance(double fbar, double* rms = nullptr) const;

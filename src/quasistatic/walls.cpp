@@ -32,12 +32,12 @@ double distance(int w, double px, double py, double f) {
 NetworkSolver::Impl::WallEval NetworkSolver::Impl::wall_eval(int p, int w) const {
   WallEval e;
   const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
-  const double d1 = distance(w, x[p] + du[3 * p], y[p] + du[3 * p + 1], face(Fbox_trial, box0, w));
-  if (r[p] - d1 <= 0.0 && !wall_law.has_history(whist[s])) return e;
+  const double d1 = distance(w, ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1], face(Fbox_trial, box0, w));
+  if (ps.r[p] - d1 <= 0.0 && !wall_law.has_history(whist[s])) return e;
   ct::ContactKinematics k;
-  k.overlap = r[p] - d1;
-  k.overlap_start = r[p] - distance(w, x[p], y[p], face(Fbox, box0, w));
-  k.r_eff = r[p];
+  k.overlap = ps.r[p] - d1;
+  k.overlap_start = ps.r[p] - distance(w, ps.pos[2 * p], ps.pos[2 * p + 1], face(Fbox, box0, w));
+  k.r_eff = ps.r[p];
   ct::ContactTangent t;
   e.r = wall_law.evaluate(whist[s], k, &t);
   if (!e.r.loaded) return e;

@@ -42,6 +42,7 @@
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/solver_options.hpp"
+#include "netdem/system/particle_set.hpp"
 
 namespace netdem::qs {
 
@@ -179,8 +180,9 @@ class NetworkSolver {
 
   // committed state
   std::size_t size() const;
-  const std::vector<double>& x() const;
-  const std::vector<double>& y() const;
+  std::vector<double> x() const;  ///< the centres' x (a copy of particles().axis(0))
+  std::vector<double> y() const;
+  const sys::ParticleSet<2>& particles() const;  ///< centres, rotations, radii
   const std::vector<double>& theta() const;
   const std::vector<double>& radius() const;
   const std::vector<std::uint8_t>& peripheral() const;
