@@ -1,4 +1,4 @@
-// ContactTable: the system layer's contact table with the network solver's per-row data, and the
+// ContactTableT: the system layer's contact table with the network solver's per-row data, and the
 // neighbour rebuild (solver_impl.hpp states the rules).
 #include <chrono>
 
@@ -6,23 +6,30 @@
 
 namespace netdem::qs {
 
-void ContactTable::rebuild(const Law& law, const sys::ParticleSet<2>& ps, double skin, double r_max,
-                           const Eigen::Matrix2d& E, const Eigen::Matrix2d& Fbox) {
-  sys::ContactTable<Law::History, 2>::rebuild(law, ps, skin, r_max, Fbox);
-  PairAux fresh;
+template <int D>
+void ContactTableT<D>::rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max,
+                               const Mat& E, const Mat& Fbox) {
+  sys::ContactTable<typename LawT<D>::History, D>::rebuild(law, ps, skin, r_max, Fbox);
+  PairAuxT<D> fresh;
   fresh.E_form = E;
-  carry(aux, fresh);
-  carry(fn_c, 0.0);
-  carry(ft_c, 0.0);
-  carry(slide_c, std::uint8_t{0});
+  this->carry(aux, fresh);
+  this->carry(fn_c, 0.0);
+  this->carry(ft_c, ct::tan_zero<Tan>());
+  this->carry(slide_c, std::uint8_t{0});
 }
 
-void NetworkSolver::Impl::build_neighbours() {
+template <int D>
+void NetworkSolverT<D>::Impl::build_neighbours() {
   const auto t0 = std::chrono::steady_clock::now();
-  ContactTable::rebuild(law, ps, opt.skin * r_mean, r_max, E, Fbox);
+  Table::rebuild(law, ps, opt.skin * r_mean, r_max, E, Fbox);
   apart.assign(pi.size(), 0);  // new pair indices: nothing is known to be zero
   build_pattern();
   tim.neighbours += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+template struct ContactTableT<2>;
+template struct ContactTableT<3>;
+template struct NetworkSolverT<2>::Impl;
+template struct NetworkSolverT<3>::Impl;
 
 }  // namespace netdem::qs
