@@ -11,72 +11,12 @@
 
 namespace netdem::qs {
 
-// Sparsity pattern of the free-DOF matrix: diagonal kN x kN blocks + one block pair per neighbour
-// pair, written directly in compressed column form from the particle adjacency (adj_start,
-// adj_pair): column (p, b) holds the free DOFs of p and of its neighbours, in DOF order (DOFs
-// are numbered particle by particle).
+// Sparsity pattern of the free-DOF matrix and the slots of the pairs (pair_pattern.hpp): diagonal
+// kN x kN blocks + one block pair per neighbour pair, columns in DOF order; M shares it.
 template <int D>
 void NetworkSolverT<D>::Impl::build_pattern() {
-  std::vector<int> near;  // p and its neighbours, sorted
-  auto neighbourhood = [&](int p) {
-    near.clear();
-    near.push_back(p);
-    for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
-      const auto k = static_cast<std::size_t>(adj_pair[q]);
-      near.push_back(pi[k] == p ? pj[k] : pi[k]);
-    }
-    std::sort(near.begin(), near.end());
-  };
-  auto free_of = [&](int q) {
-    int c = 0;
-    for (int a = 0; a < kN; ++a) c += dof[kN * q + a] >= 0;
-    return c;
-  };
-  K.resize(nfree, nfree);
-  int* outer = K.outerIndexPtr();
-  outer[0] = 0;
-  for (int p = 0; p < n; ++p) {
-    if (free_of(p) == 0) continue;
-    neighbourhood(p);
-    int rows = 0;
-    for (const int q : near) rows += free_of(q);
-    for (int b = 0; b < kN; ++b)
-      if (const int d = dof[kN * p + b]; d >= 0) outer[d + 1] = rows;
-  }
-  for (int d = 0; d < nfree; ++d) outer[d + 1] += outer[d];
-  K.resizeNonZeros(outer[nfree]);
-  int* inner = K.innerIndexPtr();
-  std::fill(K.valuePtr(), K.valuePtr() + outer[nfree], 0.0);
-  for (int p = 0; p < n; ++p) {
-    if (free_of(p) == 0) continue;
-    neighbourhood(p);
-    for (int b = 0; b < kN; ++b) {
-      const int d = dof[kN * p + b];
-      if (d < 0) continue;
-      int at = outer[d];
-      for (const int q : near)
-        for (int a = 0; a < kN; ++a)
-          if (const int row = dof[kN * q + a]; row >= 0) inner[at++] = row;
-    }
-  }
+  pattern.build(K, n, kN, dof, nfree, pi.size(), [&](std::size_t k) { return std::pair<int, int>(pi[k], pj[k]); });
   M = K;
-  auto find = [&](int row, int col) -> int {
-    const int* in = K.innerIndexPtr();
-    const int b = K.outerIndexPtr()[col], e = K.outerIndexPtr()[col + 1];
-    const int* it = std::lower_bound(in + b, in + e, row);
-    return static_cast<int>(it - in);
-  };
-  pos.assign(kP * kP * pi.size(), -1);
-  for (std::size_t k = 0; k < pi.size(); ++k) {
-    const int nodes[2] = {pi[k], pj[k]};
-    for (int a = 0; a < kP; ++a)
-      for (int b = 0; b < kP; ++b) {
-        const int ra = dof[kN * nodes[a / kN] + a % kN], cb = dof[kN * nodes[b / kN] + b % kN];
-        if (ra >= 0 && cb >= 0) pos[kP * kP * k + kP * b + a] = find(ra, cb);
-      }
-  }
-  diag_pos.resize(nfree);
-  for (int d = 0; d < nfree; ++d) diag_pos[d] = find(d, d);
   pattern_changed = true;
 }
 
@@ -166,7 +106,7 @@ void NetworkSolverT<D>::Impl::scatter(std::size_t k, const Element& e, const Pai
   const double kt = k_t;
   double* Kv = K.valuePtr();
   double* Mv = M.valuePtr();
-  const int* pk = &pos[kP * kP * k];
+  const int* pk = pattern.slots(k);
   if constexpr (D == 2) {
     for (int b = 0; b < 6; ++b)
       for (int a = 0; a < 6; ++a) {
@@ -264,7 +204,7 @@ void NetworkSolverT<D>::Impl::open_contact_stiffness(std::size_t k, const Geomet
   if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
   const double kn = last_kn[k];
   const PairVec bn = ct::normal_gradient(g1);
-  const int* pk = &pos[kP * kP * k];
+  const int* pk = pattern.slots(k);
   for (int b = 0; b < kP; ++b)
     for (int a = 0; a < kP; ++a) {
       const int q = pk[kP * b + a];
@@ -316,10 +256,10 @@ double NetworkSolverT<D>::Impl::mean_diagonal() const {
     for (int a = 0; a < kN; ++a)
       if (const int d = dof[kN * p + a]; d >= 0) {
         if (!is_rotation(a)) {
-          sum += M.valuePtr()[diag_pos[d]];
+          sum += M.valuePtr()[pattern.diag(d)];
           ++c;
         } else {
-          rot += M.valuePtr()[diag_pos[d]];
+          rot += M.valuePtr()[pattern.diag(d)];
           ++cr;
         }
       }
@@ -338,8 +278,8 @@ void NetworkSolverT<D>::Impl::regularise() {
     for (int a = 0; a < kN; ++a)
       if (const int d = dof[kN * p + a]; d >= 0) {
         const double add = eps * (is_rotation(a) ? r_mean * r_mean : 1.0) + (is_rotation(a) ? eta_r : eta_t);
-        K.valuePtr()[diag_pos[d]] += add;
-        M.valuePtr()[diag_pos[d]] += add;
+        K.valuePtr()[pattern.diag(d)] += add;
+        M.valuePtr()[pattern.diag(d)] += add;
       }
 }
 

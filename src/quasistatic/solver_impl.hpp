@@ -4,7 +4,9 @@
 //   contact_table.cpp  ContactTableT<D>: the system layer's table (netdem/system/contact_table.hpp)
 //                      with the solver's per-row data, and the neighbour rebuild
 //   boundary.cpp       DofMap and the prescribed motion of an increment (boundary conditions)
-//   assembly.cpp       sparsity pattern, trial forces, iteration matrix, drag and regularisation
+//   pair_pattern.hpp   the sparsity pattern and the slots of the pairs (shared with the staggered
+//                      scheme)
+//   assembly.cpp       trial forces, iteration matrix (through the slots), drag and regularisation
 //   newton.cpp         the Newton driver of one increment (predictor, iterations, line search, commit)
 //   relaxation.cpp     the local nonlinear Gauss-Seidel sweep over the worst particles
 //   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
@@ -30,6 +32,7 @@
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/system/contact_table.hpp"
 #include "netdem/system/particle_set.hpp"
+#include "pair_pattern.hpp"
 
 namespace netdem::qs {
 
@@ -133,8 +136,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
 
   // sparse pattern (free DOFs only, full storage)
   SpMat K, M;
-  std::vector<int> pos;       // kP^2 per pair: position in valuePtr, -1 if a DOF is prescribed
-  std::vector<int> diag_pos;  // per free DOF
+  PairPattern pattern;  // K's structure, the pairs' slots and the diagonal entries (pair_pattern.hpp)
   bool pattern_changed = true;
 
   // trial buffers of the current increment

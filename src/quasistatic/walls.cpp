@@ -88,8 +88,8 @@ void NetworkSolverT<D>::Impl::wall_stiffness() {
       if (!(wk[s] > 0.0)) continue;
       const int d = dof[3 * p + (w < 2 ? 0 : 1)];
       if (d < 0) continue;
-      K.valuePtr()[diag_pos[d]] += wk[s];
-      M.valuePtr()[diag_pos[d]] += wk[s];
+      K.valuePtr()[pattern.diag(d)] += wk[s];
+      M.valuePtr()[pattern.diag(d)] += wk[s];
     }
 }
 
