@@ -51,7 +51,10 @@ class ContactTable {
   template <contact::ContactLaw L>
   void rebuild(const L&, const ParticleSet<D>& ps, double skin, double r_max, const Mat& F) {
     const int n = static_cast<int>(ps.size());
-    for (int a = 0; a < D; ++a) axes_[static_cast<std::size_t>(a)] = ps.axis(a);
+    for (std::size_t a = 0; a < D; ++a) {  // the grid reads the centres by axis (storage reused)
+      axes_[a].resize(static_cast<std::size_t>(n));
+      for (std::size_t p = 0; p < axes_[a].size(); ++p) axes_[a][p] = ps.pos[D * p + a];
+    }
     typename packing::CellGridT<D>::Axes spans;
     for (std::size_t a = 0; a < D; ++a) spans[a] = axes_[a];
     grid_.rebuild(spans, 2.0 * r_max + skin);
