@@ -194,7 +194,7 @@ int centres_outside(const netdem::qs::NetworkSolver& solver, const netdem::packi
   int outside = 0;
   const Eigen::Matrix2d Finv = solver.box_deformation().inverse();
   for (std::size_t p = 0; p < solver.size(); ++p) {
-    const Eigen::Vector2d q = Finv * Eigen::Vector2d(solver.x()[p], solver.y()[p]);  // in the initial box
+    const Eigen::Vector2d q = Finv * solver.particles().position(p);  // in the initial box
     outside += q.x() < box.x_min || q.x() > box.x_max || q.y() < box.y_min || q.y() > box.y_max;
   }
   return outside;

@@ -11,75 +11,21 @@
 
 namespace netdem::qs {
 
-// Sparsity pattern of the free-DOF matrix: diagonal 3x3 blocks + one block pair per neighbour
-// pair, written directly in compressed column form from the particle adjacency (adj_start,
-// adj_pair): column (p, b) holds the free DOFs of p and of its neighbours, in DOF order (DOFs
-// are numbered particle by particle).
-void NetworkSolver::Impl::build_pattern() {
-  std::vector<int> near;  // p and its neighbours, sorted
-  auto neighbourhood = [&](int p) {
-    near.clear();
-    near.push_back(p);
-    for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
-      const auto k = static_cast<std::size_t>(adj_pair[q]);
-      near.push_back(pi[k] == p ? pj[k] : pi[k]);
-    }
-    std::sort(near.begin(), near.end());
-  };
-  auto free_of = [&](int q) { return (dof[3 * q] >= 0) + (dof[3 * q + 1] >= 0) + (dof[3 * q + 2] >= 0); };
-  K.resize(nfree, nfree);
-  int* outer = K.outerIndexPtr();
-  outer[0] = 0;
-  for (int p = 0; p < n; ++p) {
-    if (free_of(p) == 0) continue;
-    neighbourhood(p);
-    int rows = 0;
-    for (const int q : near) rows += free_of(q);
-    for (int b = 0; b < 3; ++b)
-      if (const int d = dof[3 * p + b]; d >= 0) outer[d + 1] = rows;
-  }
-  for (int d = 0; d < nfree; ++d) outer[d + 1] += outer[d];
-  K.resizeNonZeros(outer[nfree]);
-  int* inner = K.innerIndexPtr();
-  std::fill(K.valuePtr(), K.valuePtr() + outer[nfree], 0.0);
-  for (int p = 0; p < n; ++p) {
-    if (free_of(p) == 0) continue;
-    neighbourhood(p);
-    for (int b = 0; b < 3; ++b) {
-      const int d = dof[3 * p + b];
-      if (d < 0) continue;
-      int at = outer[d];
-      for (const int q : near)
-        for (int a = 0; a < 3; ++a)
-          if (const int row = dof[3 * q + a]; row >= 0) inner[at++] = row;
-    }
-  }
+// Sparsity pattern of the free-DOF matrix and the slots of the pairs (pair_pattern.hpp): diagonal
+// kN x kN blocks + one block pair per neighbour pair, columns in DOF order; M shares it.
+template <int D>
+void NetworkSolverT<D>::Impl::build_pattern() {
+  pattern.build(K, n, kN, dof, nfree, pi.size(), [&](std::size_t k) { return std::pair<int, int>(pi[k], pj[k]); });
   M = K;
-  auto find = [&](int row, int col) -> int {
-    const int* in = K.innerIndexPtr();
-    const int b = K.outerIndexPtr()[col], e = K.outerIndexPtr()[col + 1];
-    const int* it = std::lower_bound(in + b, in + e, row);
-    return static_cast<int>(it - in);
-  };
-  pos.assign(36 * pi.size(), -1);
-  for (std::size_t k = 0; k < pi.size(); ++k) {
-    const int nodes[2] = {pi[k], pj[k]};
-    for (int a = 0; a < 6; ++a)
-      for (int b = 0; b < 6; ++b) {
-        const int ra = dof[3 * nodes[a / 3] + a % 3], cb = dof[3 * nodes[b / 3] + b % 3];
-        if (ra >= 0 && cb >= 0) pos[36 * k + 6 * b + a] = find(ra, cb);
-      }
-  }
-  diag_pos.resize(nfree);
-  for (int d = 0; d < nfree; ++d) diag_pos[d] = find(d, d);
   pattern_changed = true;
 }
 
 // Trial evaluation of every pair from the committed state and the increment du, with assembly:
-// fills f (3n), pf, the trial results and the values of K and M.
-void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
+// fills f (kN n), pf, the trial results and the values of K and M.
+template <int D>
+void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
   std::fill(f.begin(), f.end(), 0.0);
-  pf.resize(6 * pi.size());
+  pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
   std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
   std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
@@ -88,8 +34,7 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
   Element e;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const int i = pi[k], j = pj[k];
-    const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                  ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+    const Geometry g1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]);
     // pairs that are apart and have never touched cost only the geometry
     if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
       set_apart(k);
@@ -97,13 +42,13 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
       continue;
     }
     apart[k] = 0;
-    ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, &topt);
+    ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, &topt);
     trial[k] = e.law;
     trial_slip[k] = e.dslip;
-    for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
-    for (int a = 0; a < 3; ++a) {
-      f[3 * i + a] += e.force(a);
-      f[3 * j + a] += e.force(3 + a);
+    for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);
+    for (int a = 0; a < kN; ++a) {
+      f[kN * i + a] += e.force(a);
+      f[kN * j + a] += e.force(kN + a);
     }
     if (!e.law.loaded) {
       open_contact_stiffness(k, g1);
@@ -112,7 +57,8 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
     if (last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
     last_open[k] = 0;
     if (e.law.sliding) any_nonsymmetric = true;
-    const ct::PairVec bn = ct::normal_gradient(g1), bt = ct::slip_gradient(g1);
+    const PairVec bn = ct::normal_gradient(g1);
+    const SlipGradient bt = ct::slip_gradient(g1);
     double k_t = 0.0;
     const double kn_sym = iteration_stiffness(k, bn, bt, e, k_t);
     last_kn[k] = kn_sym;
@@ -120,15 +66,18 @@ void NetworkSolver::Impl::assemble(bool& any_nonsymmetric) {
   }
   // stick tangents differ slightly from M too
   if (opt.law.frictional()) any_nonsymmetric = true;
-  wall_forces();
-  wall_stiffness();
+  if constexpr (D == 2) {
+    wall_forces();
+    wall_stiffness();
+  }
 }
 
 // Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix, from
 // the law's iteration stiffness (law.hpp); returns the normal stiffness of the symmetric matrix M
 // and its tangential stiffness in k_t.
-double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairVec& bn, const ct::PairVec& bt,
-                                                Element& e, double& k_t) {
+template <int D>
+double NetworkSolverT<D>::Impl::iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt,
+                                                    Element& e, double& k_t) {
   const ct::IterationStiffness is = law.iteration_stiffness(hist[k], e.kin, e.law);
   const double kn_extra = is.k_n_add;
   if (kn_extra > 0.0) e.stiffness.noalias() += kn_extra * bn * bn.transpose();
@@ -139,66 +88,86 @@ double NetworkSolver::Impl::iteration_stiffness(std::size_t k, const ct::PairVec
   if (e.law.sliding != (last_sliding[k] != 0)) flips[k] = static_cast<std::uint8_t>(std::min(flips[k] + 1, 100));
   last_sliding[k] = e.law.sliding ? 1 : 0;
   const double frac = flips[k] >= opt.freeze_after ? 1.0 : opt.slide_stiffness_fraction;
-  if (e.law.sliding && frac > 0.0) e.stiffness.noalias() += frac * is.k_t * bt * bt.transpose();
+  if (e.law.sliding && frac > 0.0) {
+    if constexpr (D == 2) {
+      e.stiffness.noalias() += frac * is.k_t * bt * bt.transpose();
+    } else {
+      e.stiffness.noalias() += frac * is.k_t * bt.transpose() * bt;
+    }
+  }
   k_t = is.k_t * (e.law.sliding ? frac : 1.0);
   return e.tangent.dfn_dun + kn_extra;
 }
 
 // Adds pair k's iteration matrix to K and its symmetric slip-status tangent to M.
-void NetworkSolver::Impl::scatter(std::size_t k, const Element& e, const ct::PairVec& bn, const ct::PairVec& bt,
-                                  double kn_sym, double k_t) {
+template <int D>
+void NetworkSolverT<D>::Impl::scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt,
+                                      double kn_sym, double k_t) {
   const double kt = k_t;
   double* Kv = K.valuePtr();
   double* Mv = M.valuePtr();
-  const int* pk = &pos[36 * k];
-  for (int b = 0; b < 6; ++b)
-    for (int a = 0; a < 6; ++a) {
-      const int q = pk[6 * b + a];
-      if (q < 0) continue;
-      Kv[q] += e.stiffness(a, b);
-      Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
-    }
+  const int* pk = pattern.slots(k);
+  if constexpr (D == 2) {
+    for (int b = 0; b < 6; ++b)
+      for (int a = 0; a < 6; ++a) {
+        const int q = pk[6 * b + a];
+        if (q < 0) continue;
+        Kv[q] += e.stiffness(a, b);
+        Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
+      }
+  } else {
+    const PairMat Ms = kn_sym * bn * bn.transpose() + kt * bt.transpose() * bt;
+    for (int b = 0; b < kP; ++b)
+      for (int a = 0; a < kP; ++a) {
+        const int q = pk[kP * b + a];
+        if (q < 0) continue;
+        Kv[q] += e.stiffness(a, b);
+        Mv[q] += Ms(a, b);
+      }
+  }
 }
 
 /// Pair k has never touched and is apart: zero trial state and force.
-void NetworkSolver::Impl::set_apart(std::size_t k) {
+template <int D>
+void NetworkSolverT<D>::Impl::set_apart(std::size_t k) {
   trial[k] = Response{};
-  trial_slip[k] = 0.0;
-  std::fill_n(&pf[6 * k], 6, 0.0);
+  trial_slip[k] = ct::tan_zero<Tan>();
+  std::fill_n(&pf[kP * k], kP, 0.0);
   apart[k] = 1;
 }
 
 /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
 /// that has never touched and is clearly apart costs a squared distance (its zero trial state
 /// and force are written once, then flagged in `apart`).
-void NetworkSolver::Impl::pair_forces(std::size_t k, Element& e) {
+template <int D>
+void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
   const int i = pi[k], j = pj[k];
+  const Vec xi = moved(i), xj = moved(j);
   if (!law.has_history(hist[k])) {
-    const double dx = x[j] + du[3 * j] - x[i] - du[3 * i], dy = y[j] + du[3 * j + 1] - y[i] - du[3 * i + 1];
-    const double rs = r[i] + r[j];
-    if (dx * dx + dy * dy > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
+    const double rs = ps.r[i] + ps.r[j];
+    if ((xj - xi).squaredNorm() > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding
       if (!apart[k]) set_apart(k);
       return;
     }
   }
-  apart[k] = 0;
-  const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
+  apart[k] = 0;  // (a pair this test lets through with overlap <= 0 is set apart below: the same state)
+  const Geometry g1 = ct::pair_geometry(xi, xj, ps.r[i], ps.r[j]);
   if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
     set_apart(k);
     return;
   }
-  ct::pair_element(law, hist[k], g0[k], g1, du[3 * i + 2], du[3 * j + 2], e, nullptr);
+  ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, nullptr);
   trial[k] = e.law;
   trial_slip[k] = e.dslip;
-  for (int a = 0; a < 6; ++a) pf[6 * k + a] = e.force(a);
+  for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);
 }
 
 // Forces only, on opt.threads threads: the pairs (in parallel), then f gathered per particle
 // over its pairs in increasing pair order, i.e. the same sums in the same order as the
 // assembling loop (bit-identical results for any number of threads).
-void NetworkSolver::Impl::evaluate_forces() {
-  pf.resize(6 * pi.size());
+template <int D>
+void NetworkSolverT<D>::Impl::evaluate_forces() {
+  pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
   const auto np = static_cast<std::ptrdiff_t>(pi.size());
   const int levels = omp_get_max_active_levels();
@@ -212,36 +181,33 @@ void NetworkSolver::Impl::evaluate_forces() {
     }
 #pragma omp for schedule(static)
     for (int p = 0; p < n; ++p) {
-      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      double s[kN] = {};
       for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
         const auto k = static_cast<std::size_t>(adj_pair[q]);
-        const double* fk = &pf[6 * k + (pi[k] == p ? 0 : 3)];
-        s0 += fk[0];
-        s1 += fk[1];
-        s2 += fk[2];
+        const double* fk = &pf[kP * k + (pi[k] == p ? 0 : kN)];
+        for (int a = 0; a < kN; ++a) s[a] += fk[a];
       }
-      f[3 * p] = s0;
-      f[3 * p + 1] = s1;
-      f[3 * p + 2] = s2;
+      for (int a = 0; a < kN; ++a) f[kN * p + a] = s[a];
     }
   }
   omp_set_max_active_levels(levels);
-  wall_forces();  // serial, after the pairs: the same sums in the same order
+  if constexpr (D == 2) wall_forces();  // serial, after the pairs: the same sums in the same order
 }
 
 // Open/closed cycling: a pair that closed and opened again within this increment keeps the
 // normal stiffness it last had while closed, so that the Newton step lands near touch instead
 // of jumping across it (iteration matrix only).
-void NetworkSolver::Impl::open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1) {
+template <int D>
+void NetworkSolverT<D>::Impl::open_contact_stiffness(std::size_t k, const Geometry& g1) {
   if (!last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
   last_open[k] = 1;
   if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
   const double kn = last_kn[k];
-  const ct::PairVec bn = ct::normal_gradient(g1);
-  const int* pk = &pos[36 * k];
-  for (int b = 0; b < 6; ++b)
-    for (int a = 0; a < 6; ++a) {
-      const int q = pk[6 * b + a];
+  const PairVec bn = ct::normal_gradient(g1);
+  const int* pk = pattern.slots(k);
+  for (int b = 0; b < kP; ++b)
+    for (int a = 0; a < kP; ++a) {
+      const int q = pk[kP * b + a];
       if (q < 0) continue;
       const double v = kn * bn(a) * bn(b);
       K.valuePtr()[q] += v;
@@ -251,45 +217,49 @@ void NetworkSolver::Impl::open_contact_stiffness(std::size_t k, const ct::PairGe
 
 /// Re-evaluates (forces only) the pairs of the given particles after their du changed, keeping
 /// f, pf and the trial state consistent with du without a full evaluation.
-void NetworkSolver::Impl::refresh_particles(const std::vector<int>& ps) {
+template <int D>
+void NetworkSolverT<D>::Impl::refresh_particles(const std::vector<int>& group) {
   Element e;
-  for (const int p : ps)
+  for (const int p : group)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
       const auto k = static_cast<std::size_t>(adj_pair[q]);
       if (refreshed[k]) continue;
       refreshed[k] = 1;
       const int i = pi[k], j = pj[k];
-      for (int a = 0; a < 3; ++a) {
-        f[3 * i + a] -= pf[6 * k + a];
-        f[3 * j + a] -= pf[6 * k + 3 + a];
+      for (int a = 0; a < kN; ++a) {
+        f[kN * i + a] -= pf[kP * k + a];
+        f[kN * j + a] -= pf[kP * k + kN + a];
       }
       pair_forces(k, e);
-      for (int a = 0; a < 3; ++a) {
-        f[3 * i + a] += pf[6 * k + a];
-        f[3 * j + a] += pf[6 * k + 3 + a];
+      for (int a = 0; a < kN; ++a) {
+        f[kN * i + a] += pf[kP * k + a];
+        f[kN * j + a] += pf[kP * k + kN + a];
       }
     }
-  for (const int p : ps)
+  for (const int p : group)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
-  if (walls())
-    for (const int p : ps) {
-      wall_particle(p, -1.0);
-      wall_particle(p, 1.0);
-    }
+  if constexpr (D == 2) {
+    if (walls())
+      for (const int p : group) {
+        wall_particle(p, -1.0);
+        wall_particle(p, 1.0);
+      }
+  }
 }
 
 /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).
-double NetworkSolver::Impl::mean_diagonal() const {
+template <int D>
+double NetworkSolverT<D>::Impl::mean_diagonal() const {
   double sum = 0.0, rot = 0.0;
   int c = 0, cr = 0;
   for (int p = 0; p < n; ++p)
-    for (int a = 0; a < 3; ++a)
-      if (const int d = dof[3 * p + a]; d >= 0) {
-        if (a < 2) {
-          sum += M.valuePtr()[diag_pos[d]];
+    for (int a = 0; a < kN; ++a)
+      if (const int d = dof[kN * p + a]; d >= 0) {
+        if (!is_rotation(a)) {
+          sum += M.valuePtr()[pattern.diag(d)];
           ++c;
         } else {
-          rot += M.valuePtr()[diag_pos[d]];
+          rot += M.valuePtr()[pattern.diag(d)];
           ++cr;
         }
       }
@@ -299,17 +269,21 @@ double NetworkSolver::Impl::mean_diagonal() const {
 }
 
 /// Adds the viscous drag and the tiny regularisation to the diagonal of K and M.
-void NetworkSolver::Impl::regularise() {
+template <int D>
+void NetworkSolverT<D>::Impl::regularise() {
   const double ref = mean_diagonal();
   const double eps = opt.regularisation * ref;
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   for (int p = 0; p < n; ++p)
-    for (int a = 0; a < 3; ++a)
-      if (const int d = dof[3 * p + a]; d >= 0) {
-        const double add = eps * (a == 2 ? r_mean * r_mean : 1.0) + (a == 2 ? eta_r : eta_t);
-        K.valuePtr()[diag_pos[d]] += add;
-        M.valuePtr()[diag_pos[d]] += add;
+    for (int a = 0; a < kN; ++a)
+      if (const int d = dof[kN * p + a]; d >= 0) {
+        const double add = eps * (is_rotation(a) ? r_mean * r_mean : 1.0) + (is_rotation(a) ? eta_r : eta_t);
+        K.valuePtr()[pattern.diag(d)] += add;
+        M.valuePtr()[pattern.diag(d)] += add;
       }
 }
+
+template struct NetworkSolverT<2>::Impl;
+template struct NetworkSolverT<3>::Impl;
 
 }  // namespace netdem::qs

@@ -4,28 +4,19 @@
 
 namespace netdem::qs {
 
-Eigen::Matrix2d small_expm(const Eigen::Matrix2d& A) {
-  Eigen::Matrix2d term = Eigen::Matrix2d::Identity(), sum = Eigen::Matrix2d::Identity();
-  for (int k = 1; k <= 8; ++k) {
-    term = term * A / static_cast<double>(k);
-    sum += term;
-  }
-  return sum;
-}
-
-void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph) {
-  const int n = static_cast<int>(periph.size());
-  dof.assign(3 * n, -1);
+void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free,
+                   const std::vector<std::uint8_t>& periph) {
+  const int n = static_cast<int>(periph.size()), kn = dim + rot_dofs;
+  dof.assign(static_cast<std::size_t>(kn) * n, -1);
   nfree = 0;
   for (int p = 0; p < n; ++p) {
     const bool walls = mode == BoundaryMode::Walls;  // nothing prescribed
     const bool translations_free = walls || (mode == BoundaryMode::Die && !periph[p]);
-    if (translations_free) {
-      dof[3 * p] = nfree++;
-      dof[3 * p + 1] = nfree++;
-    }
+    if (translations_free)
+      for (int a = 0; a < dim; ++a) dof[kn * p + a] = nfree++;
     // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes
-    if (rotations_free && (walls || !periph[p])) dof[3 * p + 2] = nfree++;
+    if (rotations_free && (walls || !periph[p]))
+      for (int a = dim; a < kn; ++a) dof[kn * p + a] = nfree++;
   }
 }
 
@@ -34,45 +25,49 @@ void DofMap::build(BoundaryMode mode, bool rotations_free, const std::vector<std
 // part (scaled; rotations: the previous rotation increment, scaled) on an unchanged strain path,
 // else the affine motion alone. The non-affine part is du_prev minus the previous affine motion
 // at the previous increment's start positions, so the predictor does not depend on the origin.
-void NetworkSolver::Impl::prescribe(const Eigen::Matrix2d& dE) {
-  const Eigen::Matrix2d A = small_expm(dE) - Eigen::Matrix2d::Identity();
-  Fbox_trial = small_expm(dE) * Fbox;  // the walls of BoundaryMode::Walls at the end of the increment
-  du_aff.assign(3 * n, 0.0);
+template <int D>
+void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
+  const Mat A = small_expm<D>(dE) - Mat::Identity();
+  Fbox_trial = small_expm<D>(dE) * Fbox;  // the walls of BoundaryMode::Walls at the end of the increment
+  du_aff.assign(kN * n, 0.0);
   for (int p = 0; p < n; ++p) {
-    const Eigen::Vector2d u = A * Eigen::Vector2d(x[p], y[p]);
-    du_aff[3 * p] = u.x();
-    du_aff[3 * p + 1] = u.y();
+    const Vec u = A * at(p);
+    for (int a = 0; a < D; ++a) du_aff[kN * p + a] = u(a);
   }
   const double dn = dE.norm(), dpn = dE_prev.norm();
   const bool reuse = !du_prev.empty() && dpn > 0.0 && dn > 0.0 &&
                      (dE.array() * dE_prev.array()).sum() / (dn * dpn) > 0.999;
   const double scale = reuse ? dn / dpn : 0.0;
-  for (int q = 0; q < 3 * n; ++q) du[q] = du_aff[q];
+  for (int q = 0; q < kN * n; ++q) du[q] = du_aff[q];
   if (!reuse) return;
   // the previous increment's affine part, A_prev x_prev, at its start positions x_prev = x - du_prev
-  const Eigen::Matrix2d A_prev = small_expm(dE_prev) - Eigen::Matrix2d::Identity();
+  const Mat A_prev = small_expm<D>(dE_prev) - Mat::Identity();
   for (int p = 0; p < n; ++p) {
-    const Eigen::Vector2d up(du_prev[3 * p], du_prev[3 * p + 1]);
-    const Eigen::Vector2d na = up - A_prev * (Eigen::Vector2d(x[p], y[p]) - up);
-    if (dof[3 * p] >= 0) du[3 * p] += scale * na.x();
-    if (dof[3 * p + 1] >= 0) du[3 * p + 1] += scale * na.y();
-    if (dof[3 * p + 2] >= 0) du[3 * p + 2] = scale * du_prev[3 * p + 2];
+    const Vec up = Eigen::Map<const Vec>(&du_prev[kN * p]);
+    const Vec na = up - A_prev * (at(p) - up);
+    for (int a = 0; a < D; ++a)
+      if (dof[kN * p + a] >= 0) du[kN * p + a] += scale * na(a);
+    for (int a = D; a < kN; ++a)
+      if (dof[kN * p + a] >= 0) du[kN * p + a] = scale * du_prev[kN * p + a];
   }
 }
 
-void NetworkSolver::set_reversible_normal(bool reversible) {
+template <int D>
+void NetworkSolverT<D>::set_reversible_normal(bool reversible) {
   auto& s = *impl_;
   if (!reversible && s.opt.law.reversible) {
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
-      const double u =
-          ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]).overlap;
-      s.hist[k] = Law::start_unloading_branch(s.hist[k], u);
+      const double u = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]).overlap;
+      s.hist[k] = Impl::Law::start_unloading_branch(s.hist[k], u);
     }
   }
   SolverOptions o = s.opt;
   o.law.reversible = reversible;
   s.set_options(o);
 }
+
+template class NetworkSolverT<2>;
+template class NetworkSolverT<3>;
 
 }  // namespace netdem::qs

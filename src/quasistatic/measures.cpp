@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -15,7 +16,10 @@
 
 namespace netdem::qs {
 
-StateMeasures NetworkSolver::measures() const {
+template <int D>
+StateMeasures NetworkSolverT<D>::measures() const
+  requires(D == 2)
+{
   const auto& s = *impl_;
   StateMeasures m;
   m.E11 = s.E(0, 0);
@@ -36,7 +40,7 @@ StateMeasures NetworkSolver::measures() const {
   for (int p = 0; p < s.n; ++p) {
     if (s.dof[3 * p] >= 0) continue;
     const Eigen::Vector2d Fapp(-s.f_c[3 * p], -s.f_c[3 * p + 1]);
-    S += Fapp * (Eigen::Vector2d(s.x[p], s.y[p]) - xc).transpose();
+    S += Fapp * (s.at(p) - xc).transpose();
     Fnet += Fapp;
     Fabs += Fapp.norm();
   }
@@ -51,8 +55,8 @@ StateMeasures NetworkSolver::measures() const {
       for (int w = 0; w < 4; ++w) {
         const double fn = s.wfn_c[4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
         if (!(fn > 0.0)) continue;
-        const Eigen::Vector2d xp(s.x[p], s.y[p]);
-        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], s.y[p]) : Eigen::Vector2d(s.x[p], faces[w]);
+        const Eigen::Vector2d xp = s.at(p);
+        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], xp.y()) : Eigen::Vector2d(xp.x(), faces[w]);
         const Eigen::Vector2d Fapp = fn * normal[w];
         S += Fapp * (cp - xc).transpose();
         SW -= Fapp * (xp - cp).transpose();
@@ -75,14 +79,14 @@ StateMeasures NetworkSolver::measures() const {
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const auto g = ct::pair_geometry(ct::Vec(s.x[i], s.y[i]), ct::Vec(s.x[j], s.y[j]), s.r[i], s.r[j]);
+    const auto g = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]);
     const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
     SC -= fj * (g.L * g.n).transpose();
     ++loaded;
     sum_fn += s.fn_c[k];
     m.sliding += s.slide_c[k];
     // Eq 16 with the strain accumulated since the contact formed
-    const auto a = sys::affine_approach<2>(g.n, s.E - s.aux[k].E_form, s.r[i] + s.r[j]);
+    const auto a = sys::affine_approach<2>(g.n, s.E - s.aux[k].E_form, s.ps.r[i] + s.ps.r[j]);
     dev.add(g.overlap, a);
     sum_tc += std::fabs(s.aux[k].centre - a.tangential);
     sum_tr += std::fabs(s.aux[k].slip - a.tangential);
@@ -102,8 +106,8 @@ StateMeasures NetworkSolver::measures() const {
   if (loaded == 0) {  // initial state: count geometric contacts
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
-      const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
-      if (L <= (s.r[i] + s.r[j]) * (1.0 + 1e-6)) ++loaded;
+      const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+      if (L <= (s.ps.r[i] + s.ps.r[j]) * (1.0 + 1e-6)) ++loaded;
     }
   }
   m.contacts = loaded;
@@ -117,28 +121,92 @@ StateMeasures NetworkSolver::measures() const {
   return m;
 }
 
-std::vector<ContactView> NetworkSolver::contacts() const {
+template <int D>
+std::vector<ContactView> NetworkSolverT<D>::contacts() const {
   const auto& s = *impl_;
   std::vector<ContactView> out;
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const double L = std::hypot(s.x[j] - s.x[i], s.y[j] - s.y[i]);
-    out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.r[i] + s.r[j] - L, s.slide_c[k] != 0});
+    if constexpr (D == 2) {
+      const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
+    } else {
+      const double L = (s.at(j) - s.at(i)).norm();
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
+    }
   }
   return out;
+}
+
+// The Eq 13 stress of the prescribed particles' reactions (lever arms from the centre of the
+// current box, as measures()) and the Love-Weber contact stress, in any dimension.
+template <int D>
+StressMeasuresT<D> NetworkSolverT<D>::stress() const {
+  const auto& s = *impl_;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Vec = typename Impl::Vec;
+  if (s.walls()) throw std::invalid_argument("stress: in the walls mode the reactions are the walls' (measures())");
+  constexpr int kN = Impl::kN;
+  StressMeasuresT<D> m;
+  m.strain = s.E;
+  const double V = s.box_area0 * s.Fbox.determinant();
+  m.density = s.solid_area / V;
+  Vec c0;
+  c0(0) = 0.5 * (s.box0.x_min + s.box0.x_max);
+  c0(1) = 0.5 * (s.box0.y_min + s.box0.y_max);
+  if constexpr (D == 3) c0(2) = 0.5 * (s.box0.z_min + s.box0.z_max);
+  const Vec xc = s.Fbox * c0;
+  Vec Fnet = Vec::Zero();
+  double Fabs = 0.0;
+  Mat S = Mat::Zero();
+  for (int p = 0; p < s.n; ++p) {
+    if (s.dof[kN * p] >= 0) continue;
+    const Vec Fapp = -Eigen::Map<const Vec>(&s.f_c[kN * p]);
+    S += Fapp * (s.at(p) - xc).transpose();
+    Fnet += Fapp;
+    Fabs += Fapp.norm();
+  }
+  S /= V;
+  m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
+  m.eq13 = 0.5 * (S + S.transpose());
+  Mat SC = Mat::Zero();
+  double sum_fn = 0.0;
+  for (std::size_t k = 0; k < s.pi.size(); ++k) {
+    if (s.fn_c[k] <= 0.0) continue;
+    const int i = s.pi[k], j = s.pj[k];
+    const auto g = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]);
+    Vec fj;
+    if constexpr (D == 2) {
+      fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
+    } else {
+      fj = s.fn_c[k] * g.n + s.ft_c[k];
+    }
+    SC -= fj * (g.L * g.n).transpose();
+    ++m.contact_count;
+    sum_fn += s.fn_c[k];
+    m.sliding += s.slide_c[k];
+  }
+  SC /= V;
+  m.contacts = 0.5 * (SC + SC.transpose());
+  const double c = m.contacts.norm(), d = (m.eq13 - m.contacts).norm();
+  m.eq13_vs_contacts = c > 0.0 ? d / c : (d > 0.0 ? 1.0 : 0.0);
+  m.Z = 2.0 * m.contact_count / s.n;
+  m.mean_normal_force = m.contact_count > 0 ? sum_fn / m.contact_count : 0.0;
+  return m;
 }
 
 
 /// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
 /// out-of-balance contact force, i.e. the viscous drag that holds the increment.
-double NetworkSolver::Impl::unbalance(double fbar, double* rms) const {
+template <int D>
+double NetworkSolverT<D>::Impl::unbalance(double fbar, double* rms) const {
   double m = 0.0, s2 = 0.0;
   int c = 0;
   for (int p = 0; p < n; ++p)
-    for (int a = 0; a < 3; ++a)
-      if (dof[3 * p + a] >= 0) {
-        const double v = std::fabs(f[3 * p + a]) / (a == 2 ? r_mean : 1.0);
+    for (int a = 0; a < kN; ++a)
+      if (dof[kN * p + a] >= 0) {
+        const double v = std::fabs(f[kN * p + a]) / (is_rotation(a) ? r_mean : 1.0);
         m = std::max(m, v);
         s2 += v * v;
         ++c;
@@ -149,7 +217,8 @@ double NetworkSolver::Impl::unbalance(double fbar, double* rms) const {
 
 
 /// Diagnostics (verbose): one line per Newton iteration with the branch transitions since the last.
-void NetworkSolver::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
+template <int D>
+void NetworkSolverT<D>::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
   const std::size_t np = pi.size();
   int tr[3][3] = {}, ss = 0;
   if (it == 0) diag_branch.assign(np, 0);
@@ -169,15 +238,16 @@ void NetworkSolver::Impl::print_iteration(int it, double newton_res, double newt
 }
 
 /// Diagnostics (verbose): the particles with the largest Newton residual.
-void NetworkSolver::Impl::print_worst(double fbar) const {
+template <int D>
+void NetworkSolverT<D>::Impl::print_worst(double fbar) const {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   std::vector<std::pair<double, int>> worst;
   for (int p = 0; p < n; ++p) {
     double m = 0.0;
-    for (int a = 0; a < 3; ++a)
-      if (dof[3 * p + a] >= 0) {
-        const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
-        m = std::max(m, std::fabs(rv) / (a == 2 ? r_mean : 1.0));
+    for (int a = 0; a < kN; ++a)
+      if (dof[kN * p + a] >= 0) {
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_aff[kN * p + a]);
+        m = std::max(m, std::fabs(rv) / (is_rotation(a) ? r_mean : 1.0));
       }
     worst.emplace_back(m / std::max(fbar, 1e-300), p);
   }
@@ -197,7 +267,9 @@ void NetworkSolver::Impl::print_worst(double fbar) const {
     const int p = worst[w].second;
     std::fprintf(stderr, "    worst p=%d |r|/fbar=%.3e contacts=%d sliding=%d non-affine motion %.3e R\n", p,
                  worst[w].first, closed[p], slid[p],
-                 std::hypot(du[3 * p] - du_aff[3 * p], du[3 * p + 1] - du_aff[3 * p + 1]) / r_mean);
+                 (D == 2 ? std::hypot(du[kN * p] - du_aff[kN * p], du[kN * p + 1] - du_aff[kN * p + 1])
+                         : (Eigen::Map<const Vec>(&du[kN * p]) - Eigen::Map<const Vec>(&du_aff[kN * p])).norm()) /
+                     r_mean);
     if (w >= 2) continue;
     for (std::size_t k = 0; k < pi.size(); ++k)
       if ((pi[k] == p || pj[k] == p) && trial[k].loaded)
@@ -205,5 +277,11 @@ void NetworkSolver::Impl::print_worst(double fbar) const {
                      trial[k].f_n, last_kn[k], static_cast<int>(trial[k].branch));
   }
 }
+
+template class NetworkSolverT<2>;
+// 3D: member by member (measures() is 2D only, and clang 14 instantiates constrained members too)
+template std::vector<ContactView> NetworkSolverT<3>::contacts() const;
+template StressMeasuresT<3> NetworkSolverT<3>::stress() const;
+template struct NetworkSolverT<3>::Impl;
 
 }  // namespace netdem::qs

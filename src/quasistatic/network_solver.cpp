@@ -1,9 +1,10 @@
-// NetworkSolver: construction from a packing or from a state, the copyable state, and the public
+// NetworkSolverT<D>: construction from a packing or from a state, the copyable state, and the public
 // accessors. The parts are listed in solver_impl.hpp.
 #include "netdem/quasistatic/network_solver.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <numbers>
 #include <stdexcept>
@@ -16,22 +17,28 @@
 
 namespace netdem::qs {
 
-void NetworkSolver::Impl::init_linear_solver() {
+template <int D>
+void NetworkSolverT<D>::Impl::init_linear_solver() {
   LinearSolverOptions lo;
   lo.gmres_tolerance = opt.linear_tolerance;
   lin = LinearSolver(lo);
-  r_mean = std::accumulate(r.begin(), r.end(), 0.0) / n;
-  r_max = *std::max_element(r.begin(), r.end());
-  DofMap::build(opt.mode, opt.rotations && opt.law.frictional(), periph);
+  r_mean = std::accumulate(ps.r.begin(), ps.r.end(), 0.0) / n;
+  r_max = *std::max_element(ps.r.begin(), ps.r.end());
+  DofMap::build(D, kR, opt.mode, opt.rotations && opt.law.frictional(), periph);
   std::vector<int> particle_of_dof(static_cast<std::size_t>(nfree));
-  for (int q = 0; q < 3 * n; ++q)
-    if (dof[q] >= 0) particle_of_dof[dof[q]] = q / 3;
+  for (int q = 0; q < kN * n; ++q)
+    if (dof[q] >= 0) particle_of_dof[dof[q]] = q / kN;
   lin.set_row_blocks(std::move(particle_of_dof));
-  du.assign(3 * n, 0.0);
-  f.assign(3 * n, 0.0);
+  du.assign(kN * n, 0.0);
+  f.assign(kN * n, 0.0);
 }
 
-void NetworkSolver::Impl::set_options(const SolverOptions& o) {
+template <int D>
+void NetworkSolverT<D>::Impl::set_options(const SolverOptions& o) {
+  if constexpr (D == 3) {
+    if (o.mode == BoundaryMode::Walls)
+      throw std::invalid_argument("network solver: the walls boundary mode is 2D only (3D: affine or die)");
+  }
   opt = o;
   law = Law(o.law);
   contact::PlasticIndentationParams frictionless = o.law;
@@ -39,38 +46,83 @@ void NetworkSolver::Impl::set_options(const SolverOptions& o) {
   wall_law = Law(frictionless);
 }
 
-NetworkSolver::NetworkSolver(const packing::Packing& pk, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
+namespace {
+
+/// The outer layer of a 3D packing (the die mode's prescribed particles): the spheres whose
+/// surface comes within one mean radius of a face of the spheres' bounding box.
+std::vector<std::uint8_t> peripheral_layer_3d(const packing::Packing& pk) {
+  const std::size_t n = pk.size();
+  const std::vector<double>* axes[3] = {&pk.x, &pk.y, &pk.z};
+  double lo[3], hi[3], r_mean = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<double>::infinity();
+    hi[a] = -lo[a];
+  }
+  for (std::size_t p = 0; p < n; ++p) {
+    r_mean += pk.r[p] / static_cast<double>(n);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], (*axes[a])[p] - pk.r[p]);
+      hi[a] = std::max(hi[a], (*axes[a])[p] + pk.r[p]);
+    }
+  }
+  std::vector<std::uint8_t> per(n, 0);
+  for (std::size_t p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a)
+      if ((*axes[a])[p] - pk.r[p] - lo[a] < r_mean || hi[a] - (*axes[a])[p] - pk.r[p] < r_mean) per[p] = 1;
+  return per;
+}
+
+}  // namespace
+
+template <int D>
+NetworkSolverT<D>::NetworkSolverT(const packing::Packing& pk, const SolverOptions& options)
+    : impl_(std::make_unique<Impl>()) {
   options.validate();
-  if (pk.dim != 2) throw std::invalid_argument("network solver: the packing is 3D (dim 3); the network solver is 2D only");
+  if (pk.dim != D)
+    throw std::invalid_argument(fmt::format("network solver: the packing has dimension {}, the solver {}", pk.dim, D));
   packing::validate(pk);
   auto& s = *impl_;
   s.set_options(options);
   s.n = static_cast<int>(pk.size());
-  s.x = pk.x;
-  s.y = pk.y;
-  s.r = pk.r;
-  s.th.assign(s.n, 0.0);
-  s.periph = packing::peripheral_layer(pk);
-  s.solid_area = pk.solid_area();
-  s.box_area0 = pk.box.area();
+  s.ps = sys::ParticleSet<D>::from_packing(pk);
+  if constexpr (D == 2) {
+    s.periph = packing::peripheral_layer(pk);
+  } else {
+    s.periph = peripheral_layer_3d(pk);
+  }
+  s.solid_area = pk.solid_measure();
+  s.box_area0 = pk.box_measure();
   s.box0 = pk.box;
   s.seed = pk.seed;
   s.D0 = s.solid_area / s.box_area0;
   s.init_linear_solver();
-  s.f_c.assign(3 * s.n, 0.0);
+  s.f_c.assign(Impl::kN * s.n, 0.0);
   s.build_neighbours();
 }
 
-NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
+template <int D>
+NetworkSolverT<D>::NetworkSolverT(const State& st, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
   options.validate();
   st.validate();
   auto& s = *impl_;
   s.set_options(options);
-  s.n = static_cast<int>(st.x.size());
-  s.x = st.x;
-  s.y = st.y;
-  s.th = st.theta;
-  s.r = st.r;
+  if constexpr (D == 2) {  // the 2D state keeps the layout of the 2D state file
+    s.n = static_cast<int>(st.x.size());
+    s.ps.pos.resize(2 * st.x.size());
+    s.pos_build.resize(2 * st.x.size());
+    for (int p = 0; p < s.n; ++p) {
+      s.ps.pos[2 * p] = st.x[p];
+      s.ps.pos[2 * p + 1] = st.y[p];
+      s.pos_build[2 * p] = st.x_build[p];
+      s.pos_build[2 * p + 1] = st.y_build[p];
+    }
+    s.ps.rot = st.theta;
+    s.ps.r = st.r;
+  } else {
+    s.n = static_cast<int>(st.particles.size());
+    s.ps = st.particles;
+    s.pos_build = st.pos_build;
+  }
   s.periph = st.peripheral;
   s.solid_area = st.solid_area;
   s.box_area0 = st.box_area0;
@@ -87,9 +139,7 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   s.fn_c = st.f_n;
   s.ft_c = st.f_t;
   s.slide_c = st.sliding;
-  s.xb = st.x_build;
-  s.yb = st.y_build;
-  s.Fb = st.box_deformation_build;
+  s.F_build = st.box_deformation_build;
   s.build_adjacency(s.n);
   s.apart.assign(s.pi.size(), 0);
   s.build_pattern();
@@ -102,17 +152,31 @@ NetworkSolver::NetworkSolver(const NetworkState& st, const SolverOptions& option
   s.wfn_c = st.wall_f_n;
 }
 
-NetworkSolver::NetworkSolver(const NetworkSolver& other) : NetworkSolver(other.state(), other.options()) {}
+template <int D>
+NetworkSolverT<D>::NetworkSolverT(const NetworkSolverT& other) : NetworkSolverT(other.state(), other.options()) {}
 
-NetworkSolver::~NetworkSolver() = default;
+template <int D>
+NetworkSolverT<D>::~NetworkSolverT() = default;
 
-NetworkState NetworkSolver::state() const {
+template <int D>
+typename NetworkSolverT<D>::State NetworkSolverT<D>::state() const {
   const auto& s = *impl_;
-  NetworkState st;
-  st.x = s.x;
-  st.y = s.y;
-  st.theta = s.th;
-  st.r = s.r;
+  State st;
+  if constexpr (D == 2) {
+    st.x = s.ps.axis(0);
+    st.y = s.ps.axis(1);
+    st.theta = s.ps.rot;
+    st.r = s.ps.r;
+    st.x_build.resize(s.ps.size());
+    st.y_build.resize(s.ps.size());
+    for (std::size_t p = 0; p < s.ps.size(); ++p) {
+      st.x_build[p] = s.pos_build[2 * p];
+      st.y_build[p] = s.pos_build[2 * p + 1];
+    }
+  } else {
+    st.particles = s.ps;
+    st.pos_build = s.pos_build;
+  }
   st.peripheral = s.periph;
   st.solid_area = s.solid_area;
   st.initial_density = s.D0;
@@ -130,9 +194,7 @@ NetworkState NetworkSolver::state() const {
   st.f_n = s.fn_c;
   st.f_t = s.ft_c;
   st.sliding = s.slide_c;
-  st.x_build = s.xb;
-  st.y_build = s.yb;
-  st.box_deformation_build = s.Fb;
+  st.box_deformation_build = s.F_build;
   st.f_contact = s.f_c;
   st.du_prev = s.du_prev;
   st.dE_prev = s.dE_prev;
@@ -140,7 +202,36 @@ NetworkState NetworkSolver::state() const {
   return st;
 }
 
-void NetworkState::validate() const {
+/// The 3D state: sizes, order and finiteness (the 2D state below checks the 2D file's fields).
+template <int D>
+void NetworkStateT<D>::validate() const {
+  auto bad = [](const std::string& m) { throw std::invalid_argument("network state: " + m); };
+  constexpr std::size_t kN = contact::Dim<D>::kNodeDofs;
+  const std::size_t n = particles.size(), np = pair_i.size();
+  if (n == 0) bad("no particles");
+  if (particles.pos.size() != D * n || particles.rot.size() != contact::Dim<D>::kRotDofs * n ||
+      peripheral.size() != n || pos_build.size() != D * n || f_contact.size() != kN * n ||
+      (!du_prev.empty() && du_prev.size() != kN * n))
+    bad(fmt::format("per-particle arrays do not all have {} entries", n));
+  if (pair_j.size() != np || history.size() != np || aux.size() != np || f_n.size() != np || f_t.size() != np ||
+      sliding.size() != np)
+    bad(fmt::format("per-pair arrays do not all have {} entries", np));
+  if (!wall_history.empty() || !wall_f_n.empty()) bad("the walls mode is 2D only");
+  for (std::size_t k = 0; k < np; ++k) {
+    const int i = pair_i[k], j = pair_j[k];
+    if (i < 0 || j <= i || static_cast<std::size_t>(j) >= n) bad(fmt::format("pair {} ({}, {}) is not i < j < N", k, i, j));
+    if (k > 0 && !(std::make_pair(pair_i[k - 1], pair_j[k - 1]) < std::make_pair(i, j)))
+      bad(fmt::format("pairs are not sorted at pair {}", k));
+  }
+  for (const auto* v : {&particles.pos, &particles.rot, &particles.r, &pos_build, &f_contact, &du_prev, &f_n})
+    for (const double d : *v)
+      if (!std::isfinite(d)) bad("a non-finite value");
+  if (!(solid_area > 0 && box_area0 > 0 && initial_density > 0)) bad("solid and box measures must be positive");
+  if (!box_deformation.allFinite() || !(box_deformation.determinant() > 0.0) || !strain.allFinite())
+    bad("box deformation must be finite with a positive determinant");
+}
+
+void NetworkStateT<2>::validate() const {
   auto bad = [](const std::string& m) { throw std::invalid_argument("network state: " + m); };
   const std::size_t n = x.size(), np = pair_i.size();
   if (n == 0) bad("no particles");
@@ -199,19 +290,75 @@ void NetworkState::validate() const {
   if (!strain.allFinite() || !dE_prev.allFinite()) bad("non-finite strain");
 }
 
-const SolverOptions& NetworkSolver::options() const { return impl_->opt; }
-const SolverTimings& NetworkSolver::timings() const { return impl_->tim; }
-std::size_t NetworkSolver::size() const { return static_cast<std::size_t>(impl_->n); }
-const std::vector<double>& NetworkSolver::x() const { return impl_->x; }
-const std::vector<double>& NetworkSolver::y() const { return impl_->y; }
-const std::vector<double>& NetworkSolver::theta() const { return impl_->th; }
-const std::vector<double>& NetworkSolver::radius() const { return impl_->r; }
-const std::vector<std::uint8_t>& NetworkSolver::peripheral() const { return impl_->periph; }
-Eigen::Matrix2d NetworkSolver::box_deformation() const { return impl_->Fbox; }
-double NetworkSolver::solid_area() const { return impl_->solid_area; }
-double NetworkSolver::initial_density() const { return impl_->D0; }
-const packing::Box& NetworkSolver::initial_box() const { return impl_->box0; }
-std::uint64_t NetworkSolver::seed() const { return impl_->seed; }
-int NetworkSolver::free_dofs() const { return impl_->nfree; }
+template <int D>
+const SolverOptions& NetworkSolverT<D>::options() const {
+  return impl_->opt;
+}
+template <int D>
+const SolverTimings& NetworkSolverT<D>::timings() const {
+  return impl_->tim;
+}
+template <int D>
+std::size_t NetworkSolverT<D>::size() const {
+  return static_cast<std::size_t>(impl_->n);
+}
+template <int D>
+std::vector<double> NetworkSolverT<D>::x() const
+  requires(D == 2)
+{
+  return impl_->ps.axis(0);
+}
+template <int D>
+std::vector<double> NetworkSolverT<D>::y() const
+  requires(D == 2)
+{
+  return impl_->ps.axis(1);
+}
+template <int D>
+const std::vector<double>& NetworkSolverT<D>::theta() const
+  requires(D == 2)
+{
+  return impl_->ps.rot;
+}
+template <int D>
+const std::vector<double>& NetworkSolverT<D>::radius() const {
+  return impl_->ps.r;
+}
+template <int D>
+const sys::ParticleSet<D>& NetworkSolverT<D>::particles() const {
+  return impl_->ps;
+}
+template <int D>
+const std::vector<std::uint8_t>& NetworkSolverT<D>::peripheral() const {
+  return impl_->periph;
+}
+template <int D>
+typename NetworkSolverT<D>::Mat NetworkSolverT<D>::box_deformation() const {
+  return impl_->Fbox;
+}
+template <int D>
+double NetworkSolverT<D>::solid_area() const {
+  return impl_->solid_area;
+}
+template <int D>
+double NetworkSolverT<D>::initial_density() const {
+  return impl_->D0;
+}
+template <int D>
+const packing::Box& NetworkSolverT<D>::initial_box() const {
+  return impl_->box0;
+}
+template <int D>
+std::uint64_t NetworkSolverT<D>::seed() const {
+  return impl_->seed;
+}
+template <int D>
+int NetworkSolverT<D>::free_dofs() const {
+  return impl_->nfree;
+}
+
+template struct NetworkStateT<3>;
+template class NetworkSolverT<2>;
+template class NetworkSolverT<3>;
 
 }  // namespace netdem::qs

@@ -18,15 +18,17 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-IncrementReport NetworkSolver::increment(const Eigen::Matrix2d& dE) {
+template <int D>
+IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
   if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
   return impl_->attempt(dE);
 }
 
-IncrementReport NetworkSolver::Impl::attempt(const Eigen::Matrix2d& dE) {
+template <int D>
+IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
-  if (needs_rebuild(x, y, Fbox, opt.skin * r_mean, r_max)) {
+  if (this->needs_rebuild(ps, Fbox, opt.skin * r_mean, r_max)) {
     build_neighbours();
     rep.reanalysed = true;
   }
@@ -74,14 +76,15 @@ IncrementReport NetworkSolver::Impl::attempt(const Eigen::Matrix2d& dE) {
 
 // Per-increment set-up: the start geometry of every pair, the prescribed motion and predictor,
 // the flip counters of the iteration matrix, and the drag (computed at the first assembly).
-void NetworkSolver::Impl::begin_increment(const Eigen::Matrix2d& dE) {
+template <int D>
+void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
   const std::size_t np = pi.size();
   g0.resize(np);
   trial.resize(np);
   trial_slip.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pi[k], j = pj[k];
-    g0[k] = ct::pair_geometry(ct::Vec(x[i], y[i]), ct::Vec(x[j], y[j]), r[i], r[j]);
+    g0[k] = ct::pair_geometry(at(i), at(j), ps.r[i], ps.r[j]);
   }
   prescribe(dE);
   last_sliding.assign(np, 0);
@@ -103,7 +106,8 @@ void NetworkSolver::Impl::begin_increment(const Eigen::Matrix2d& dE) {
 // at a finite rate instead of making the tangent singular. Homogeneous (affine) motion is not
 // resisted; its size, max|f_contact| / mean contact force, is reported as the unbalanced force
 // of the increment. With viscosity_strain > 0 the drag is per unit strain (|dE| scaled).
-void NetworkSolver::Impl::start_drag(const Eigen::Matrix2d& dE) {
+template <int D>
+void NetworkSolverT<D>::Impl::start_drag(const Mat& dE) {
   const double md = mean_diagonal();
   kl_ref = md;
   eta = opt.viscosity * md;
@@ -112,7 +116,8 @@ void NetworkSolver::Impl::start_drag(const Eigen::Matrix2d& dE) {
 
 // The Newton step into sol: a fresh factorisation of M (with drag and regularisation) on fresh
 // iterations, then GMRES on K preconditioned by it (direct solve when symmetric); clipped.
-bool NetworkSolver::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
+template <int D>
+bool NetworkSolverT<D>::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
   LinearStatus st;
   if (fresh) {
     regularise();
@@ -134,13 +139,14 @@ bool NetworkSolver::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& 
 // Backtracking line search on the RMS residual (steps 1, 1/2, ... backtracks of them): the first
 // step that lowers it, else the best step tried. Returns whether f and the trial state belong to
 // the final du (false when it went back to an earlier step).
-bool NetworkSolver::Impl::line_search(double newton_res) {
+template <int D>
+bool NetworkSolverT<D>::Impl::line_search(double newton_res) {
   bool f_current = true;
   du_start = du;
   auto apply = [&](double a) {
     for (int p = 0; p < n; ++p)
-      for (int c = 0; c < 3; ++c)
-        if (const int d = dof[3 * p + c]; d >= 0) du[3 * p + c] = du_start[3 * p + c] + a * sol(d);
+      for (int c = 0; c < kN; ++c)
+        if (const int d = dof[kN * p + c]; d >= 0) du[kN * p + c] = du_start[kN * p + c] + a * sol(d);
   };
   double alpha = 1.0;
   const double r_before = newton_res;
@@ -166,7 +172,8 @@ bool NetworkSolver::Impl::line_search(double newton_res) {
 
 // Nonlinear Gauss-Seidel on the worst particles after the global step; returns whether f and
 // the trial state belong to the final du.
-bool NetworkSolver::Impl::local_sweeps(bool f_current) {
+template <int D>
+bool NetworkSolverT<D>::Impl::local_sweeps(bool f_current) {
   for (int sweep = 0; sweep < opt.local_sweeps; ++sweep) {
     if (!f_current) {
       evaluate_forces();
@@ -183,42 +190,43 @@ bool NetworkSolver::Impl::local_sweeps(bool f_current) {
 
 // Commits the trial state of the increment: contact histories, affine-deviation bookkeeping,
 // committed forces, positions, the strain and the box.
-void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep) {
-  const Eigen::Matrix2d E_old = E;
+template <int D>
+void NetworkSolverT<D>::Impl::commit(const Mat& dE, IncrementReport& rep) {
+  const Mat E_old = E;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const auto& t = trial[k];
     const bool was_loaded = fn_c[k] > 0.0;
     const bool loaded = t.loaded;
     if (loaded && !law.has_history(hist[k])) {  // first touch: start the affine-deviation bookkeeping
-      aux[k] = PairAux{};
+      aux[k] = PairAuxT<D>{};
       aux[k].E_form = E_old;
     }
     if (loaded && !was_loaded) ++rep.new_contacts;
     if (!loaded && was_loaded) ++rep.lost_contacts;
     if (loaded || law.has_history(hist[k])) {
       hist[k] = t.history;
-      aux[k].slip += trial_slip[k];
-      // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
-      const int i = pi[k], j = pj[k];
-      const ct::PairGeometry& g = g0[k];
-      const ct::PairGeometry g1 = ct::pair_geometry(ct::Vec(x[i] + du[3 * i], y[i] + du[3 * i + 1]),
-                                                    ct::Vec(x[j] + du[3 * j], y[j] + du[3 * j + 1]), r[i], r[j]);
-      aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
+      if constexpr (D == 2) {  // the Figs 7-8 bookkeeping (2D)
+        aux[k].slip += trial_slip[k];
+        // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
+        const int i = pi[k], j = pj[k];
+        const Geometry& g = g0[k];
+        const Geometry g1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]);
+        aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
+      }
     }
     fn_c[k] = t.f_n;
     ft_c[k] = t.f_t;
     slide_c[k] = t.sliding ? 1 : 0;
     rep.sliding += t.sliding;
   }
-  commit_walls();
+  if constexpr (D == 2) commit_walls();
   for (int p = 0; p < n; ++p) {
-    x[p] += du[3 * p];
-    y[p] += du[3 * p + 1];
-    th[p] += du[3 * p + 2];
+    for (int a = 0; a < D; ++a) ps.pos[D * p + a] += du[kN * p + a];
+    for (int a = 0; a < kR; ++a) ps.rot[kR * p + a] += du[kN * p + D + a];
   }
   f_c = f;
   E += dE;
-  Fbox = small_expm(dE) * Fbox;
+  Fbox = small_expm<D>(dE) * Fbox;
   du_prev = du;
   dE_prev = dE;
   const auto& ls = lin.stats();
@@ -231,7 +239,8 @@ void NetworkSolver::Impl::commit(const Eigen::Matrix2d& dE, IncrementReport& rep
   tim.increments += 1;
 }
 
-double NetworkSolver::Impl::mean_normal_force() const {
+template <int D>
+double NetworkSolverT<D>::Impl::mean_normal_force() const {
   double s = 0.0;
   int c = 0;
   for (const auto& t : trial)
@@ -244,15 +253,16 @@ double NetworkSolver::Impl::mean_normal_force() const {
 
 /// Newton residual r = f_contact - eta (du - du_affine) on the free DOFs, as RMS / fbar (max-norm
 /// in max_norm). If fill_rhs, also stores r in rhs for the linear solve.
-double NetworkSolver::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
+template <int D>
+double NetworkSolverT<D>::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   double m = 0.0, s2 = 0.0;
   for (int p = 0; p < n; ++p)
-    for (int a = 0; a < 3; ++a)
-      if (const int d = dof[3 * p + a]; d >= 0) {
-        const double rv = f[3 * p + a] - (a == 2 ? eta_r : eta_t) * (du[3 * p + a] - du_aff[3 * p + a]);
+    for (int a = 0; a < kN; ++a)
+      if (const int d = dof[kN * p + a]; d >= 0) {
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_aff[kN * p + a]);
         if (fill_rhs) rhs(d) = rv;
-        const double v = std::fabs(rv) / (a == 2 ? r_mean : 1.0);
+        const double v = std::fabs(rv) / (is_rotation(a) ? r_mean : 1.0);
         m = std::max(m, v);
         s2 += v * v;
       }
@@ -262,18 +272,37 @@ double NetworkSolver::Impl::residual(double fbar, bool fill_rhs, double* max_nor
 }
 
 /// Per-particle step limits: a single soft mode must not freeze the whole network.
-void NetworkSolver::Impl::clip_step() {
+template <int D>
+void NetworkSolverT<D>::Impl::clip_step() {
   for (int p = 0; p < n; ++p) {
-    const int dx = dof[3 * p], dy = dof[3 * p + 1], dr = dof[3 * p + 2];
-    if (dx >= 0) {
-      const double t = std::hypot(sol(dx), sol(dy)), tl = opt.max_step * r_mean;
-      if (t > tl) {
-        sol(dx) *= tl / t;
-        sol(dy) *= tl / t;
+    if constexpr (D == 2) {
+      const int dx = dof[3 * p], dy = dof[3 * p + 1], dr = dof[3 * p + 2];
+      if (dx >= 0) {
+        const double t = std::hypot(sol(dx), sol(dy)), tl = opt.max_step * r_mean;
+        if (t > tl) {
+          sol(dx) *= tl / t;
+          sol(dy) *= tl / t;
+        }
+      }
+      if (dr >= 0) sol(dr) = std::clamp(sol(dr), -opt.max_rotation_step, opt.max_rotation_step);
+    } else {  // the translation by its length, the rotation vector by its angle
+      const int* d = &dof[6 * p];
+      if (d[0] >= 0) {
+        const double t = std::sqrt(sol(d[0]) * sol(d[0]) + sol(d[1]) * sol(d[1]) + sol(d[2]) * sol(d[2]));
+        const double tl = opt.max_step * r_mean;
+        if (t > tl)
+          for (int a = 0; a < 3; ++a) sol(d[a]) *= tl / t;
+      }
+      if (d[3] >= 0) {
+        const double t = std::sqrt(sol(d[3]) * sol(d[3]) + sol(d[4]) * sol(d[4]) + sol(d[5]) * sol(d[5]));
+        if (t > opt.max_rotation_step)
+          for (int a = 3; a < 6; ++a) sol(d[a]) *= opt.max_rotation_step / t;
       }
     }
-    if (dr >= 0) sol(dr) = std::clamp(sol(dr), -opt.max_rotation_step, opt.max_rotation_step);
   }
 }
+
+template class NetworkSolverT<2>;
+template class NetworkSolverT<3>;
 
 }  // namespace netdem::qs

@@ -1,17 +1,25 @@
 #pragma once
-// Private: the parts of the network solver (NetworkSolver::Impl) and which file owns what.
+// Private: the parts of the network solver (NetworkSolverT<D>::Impl) and which file owns what.
 //
-//   contact_table.cpp  ContactTable: the neighbour pairs and their committed history, and its
-//                      lifecycle across neighbour rebuilds
+//   contact_table.cpp  ContactTableT<D>: the system layer's table (netdem/system/contact_table.hpp)
+//                      with the solver's per-row data, and the neighbour rebuild
 //   boundary.cpp       DofMap and the prescribed motion of an increment (boundary conditions)
-//   assembly.cpp       sparsity pattern, trial forces, iteration matrix, drag and regularisation
+//   pair_pattern.hpp   the sparsity pattern and the slots of the pairs (shared with the staggered
+//                      scheme)
+//   assembly.cpp       trial forces, iteration matrix (through the slots), drag and regularisation
 //   newton.cpp         the Newton driver of one increment (predictor, iterations, line search, commit)
 //   relaxation.cpp     the local nonlinear Gauss-Seidel sweep over the worst particles
 //   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
 //   network_solver.cpp construction, the public accessors, the copyable state
-//   state_io.cpp       the state file (save/restore)
-//   walls.cpp          the rigid frictionless die walls of BoundaryMode::Walls
+//   state_io.cpp       the state file (save/restore; 2D)
+//   walls.cpp          the rigid frictionless die walls of BoundaryMode::Walls (2D)
+//
+// The dimension D is a template parameter of everything here: a node has kN = Dim<D>::kNodeDofs
+// DOFs (D translations, then Dim<D>::kRotDofs rotations; DOF c of particle p at kN p + c), a pair
+// element kP = 2 kN. Each .cpp file defines its members for any D and instantiates them for D = 2
+// (the tools) and D = 3 (walls.cpp: D = 2 only; its callers reach it under `if constexpr`).
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -20,9 +28,11 @@
 
 #include "netdem/contact/element.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
-#include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/contact_table.hpp"
+#include "netdem/system/particle_set.hpp"
+#include "pair_pattern.hpp"
 
 namespace netdem::qs {
 
@@ -30,94 +40,117 @@ namespace ct = netdem::contact;
 
 /// The network solver's contact law, chosen at compile time. The solver reaches it only through
 /// the contact-law interface (netdem/contact/law.hpp): evaluate, iteration_stiffness, has_history.
-using Law = ct::PlasticIndentationLaw;
-using Element = ct::PairElement<Law>;
-using Response = Law::Response;
+template <int D>
+using LawT = ct::PlasticIndentationLawT<D>;
 
-/// The contact table: one row per neighbour pair (i < j, sorted by (i, j)), i.e. every pair with
-/// a gap below the skin at the last rebuild, touching or not. Per row it holds the committed
-/// history of the contact law, the affine-deviation bookkeeping and the committed forces.
-/// Lifecycle: a row is created (zero history, E_form = the strain at creation) when a pair comes
-/// within the skin; it keeps its history across rebuilds while the pair stays within the skin;
-/// it is dropped, history and all, when a rebuild finds the pair farther apart than the skin
-/// (plastic flattening u_max included: a pair that far apart cannot touch again before the next
-/// rebuild). The adjacency (pairs of each particle, CSR) follows every rebuild.
-struct ContactTable {
-  std::vector<int> pi, pj;
-  std::vector<Law::History> hist;
-  std::vector<PairAux> aux;
-  std::vector<double> fn_c, ft_c;   ///< committed normal and tangential forces
+/// The contact table of the network solver: the system layer's table (netdem/system/
+/// contact_table.hpp: rows i < j sorted, every pair with a gap below the skin at the last rebuild,
+/// touching or not; their committed history; the adjacency; the lifecycle, read from the law)
+/// plus the solver's own per-row data, carried across rebuilds with the history: the
+/// affine-deviation bookkeeping (a new row starts with E_form = the strain at its creation) and
+/// the committed forces.
+template <int D>
+struct ContactTableT : sys::ContactTable<typename LawT<D>::History, D> {
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Tan = typename ct::Dim<D>::Tan;
+  std::vector<PairAuxT<D>> aux;
+  std::vector<double> fn_c;           ///< committed normal force
+  std::vector<Tan> ft_c;              ///< committed tangential force
   std::vector<std::uint8_t> slide_c;  ///< committed sliding flag
-  std::vector<int> adj_start, adj_pair;  ///< pairs of each particle (CSR, increasing pair index)
-  std::vector<double> xb, yb;       ///< positions at the last rebuild
-  Eigen::Matrix2d Fb = Eigen::Matrix2d::Identity();  ///< box deformation at the last rebuild
-  packing::CellGrid grid;           ///< neighbour search (storage reused across rebuilds)
 
-  std::size_t pairs() const { return pi.size(); }
-  /// New neighbour list (gap < skin) merged with the committed history (both sorted).
-  void rebuild(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& r,
-               double skin, double r_max, const Eigen::Matrix2d& E, const Eigen::Matrix2d& Fbox);
-  void build_adjacency(int n);
-  /// Displacement relative to the affine motion since the last rebuild, plus the affine part of
-  /// the relative motion of two neighbours, exceeds the skin.
-  bool needs_rebuild(const std::vector<double>& x, const std::vector<double>& y, const Eigen::Matrix2d& Fbox,
-                     double skin, double r_max) const;
+  /// New rows (gap < skin) merged with the committed history and the per-row data above.
+  void rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max, const Mat& E,
+               const Mat& Fbox);
 };
 
-/// The boundary conditions as a DOF map: dof[3p + c] = free index or -1 (prescribed).
+/// The boundary conditions as a DOF map: dof[kN p + c] = free index or -1 (prescribed).
 /// Die mode: the peripheral layer's translations are prescribed; affine mode: every centre's.
 /// Peripheral rotations are always held (section 2.4); interior rotations are free when the law
 /// has friction and rotations are allowed.
 struct DofMap {
   std::vector<int> dof;
   int nfree = 0;
-  void build(BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph);
+  void build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph);
 };
 
-/// BoundaryMode::Walls: the contacts of every particle with the four walls (slot 4 p + w; w = 0
-/// left, 1 right, 2 bottom, 3 top), the plastic-indentation law with R* = r_p and mu = 0.
-struct WallTable {
-  std::vector<Law::History> whist;  ///< committed history
-  std::vector<double> wfn_c;        ///< committed normal force
-  std::vector<Response> wtrial;     ///< trial state of the current du
-  std::vector<double> wf, wk;       ///< trial force on p along its wall axis (signed), iteration stiffness
-  Eigen::Matrix2d Fbox_trial = Eigen::Matrix2d::Identity();  ///< the box at the end of the increment
+/// BoundaryMode::Walls (2D): the contacts of every particle with the four walls (slot 4 p + w;
+/// w = 0 left, 1 right, 2 bottom, 3 top), the plastic-indentation law with R* = r_p and mu = 0.
+template <int D>
+struct WallTableT {
+  std::vector<typename LawT<D>::History> whist;  ///< committed history
+  std::vector<double> wfn_c;                     ///< committed normal force
+  std::vector<typename LawT<D>::Response> wtrial;  ///< trial state of the current du
+  std::vector<double> wf, wk;  ///< trial force on p along its wall axis (signed), iteration stiffness
+  Eigen::Matrix<double, D, D> Fbox_trial = Eigen::Matrix<double, D, D>::Identity();  ///< the box at the end of the increment
 };
 
-struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
+template <int D>
+struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
+  using Law = LawT<D>;
+  using Element = ct::PairElementT<Law>;
+  using Response = typename Law::Response;
+  using Geometry = ct::PairGeometryT<D>;
+  using Vec = typename ct::Dim<D>::Vec;
+  using Tan = typename ct::Dim<D>::Tan;
+  using PairVec = ct::PairVecT<D>;
+  using PairMat = ct::PairMatT<D>;
+  /// d slip / d q of a pair: b_t (6) in 2D, B_t (3 x 12) in 3D (kinematics.hpp slip_gradient).
+  using SlipGradient = std::conditional_t<D == 2, PairVec, Eigen::Matrix<double, 3, 12>>;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Table = ContactTableT<D>;
+  static constexpr int kN = ct::Dim<D>::kNodeDofs;  ///< DOFs per node
+  static constexpr int kP = 2 * kN;                 ///< DOFs per pair element
+  static constexpr int kR = ct::Dim<D>::kRotDofs;
+  using Table::adj_pair;
+  using Table::adj_start;
+  using Table::aux;
+  using Table::F_build;
+  using Table::fn_c;
+  using Table::ft_c;
+  using Table::hist;
+  using Table::pi;
+  using Table::pj;
+  using Table::pos_build;
+  using Table::slide_c;
+  using WallTableT<D>::whist;
+  using WallTableT<D>::wfn_c;
+  using WallTableT<D>::wtrial;
+  using WallTableT<D>::wf;
+  using WallTableT<D>::wk;
+  using WallTableT<D>::Fbox_trial;
+
   SolverOptions opt;
   Law law;       ///< the law of opt.law (set_options keeps both together)
   Law wall_law;  ///< the same law without friction (the walls are frictionless)
   int n = 0;
-  std::vector<double> x, y, th, r;
+  sys::ParticleSet<D> ps;  ///< centres, rotations, radii (committed state)
   std::vector<std::uint8_t> periph;
-  double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;
+  double solid_area = 0, D0 = 0, r_mean = 0, r_max = 0, box_area0 = 0;  ///< 3D: volumes
   packing::Box box0;
   std::uint64_t seed = 0;
-  Eigen::Matrix2d Fbox = Eigen::Matrix2d::Identity();
-  Eigen::Matrix2d E = Eigen::Matrix2d::Zero();
-  std::vector<double> f_c;  ///< 3n contact forces on the particles (committed state)
+  Mat Fbox = Mat::Identity();
+  Mat E = Mat::Zero();
+  std::vector<double> f_c;  ///< kN n contact forces on the particles (committed state)
   std::vector<double> du_prev;  ///< the last committed increment's displacements (predictor)
-  Eigen::Matrix2d dE_prev = Eigen::Matrix2d::Zero();
+  Mat dE_prev = Mat::Zero();
 
   // sparse pattern (free DOFs only, full storage)
   SpMat K, M;
-  std::vector<int> pos;       // 36 per pair: position in valuePtr, -1 if a DOF is prescribed
-  std::vector<int> diag_pos;  // per free DOF
+  PairPattern pattern;  // K's structure, the pairs' slots and the diagonal entries (pair_pattern.hpp)
   bool pattern_changed = true;
 
   // trial buffers of the current increment
   std::vector<double> du, f;
-  std::vector<double> pf;  // 6 per pair: the pair's force on (i, j) in the trial state (summed into f)
+  std::vector<double> pf;  // kP per pair: the pair's force on (i, j) in the trial state (summed into f)
   std::vector<std::uint8_t> apart;      // per pair: never touched, apart, trial state and pf already zero
   std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
   std::vector<double> relax_rp;         // scratch of relax_worst (it runs every Newton iteration)
   std::vector<std::uint8_t> relax_done;
   std::vector<int> relax_moved;
   std::vector<std::pair<double, int>> relax_bad;
-  std::vector<ct::PairGeometry> g0;
+  std::vector<Geometry> g0;
   std::vector<Response> trial;
-  std::vector<double> trial_slip;
+  std::vector<Tan> trial_slip;
   std::vector<std::uint8_t> last_sliding, flips;  // per pair, within the current increment
   std::vector<std::uint8_t> last_open, open_flips;
   std::vector<double> last_kn;
@@ -132,38 +165,63 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   SolverTimings tim;
   SolverTimings lin_base;  ///< linear-solver counters of the solver(s) this one was restored from
 
+  /// Centre of p in the committed state and at the end of the trial increment du.
+  Vec at(int p) const {
+    if constexpr (D == 2) {
+      return Vec(ps.pos[2 * p], ps.pos[2 * p + 1]);
+    } else {
+      return Vec(ps.pos[3 * p], ps.pos[3 * p + 1], ps.pos[3 * p + 2]);
+    }
+  }
+  Vec moved(int p) const {
+    if constexpr (D == 2) {
+      return Vec(ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1]);
+    } else {
+      return Vec(ps.pos[3 * p] + du[6 * p], ps.pos[3 * p + 1] + du[6 * p + 1], ps.pos[3 * p + 2] + du[6 * p + 2]);
+    }
+  }
+  /// The rotation increment of p in du (2D: the angle; 3D: the rotation vector).
+  typename ct::Dim<D>::Rot rotation(int p) const {
+    if constexpr (D == 2) {
+      return du[3 * p + 2];
+    } else {
+      return Vec(du[6 * p + 3], du[6 * p + 4], du[6 * p + 5]);
+    }
+  }
+  /// Whether DOF c of a node is a rotation.
+  static bool is_rotation(int c) { return c >= D; }
+
   // construction (network_solver.cpp)
   void set_options(const SolverOptions& o);
   void init_linear_solver();
   // contact_table.cpp
   void build_neighbours();
   // boundary.cpp
-  void prescribe(const Eigen::Matrix2d& dE);
+  void prescribe(const Mat& dE);
   // assembly.cpp
   void build_pattern();
   void assemble(bool& any_nonsymmetric);
-  double iteration_stiffness(std::size_t k, const ct::PairVec& bn, const ct::PairVec& bt, Element& e, double& k_t);
-  void scatter(std::size_t k, const Element& e, const ct::PairVec& bn, const ct::PairVec& bt, double kn_sym,
-               double k_t);
+  double iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt, Element& e, double& k_t);
+  void scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt, double kn_sym, double k_t);
   void set_apart(std::size_t k);
   void pair_forces(std::size_t k, Element& e);
   void evaluate_forces();
-  void open_contact_stiffness(std::size_t k, const ct::PairGeometry& g1);
-  void refresh_particles(const std::vector<int>& ps);
+  void open_contact_stiffness(std::size_t k, const Geometry& g1);
+  void refresh_particles(const std::vector<int>& group);
   double mean_diagonal() const;
   void regularise();
   // newton.cpp
-  IncrementReport attempt(const Eigen::Matrix2d& dE);
-  void begin_increment(const Eigen::Matrix2d& dE);
-  void start_drag(const Eigen::Matrix2d& dE);
+  IncrementReport attempt(const Mat& dE);
+  void begin_increment(const Mat& dE);
+  void start_drag(const Mat& dE);
   bool linear_step(bool fresh, bool nonsym, IncrementReport& rep);
   bool line_search(double newton_res);
   bool local_sweeps(bool f_current);
-  void commit(const Eigen::Matrix2d& dE, IncrementReport& rep);
+  void commit(const Mat& dE, IncrementReport& rep);
   double mean_normal_force() const;
   double residual(double fbar, bool fill_rhs, double* max_norm = nullptr);
   void clip_step();
-  // walls.cpp
+  // walls.cpp (2D)
   bool walls() const { return opt.mode == BoundaryMode::Walls; }
   struct WallEval {
     Response r;
@@ -175,8 +233,8 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   void wall_stiffness();                   ///< the wall contacts' stiffness into K and M
   void commit_walls();
   // relaxation.cpp
-  void local_eval(const int* ps, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
-  void relax_set(const int* ps, int m, double fbar);
+  void local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
+  void relax_set(const int* group, int m, double fbar);
   int relax_worst(double fbar, double rms);
   // measures.cpp
   double unbalance(double fbar, double* rms = nullptr) const;
@@ -184,7 +242,16 @@ struct NetworkSolver::Impl : ContactTable, DofMap, WallTable {
   void print_worst(double fbar) const;
 };
 
-/// exp(A) for a small symmetric 2x2 matrix (series; |A| << 1 per increment).
-Eigen::Matrix2d small_expm(const Eigen::Matrix2d& A);
+/// exp(A) for a small symmetric D x D matrix (series; |A| << 1 per increment).
+template <int D>
+Eigen::Matrix<double, D, D> small_expm(const Eigen::Matrix<double, D, D>& A) {
+  using Mat = Eigen::Matrix<double, D, D>;
+  Mat term = Mat::Identity(), sum = Mat::Identity();
+  for (int k = 1; k <= 8; ++k) {
+    term = term * A / static_cast<double>(k);
+    sum += term;
+  }
+  return sum;
+}
 
 }  // namespace netdem::qs

@@ -6,8 +6,8 @@
 //   staggered_contacts.cpp   contact creation and detection, the move and the shrinkage correction
 //   staggered_integrate.cpp  the two-particle models over a step: RK4 with step doubling,
 //                            strategies 1 and 2 (section 3.3), advance_free
-//   staggered_network.cpp    constraints and held clusters, the pattern, the assembly and the
-//                            solve of the bond network
+//   staggered_network.cpp    constraints and held clusters, the pattern (pair_pattern.hpp, shared
+//                            with the network solver), the assembly and the solve of the bond network
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -23,6 +23,7 @@
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/staggered.hpp"
+#include "pair_pattern.hpp"
 
 namespace netdem::qs::staggered {
 
@@ -104,7 +105,7 @@ struct Staggered::Impl {
   std::vector<int> dof;    // 6N -> free index or -1
   int nfree = 0;
   SpMat K;
-  std::vector<int> slots;  // 144 per contact: index into K's values, -1 for a fixed DOF
+  PairPattern pattern;     // K's structure and the contacts' slots (pair_pattern.hpp, the network solver's)
   std::vector<contact::BondElement> ref;  // the elements of the last factorisation (its contacts)
   std::vector<std::uint8_t> ref_fixed;    // and its constraints
   std::vector<std::vector<int>> floating;  // clusters held at their first particle

@@ -156,32 +156,9 @@ void Staggered::Impl::build_pattern_for(std::size_t nc, const std::vector<std::u
   nfree = 0;
   for (int i = 0; i < 6 * n; ++i)
     if (!fx[i]) dof[i] = nfree++;
-  std::vector<Eigen::Triplet<double, int>> tr;
-  tr.reserve(nc * 144 + static_cast<std::size_t>(nfree));
-  for (int i = 0; i < nfree; ++i) tr.emplace_back(i, i, 0.0);
-  auto gdof = [&](const Contact& k, int l) { return 6 * (l < 6 ? k.a : k.b) + (l % 6); };
-  for (std::size_t kc = 0; kc < nc; ++kc)
-    for (int i = 0; i < 12; ++i)
-      for (int j = 0; j < 12; ++j) {
-        const int gi = dof[gdof(c[kc], i)], gj = dof[gdof(c[kc], j)];
-        if (gi >= 0 && gj >= 0) tr.emplace_back(gi, gj, 0.0);
-      }
-  K.resize(nfree, nfree);
-  K.setFromTriplets(tr.begin(), tr.end());
-  K.makeCompressed();
-  slots.assign(nc * 144, -1);
-  const int* outer = K.outerIndexPtr();
-  const int* inner = K.innerIndexPtr();
-  for (std::size_t kc = 0; kc < nc; ++kc)
-    for (int i = 0; i < 12; ++i)
-      for (int j = 0; j < 12; ++j) {
-        const int gi = dof[gdof(c[kc], i)], gj = dof[gdof(c[kc], j)];
-        if (gi < 0 || gj < 0) continue;
-        const int* b = inner + outer[gj];
-        const int* e = inner + outer[gj + 1];
-        const int* it = std::lower_bound(b, e, gi);
-        slots[kc * 144 + 12 * i + j] = static_cast<int>(it - inner);
-      }
+  // the network solver's pattern and slots (pair_pattern.hpp); a particle with a free DOF has a bond
+  // here (update_constraints fixes the others), so the structure is that of the bonds' blocks
+  pattern.build(K, n, 6, dof, nfree, nc, [&](std::size_t k) { return std::pair<int, int>(c[k].a, c[k].b); });
   std::vector<int> blocks(static_cast<std::size_t>(nfree));
   for (int i = 0; i < 6 * n; ++i)
     if (dof[i] >= 0) blocks[dof[i]] = i / 6;
@@ -195,10 +172,10 @@ void Staggered::Impl::assemble(const std::vector<contact::BondElement>& e) {
   std::fill(v, v + K.nonZeros(), 0.0);
   for (std::size_t kc = 0; kc < e.size(); ++kc) {
     const contact::BondMat12 Ke = contact::bond_stiffness(e[kc], bmat);
-    const int* s = &slots[kc * 144];
+    const int* s = pattern.slots(kc);  // row i, column j at 12 j + i
     for (int i = 0; i < 12; ++i)
       for (int j = 0; j < 12; ++j)
-        if (s[12 * i + j] >= 0) v[s[12 * i + j]] += cscale * dof_scale(i) * dof_scale(j) * Ke(i, j);
+        if (s[12 * j + i] >= 0) v[s[12 * j + i]] += cscale * dof_scale(i) * dof_scale(j) * Ke(i, j);
   }
 }
 

@@ -29,15 +29,16 @@ double distance(int w, double px, double py, double f) {
 }
 }  // namespace
 
-NetworkSolver::Impl::WallEval NetworkSolver::Impl::wall_eval(int p, int w) const {
+template <int D>
+typename NetworkSolverT<D>::Impl::WallEval NetworkSolverT<D>::Impl::wall_eval(int p, int w) const {
   WallEval e;
   const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
-  const double d1 = distance(w, x[p] + du[3 * p], y[p] + du[3 * p + 1], face(Fbox_trial, box0, w));
-  if (r[p] - d1 <= 0.0 && !wall_law.has_history(whist[s])) return e;
+  const double d1 = distance(w, ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1], face(Fbox_trial, box0, w));
+  if (ps.r[p] - d1 <= 0.0 && !wall_law.has_history(whist[s])) return e;
   ct::ContactKinematics k;
-  k.overlap = r[p] - d1;
-  k.overlap_start = r[p] - distance(w, x[p], y[p], face(Fbox, box0, w));
-  k.r_eff = r[p];
+  k.overlap = ps.r[p] - d1;
+  k.overlap_start = ps.r[p] - distance(w, ps.pos[2 * p], ps.pos[2 * p + 1], face(Fbox, box0, w));
+  k.r_eff = ps.r[p];
   ct::ContactTangent t;
   e.r = wall_law.evaluate(whist[s], k, &t);
   if (!e.r.loaded) return e;
@@ -47,7 +48,8 @@ NetworkSolver::Impl::WallEval NetworkSolver::Impl::wall_eval(int p, int w) const
   return e;
 }
 
-void NetworkSolver::Impl::wall_particle(int p, double sign) {
+template <int D>
+void NetworkSolverT<D>::Impl::wall_particle(int p, double sign) {
   for (int w = 0; w < 4; ++w) {
     const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
     const int axis = w < 2 ? 0 : 1;
@@ -63,11 +65,12 @@ void NetworkSolver::Impl::wall_particle(int p, double sign) {
   }
 }
 
-void NetworkSolver::Impl::wall_forces() {
+template <int D>
+void NetworkSolverT<D>::Impl::wall_forces() {
   if (!walls()) return;
   const std::size_t slots = 4 * static_cast<std::size_t>(n);
   if (whist.size() != slots) {
-    whist.assign(slots, Law::History{});
+    whist.assign(slots, typename Law::History{});
     wfn_c.assign(slots, 0.0);
   }
   wtrial.resize(slots);
@@ -76,7 +79,8 @@ void NetworkSolver::Impl::wall_forces() {
   for (int p = 0; p < n; ++p) wall_particle(p, 1.0);
 }
 
-void NetworkSolver::Impl::wall_stiffness() {
+template <int D>
+void NetworkSolverT<D>::Impl::wall_stiffness() {
   if (!walls()) return;
   for (int p = 0; p < n; ++p)
     for (int w = 0; w < 4; ++w) {
@@ -84,17 +88,21 @@ void NetworkSolver::Impl::wall_stiffness() {
       if (!(wk[s] > 0.0)) continue;
       const int d = dof[3 * p + (w < 2 ? 0 : 1)];
       if (d < 0) continue;
-      K.valuePtr()[diag_pos[d]] += wk[s];
-      M.valuePtr()[diag_pos[d]] += wk[s];
+      K.valuePtr()[pattern.diag(d)] += wk[s];
+      M.valuePtr()[pattern.diag(d)] += wk[s];
     }
 }
 
-void NetworkSolver::Impl::commit_walls() {
+template <int D>
+void NetworkSolverT<D>::Impl::commit_walls() {
   if (!walls()) return;
   for (std::size_t s = 0; s < whist.size(); ++s) {
     if (wtrial[s].loaded || wall_law.has_history(whist[s])) whist[s] = wtrial[s].history;
     wfn_c[s] = wtrial[s].f_n;
   }
 }
+
+// 2D only: the 3D solver refuses the walls mode (network_solver.cpp) and never calls these
+template struct NetworkSolverT<2>::Impl;
 
 }  // namespace netdem::qs

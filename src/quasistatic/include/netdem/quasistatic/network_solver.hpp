@@ -1,8 +1,12 @@
 #pragma once
 // Quasi-static implicit network solver (Redanz & Fleck, Acta Mater. 49 (2001) 4325, sections 2.3-2.4).
 //
-// Each particle is a node with (u1, u2, theta); each contact a plastic-indentation element from
-// src/contact. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
+// Each particle is a node with Dim<D>::kNodeDofs DOFs ((u1, u2, theta) for disks, (u1, u2, u3) and
+// a rotation vector for spheres); each contact a plastic-indentation element from src/contact
+// (6x6 or 12x12, contact/element.hpp). The dimension is the template parameter of NetworkSolverT<D>
+// (NetworkSolver = NetworkSolverT<2>, used by the tools; NetworkSolver3 = NetworkSolverT<3>).
+// The walls mode (BoundaryMode::Walls), the state file and the measures of StateMeasures (strain,
+// Figs 7-8 deviations) are 2D only for now; stress() gives the Eq 13 and contact stresses in both. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
 // coordinates) on the prescribed particles (the peripheral layer in die mode, every centre in
 // affine mode; peripheral rotations are always held), then finds the free DOFs by Newton
 // iterations on the equilibrium equations (Eq 10-12). The trial state is always recomputed from
@@ -39,9 +43,11 @@
 
 #include <Eigen/Core>
 
+#include "netdem/contact/dim.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/solver_options.hpp"
+#include "netdem/system/particle_set.hpp"
 
 namespace netdem::qs {
 
@@ -100,17 +106,71 @@ struct ContactView {
   bool sliding;
 };
 
-/// Affine-deviation bookkeeping of one contact (section 3.3, Figs 7-8).
-struct PairAux {
-  Eigen::Matrix2d E_form = Eigen::Matrix2d::Zero();  ///< accumulated strain when the contact formed
+/// The Eq 13 and Love-Weber stresses of the committed state in dimension D (tension positive):
+/// the symmetric parts, and what tells how far from equilibrium they are.
+template <int D>
+struct StressMeasuresT {
+  using Mat = Eigen::Matrix<double, D, D>;
+  Mat strain = Mat::Zero();      ///< accumulated E
+  double density = 0;            ///< solid measure / current box measure
+  Mat eq13 = Mat::Zero();        ///< symmetric part of Eq 13 (reactions of the prescribed particles)
+  Mat contacts = Mat::Zero();    ///< symmetric part of the Love-Weber average over the contacts
+  double eq13_vs_contacts = 0;   ///< |eq13 - contacts| / |contacts| (Frobenius)
+  double net_force_ratio = 0;    ///< |sum of the reactions| / sum of |reaction|
+  int contact_count = 0, sliding = 0;
+  double Z = 0;                  ///< 2 x load-bearing contacts / N
+  double mean_normal_force = 0;
+};
+
+/// Affine-deviation bookkeeping of one contact (section 3.3, Figs 7-8). In 3D only E_form is kept
+/// (the Figs 7-8 measures are 2D).
+template <int D>
+struct PairAuxT {
+  Eigen::Matrix<double, D, D> E_form = Eigen::Matrix<double, D, D>::Zero();  ///< accumulated strain when the contact formed
   double slip = 0.0;    ///< accumulated slip with rotations (Eq 5)
   double centre = 0.0;  ///< accumulated tangential displacement of the centres (L dphi)
 };
+using PairAux = PairAuxT<2>;
 
+/// Everything a solver in dimension D needs to continue a run (the 3D layout; the 2D one below
+/// keeps the fields of the 2D state file): the particles, the contact table with its committed
+/// history, the committed forces and the predictor of the next increment. Plain data.
+template <int D>
+struct NetworkStateT {
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Tan = typename contact::Dim<D>::Tan;
+  sys::ParticleSet<D> particles;
+  std::vector<std::uint8_t> peripheral;
+  double solid_area = 0, initial_density = 0, box_area0 = 0;  ///< 3D: volumes
+  packing::Box box0;
+  std::uint64_t seed = 0;
+  Mat box_deformation = Mat::Identity();
+  Mat strain = Mat::Zero();
+  std::vector<int> pair_i, pair_j;
+  std::vector<contact::PlasticIndentationHistoryT<D>> history;
+  std::vector<PairAuxT<D>> aux;
+  std::vector<double> f_n;
+  std::vector<Tan> f_t;
+  std::vector<std::uint8_t> sliding;
+  std::vector<double> pos_build;  ///< D per particle: the centres at the last neighbour rebuild
+  Mat box_deformation_build = Mat::Identity();
+  std::vector<double> f_contact;  ///< kNodeDofs per particle
+  std::vector<double> du_prev;
+  Mat dE_prev = Mat::Zero();
+  SolverTimings timings;
+  std::vector<contact::PlasticIndentationHistoryT<D>> wall_history;  ///< empty (walls are 2D)
+  std::vector<double> wall_f_n;
+
+  /// Throws std::invalid_argument (one line) if sizes or values are inconsistent.
+  void validate() const;
+};
+
+/// The 2D state: the fields of the 2D state file (save_state, load_state).
 /// Everything a solver needs to continue a run: the particles, the contact table with its
 /// committed history, the committed forces and the predictor of the next increment. Plain data:
 /// copy it, save it (save_state), restore it (NetworkSolver(state, options)).
-struct NetworkState {
+template <>
+struct NetworkStateT<2> {
   std::vector<double> x, y, theta, r;
   std::vector<std::uint8_t> peripheral;
   double solid_area = 0, initial_density = 0, box_area0 = 0;
@@ -138,6 +198,7 @@ struct NetworkState {
   /// Throws std::invalid_argument (one line) if sizes, order or values are inconsistent.
   void validate() const;
 };
+using NetworkState = NetworkStateT<2>;
 
 /// Writes the state exactly in the state archive (JSON, kind "network"; docs/quasistatic.md
 /// "State file"), atomically (temporary file + rename). Throws std::runtime_error naming the file
@@ -151,20 +212,26 @@ NetworkState load_state(const std::string& path);
 NetworkState load_state(std::istream& in, const std::string& source);
 NetworkState load_state_text(std::string_view text, const std::string& source);
 
-class NetworkSolver {
+template <int D>
+class NetworkSolverT {
  public:
-  /// Throws std::invalid_argument on invalid options or packing.
-  NetworkSolver(const packing::Packing& packing, const SolverOptions& options);
+  static constexpr int kDim = D;
+  using Mat = Eigen::Matrix<double, D, D>;
+  using State = NetworkStateT<D>;
+
+  /// Throws std::invalid_argument on invalid options or packing (a packing of another dimension;
+  /// in 3D the walls mode).
+  NetworkSolverT(const packing::Packing& packing, const SolverOptions& options);
   /// Continues from a state (bit-identical to the solver it was taken from when `options` are
   /// that solver's). The boundary mode may differ; throws std::invalid_argument on a bad state.
-  NetworkSolver(const NetworkState& state, const SolverOptions& options);
-  ~NetworkSolver();
-  NetworkSolver(const NetworkSolver& other);  ///< = NetworkSolver(other.state(), other.options())
-  NetworkSolver& operator=(const NetworkSolver&) = delete;
+  NetworkSolverT(const State& state, const SolverOptions& options);
+  ~NetworkSolverT();
+  NetworkSolverT(const NetworkSolverT& other);  ///< = NetworkSolverT(other.state(), other.options())
+  NetworkSolverT& operator=(const NetworkSolverT&) = delete;
 
-  /// One load increment with the macroscopic strain increment dE (symmetric 2x2).
+  /// One load increment with the macroscopic strain increment dE (symmetric D x D).
   /// Throws std::runtime_error with a one-line message on a singular/indefinite system or NaN.
-  IncrementReport increment(const Eigen::Matrix2d& dE);
+  IncrementReport increment(const Mat& dE);
 
   /// Switches the normal law between reversible Eq 2 (compaction as in sections 2-3.3 of the
   /// paper) and the section 3.4 elastic unloading branch (yield-surface probing). Switching the
@@ -172,21 +239,29 @@ class NetworkSolver {
   /// jumps; pairs apart start fresh. Takes effect from the next increment.
   void set_reversible_normal(bool reversible);
 
-  NetworkState state() const;
+  State state() const;
   const SolverOptions& options() const;
-  StateMeasures measures() const;
+  StateMeasures measures() const
+    requires(D == 2);
+  /// The Eq 13 and contact stresses (both dimensions; not in the walls mode, whose reactions are
+  /// the walls': measures()).
+  StressMeasuresT<D> stress() const;
   const SolverTimings& timings() const;
 
   // committed state
   std::size_t size() const;
-  const std::vector<double>& x() const;
-  const std::vector<double>& y() const;
-  const std::vector<double>& theta() const;
+  std::vector<double> x() const  ///< the centres' x (a copy of particles().axis(0))
+    requires(D == 2);
+  std::vector<double> y() const
+    requires(D == 2);
+  const std::vector<double>& theta() const
+    requires(D == 2);
+  const sys::ParticleSet<D>& particles() const;  ///< centres, rotations, radii
   const std::vector<double>& radius() const;
   const std::vector<std::uint8_t>& peripheral() const;
-  std::vector<ContactView> contacts() const;  ///< load-bearing contacts only
-  Eigen::Matrix2d box_deformation() const;     ///< maps the initial box to the current one
-  double solid_area() const;
+  std::vector<ContactView> contacts() const;  ///< load-bearing contacts only (3D: f_t = |f_t|)
+  Mat box_deformation() const;                ///< maps the initial box to the current one
+  double solid_area() const;                  ///< 3D: the solid volume
   double initial_density() const;
   const packing::Box& initial_box() const;  ///< the packing's box
   std::uint64_t seed() const;               ///< the packing's seed
@@ -197,5 +272,10 @@ class NetworkSolver {
  private:
   std::unique_ptr<Impl> impl_;
 };
+
+using NetworkSolver = NetworkSolverT<2>;
+using NetworkSolver3 = NetworkSolverT<3>;
+extern template class NetworkSolverT<2>;
+extern template class NetworkSolverT<3>;
 
 }  // namespace netdem::qs
