@@ -219,6 +219,27 @@ void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const Dynami
   j["neighbour_rebuilds"] = s.rebuilds();
 }
 
+/// How a run that cannot be trusted ends: its status and reason in summary.json, the text that
+/// closes the files, the one line on stderr.
+struct UntrustedEnd {
+  std::string status, reason, finish, message;
+};
+
+/// Closes the files and the folder of a run that stopped unstable or incomplete; exit status 3.
+template <int D>
+int stop_untrustworthy(CompactFiles<D>& files, nlohmann::json& summary, const fs::path& out,
+                       const CompactionSummaryT<D>& r, const UntrustedEnd& end) {
+  files.finish(end.finish);
+  summary["increments_done"] = r.increments_done;
+  summary["steps"] = r.steps;
+  summary["status"] = end.status;
+  summary["status_reason"] = end.reason;
+  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
+  std::fprintf(stderr, "demsolve: error: %s\n", end.message.c_str());
+  return exit_code::untrustworthy;
+}
+
 template <int D>
 int run_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
   // ---- the door: every value before anything is written ----------------------------------------
@@ -302,31 +323,15 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   activity() = "compacting";
   const CompactionSummaryT<D> r = run_compaction(s, rate, co, files);
   if (r.instability) {
-    files.finish(one_line(r.instability_what));
-    summary["increments_done"] = r.increments_done;
-    summary["steps"] = r.steps;
     // as report_unstable(), without state_last_good.txt (compact writes no state file)
-    summary["status"] = "unstable";
-    summary["status_reason"] = r.instability_what;
     summary["unstable_quantity"] = r.instability_quantity;
     summary["unstable_step"] = r.instability_step;
     summary["unstable_time"] = r.instability_time;
-    write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
-    close_run_dir(out);
-    std::fprintf(stderr, "demsolve: error: %s\n", one_line(r.instability_what).c_str());
-    return exit_code::untrustworthy;
+    return stop_untrustworthy(files, summary, out, r, {"unstable", r.instability_what, one_line(r.instability_what),
+                                                        one_line(r.instability_what)});
   }
-  if (r.status == "incomplete") {  // --max-steps reached during the run: the rows so far, no final snapshot
-    files.finish(r.reason);
-    summary["increments_done"] = r.increments_done;
-    summary["steps"] = r.steps;
-    summary["status"] = r.status;
-    summary["status_reason"] = r.reason;
-    write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
-    close_run_dir(out);
-    std::fprintf(stderr, "demsolve: error: incomplete: %s\n", r.reason.c_str());
-    return exit_code::untrustworthy;
-  }
+  if (r.status == "incomplete")  // --max-steps reached during the run: the rows so far, no final snapshot
+    return stop_untrustworthy(files, summary, out, r, {r.status, r.reason, r.reason, "incomplete: " + r.reason});
   files.finish("");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_compact_snapshot(s, out, "final", files.contacts_buffer());
