@@ -158,8 +158,14 @@ struct LawArgs {
   double k_t = contact::PlasticIndentationParams{}.k_t, sigma_y = contact::PlasticIndentationParams{}.sigma_y;
   double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
   double first_touch = contact::PlasticIndentationParams{}.first_touch;
-  int max_newton = qs::SolverOptions::compact().max_newton;
+  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50)
+  std::string iteration = "legacy-drag";
+  double regularisation_scale = 1.0;
+  int max_cuts = qs::SolverOptions{}.max_cuts;
 };
+
+/// Newton iterations per increment of the pseudo-transient iteration when --max-newton is not given.
+inline constexpr int kPseudoTransientMaxNewton = 50;
 
 /// The LawArgs of a library preset (the command's defaults).
 inline LawArgs law_args(const qs::SolverOptions& o) {
@@ -171,7 +177,9 @@ inline LawArgs law_args(const qs::SolverOptions& o) {
   a.first_touch = o.law.first_touch;
   a.tol = o.residual_tol;
   a.viscosity = o.viscosity;
-  a.max_newton = o.max_newton;
+  a.iteration = o.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+  a.regularisation_scale = o.regularisation_scale;
+  a.max_cuts = o.max_cuts;
   return a;
 }
 
@@ -185,8 +193,26 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
                  "(bounded stiffness; the same law as demsolve); 0: Eq 2 down to u = 0")
       ->capture_default_str();
   app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
-  app.add_option("--max-newton", a.max_newton, "Newton iterations per increment")->capture_default_str();
-  app.add_option("--viscosity", a.viscosity, "drag on non-affine motion / mean contact stiffness (0: pure Newton)")
+  app.add_option("--max-newton", a.max_newton,
+                 "Newton iterations per increment (0: the iteration's own, legacy-drag 10, pseudo-transient 50)")
+      ->capture_default_str();
+  app.add_option("--viscosity", a.viscosity,
+                 "drag / mean contact stiffness: legacy-drag: on the non-affine motion of the increment (0: pure "
+                 "Newton); pseudo-transient: its start value, on each Newton step")
+      ->capture_default_str();
+  app.add_option("--iteration", a.iteration,
+                 "legacy-drag: the drag of the increment stays in the answer (earlier results; the default for now); "
+                 "pseudo-transient: the drag acts on each Newton step only and an increment is accepted on the "
+                 "undragged residual, RMS <= --tol and max <= 10 x --tol (docs/quasistatic.md)")
+      ->check(CLI::IsMember({"legacy-drag", "pseudo-transient"}))
+      ->capture_default_str();
+  app.add_option("--regularisation-scale", a.regularisation_scale,
+                 "multiplies the drag (the regularisation the iteration keeps); a converged pseudo-transient answer "
+                 "must not depend on it")
+      ->capture_default_str();
+  app.add_option("--max-cuts", a.max_cuts,
+                 "pseudo-transient: an increment not accepted within --max-newton iterations is redone as two halves, "
+                 "down to 2^-N of it")
       ->capture_default_str();
   app.add_option("--normal-unloading", a.normal_unloading, unloading_help)
       ->check(CLI::IsMember({"reversible", "elastic"}))
@@ -219,8 +245,15 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   so.law.first_touch = a.first_touch;
   so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
-  so.max_newton = a.max_newton;
+  so.iteration = a.iteration == "pseudo-transient" ? qs::Iteration::PseudoTransient : qs::Iteration::LegacyDrag;
+  if (a.max_newton > 0) {
+    so.max_newton = a.max_newton;
+  } else if (so.iteration == qs::Iteration::PseudoTransient) {
+    so.max_newton = kPseudoTransientMaxNewton;
+  }
   so.viscosity = a.viscosity;
+  so.regularisation_scale = a.regularisation_scale;
+  so.max_cuts = a.max_cuts;
 }
 
 }  // namespace netdem::app::netsolve

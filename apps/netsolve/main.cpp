@@ -209,6 +209,8 @@ struct CompactRecord {
   netdem::app::netsolve::ConvergenceRecord conv;
   netdem::app::netsolve::EquilibriumRecord equilibrium;
   std::string stopped;
+  int instabilities = 0, cut_increments = 0;  ///< increments with an instability event, cut increments
+  double drag_work = 0.0, contact_work = 0.0;  ///< summed over the increments
 };
 
 /// summary.json of a `compact` run (docs/quasistatic.md).
@@ -218,7 +220,8 @@ nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const ne
   namespace qs = netdem::qs;
   const double sy = so.law.sigma_y;
   const auto& tm = solver.timings();
-  const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped] = r;
+  const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped, instabilities,
+               cut_increments, drag_work, contact_work] = r;
   nlohmann::json j;
   j["command"] = g_command;
   status.write(j);
@@ -254,6 +257,12 @@ nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const ne
     const bool inl = qs::cholmod_inline_openmp(&why);
     j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
   }
+  j["solver"]["iteration"] = so.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+  j["solver"]["regularisation_scale"] = so.regularisation_scale;
+  j["solver"]["max_cuts"] = so.max_cuts;
+  j["solver"]["instability_events"] = instabilities;
+  j["solver"]["cut_increments"] = cut_increments;
+  j["solver"]["drag_work_fraction"] = contact_work > 0.0 ? drag_work / contact_work : 0.0;
   j["solver"]["max_newton_residual"] = conv.max_newton_residual;
   j["solver"]["last_increment_converged"] = conv.last_converged;
   j["solver"]["eq13_vs_contacts"] = equilibrium.last;  // judged in the run status (origin-free Eq 13)
@@ -294,7 +303,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
       "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
-      "linear_iterations,converged,net_force_ratio,eq13_vs_contacts\n";
+      "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction\n";
   std::size_t next_snap = 0;
   int unconverged = 0;
   double max_residual = 0.0;
@@ -303,6 +312,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const double sy = so.law.sigma_y;
   app::netsolve::ConvergenceRecord conv;
   conv.tol = so.residual_tol;
+  if (so.iteration == qs::Iteration::PseudoTransient) conv.max_unconverged_fraction = 0.0;
+  int instabilities = 0, cut_increments = 0;
+  double drag_work = 0.0, contact_work = 0.0;
   app::netsolve::EquilibriumRecord equilibrium;
   app::netsolve::ResidualGrowth growth;
   growth.tol = so.residual_tol;
@@ -311,14 +323,19 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const auto on_row = [&](const qs::CompactionRow& row) {
     const auto& m = row.state;
     csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e}\n",
                        row.increment, m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0,
-                       m.net_force_ratio, m.eq13_vs_contacts);
+                       m.net_force_ratio, m.eq13_vs_contacts, row.report.substeps, row.report.instability ? 1 : 0,
+                       qs::drag_work_fraction(row.report));
     if (row.increment > 0) {
+      instabilities += row.report.instability;
+      cut_increments += row.report.substeps > 1;
+      drag_work += row.report.drag_work;
+      contact_work += row.report.contact_work;
       unconverged += !row.report.converged;
       max_residual = std::max(max_residual, row.report.residual);
       conv.add(row.increment, row.report.converged, row.report.newton_residual);
@@ -366,7 +383,8 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
   if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
   const nlohmann::json j = compact_summary(a, ra, so, co, pk, solver, status,
-                                           {source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped});
+                                           {source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped,
+                                            instabilities, cut_increments, drag_work, contact_work});
   app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   app::close_run_dir(out);
   std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",

@@ -29,7 +29,10 @@ struct ConvergenceRecord {
   bool last_converged = true;
 
   // thresholds (documented in docs/quasistatic.md "Run status")
-  static constexpr double kMaxUnconvergedFraction = 0.05;  ///< more than 5 % of the increments
+  static constexpr double kMaxUnconvergedFraction = 0.05;  ///< legacy drag: more than 5 % of the increments
+  /// The fraction of unconverged increments a trustworthy run may have: kMaxUnconvergedFraction
+  /// for the legacy drag, 0 for the pseudo-transient iteration (every increment must be accepted).
+  double max_unconverged_fraction = kMaxUnconvergedFraction;
   static constexpr double kResidualFactor = 10.0;          ///< any residual above 10 x --tol
 
   void add(int increment, bool converged, double newton_residual) {
@@ -49,9 +52,9 @@ struct ConvergenceRecord {
   void judge(RunStatus& st, const std::string& what) const {
     if (increments == 0) return;
     const std::string pre = what.empty() ? "" : what + ": ";
-    if (unconverged > kMaxUnconvergedFraction * increments)
-      st.add("unconverged", fmt::format("{}{} of {} increments unconverged (more than 5 %), the first at increment {}", pre,
-                                        unconverged, increments, first_unconverged));
+    if (unconverged > max_unconverged_fraction * increments)
+      st.add("unconverged", fmt::format("{}{} of {} increments unconverged (more than {:g} %), the first at increment {}",
+                                        pre, unconverged, increments, 100 * max_unconverged_fraction, first_unconverged));
     if (!(max_newton_residual <= kResidualFactor * tol))
       st.add("unconverged", fmt::format("{}Newton residual {:.3g} at increment {} is above 10 x --tol = {:.3g}", pre,
                                         max_newton_residual, worst_increment, kResidualFactor * tol));

@@ -142,6 +142,10 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   probe = qs::SolverOptions::yield_probe();
   probe.mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
   probe.law = pre.law;  // unloading switches it to the elastic branch (set_reversible_normal)
+  probe.iteration = pre.iteration;  // the iteration and its regularisation knob cover the probes too
+  probe.regularisation_scale = pre.regularisation_scale;
+  probe.max_cuts = pre.max_cuts;
+  if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
 }
 
@@ -330,6 +334,7 @@ bool YieldRun::precompact() {
   using namespace netdem;
   const auto t0 = Clock::now();
   conv_.tol = so_.residual_tol;
+  if (so_.iteration == qs::Iteration::PseudoTransient) conv_.max_unconverged_fraction = 0.0;
   app::netsolve::activity() = "precompacting";
   if (solver_) {
     loaded_ = solver_->measures();
@@ -577,7 +582,10 @@ int YieldRun::finish() {
                                     {"linear_tol", so_.linear_tolerance}, {"max_newton", so_.max_newton}}},
                  {"probes", {{"tol", po_.residual_tol}, {"viscosity", po_.viscosity},
                              {"viscosity_strain", po_.viscosity_strain}, {"chord_steps", po_.chord_steps},
-                             {"linear_tol", po_.linear_tolerance}, {"max_newton", po_.max_newton}}}};
+                             {"linear_tol", po_.linear_tolerance}, {"max_newton", po_.max_newton}}},
+                 {"iteration", so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag"},
+                 {"regularisation_scale", so_.regularisation_scale},
+                 {"max_cuts", so_.max_cuts}};
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact_},
                    {"unloading", t_unload_},

@@ -246,7 +246,7 @@ void NetworkSolverT<D>::Impl::print_worst(double fbar) const {
     double m = 0.0;
     for (int a = 0; a < kN; ++a)
       if (dof[kN * p + a] >= 0) {
-        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_aff[kN * p + a]);
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_ref[kN * p + a]);
         m = std::max(m, std::fabs(rv) / (is_rotation(a) ? r_mean : 1.0));
       }
     worst.emplace_back(m / std::max(fbar, 1e-300), p);

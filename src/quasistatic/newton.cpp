@@ -21,7 +21,45 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 template <int D>
 IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
   if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
-  return impl_->attempt(dE);
+  return advance(dE, 0);
+}
+
+// An increment, cut in halves while it is not accepted (pseudo-transient iteration): the committed
+// state before it is restored exactly (the state copy continues bit-identically) and the two
+// halves are done in turn. The report sums the iterations of all attempts (the undone one
+// included) and the drag work of the path kept; a cut increment is an instability event.
+template <int D>
+IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
+  if (!impl_->pseudo_transient() || depth >= impl_->opt.max_cuts) return impl_->attempt(dE);
+  const State saved = state();
+  IncrementReport first;
+  try {
+    first = impl_->attempt(dE);
+    if (first.converged) return first;
+  } catch (const DivergedError&) {
+  }
+  const SolverTimings spent = impl_->tim;
+  NetworkSolverT restored(saved, impl_->opt);
+  std::swap(impl_, restored.impl_);
+  impl_->tim = spent;
+  impl_->lin_base = spent;
+  IncrementReport rep = advance(dE / 2.0, depth + 1);
+  const IncrementReport second = advance(dE / 2.0, depth + 1);
+  rep.newton_iterations += first.newton_iterations + second.newton_iterations;
+  rep.linear_iterations += first.linear_iterations + second.linear_iterations;
+  rep.converged = rep.converged && second.converged;
+  rep.residual = second.residual;
+  rep.residual_rms = second.residual_rms;
+  rep.newton_residual = second.newton_residual;
+  rep.reanalysed = true;
+  rep.new_contacts += second.new_contacts;
+  rep.lost_contacts += second.lost_contacts;
+  rep.sliding = second.sliding;
+  rep.substeps += second.substeps;
+  rep.instability = true;
+  rep.drag_work += second.drag_work;
+  rep.contact_work += second.contact_work;
+  return rep;
 }
 
 template <int D>
@@ -47,6 +85,9 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
       evaluate_forces();
     }  // else: a chord step from a state the line search and the local sweep left current
     tim.assemble += seconds_since(ta);
+    // pseudo-transient: the drag acts on the step from this iterate, so the residual below is the
+    // undragged one (the legacy drag keeps du_ref = du_aff for the whole increment)
+    if (pseudo_transient()) du_ref = du;
     if (eta < 0.0 && want_tangent && nfree > 0) start_drag(dE);
     fbar = mean_normal_force();
     if (fbar <= 0.0) fbar = opt.law.sigma_y * r_mean * 1e-6;
@@ -56,22 +97,77 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
     if (!std::isfinite(newton_res))
       throw DivergedError("increment: non-finite contact forces (diverged Newton iteration)");
     if (opt.verbose) print_iteration(it, newton_res, newton_max, fbar);
-    if ((newton_res <= opt.residual_tol && newton_max <= opt.max_residual_tol) || nfree == 0) {
+    if (accepted(newton_res, newton_max) || nfree == 0) {
       rep.converged = true;
       break;
     }
     if (!want_tangent) break;
+    if (pseudo_transient() && fresh) adapt_drag(newton_res, rep);
+    du_before = du;
     linear_step(fresh, nonsym, rep);
     const bool f_current = line_search(newton_res);
     f_valid = local_sweeps(f_current);  // relax_worst refreshes the pairs of the particles it moved
+    rep.drag_work += drag_work(du_before);
     ++rep.newton_iterations;
   }
   rep.residual = nfree > 0 ? unbalance(fbar, &rep.residual_rms) : 0.0;
   if (opt.verbose && nfree > 0) print_worst(fbar);
+  rep.contact_work = contact_work();
   commit(dE, rep);
   tim.newton_iterations += rep.newton_iterations;
   tim.total += seconds_since(t_start);
   return rep;
+}
+
+/// Whether an iterate with this residual (RMS and max over the free DOFs, relative to the mean
+/// contact force) is an accepted equilibrium. Pseudo-transient: the residual is the undragged one.
+template <int D>
+bool NetworkSolverT<D>::Impl::accepted(double rms, double max) const {
+  if (pseudo_transient()) return rms <= opt.residual_tol && max <= opt.max_residual_factor * opt.residual_tol;
+  return rms <= opt.residual_tol && max <= opt.max_residual_tol;
+}
+
+/// Switched evolution relaxation of the pseudo-time step: the drag follows the ratio of the
+/// undragged residuals of successive fresh iterations, within [floor, ceiling] x its start value.
+/// A rise above the start value marks the increment as an instability event.
+template <int D>
+void NetworkSolverT<D>::Impl::adapt_drag(double res, IncrementReport& rep) {
+  if (res_fresh > 0.0 && res > 0.0)
+    eta = std::clamp(eta * res / res_fresh, eta0 * opt.drag_floor, eta0 * opt.drag_ceiling);
+  if (eta > eta0) rep.instability = true;
+  res_fresh = res;
+}
+
+/// Work of the drag along the step from `before` to du: eta (du - du_ref) . (du - before) over the
+/// free DOFs (rotations with eta r_mean^2). Pseudo-transient: eta |step|^2, the energy the path
+/// dissipated in the step.
+template <int D>
+double NetworkSolverT<D>::Impl::drag_work(const std::vector<double>& before) const {
+  const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
+  double w = 0.0;
+  for (int q = 0; q < kN * n; ++q)
+    if (dof[q] >= 0) w += (is_rotation(q % kN) ? eta_r : eta_t) * (du[q] - du_ref[q]) * (du[q] - before[q]);
+  return w;
+}
+
+/// Work of the contact forces over the increment, trapezoidal in the committed and the trial
+/// forces: normal force on the overlap change, tangential force on the slip increment.
+template <int D>
+double NetworkSolverT<D>::Impl::contact_work() const {
+  double w = 0.0;
+  for (std::size_t k = 0; k < pi.size(); ++k) {
+    const auto& t = trial[k];
+    if (!t.loaded && fn_c[k] <= 0.0) continue;
+    const int i = pi[k], j = pj[k];
+    const double u1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]).overlap;
+    w += 0.5 * (fn_c[k] + t.f_n) * (u1 - g0[k].overlap);
+    if constexpr (D == 2) {
+      w += 0.5 * (ft_c[k] + t.f_t) * trial_slip[k];
+    } else {
+      w += 0.5 * (ft_c[k] + t.f_t).dot(trial_slip[k]);
+    }
+  }
+  return w;
 }
 
 // Per-increment set-up: the start geometry of every pair, the prescribed motion and predictor,
@@ -99,19 +195,23 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
   rhs.resize(nfree);
   sol.resize(nfree);
   eta = -1.0;
+  res_fresh = -1.0;
+  du_ref = du_aff;
 }
 
-// Viscous regularisation (pseudo-time): the free DOFs feel a drag eta (du - du_affine) relative
-// to the affine motion, so mechanisms and collapsing regions get a finite stiffness eta and move
-// at a finite rate instead of making the tangent singular. Homogeneous (affine) motion is not
+// Viscous regularisation (pseudo-time): the free DOFs feel a drag eta (du - du_ref), so mechanisms
+// and collapsing regions get a finite stiffness eta and move at a finite rate instead of making
+// the tangent singular. Pseudo-transient: du_ref is the current iterate (the drag shapes the path
+// only); legacy drag: du_ref is the affine motion of the increment (the drag stays in the answer). Homogeneous (affine) motion is not
 // resisted; its size, max|f_contact| / mean contact force, is reported as the unbalanced force
 // of the increment. With viscosity_strain > 0 the drag is per unit strain (|dE| scaled).
 template <int D>
 void NetworkSolverT<D>::Impl::start_drag(const Mat& dE) {
   const double md = mean_diagonal();
   kl_ref = md;
-  eta = opt.viscosity * md;
+  eta = opt.viscosity * opt.regularisation_scale * md;
   if (opt.viscosity_strain > 0.0 && dE.norm() > 0.0) eta *= opt.viscosity_strain / dE.norm();
+  eta0 = eta;
 }
 
 // The Newton step into sol: a fresh factorisation of M (with drag and regularisation) on fresh
@@ -251,7 +351,7 @@ double NetworkSolverT<D>::Impl::mean_normal_force() const {
   return c > 0 ? s / c : 0.0;
 }
 
-/// Newton residual r = f_contact - eta (du - du_affine) on the free DOFs, as RMS / fbar (max-norm
+/// Newton residual r = f_contact - eta (du - du_ref) on the free DOFs, as RMS / fbar (max-norm
 /// in max_norm). If fill_rhs, also stores r in rhs for the linear solve.
 template <int D>
 double NetworkSolverT<D>::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
@@ -260,7 +360,7 @@ double NetworkSolverT<D>::Impl::residual(double fbar, bool fill_rhs, double* max
   for (int p = 0; p < n; ++p)
     for (int a = 0; a < kN; ++a)
       if (const int d = dof[kN * p + a]; d >= 0) {
-        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_aff[kN * p + a]);
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_ref[kN * p + a]);
         if (fill_rhs) rhs(d) = rv;
         const double v = std::fabs(rv) / (is_rotation(a) ? r_mean : 1.0);
         m = std::max(m, v);

@@ -65,7 +65,7 @@ void NetworkSolverT<D>::Impl::local_eval(const int* group, int m, Eigen::VectorX
     for (int a = 0; a < kN; ++a) {
       const int p = group[t];
       const double ea = is_rotation(a) ? eta_t * r_mean * r_mean : eta_t;
-      res(kN * t + a) -= ea * (du[kN * p + a] - du_aff[kN * p + a]);
+      res(kN * t + a) -= ea * (du[kN * p + a] - du_ref[kN * p + a]);
       Kl(kN * t + a, kN * t + a) += ea + 1e-9 * kl_ref * (is_rotation(a) ? r_mean * r_mean : 1.0);
     }
 }
@@ -141,7 +141,7 @@ int NetworkSolverT<D>::Impl::relax_worst(double fbar, double rms) {
     double s2 = 0.0;
     for (int a = 0; a < kN; ++a)
       if (dof[kN * p + a] >= 0) {
-        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_aff[kN * p + a]);
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_ref[kN * p + a]);
         s2 += std::pow(rv / (is_rotation(a) ? r_mean : 1.0), 2);
       }
     rp[p] = std::sqrt(s2);

@@ -156,9 +156,14 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   std::vector<double> last_kn;
   std::vector<std::uint8_t> diag_branch;  // verbose diagnostics: branch + 4*sliding at the last iteration
   std::vector<double> du_aff;  // affine motion of the increment (drag reference)
-  double eta = -1.0;           // viscous drag coefficient of the current increment
+  std::vector<double> du_ref;  // the drag's reference: du_aff (legacy drag) or the iterate of the
+                               // current iteration (pseudo-transient: the drag acts on the step)
+  double eta = -1.0;           // viscous drag coefficient of the current factor
+  double eta0 = 0.0;           // its start value in the increment
+  double res_fresh = -1.0;     // pseudo-transient: the residual at the last fresh iteration
   double kl_ref = 1.0;         // mean translational diagonal (local regularisation)
   std::vector<double> du_start;  // du at the start of a line search
+  std::vector<double> du_before;  // du at the start of a Newton step (its drag work)
   VecX rhs, sol;
 
   LinearSolver lin;
@@ -214,6 +219,11 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   IncrementReport attempt(const Mat& dE);
   void begin_increment(const Mat& dE);
   void start_drag(const Mat& dE);
+  bool pseudo_transient() const { return opt.iteration == Iteration::PseudoTransient; }
+  bool accepted(double rms, double max) const;
+  void adapt_drag(double res, IncrementReport& rep);
+  double drag_work(const std::vector<double>& before) const;
+  double contact_work() const;
   bool linear_step(bool fresh, bool nonsym, IncrementReport& rep);
   bool line_search(double newton_res);
   bool local_sweeps(bool f_current);

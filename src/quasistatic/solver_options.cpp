@@ -34,6 +34,14 @@ void SolverOptions::validate() const {
           fmt::format("solver: linear tolerance must be in (0, 1), got {}", linear_tolerance));
   require(std::isfinite(viscosity) && viscosity >= 0.0 && viscosity <= 1e3,
           fmt::format("solver: viscosity must be in [0, 1e3], got {}", viscosity));
+  require(std::isfinite(regularisation_scale) && regularisation_scale >= 1e-6 && regularisation_scale <= 1e6,
+          fmt::format("solver: regularisation scale must be in [1e-6, 1e6], got {}", regularisation_scale));
+  require(std::isfinite(max_residual_factor) && max_residual_factor >= 1.0,
+          fmt::format("solver: max residual factor must be >= 1, got {}", max_residual_factor));
+  require(std::isfinite(drag_floor) && drag_floor > 0.0 && drag_floor <= 1.0 && std::isfinite(drag_ceiling) &&
+              drag_ceiling >= 1.0,
+          fmt::format("solver: drag bounds must satisfy 0 < floor <= 1 <= ceiling, got {} and {}", drag_floor, drag_ceiling));
+  require(max_cuts >= 0 && max_cuts <= 20, fmt::format("solver: max_cuts must be in [0, 20], got {}", max_cuts));
   require(freeze_after >= 1 && freeze_after <= 100, fmt::format("solver: freeze_after must be in [1, 100], got {}", freeze_after));
   require(local_sweeps >= 0 && local_sweeps <= 100, fmt::format("solver: local_sweeps must be in [0, 100], got {}", local_sweeps));
   require(local_iterations >= 1 && local_iterations <= 100,

@@ -25,23 +25,15 @@ using namespace netdem;
 
 namespace {
 
+using netdem::test::compact;
 using netdem::test::expect_same_state;
+using netdem::test::random_packing;
+using netdem::test::RunResult;
+using netdem::test::square_lattice;
+using netdem::test::sticking_newton_case;
 using netdem::test::small_scale;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Square lattice of nc x nr touching disks of radius R filling the box [0, 2 R nc] x [0, 2 R nr].
-packing::Packing square_lattice(int nc, int nr, double R = 1.0) {
-  packing::Packing p;
-  for (int r = 0; r < nr; ++r)
-    for (int c = 0; c < nc; ++c) {
-      p.x.push_back(R + 2 * R * c);
-      p.y.push_back(R + 2 * R * r);
-      p.r.push_back(R);
-    }
-  p.box = {0.0, 0.0, 2 * R * nc, 2 * R * nr};
-  return p;
-}
 
 // Closed form for the square lattice under proportional affine strain with principal components
 // (E11, E22): every horizontal contact has length 2R exp(E11), every vertical one 2R exp(E22);
@@ -54,57 +46,6 @@ Eigen::Vector2d lattice_stress(int nc, int nr, double R, double E11, double E22,
   };
   const double Lh = 2 * R * std::exp(E11), Lv = 2 * R * std::exp(E22);
   return {-(nr * (nc - 1)) * contact(Lh) / V, -(nc * (nr - 1)) * contact(Lv) / V};
-}
-
-struct RunResult {
-  qs::StateMeasures m;
-  int unconverged = 0;
-  double max_residual = 0;
-};
-
-// The random test packing: r = R[0.9, 1.1], deposited in a box of the given width.
-packing::Packing random_packing(double width, std::uint64_t seed) {
-  packing::DepositionOptions d;
-  d.width = width;
-  d.seed = seed;
-  return packing::ballistic_deposition(d);
-}
-
-RunResult compact(const packing::Packing& pk, const qs::SolverOptions& so, const qs::StrainPath& path, double D,
-                  int increments) {
-  qs::NetworkSolver s(pk, so);
-  qs::CompactionOptions co;
-  co.path = path;
-  co.target_density = D;
-  co.increments = increments;
-  RunResult rr;
-  qs::run_compaction(s, co, [&](const qs::CompactionRow& row) {
-    rr.m = row.state;
-    if (row.increment > 0) {
-      rr.unconverged += !row.report.converged;
-      rr.max_residual = std::max(rr.max_residual, row.report.residual);
-    }
-  });
-  return rr;
-}
-
-// Pure Newton (no drag) to 1e-5 of the mean contact force with sticking friction on the small
-// random packing (seed 3), compacted hydrostatically by 0.02 in density.
-struct NewtonCase {
-  packing::Packing pk;
-  qs::SolverOptions so;
-  double D = 0;
-};
-NewtonCase sticking_newton_case() {
-  NewtonCase c;
-  c.pk = random_packing(small_scale() ? 12.0 : 20.0, 3);
-  c.so.law.mu = kInf;
-  c.so.viscosity = 0.0;
-  c.so.residual_tol = 1e-5;
-  c.so.max_residual_tol = 1e-5;
-  c.so.max_newton = 300;
-  c.D = c.pk.density() + 0.02;
-  return c;
 }
 
 }  // namespace

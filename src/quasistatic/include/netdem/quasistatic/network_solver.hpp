@@ -11,9 +11,12 @@
 // affine mode; peripheral rotations are always held), then finds the free DOFs by Newton
 // iterations on the equilibrium equations (Eq 10-12). The trial state is always recomputed from
 // the committed contact history plus the whole increment (return mapping) and committed only when
-// the increment ends. If Newton does not reach the tolerance within max_newton iterations the
-// increment is accepted anyway and its residual is carried into the next increment (forward Euler
-// with equilibrium correction); the residual norm is reported per increment. With chord_steps > 0
+// the increment ends. Legacy drag (the default): if Newton does not reach the tolerance within
+// max_newton iterations the increment is accepted anyway and its residual is carried into the next
+// increment (forward Euler with equilibrium correction); the residual norm is reported per
+// increment. Pseudo-transient iteration (Iteration::PseudoTransient, solver_options.hpp): the drag
+// acts on each Newton step only, the increment is accepted on the undragged residual, and an
+// unaccepted increment is cut in halves (max_cuts) before it is reported unconverged. With chord_steps > 0
 // an assembled tangent and its factorisation serve several iterations (modified Newton).
 //
 // Linear algebra: the global tangent K is assembled into a fixed sparsity pattern built from the
@@ -67,7 +70,22 @@ struct IncrementReport {
   int linear_iterations = 0;    ///< GMRES iterations summed over the Newton iterations
   bool reanalysed = false;
   int new_contacts = 0, lost_contacts = 0, sliding = 0;
+  /// Sub-increments the increment was cut into (1: not cut) after an unaccepted attempt.
+  int substeps = 1;
+  /// Instability event (pseudo-transient iteration): the undragged residual rose between two
+  /// fresh iterations, so the pseudo-time step had to damp the path (drag above its start value).
+  bool instability = false;
+  /// Work of the regularising drag along the iteration path (its dissipation) and the work of
+  /// the contact forces over the increment (trapezoidal in the start and end forces): the path's
+  /// dissipated energy is reported as drag_work / contact_work.
+  double drag_work = 0.0, contact_work = 0.0;
 };
+
+/// The energy the iteration path dissipated in the drag, as a fraction of the work of the contact
+/// forces over the increment (0 when the contacts did no work).
+inline double drag_work_fraction(const IncrementReport& r) {
+  return r.contact_work > 0.0 ? r.drag_work / r.contact_work : 0.0;
+}
 
 /// Macroscopic and microscopic measures of the committed state.
 struct StateMeasures {
@@ -270,6 +288,7 @@ class NetworkSolverT {
   struct Impl;
 
  private:
+  IncrementReport advance(const Mat& dE, int depth);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -1,0 +1,184 @@
+// Tests that fail if a regularisation is left in the network solver's answer (issue 28): the
+// pseudo-transient iteration must end at the undragged equilibrium whatever the drag, while the
+// legacy drag of the whole increment stays in its answer (each test shows both, so that it can
+// fail).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "network_test_util.hpp"
+#include "netdem/packing/packing.hpp"
+#include "netdem/quasistatic/compaction.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+
+using namespace netdem;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+qs::SolverOptions pseudo_transient(qs::SolverOptions so, double scale) {
+  so.iteration = qs::Iteration::PseudoTransient;
+  so.regularisation_scale = scale;
+  so.max_newton = 100;
+  return so;
+}
+
+// Two disks (radii 1 and 0.6) side by side between the left and right walls, just touching both
+// walls and each other; the box is compressed along x only (E11 < 0, E22 = 0).
+packing::Packing two_disks_between_walls() {
+  packing::Packing p;
+  const double r1 = 1.0, r2 = 0.6;
+  p.x = {r1, 2 * r1 + r2};
+  p.y = {5.0, 5.0};
+  p.r = {r1, r2};
+  p.box = {0.0, 0.0, 2 * r1 + 2 * r2, 10.0};
+  return p;
+}
+
+struct WallCase {
+  double x1 = 0, x2 = 0, force = 0;  ///< the disks' centres and the common contact force
+  bool converged = true;
+  int substeps = 0;
+};
+
+// Compacts the two-disk case by the strain E11 in n increments; `then` (if given) takes over for
+// the last increment, which is `last` times as large as the others.
+WallCase run_walls(const qs::SolverOptions& so, double E11, int n, const qs::SolverOptions* then = nullptr,
+                   double last = 1.0) {
+  qs::NetworkSolver first(two_disks_between_walls(), so);
+  Eigen::Matrix2d dE = Eigen::Matrix2d::Zero();
+  dE(0, 0) = E11 / (n - 1 + last);
+  WallCase c;
+  for (int k = 0; k < n - 1; ++k) c.converged = c.converged && first.increment(dE).converged;
+  qs::NetworkSolver s(first.state(), then ? *then : so);
+  dE *= n > 1 ? last : 1.0;
+  for (int k = n - 1; k < n; ++k) {
+    const auto rep = s.increment(dE);
+    c.converged = c.converged && rep.converged;
+    c.substeps += rep.substeps;
+  }
+  c.x1 = s.x()[0];
+  c.x2 = s.x()[1];
+  for (const auto& ct : s.contacts()) c.force = ct.f_n;
+  return c;
+}
+
+}  // namespace
+
+// The two disks between walls: along x the three contacts (wall-disk 1, disk 1-disk 2, disk 2-wall)
+// carry one force F. With Eq 2 (F = 3 sigma_y sqrt(8 u R*), first touch at u = 0) each overlap is
+// u = c / R* with c = F^2 / (72 sigma_y^2), R* = r for a wall, r1 r2 / (r1 + r2) for the pair, and
+// the three overlaps sum to the box's shortening: a closed form for F and both centres. The legacy
+// drag holds the disks near the affine motion, away from it; the pseudo-transient iteration ends
+// on it for drags 0.1, 1 and 10 times the default.
+TEST(Equilibrium, TwoDisksBetweenWallsMatchClosedFormForEveryDrag) {
+  const double r1 = 1.0, r2 = 0.6, L0 = 2 * r1 + 2 * r2, E11 = -0.02;
+  const double delta = L0 * (1.0 - std::exp(E11));
+  const double rs = r1 * r2 / (r1 + r2);
+  const double c = delta / (1.0 / r1 + 1.0 / rs + 1.0 / r2);
+  const double F = std::sqrt(72.0 * c);  // sigma_y = 1
+  const double x1 = r1 - c / r1, x2 = L0 * std::exp(E11) - (r2 - c / r2);
+  qs::SolverOptions base;
+  base.mode = qs::BoundaryMode::Walls;
+  base.law.mu = kInf;
+  base.law.first_touch = 0.0;
+  base.viscosity = 0.1;
+  base.residual_tol = 1e-9;
+  base.linear_tolerance = 1e-10;
+  for (double scale : {0.1, 1.0, 10.0}) {
+    const WallCase w = run_walls(pseudo_transient(base, scale), E11, 4);
+    std::printf("pseudo-transient, drag x %g: F = %.12f (closed form %.12f), x1 %.3e, x2 %.3e off\n", scale, w.force, F,
+                w.x1 - x1, w.x2 - x2);
+    EXPECT_TRUE(w.converged);
+    EXPECT_NEAR(w.force, F, 1e-7 * F);
+    EXPECT_NEAR(w.x1, x1, 1e-9);
+    EXPECT_NEAR(w.x2, x2, 1e-9);
+  }
+  base.max_residual_tol = 1e-9;
+  base.max_newton = 100;
+  base.regularisation_scale = 10.0;  // the legacy drag at 10x: its answer moves
+  const WallCase legacy = run_walls(base, E11, 4);
+  std::printf("legacy drag x 10: F = %.12f, x1 %.3e off\n", legacy.force, legacy.x1 - x1);
+  EXPECT_GT(std::fabs(legacy.force - F), 1e-3 * F);
+}
+
+// The cut-back: with too few iterations per increment, the increment is redone in halves and
+// still ends on the same equilibrium (the reversible law makes the answer independent of the path
+// along this monotonic loading). The first-touch chord keeps the stiffness at touch finite.
+TEST(Equilibrium, CutIncrementsEndOnTheSameEquilibrium) {
+  qs::SolverOptions so;
+  so.mode = qs::BoundaryMode::Walls;
+  so.law.mu = kInf;
+  so.residual_tol = 1e-9;
+  so.linear_tolerance = 1e-10;
+  so = pseudo_transient(so, 1.0);
+  const WallCase full = run_walls(so, -0.05, 2, nullptr, 4.0);
+  qs::SolverOptions few = so;  // the second increment (the first brings the contacts past the touch)
+  few.max_newton = 2;
+  few.max_cuts = 6;
+  const WallCase cut = run_walls(so, -0.05, 2, &few, 4.0);
+  std::printf("second increment (4x the first): %d sub-increments with 2 iterations each at most; F %.12f against "
+              "%.12f\n", cut.substeps, cut.force, full.force);
+  EXPECT_TRUE(full.converged);
+  EXPECT_TRUE(cut.converged);
+  EXPECT_GT(cut.substeps, 1);
+  EXPECT_NEAR(cut.force, full.force, 1e-7 * full.force);
+  few.max_cuts = 0;  // without cuts the same iteration budget leaves the increment unaccepted
+  EXPECT_FALSE(run_walls(so, -0.05, 2, &few, 4.0).converged);
+}
+
+// Sticking friction on the small random packing, die mode: the pseudo-transient answer equals pure
+// Newton (no drag at all) for drags 0.1, 1 and 10 times 0.1 of the mean stiffness, while the
+// legacy drag at that size moves S22.
+TEST(Equilibrium, RandomPackingAnswerIsIndependentOfTheDrag) {
+  auto [pk, so, D] = test::sticking_newton_case();
+  const auto pure = test::compact(pk, so, qs::StrainPath::hydrostatic(), D, 40);
+  ASSERT_EQ(pure.unconverged, 0);
+  so.viscosity = 0.1;
+  so.max_residual_tol = kInf;
+  for (double scale : {0.1, 1.0, 10.0}) {
+    const auto r = test::compact(pk, pseudo_transient(so, scale), qs::StrainPath::hydrostatic(), D, 40);
+    const double d11 = std::fabs(r.m.S11 / pure.m.S11 - 1.0), d22 = std::fabs(r.m.S22 / pure.m.S22 - 1.0);
+    std::printf("pseudo-transient, drag x %g: S11 %.3e, S22 %.3e from pure Newton, Z %.4f against %.4f\n", scale, d11,
+                d22, r.m.Z, pure.m.Z);
+    EXPECT_EQ(r.unconverged, 0);
+    EXPECT_LT(d11, 1e-4);
+    EXPECT_LT(d22, 1e-4);
+    EXPECT_NEAR(r.m.Z, pure.m.Z, 1e-9);
+  }
+  so.regularisation_scale = 10.0;
+  const auto legacy = test::compact(pk, so, qs::StrainPath::hydrostatic(), D, 40);
+  const double dl = std::fabs(legacy.m.S22 / pure.m.S22 - 1.0);
+  std::printf("legacy drag x 10: S22 %.3e from pure Newton\n", dl);
+  EXPECT_GT(dl, 1e-3);
+}
+
+// A rattler loose in the cage of a square lattice has no stiffness and a zero residual: it must not
+// stall the iteration, and it stays where the predictor puts it (the affine motion), whatever the
+// drag.
+TEST(Equilibrium, RattlerDoesNotStallTheIteration) {
+  auto pk = test::square_lattice(6, 6);
+  const int hole = 2 * 6 + 2;
+  pk.r[hole] = 0.4;
+  const double x0 = pk.x[hole], y0 = pk.y[hole];
+  qs::SolverOptions so;
+  so.law.mu = kInf;
+  so.viscosity = 0.1;
+  so.linear_tolerance = 1e-8;
+  qs::CompactionOptions co;
+  co.target_density = pk.density() * 1.03;
+  co.increments = 10;
+  for (double scale : {0.1, 10.0}) {
+    qs::NetworkSolver s(pk, pseudo_transient(so, scale));
+    int unconverged = 0;
+    qs::run_compaction(s, co, [&](const qs::CompactionRow& row) { unconverged += row.increment > 0 && !row.report.converged; });
+    EXPECT_EQ(unconverged, 0);
+    const Eigen::Vector2d affine = s.box_deformation() * Eigen::Vector2d(x0, y0);
+    EXPECT_NEAR(s.x()[hole], affine.x(), 1e-12);
+    EXPECT_NEAR(s.y()[hole], affine.y(), 1e-12);
+    for (const auto& c : s.contacts()) EXPECT_TRUE(c.i != hole && c.j != hole);
+  }
+}
