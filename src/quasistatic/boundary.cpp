@@ -42,7 +42,13 @@ void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
   if (!reuse) return;
   // the previous increment's affine part, A_prev x_prev, at its start positions x_prev = x - du_prev
   const Mat A_prev = small_expm<D>(dE_prev) - Mat::Identity();
+  // pseudo-transient: a particle without a loaded contact has no equilibrium position of its own
+  // (any position away from its neighbours has a zero residual), so it keeps the affine predictor
+  // instead of drifting on with the extrapolated motion of the last increment
+  const bool held_only = pseudo_transient();
+  if (held_only) loaded_particle(predictor_loaded);
   for (int p = 0; p < n; ++p) {
+    if (held_only && !predictor_loaded[p]) continue;
     const Vec up = Eigen::Map<const Vec>(&du_prev[kN * p]);
     const Vec na = up - A_prev * (at(p) - up);
     for (int a = 0; a < D; ++a)
@@ -50,6 +56,17 @@ void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
     for (int a = D; a < kN; ++a)
       if (dof[kN * p + a] >= 0) du[kN * p + a] = scale * du_prev[kN * p + a];
   }
+}
+
+/// loaded[p] = 1 if particle p has a loaded contact (a pair or, in walls mode, a wall) in the
+/// committed state.
+template <int D>
+void NetworkSolverT<D>::Impl::loaded_particle(std::vector<std::uint8_t>& loaded) const {
+  loaded.assign(n, 0);
+  for (std::size_t k = 0; k < pi.size(); ++k)
+    if (fn_c[k] > 0.0) loaded[pi[k]] = loaded[pj[k]] = 1;
+  for (std::size_t s = 0; s < wfn_c.size(); ++s)
+    if (wfn_c[s] > 0.0) loaded[s / 4] = 1;
 }
 
 template <int D>

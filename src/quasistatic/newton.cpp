@@ -127,13 +127,24 @@ bool NetworkSolverT<D>::Impl::accepted(double rms, double max) const {
   return rms <= opt.residual_tol && max <= opt.max_residual_tol;
 }
 
-/// Switched evolution relaxation of the pseudo-time step: the drag follows the ratio of the
-/// undragged residuals of successive fresh iterations, within [floor, ceiling] x its start value.
+/// The pseudo-time step between fresh iterations, within [floor, ceiling] x the drag's start value:
+/// - the last step was cut by the line search (the pseudo-time step was too long): the drag grows
+///   by the ratio of the undragged residuals if they rose, else it stays;
+/// - else, the residual fell: switched evolution relaxation, the drag follows that ratio down;
+/// - else the full step was taken and the residual rose: the drag stays; when that happens twice
+///   in a row, the signature of an unstable path (a buckling chain, a snap-through), it halves, so
+///   that the path is followed faster (switched evolution relaxation would raise it and stall on
+///   the unstable branch). A single rise is often a contact changing status.
 /// A rise above the start value marks the increment as an instability event.
 template <int D>
 void NetworkSolverT<D>::Impl::adapt_drag(double res, IncrementReport& rep) {
-  if (res_fresh > 0.0 && res > 0.0)
-    eta = std::clamp(eta * res / res_fresh, eta0 * opt.drag_floor, eta0 * opt.drag_ceiling);
+  if (res_fresh > 0.0 && res > 0.0) {
+    const double ratio = res / res_fresh;
+    rises = ratio > 1.0 ? rises + 1 : 0;
+    double f = ratio <= 1.0 ? ratio : rises >= 2 ? 0.5 : 1.0;
+    if (last_alpha < 1.0) f = std::max(ratio, 1.0);
+    eta = std::clamp(eta * f, eta0 * opt.drag_floor, eta0 * opt.drag_ceiling);
+  }
   if (eta > eta0) rep.instability = true;
   res_fresh = res;
 }
@@ -196,6 +207,8 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
   sol.resize(nfree);
   eta = -1.0;
   res_fresh = -1.0;
+  last_alpha = 1.0;
+  rises = 0;
   du_ref = du_aff;
 }
 
@@ -267,6 +280,7 @@ bool NetworkSolverT<D>::Impl::line_search(double newton_res) {
     f_current = false;  // f and trial belong to the last step tried, not to best_alpha
   }
   if (opt.verbose) std::fprintf(stderr, "    line search step %.4f\n", alpha);
+  last_alpha = alpha;
   return f_current;
 }
 

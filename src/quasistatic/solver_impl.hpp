@@ -161,6 +161,8 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   double eta = -1.0;           // viscous drag coefficient of the current factor
   double eta0 = 0.0;           // its start value in the increment
   double res_fresh = -1.0;     // pseudo-transient: the residual at the last fresh iteration
+  double last_alpha = 1.0;     // the step length the last line search took
+  int rises = 0;               // fresh iterations in a row whose residual rose
   double kl_ref = 1.0;         // mean translational diagonal (local regularisation)
   std::vector<double> du_start;  // du at the start of a line search
   std::vector<double> du_before;  // du at the start of a Newton step (its drag work)
@@ -203,6 +205,8 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   void build_neighbours();
   // boundary.cpp
   void prescribe(const Mat& dE);
+  void loaded_particle(std::vector<std::uint8_t>& loaded) const;
+  std::vector<std::uint8_t> predictor_loaded;  // scratch of prescribe
   // assembly.cpp
   void build_pattern();
   void assemble(bool& any_nonsymmetric);

@@ -182,3 +182,51 @@ TEST(Equilibrium, RattlerDoesNotStallTheIteration) {
     for (const auto& c : s.contacts()) EXPECT_TRUE(c.i != hole && c.j != hole);
   }
 }
+
+// A buckling chain: a frictionless disk between two prescribed disks, slightly off their line,
+// compressed along the line (die mode: the outer disks follow the strain). The chain buckles: the
+// only equilibria have the middle disk out of both contacts, at least at the height
+// h = sqrt((2r)^2 - (d/2)^2) above the line for outer centres d apart, where it just touches both.
+// The pseudo-transient iteration ends there (zero force, and no further: a disk without a loaded
+// contact keeps the affine predictor) for every drag; the legacy drag holds it near its affine
+// motion, still pressed between its neighbours.
+TEST(Equilibrium, BucklingChainEndsAtTheTouchingHeight) {
+  packing::Packing pk;
+  pk.x = {0.0, 2.0, 4.0};
+  pk.y = {0.0, 0.01, 0.0};
+  pk.r = {1.0, 1.0, 1.0};
+  pk.box = {-1.0, -1.0, 5.0, 1.0};
+  qs::SolverOptions so;
+  so.law.mu = 0.0;
+  so.viscosity = 0.1;
+  auto run = [&](const qs::SolverOptions& o, int& unconverged, double& force) {
+    auto st = qs::NetworkSolver(pk, o).state();
+    st.peripheral = {1, 0, 1};  // the outer disks prescribed, the middle one free
+    qs::NetworkSolver s(st, o);
+    Eigen::Matrix2d dE = Eigen::Matrix2d::Zero();
+    dE(0, 0) = -0.002;
+    unconverged = 0;
+    for (int k = 0; k < 10; ++k) unconverged += !s.increment(dE).converged;
+    force = 0.0;
+    for (const auto& c : s.contacts()) force = std::max(force, c.f_n);
+    return Eigen::Vector2d(s.x()[1], s.y()[1]);
+  };
+  const double d = 4.0 * std::exp(-0.02), h = std::sqrt(4.0 - d * d / 4.0);
+  for (double scale : {0.1, 1.0, 10.0}) {
+    int unconverged = 0;
+    double force = 0.0;
+    const Eigen::Vector2d p = run(pseudo_transient(so, scale), unconverged, force);
+    std::printf("pseudo-transient, drag x %g: middle disk at (%.9f, %.9f), touching height %.9f, force %.2e\n", scale,
+                p.x(), p.y(), h, force);
+    EXPECT_EQ(unconverged, 0);
+    EXPECT_NEAR(p.x(), d / 2.0, 1e-9);
+    EXPECT_NEAR(p.y(), h, 1e-6);
+    EXPECT_LT(force, 1e-6);
+  }
+  int unconverged = 0;
+  double force = 0.0;
+  const Eigen::Vector2d legacy = run(so, unconverged, force);
+  std::printf("legacy drag: middle disk at height %.6f, force %.3e\n", legacy.y(), force);
+  EXPECT_LT(legacy.y(), h - 0.05);
+  EXPECT_GT(force, 1e-3);
+}
