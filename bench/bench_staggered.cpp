@@ -42,8 +42,7 @@ int main(int argc, char** argv) {
     }
   }
   const auto pk = netdem::packing::read_packing_csv(argv[1]);
-  std::vector<st::Particle> p(pk.size());
-  for (std::size_t i = 0; i < pk.size(); ++i) p[i] = {Eigen::Vector3d(pk.x[i], pk.y[i], pk.z[i]), pk.r[i]};
+  const auto p = st::Particles::from_packing(pk);
   const auto t0 = std::chrono::steady_clock::now();
   st::Staggered s(p, cs::builtin_sinter_material(material), cs::TemperatureProfile::constant(T), o);
   const std::size_t c0 = s.contacts().size();

@@ -127,8 +127,6 @@ std::string read_text(const fs::path& p, const char* what) {
 }
 
 using netdem::app::netsolve::laminar_csv;
-using netdem::app::netsolve::particles_of;
-using netdem::app::netsolve::box_plane_counts;
 using netdem::app::netsolve::write_snapshot;
 using netdem::app::netsolve::pvd;
 using netdem::app::netsolve::options_json;
@@ -232,11 +230,9 @@ void read_packing(const Args& a, Setup& u) {
 
 // The network of a packing (a file, or the green body): the boundary planes at its box (--planes box).
 void make_network(const Args& a, Setup& u) {
-  if (a.planes == "box") {
-    u.so.plane_origin = {u.pk.box.x_min, u.pk.box.y_min, u.pk.box.z_min};
-    u.box_fixed = box_plane_counts(particles_of(u.pk), u.pk.box, u.so.boundary_factor);
-  }
-  u.sim.emplace(particles_of(u.pk), *u.mat, u.prof, u.so);
+  if (a.planes == "box") u.so.plane_origin = {u.pk.box.x_min, u.pk.box.y_min, u.pk.box.z_min};
+  u.sim.emplace(st::Particles::from_packing(u.pk), *u.mat, u.prof, u.so);
+  if (a.planes == "box") u.box_fixed = u.sim->plane_particles();
 }
 
 void setup_new(const Args& a, Setup& u) {
@@ -287,27 +283,6 @@ void setup_new(const Args& a, Setup& u) {
   }
 }
 
-// StaggeredRunOptions::validate's estimate, span / dt_max, with the profile's breakpoints: each ends
-// a global step, so the run takes at least the sum over the pieces between them of ceil(piece / dt_max)
-void check_profile_steps(const sp::TemperatureProfile& tp, double t_start, const st::StaggeredRunOptions& ro,
-                         double dt_max) {
-  double steps = 0.0, prev = t_start;
-  long breakpoints = 0;
-  for (double b : tp.times()) {
-    if (!(b > prev && b < ro.t_end)) continue;  // outside the run, or a jump's second row
-    steps += std::ceil((b - prev) / dt_max);
-    prev = b;
-    ++breakpoints;
-  }
-  if (breakpoints == 0) return;
-  steps += std::ceil((ro.t_end - prev) / dt_max);
-  if (!(steps <= static_cast<double>(ro.max_steps)))
-    throw UsageError(fmt::format("--max-steps: the run of {:.6g} s needs at least {:.3g} steps of at most {:.6g} s (the "
-                                 "largest global step; each of the {} breakpoints of the temperature profile within the "
-                                 "run ends one), more than the step limit {}: shorten the run or the profile, or raise the "
-                                 "limit", ro.t_end - t_start, steps, dt_max, breakpoints, ro.max_steps));
-}
-
 Setup setup(const Args& a, const CLI::App& app) {
   Setup u;
   u.restart = !a.restart.empty();
@@ -326,10 +301,11 @@ Setup setup(const Args& a, const CLI::App& app) {
     setup_restart(a, u);
   else
     setup_new(a, u);
+  // the work estimate with the temperature profile's breakpoints (each ends a global step)
   if (u.sim)
-    check_profile_steps(u.sim->temperature(), u.sim->time(), u.ro, u.sim->options().dt_max);
+    as_options([&] { u.ro.validate(u.sim->time(), u.sim->options().dt_max, u.sim->temperature()); });
   else
-    check_profile_steps(u.prof, 0.0, u.ro, u.so.dt_max);
+    as_options([&] { u.ro.validate(0.0, u.so.dt_max, u.prof); });
   return u;
 }
 

@@ -32,42 +32,15 @@ std::string laminar_csv(const netdem::packing::Packing& pk, double lamina) {
   return lam;
 }
 
-std::vector<st::Particle> particles_of(const netdem::packing::Packing& pk) {
-  std::vector<st::Particle> p(pk.size());
-  for (std::size_t i = 0; i < pk.size(); ++i) {
-    p[i].x = Eigen::Vector3d(pk.x[i], pk.y[i], pk.z[i]);
-    p[i].r = pk.r[i];
-  }
-  return p;
-}
-
-/// --planes box: the boundary planes of section 3.3 are the lower faces of the packing's box (the
-/// planes Oxy, Oxz, Oyz of a box at the origin; the walls of the green-body route), not those of
-/// the spheres' bounding box: a sphere pressed into a wall (overlap up to ~1 % r at rest) sits
-/// below the wall, and the bounding box's face is the deepest one, which leaves a handful of
-/// spheres on the planes (3, 4, 2 of the Cu packing instead of 57, 63, 88). Sets
-/// StaggeredOptions::plane_origin; returns the count of spheres on each plane (the library's rule).
-std::array<int, 3> box_plane_counts(const std::vector<st::Particle>& P, const netdem::packing::Box& box, double factor) {
-  std::array<int, 3> n{0, 0, 0};
-  const double lo[3] = {box.x_min, box.y_min, box.z_min};
-  for (std::size_t i = 0; i < P.size(); ++i)
-    for (int k = 0; k < 3; ++k)
-      if (P[i].x[k] - lo[k] <= factor * P[i].r) ++n[static_cast<std::size_t>(k)];
-  return n;
-}
-
 // ---- snapshots
 void write_snapshot(const fs::path& out, int k, const st::Staggered& s) {
   const auto& P = s.particles();
   const auto& P0 = s.initial_particles();
-  std::vector<double> x(P.size()), y(P.size()), z(P.size());
+  const std::vector<double> x = P.axis(0), y = P.axis(1), z = P.axis(2);
   Field rad{"radius", 1, {}}, disp{"displacement", 3, {}};
   for (std::size_t i = 0; i < P.size(); ++i) {
-    x[i] = P[i].x.x();
-    y[i] = P[i].x.y();
-    z[i] = P[i].x.z();
-    rad.values.push_back(P[i].r);
-    for (int d = 0; d < 3; ++d) disp.values.push_back(i < P0.size() ? P[i].x[d] - P0[i].x[d] : 0.0);
+    rad.values.push_back(P.r[i]);
+    for (int d = 0; d < 3; ++d) disp.values.push_back(i < P0.size() ? P.coord(i, d) - P0.coord(i, d) : 0.0);
   }
   write_file_atomic(out / fmt::format("particles_{:03d}.vtp", k), netdem::app::vtp_particles_3d(x, y, &z, {rad, disp}));
   std::vector<int> ia, ib;

@@ -1,8 +1,6 @@
 #pragma once
-// netsolve sinter's files and the packing it starts from (sinter_files.cpp): laminar.csv, the
-// particles of a packing, the boundary planes of the box, the .vtp snapshots and their .pvd,
+// netsolve sinter's files (sinter_files.cpp): laminar.csv, the .vtp snapshots and their .pvd,
 // the options and material as JSON.
-#include <array>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -17,8 +15,6 @@
 namespace netdem::app::netsolve {
 
 std::string laminar_csv(const netdem::packing::Packing& pk, double lamina);
-std::vector<netdem::qs::staggered::Particle> particles_of(const netdem::packing::Packing& pk);
-std::array<int, 3> box_plane_counts(const std::vector<netdem::qs::staggered::Particle>& P, const netdem::packing::Box& box, double factor);
 void write_snapshot(const std::filesystem::path& out, int k, const netdem::qs::staggered::Staggered& s);
 std::string pvd(const std::vector<std::pair<int, double>>& snaps);
 nlohmann::json options_json(const netdem::qs::staggered::StaggeredOptions& o);

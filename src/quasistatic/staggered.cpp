@@ -113,13 +113,16 @@ void Staggered::Impl::setup_material() {
 }
 
 void Staggered::Impl::setup_particles() {
-  if (p.empty()) bad("staggered: no particles");
+  if (p.r.empty()) bad("staggered: no particles");
+  if (!p.consistent())
+    bad(fmt::format("staggered: the particle set holds {} radii, {} centre coordinates and {} rotations (3 of each per radius)",
+                    p.r.size(), p.pos.size(), p.rot.size()));
   double rsum = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const auto& q = p[i];
-    if (!q.x.allFinite()) bad(fmt::format("staggered: particle {} has a non-finite centre", i));
-    if (!(std::isfinite(q.r) && q.r > 0.0)) bad(fmt::format("staggered: particle {} has radius {} (must be positive)", i, q.r));
-    rsum += q.r;
+    const double r = p.r[i];
+    if (!p.position(i).allFinite()) bad(fmt::format("staggered: particle {} has a non-finite centre", i));
+    if (!(std::isfinite(r) && r > 0.0)) bad(fmt::format("staggered: particle {} has radius {} (must be positive)", i, r));
+    rsum += r;
   }
   ell = std::ldexp(1.0, std::ilogb(rsum / static_cast<double>(p.size())));
   const int n = N();
@@ -131,10 +134,10 @@ void Staggered::Impl::setup_particles() {
       double lo = opt.plane_origin[k];
       if (std::isnan(lo)) {
         lo = std::numeric_limits<double>::infinity();
-        for (const auto& q : p) lo = std::min(lo, q.x[k] - q.r);
+        for (int i = 0; i < n; ++i) lo = std::min(lo, p.coord(i, k) - p.r[i]);
       }
       for (int i = 0; i < n; ++i)
-        if (p[i].x[k] - lo <= opt.boundary_factor * p[i].r) fixed_plane[6 * i + k] = 1;
+        if (p.coord(i, k) - lo <= opt.boundary_factor * p.r[i]) fixed_plane[6 * i + k] = 1;
     }
   }
 }
@@ -173,7 +176,7 @@ Staggered::~Staggered() = default;
 Staggered::Staggered(Staggered&&) noexcept = default;
 Staggered& Staggered::operator=(Staggered&&) noexcept = default;
 
-Staggered::Staggered(std::vector<Particle> particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
+Staggered::Staggered(Particles particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
                      StaggeredOptions options)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
@@ -200,8 +203,8 @@ StepRecord Staggered::step(double t_end) { return impl_->step(t_end); }
 double Staggered::time() const { return impl_->t; }
 double Staggered::dt() const { return impl_->dt; }
 long Staggered::steps() const { return impl_->nsteps; }
-const std::vector<Particle>& Staggered::particles() const { return impl_->p; }
-const std::vector<Particle>& Staggered::initial_particles() const { return impl_->p0; }
+const Particles& Staggered::particles() const { return impl_->p; }
+const Particles& Staggered::initial_particles() const { return impl_->p0; }
 const std::vector<Contact>& Staggered::contacts() const { return impl_->c; }
 const StaggeredOptions& Staggered::options() const { return impl_->opt; }
 const cs::SinterMaterial& Staggered::material() const { return impl_->mat; }
@@ -213,20 +216,27 @@ int Staggered::fixed_dofs() const {
   return static_cast<int>(std::count(impl_->fixed.begin(), impl_->fixed.end(), std::uint8_t{1}));
 }
 
+std::array<int, 3> Staggered::plane_particles() const {
+  std::array<int, 3> n{0, 0, 0};
+  for (std::size_t i = 0; i < impl_->p.size(); ++i)
+    for (std::size_t k = 0; k < 3; ++k) n[k] += impl_->fixed_plane[6 * i + k];
+  return n;
+}
+
 Eigen::Matrix3d Staggered::homogeneous_strain() const {
   const auto& p = impl_->p;
   const auto& p0 = impl_->p0;
   const double n = static_cast<double>(p.size());
   Eigen::Vector3d xm = Eigen::Vector3d::Zero(), Xm = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < p.size(); ++i) {
-    xm += p[i].x;
-    Xm += p0[i].x;
+    xm += p.position(i);
+    Xm += p0.position(i);
   }
   xm /= n;
   Xm /= n;
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero(), B = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const Eigen::Vector3d dX = p0[i].x - Xm, u = (p[i].x - xm) - dX;  // the displacement about the mean
+    const Eigen::Vector3d dX = p0.position(i) - Xm, u = (p.position(i) - xm) - dX;  // the displacement about the mean
     A += u * dX.transpose();
     B += dX * dX.transpose();
   }
@@ -248,9 +258,9 @@ double Staggered::density() const {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double V = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    lo = lo.cwiseMin(p[i].x - Eigen::Vector3d::Constant(p[i].r));
-    hi = hi.cwiseMax(p[i].x + Eigen::Vector3d::Constant(p[i].r));
-    const double r0 = impl_->p0[i].r;
+    lo = lo.cwiseMin(p.position(i) - Eigen::Vector3d::Constant(p.r[i]));
+    hi = hi.cwiseMax(p.position(i) + Eigen::Vector3d::Constant(p.r[i]));
+    const double r0 = impl_->p0.r[i];
     V += 4.0 / 3.0 * std::numbers::pi * r0 * r0 * r0;
   }
   return V / (hi - lo).prod();

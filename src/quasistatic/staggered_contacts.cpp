@@ -12,7 +12,7 @@
 namespace netdem::qs::staggered {
 
 void Staggered::Impl::add_contact(int a, int b, double d) {
-  const double ra = p[a].r, rb = p[b].r;
+  const double ra = p.r[a], rb = p.r[b];
   const double hA = (d * d + ra * ra - rb * rb) / (2.0 * d);  // the radical plane of the two spheres
   const double hB = d - hA;
   if (!(hA > 0.0 && hB > 0.0))
@@ -61,22 +61,22 @@ int Staggered::Impl::detect() {
   double rmax = 0.0;
   for (int k = 0; k < 3; ++k) grid_xyz[k].resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    rmax = std::max(rmax, p[i].r);
-    for (int k = 0; k < 3; ++k) grid_xyz[k][static_cast<std::size_t>(i)] = p[i].x[k];
+    rmax = std::max(rmax, p.r[i]);
+    for (int k = 0; k < 3; ++k) grid_xyz[k][static_cast<std::size_t>(i)] = p.coord(i, k);
   }
   grid.rebuild(grid_xyz[0], grid_xyz[1], grid_xyz[2], 2.0 * kTouch * rmax);
   found.clear();
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d& xi = p[i].x;
-    grid.for_each_near(xi[0], xi[1], xi[2], kTouch * (p[i].r + rmax), [&](std::uint32_t jj) {
+    const Eigen::Vector3d xi = centre(i);
+    grid.for_each_near(xi[0], xi[1], xi[2], kTouch * (p.r[i] + rmax), [&](std::uint32_t jj) {
       const int j = static_cast<int>(jj);
       if (j <= i) return;
-      const double rr = kTouch * (p[i].r + p[j].r);
-      if ((p[j].x - xi).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
+      const double rr = kTouch * (p.r[i] + p.r[j]);
+      if ((centre(j) - xi).squaredNorm() < rr * rr && !bonded(i, j)) found.emplace_back(i, j);
     });
   }
   std::sort(found.begin(), found.end());
-  for (const auto& [i, j] : found) add_contact(i, j, (p[j].x - p[i].x).norm());
+  for (const auto& [i, j] : found) add_contact(i, j, (centre(j) - centre(i)).norm());
   return static_cast<int>(found.size());
 }
 
@@ -90,12 +90,13 @@ void Staggered::Impl::move_and_correct(StepRecord& rec, const VecX& uhat, double
       if (g >= 0) u[i][k] = uhat[g];  // translations are not scaled
     }
   remove_rigid_motions(u);
-  for (int i = 0; i < N(); ++i) p[i].x += u[i];
+  for (int i = 0; i < N(); ++i)
+    for (int k = 0; k < 3; ++k) p.pos[3 * static_cast<std::size_t>(i) + static_cast<std::size_t>(k)] += u[i][k];
   for (std::size_t i = 0; i < c.size(); ++i) {
     Contact& k = c[i];
     const State qold = k.pair.q;
     const State qf = (k.frozen || freeze[i] == 2) ? qold : qnew[i];
-    const double d = (p[k.b].x - p[k.a].x).norm();
+    const double d = (centre(k.b) - centre(k.a)).norm();
     const auto [y4, y7] = corrected_split(qold[kHA], qold[kHB], qf[kHA], qf[kHB], d, qold[kRA], qold[kRB]);
     k.dL_bar = (y4 + y7) - (qf[kHA] + qf[kHB]);  // Eq 44
     k.pair.q = qf;

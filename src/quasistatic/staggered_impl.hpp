@@ -85,7 +85,7 @@ struct Staggered::Impl {
   cs::TemperatureProfile prof = cs::TemperatureProfile::constant(1000.0);
   contact::BondMaterial bmat;
   double x_max = 0.0;
-  std::vector<Particle> p, p0;
+  Particles p, p0;
   std::vector<Contact> c;
   std::vector<std::vector<int>> adj;  // particle -> contact indices
   packing::CellGrid3 grid;                        // detect(): the cell grid,
@@ -123,6 +123,7 @@ struct Staggered::Impl {
   void setup_material();
   void setup_particles();
   int N() const { return static_cast<int>(p.size()); }
+  Eigen::Vector3d centre(int i) const { return p.position(static_cast<std::size_t>(i)); }
 
   // contacts (staggered_contacts.cpp)
   void add_contact(int a, int b, double d);
@@ -140,7 +141,7 @@ struct Staggered::Impl {
   double dof_scale(int l) const { return (l % 6) < 3 ? 1.0 : 1.0 / ell; }
   void assemble(const std::vector<contact::BondElement>& e);
   contact::BondElement element(const Contact& k) const {
-    return contact::make_bond(p[k.a].x, p[k.b].x, k.pair.q[kHA], k.pair.q[kHB], p[k.a].r, p[k.b].r);
+    return contact::make_bond(centre(k.a), centre(k.b), k.pair.q[kHA], k.pair.q[kHB], p.r[k.a], p.r[k.b]);
   }
   VecX solve_network(StepRecord& rec);
 

@@ -57,9 +57,9 @@ void Staggered::Impl::update_constraints() {
       // stop exactly those motions (rows of the particle's DOFs on the null space, greedily
       // independent): the cluster is then held, not over-constrained
       Eigen::Vector3d xc = Eigen::Vector3d::Zero();
-      for (int i : m) xc += p[i].x;
+      for (int i : m) xc += centre(i);
       xc /= static_cast<double>(m.size());
-      const Eigen::Vector3d rel = (p[m[0]].x - xc) / ell;
+      const Eigen::Vector3d rel = (centre(m[0]) - xc) / ell;
       std::array<Eigen::VectorXd, 6> v;  // each DOF's motion under the free modes
       for (int k = 0; k < 6; ++k) {
         Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
@@ -90,7 +90,7 @@ void Staggered::Impl::update_constraints() {
 // t + w x (x - x_c) / ell and turns every node by w / ell.
 Eigen::MatrixXd Staggered::Impl::rigid_null_space(const std::vector<int>& m) const {
   Eigen::Vector3d xc = Eigen::Vector3d::Zero();
-  for (int i : m) xc += p[i].x;
+  for (int i : m) xc += centre(i);
   xc /= static_cast<double>(m.size());
   Eigen::Matrix<double, 6, 6> CtC = Eigen::Matrix<double, 6, 6>::Zero();
   for (int i : m)
@@ -98,7 +98,7 @@ Eigen::MatrixXd Staggered::Impl::rigid_null_space(const std::vector<int>& m) con
       if (!(fixed_user[6 * i + k] | fixed_plane[6 * i + k])) continue;
       Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
       row[k] = 1.0;
-      if (k < 3) row.tail<3>() = ((p[i].x - xc) / ell).cross(Eigen::Vector3d::Unit(k));  // e_k . (w x rel)
+      if (k < 3) row.tail<3>() = ((centre(i) - xc) / ell).cross(Eigen::Vector3d::Unit(k));  // e_k . (w x rel)
       CtC += row * row.transpose();
     }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(CtC);
@@ -116,7 +116,7 @@ void Staggered::Impl::remove_rigid_motions(std::vector<Eigen::Vector3d>& u) cons
     const int k = static_cast<int>(Nm.cols());
     if (k == 0) continue;
     Eigen::Vector3d xc = Eigen::Vector3d::Zero();
-    for (int i : m) xc += p[i].x;
+    for (int i : m) xc += centre(i);
     xc /= static_cast<double>(m.size());
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(k, k);
     Eigen::VectorXd b = Eigen::VectorXd::Zero(k);
@@ -124,7 +124,7 @@ void Staggered::Impl::remove_rigid_motions(std::vector<Eigen::Vector3d>& u) cons
     for (std::size_t j = 0; j < m.size(); ++j) {
       Eigen::Matrix<double, 3, 6> T;
       T.leftCols<3>().setIdentity();
-      T.rightCols<3>() = -contact::skew<double>((p[m[j]].x - xc) / ell);  // w x rel = -rel x w
+      T.rightCols<3>() = -contact::skew<double>((centre(m[j]) - xc) / ell);  // w x rel = -rel x w
       M[j] = T * Nm;
       A += M[j].transpose() * M[j];
       b += M[j].transpose() * u[m[j]];

@@ -103,6 +103,26 @@ void StaggeredRunOptions::validate(double t_start, double dt_max) const {
                                               span, min_steps, dt_max, max_steps));
 }
 
+void StaggeredRunOptions::validate(double t_start, double dt_max, const cs::TemperatureProfile& T) const {
+  validate(t_start, dt_max);
+  double steps = 0.0, prev = t_start;
+  long breakpoints = 0;
+  for (double b : T.times()) {
+    if (!(b > prev && b < t_end)) continue;  // outside the run, or a jump's second row
+    steps += std::ceil((b - prev) / dt_max);
+    prev = b;
+    ++breakpoints;
+  }
+  if (breakpoints == 0) return;
+  steps += std::ceil((t_end - prev) / dt_max);
+  if (!(steps <= static_cast<double>(max_steps)))
+    throw FieldError("max_steps", fmt::format("the run of {:.6g} s needs at least {:.3g} steps of at most {:.6g} s (the "
+                                              "largest global step; each of the {} breakpoints of the temperature profile "
+                                              "within the run ends one), more than the step limit {}: shorten the run or "
+                                              "the profile, or raise the limit",
+                                              t_end - t_start, steps, dt_max, breakpoints, max_steps));
+}
+
 const char* to_string(StaggeredRunStatus s) {
   switch (s) {
     case StaggeredRunStatus::Ok: return "ok";
@@ -121,7 +141,7 @@ std::string StaggeredRunSummary::reason() const {
 }
 
 StaggeredRunSummary run(Staggered& s, const StaggeredRunOptions& o, StaggeredObserver* observer) {
-  o.validate(s.time(), s.options().dt_max);
+  o.validate(s.time(), s.options().dt_max, s.temperature());
   StaggeredObserver none;
   StaggeredObserver& obs = observer ? *observer : none;
   const auto w0 = std::chrono::steady_clock::now();

@@ -131,11 +131,11 @@ std::string format_staggered_state(const StaggeredState& s) {
   for (const char* k : {"x", "y", "z", "r", "x0", "y0", "z0", "r0", "fixed_user", "fixed_plane"}) pc[k] = Json::array();
   for (std::size_t i = 0; i < s.p.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
-      pc[std::string(1, "xyz"[a])].push_back(real_json(s.p[i].x[a], "x"));
-      pc[std::string(1, "xyz"[a]) + "0"].push_back(real_json(s.p0[i].x[a], "x0"));
+      pc[std::string(1, "xyz"[a])].push_back(real_json(s.p.coord(i, a), "x"));
+      pc[std::string(1, "xyz"[a]) + "0"].push_back(real_json(s.p0.coord(i, a), "x0"));
     }
-    pc["r"].push_back(real_json(s.p[i].r, "r"));
-    pc["r0"].push_back(real_json(s.p0[i].r, "r0"));
+    pc["r"].push_back(real_json(s.p.r[i], "r"));
+    pc["r0"].push_back(real_json(s.p0.r[i], "r0"));
     pc["fixed_user"].push_back(flags6(s.fixed_user, i));
     pc["fixed_plane"].push_back(flags6(s.fixed_plane, i));
   }
@@ -201,16 +201,19 @@ void read_material(const Field& f, cs::SinterMaterial& m) {
 void read_particles(const Field& f, StaggeredState& s) {
   f.object({"x", "y", "z", "r", "x0", "y0", "z0", "r0", "fixed_user", "fixed_plane"});
   const std::size_t n = f["x"].array(1, 100000000);
-  s.p.resize(n);
-  s.p0.resize(n);
+  for (Particles* q : {&s.p, &s.p0}) {
+    q->pos.assign(3 * n, 0.0);
+    q->rot.assign(3 * n, 0.0);
+    q->r.assign(n, 0.0);
+  }
   s.fixed_user.assign(6 * n, 0);
   s.fixed_plane.assign(6 * n, 0);
   for (int a = 0; a < 3; ++a) {
     const std::string k(1, "xyz"[a]);
     const auto v = reals(f[k], n), v0 = reals(f[k + "0"], n);
     for (std::size_t i = 0; i < n; ++i) {
-      s.p[i].x[a] = v[i];
-      s.p0[i].x[a] = v0[i];
+      s.p.pos[3 * i + static_cast<std::size_t>(a)] = v[i];
+      s.p0.pos[3 * i + static_cast<std::size_t>(a)] = v0[i];
     }
   }
   const auto r = reals(f["r"], n), r0 = reals(f["r0"], n);
@@ -219,8 +222,8 @@ void read_particles(const Field& f, StaggeredState& s) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!(r[i] > 0.0)) f["r"][i].fail("a radius must be positive");
     if (!(r0[i] > 0.0)) f["r0"][i].fail("an initial radius must be positive");
-    s.p[i].r = r[i];
-    s.p0[i].r = r0[i];
+    s.p.r[i] = r[i];
+    s.p0.r[i] = r0[i];
     unflag6(s.fixed_user, i, f["fixed_user"][i].integer(0, 63));
     unflag6(s.fixed_plane, i, f["fixed_plane"][i].integer(0, 63));
   }
@@ -254,7 +257,7 @@ void read_contacts(const Field& f, StaggeredState& s) {
     k.t_created = f["t_created"][i].real();
     {  // the centre distance at creation: about r_a + r_b (the pair touched then); a factor 4 either
        // way is generous and keeps dL_bar / L_created finite
-      const double rab = s.p[static_cast<std::size_t>(k.a)].r + s.p[static_cast<std::size_t>(k.b)].r;
+      const double rab = s.p.r[static_cast<std::size_t>(k.a)] + s.p.r[static_cast<std::size_t>(k.b)];
       k.L_created = f["L_created"][i].real(0.25 * rab, 4.0 * rab);
     }
     k.dL_bar = f["dL_bar"][i].real();

@@ -22,7 +22,7 @@ struct StaggeredState {
   bool need_factor = true;
   int last_iterations = 0;
   Timers timers;
-  std::vector<Particle> p, p0;
+  Particles p, p0;
   std::vector<std::uint8_t> fixed_user, fixed_plane;  ///< 6 per particle
   std::vector<Contact> c;
   std::vector<std::uint8_t> ref_fixed;  ///< empty or 6 per particle: the constraints of the last factorisation

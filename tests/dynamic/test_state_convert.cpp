@@ -213,10 +213,10 @@ TEST(StateConvert, OldStaggeredTextStateConvertsBitForBit) {
   const std::size_t n = std::stoul(tok[++k]);
   ASSERT_EQ(n, s.particles().size());
   for (std::size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.particles()[i].x[a]);
-    cmp(tok[++k], s.particles()[i].r);
-    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.initial_particles()[i].x[a]);
-    cmp(tok[++k], s.initial_particles()[i].r);
+    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.particles().coord(i, a));
+    cmp(tok[++k], s.particles().r[i]);
+    for (int a = 0; a < 3; ++a) cmp(tok[++k], s.initial_particles().coord(i, a));
+    cmp(tok[++k], s.initial_particles().r[i]);
     ++k;  // the flags
   }
   ASSERT_EQ(tok[++k], "contacts");

@@ -21,17 +21,15 @@ constexpr double kT = 1293.0;  // the Cu benchmark's temperature [K]
 inline bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // spheres on a simple cubic grid of spacing 2 r, radii r (1 +- jitter), seeded
-inline std::vector<qs::staggered::Particle> cubic(int n, double r, double jitter, unsigned seed) {
+inline qs::staggered::Particles cubic(int n, double r, double jitter, unsigned seed) {
   std::mt19937_64 gen(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<qs::staggered::Particle> p;
+  qs::staggered::Particles p;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        qs::staggered::Particle q;
-        q.r = r * (1.0 + jitter * u(gen));
-        q.x = Eigen::Vector3d(r + 2.0 * r * i, r + 2.0 * r * j, r + 2.0 * r * k);
-        p.push_back(q);
+        const double ri = r * (1.0 + jitter * u(gen));
+        p.push_back(Eigen::Vector3d(r + 2.0 * r * i, r + 2.0 * r * j, r + 2.0 * r * k), ri);
       }
   return p;
 }
@@ -52,7 +50,7 @@ inline void expect_same(const qs::staggered::Staggered& a, const qs::staggered::
   EXPECT_TRUE(same_bits(a.time(), b.time()));
   EXPECT_TRUE(same_bits(a.dt(), b.dt()));
   for (std::size_t i = 0; i < a.particles().size(); ++i)
-    for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.particles()[i].x[k], b.particles()[i].x[k])) << i << " " << k;
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.particles().coord(i, k), b.particles().coord(i, k))) << i << " " << k;
   for (std::size_t i = 0; i < a.contacts().size(); ++i) {
     const auto &ca = a.contacts()[i], &cb = b.contacts()[i];
     ASSERT_EQ(ca.a, cb.a);

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -36,7 +37,7 @@ using netdem::test::kT;
 using netdem::test::same_bits;
 
 double centre_distance(const st::Staggered& s, int a, int b) {
-  return (s.particles()[b].x - s.particles()[a].x).norm();
+  return (s.particles().position(b) - s.particles().position(a)).norm();
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -75,7 +76,9 @@ void two_particles(int strategy, const Vector3d& axis, double RA, double RB) {
   o.dt_max = 10.0;
   const Vector3d e = axis.normalized();
   const Vector3d xA(3e-5, -2e-5, 1e-5);
-  std::vector<st::Particle> p{{xA, RA}, {xA + (RA + RB) * e, RB}};
+  st::Particles p;
+  p.push_back(xA, RA);
+  p.push_back(xA + (RA + RB) * e, RB);
   st::Staggered s(p, cu(), cs::TemperatureProfile::constant(kT), o);
   ASSERT_EQ(s.contacts().size(), 1u);
   for (int k = 0; k < 6; ++k) s.fix(0, k);
@@ -93,7 +96,7 @@ void two_particles(int strategy, const Vector3d& axis, double RA, double RB) {
     }
     const auto& c = s.contacts()[0];
     const double d = centre_distance(s, 0, 1);
-    EXPECT_TRUE(same_bits(s.particles()[0].x[0], xA[0]));
+    EXPECT_TRUE(same_bits(s.particles().coord(0, 0), xA[0]));
     worst_sum = std::max(worst_sum, std::fabs(c.pair.q[cs::kHA] + c.pair.q[cs::kHB] - d) / d);
     worst_bar = std::max(worst_bar, std::fabs(c.dL_bar) / L0);
     if (strategy == 2) {
@@ -140,8 +143,8 @@ TEST(Staggered, TwoParticlesStrategy1) { two_particles(1, Vector3d(0.3, 1.0, -0.
 TEST(Staggered, ChainShrinksLikeThePair) {
   const double r = 25e-6;
   const int n = 6;
-  std::vector<st::Particle> p;
-  for (int i = 0; i < n; ++i) p.push_back({Vector3d(2.0 * r * i, 0.0, 0.0), r});
+  st::Particles p;
+  for (int i = 0; i < n; ++i) p.push_back(Vector3d(2.0 * r * i, 0.0, 0.0), r);
   st::StaggeredOptions o;
   o.boundary_planes = false;
   st::Staggered s(p, cu(), cs::TemperatureProfile::constant(kT), o);
@@ -230,19 +233,23 @@ TEST(Staggered, RestartIsBitIdentical) {
 TEST(Staggered, InvariantUnderTranslationAndNumbering) {
   const auto p = cubic(3, 25e-6, 0.01, 11);
   st::StaggeredOptions o;
-  auto run = [&](const std::vector<st::Particle>& q) {
+  auto run = [&](const st::Particles& q) {
     st::Staggered s(q, cu(), cs::TemperatureProfile::constant(kT), o);
     while (s.time() < 300.0) s.step(300.0);
     return s;
   };
   const st::Staggered a = run(p);
-  std::vector<st::Particle> moved = p;
-  for (auto& q : moved) q.x += Vector3d(1.3e-3, -2.1e-3, 0.7e-3);
+  const Vector3d shift(1.3e-3, -2.1e-3, 0.7e-3);
+  st::Particles moved = p;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int k = 0; k < 3; ++k) moved.pos[3 * i + static_cast<std::size_t>(k)] += shift[k];
   std::vector<int> perm(p.size());
   std::iota(perm.begin(), perm.end(), 0);
   std::shuffle(perm.begin(), perm.end(), std::mt19937(3));
-  std::vector<st::Particle> shuffled(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) shuffled[perm[i]] = p[i];
+  std::vector<int> inverse(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) inverse[static_cast<std::size_t>(perm[i])] = static_cast<int>(i);
+  st::Particles shuffled;
+  for (int i : inverse) shuffled.push_back(p.position(static_cast<std::size_t>(i)), p.r[static_cast<std::size_t>(i)]);
   const st::Staggered b = run(moved), c = run(shuffled);
   const Eigen::Matrix3d Fa = a.homogeneous_strain(), Fb = b.homogeneous_strain(), Fc = c.homogeneous_strain();
   ASSERT_GT(-Fa(0, 0), 1e-4);
@@ -250,20 +257,25 @@ TEST(Staggered, InvariantUnderTranslationAndNumbering) {
   EXPECT_LT((Fa - Fc).norm(), 1e-9 * Fa.norm());
   EXPECT_EQ(a.contacts().size(), c.contacts().size());
   for (std::size_t i = 0; i < p.size(); ++i) {
-    EXPECT_LT((a.particles()[i].x + Vector3d(1.3e-3, -2.1e-3, 0.7e-3) - b.particles()[i].x).norm(), 1e-9 * 25e-6);
-    EXPECT_LT((a.particles()[i].x - c.particles()[perm[i]].x).norm(), 1e-9 * 25e-6);
+    EXPECT_LT((a.particles().position(i) + shift - b.particles().position(i)).norm(), 1e-9 * 25e-6);
+    EXPECT_LT((a.particles().position(i) - c.particles().position(static_cast<std::size_t>(perm[i]))).norm(), 1e-9 * 25e-6);
   }
 }
 
 TEST(Staggered, RefusesBadInput) {
   const auto T = cs::TemperatureProfile::constant(kT);
   st::StaggeredOptions o;
-  std::vector<st::Particle> p{{Vector3d::Zero(), 25e-6}, {Vector3d(50e-6, 0, 0), -1.0}};
+  st::Particles p;
+  p.push_back(Vector3d::Zero(), 25e-6);
+  p.push_back(Vector3d(50e-6, 0, 0), -1.0);
   EXPECT_THROW(st::Staggered(p, cu(), T, o), std::invalid_argument);
-  p[1].r = 25e-6;
-  p[1].x[0] = std::nan("");
+  p.r[1] = 25e-6;
+  p.pos[3] = std::nan("");
   EXPECT_THROW(st::Staggered(p, cu(), T, o), std::invalid_argument);
-  p[1].x[0] = 50e-6;
+  p.pos[3] = 50e-6;
+  st::Particles torn = p;  // arrays of different lengths: one line, not a read past the end
+  torn.pos.pop_back();
+  EXPECT_THROW(st::Staggered(torn, cu(), T, o), std::invalid_argument);
   st::StaggeredOptions bad = o;
   bad.strategy = 3;
   EXPECT_THROW(st::Staggered(p, cu(), T, bad), std::invalid_argument);
@@ -351,7 +363,7 @@ namespace {
 TEST(Staggered, BoundaryPlanesAtTheBoxOrTheBoundingBox) {
   const double r = 25e-6;
   auto p = cubic(4, r, 0.0, 1);
-  p[0].x[0] -= 0.007 * r;
+  p.pos[0] -= 0.007 * r;
   st::StaggeredOptions o;
   const auto T = cs::TemperatureProfile::constant(kT);
   const st::Staggered bbox(p, cu(), T, o);
@@ -363,6 +375,8 @@ TEST(Staggered, BoundaryPlanesAtTheBoxOrTheBoundingBox) {
   // of the three planes: 6 + 45 = 51.
   EXPECT_EQ(bbox.fixed_dofs(), 37);
   EXPECT_EQ(box.fixed_dofs(), 51);
+  EXPECT_EQ(bbox.plane_particles(), (std::array<int, 3>{1, 16, 16}));  // the spheres on each plane
+  EXPECT_EQ(box.plane_particles(), (std::array<int, 3>{16, 16, 16}));
   o.plane_origin = {0.0, std::nan(""), 0.0};  // per axis: y from the bounding box (the same here)
   EXPECT_EQ(st::Staggered(p, cu(), T, o).fixed_dofs(), 51);
   o.plane_origin = {std::numeric_limits<double>::infinity(), 0.0, 0.0};

@@ -294,6 +294,21 @@ TEST(StaggeredRun, BadOptionsAreNamedByTheirField) {
   b = ro;
   b.snapshots = -1;
   EXPECT_EQ(field_of([&] { b.validate(0.0, 10.0); }).rfind("snapshots: ", 0), 0u);
+  // each breakpoint of the temperature profile within the run ends a global step: 199 breakpoints
+  // (every 0.5 s) within a run of 100 s take at least 200 steps, however large the step (10 s)
+  std::vector<double> tb, Tb;
+  for (int k = 0; k <= 200; ++k) {
+    tb.push_back(0.5 * k);
+    Tb.push_back(k % 2 ? kT : kT - 10.0);
+  }
+  const cs::TemperatureProfile saw(tb, Tb);
+  b = ro;
+  b.max_steps = 199;
+  EXPECT_EQ(field_of([&] { b.validate(0.0, 10.0); }), "accepted") << "without the profile: 10 steps";
+  EXPECT_EQ(field_of([&] { b.validate(0.0, 10.0, saw); }).rfind("max_steps: the run of 100 s needs at least 200 steps", 0), 0u);
+  b.max_steps = 200;
+  EXPECT_EQ(field_of([&] { b.validate(0.0, 10.0, saw); }), "accepted");
+  EXPECT_EQ(field_of([&] { b.validate(0.0, 10.0, cs::TemperatureProfile::constant(kT)); }), "accepted");
   // run() checks against the state it is given, before any step
   st::Staggered s = jittered(120e9);
   st::run(s, ro);

@@ -30,6 +30,7 @@
 
 #include "netdem/contact/bond.hpp"
 #include "netdem/contact/sintering_pair.hpp"
+#include "netdem/system/particle_set.hpp"
 
 namespace netdem::qs::staggered {
 
@@ -75,10 +76,10 @@ struct StaggeredOptions {
   void validate(const cs::SinterMaterial& m) const;
 };
 
-struct Particle {
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();  ///< centre [m]
-  double r = 0.0;                               ///< radius [m]
-};
+/// The spheres of the scheme: the system layer's particles (centres [m], radii [m]). The rotations
+/// stay zero: the bonds are stress-free after every step (the shrinkage correction), so a step's
+/// rotations are not accumulated.
+using Particles = sys::ParticleSet<3>;
 
 /// One contact pair: the two-particle model's state and what the scheme keeps of it.
 struct Contact {
@@ -116,7 +117,7 @@ class Staggered {
   /// Throws std::invalid_argument (one line) for bad particles, and netdem::FieldError (one too)
   /// for bad options or a material without E or nu (StaggeredOptions::validate(material)).
   /// Initial contacts (centre distance < r_a + r_b) are created at t = 0.
-  Staggered(std::vector<Particle> particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
+  Staggered(Particles particles, cs::SinterMaterial material, cs::TemperatureProfile temperature,
             StaggeredOptions options);
   ~Staggered();
   Staggered(Staggered&&) noexcept;
@@ -137,8 +138,8 @@ class Staggered {
   double time() const;
   double dt() const;  ///< the proposal for the next step
   long steps() const;
-  const std::vector<Particle>& particles() const;
-  const std::vector<Particle>& initial_particles() const;
+  const Particles& particles() const;
+  const Particles& initial_particles() const;
   const std::vector<Contact>& contacts() const;
   const StaggeredOptions& options() const;
   const cs::SinterMaterial& material() const;
@@ -146,6 +147,8 @@ class Staggered {
   const Timers& timers() const;
   double x_max_over_R() const;    ///< the freeze limit in use
   int fixed_dofs() const;         ///< constrained DOFs (planes, fix(), anchored clusters)
+  /// The particles held on each boundary plane (normal to x, y, z; StaggeredOptions::boundary_planes).
+  std::array<int, 3> plane_particles() const;
 
   /// The least-squares homogeneous strain of the centres since t = 0: x = (I + F) X + c. Shrinkage
   /// along axis i is -F_ii (positive when the sample shrinks).

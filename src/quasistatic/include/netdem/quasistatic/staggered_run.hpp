@@ -50,6 +50,10 @@ struct StaggeredRunOptions {
   /// or for a run that needs more than max_steps steps of at most dt_max (it would end
   /// "incomplete" after hours; refused at the door instead). t_start: the state's time.
   void validate(double t_start, double dt_max) const;
+  /// validate(t_start, dt_max), and the estimate with the breakpoints of the temperature profile T
+  /// within the run: each ends a global step, so the run takes at least the sum over the pieces
+  /// between them of ceil(piece / dt_max) steps (FieldError max_steps when that exceeds max_steps).
+  void validate(double t_start, double dt_max, const cs::TemperatureProfile& T) const;
 };
 
 enum class StaggeredRunStatus { Ok, Incomplete, Unconverged, Unstable };  ///< in this order of rank
@@ -101,7 +105,8 @@ class StaggeredObserver {
   virtual void checkpoint(const Staggered& /*s*/, int /*index*/, long /*k*/) {}
 };
 
-/// Steps s to o.t_end (o.validate(s.time(), s.options().dt_max) first: FieldError), calling the
+/// Steps s to o.t_end (o.validate(s.time(), s.options().dt_max, s.temperature()) first:
+/// FieldError), calling the
 /// observer (may be nullptr) at the observation points. Returns how it ended; a step that throws
 /// (except std::bad_alloc) ends the run "unstable" and is not rethrown.
 StaggeredRunSummary run(Staggered& s, const StaggeredRunOptions& o, StaggeredObserver* observer = nullptr);

@@ -37,6 +37,15 @@ struct ParticleSet {
     return v;
   }
 
+  /// Appends a particle at rest (zero rotation) at x with radius `radius`.
+  void push_back(const Vec& x, double radius) {
+    for (int a = 0; a < D; ++a) pos.push_back(x[a]);
+    rot.insert(rot.end(), kRotDofs, 0.0);
+    r.push_back(radius);
+  }
+  /// Whether the arrays hold D centre coordinates and kRotDofs rotations per radius.
+  bool consistent() const { return pos.size() == D * r.size() && rot.size() == kRotDofs * r.size(); }
+
   /// The particles of a packing of dimension D, at rest (zero rotations). Throws
   /// std::invalid_argument (one line) if the packing has another dimension.
   static ParticleSet from_packing(const packing::Packing& pk) {
