@@ -375,7 +375,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_compact_snapshot(s, out, "final", files.contacts_buffer());
   if (a.save_state) save_jammed<D>(s, rate, jammed ? jammed->strain : Eigen::Matrix<double, D, D>::Zero(), pk.seed, out);
-  if (a.save_state || jammed) summary["state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
+  if (a.save_state || jammed) summary["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
   summary["status"] = r.status;
   std::string reason = r.ok() ? "every instability check passed" : r.reason;
   for (const auto& w : r.warnings) reason += "; warning: " + w;
