@@ -3,8 +3,6 @@
 #include "netdem/system/jammed_state.hpp"
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -293,17 +291,7 @@ JammedStateT<D> read_jammed_state(const std::string& path) {
 
 template <int D>
 void write_jammed_state(const JammedStateT<D>& s, const std::string& path) {
-  const std::string text = format_jammed_state(s);
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    f << text;
-    f.flush();
-    if (!f) throw std::runtime_error(fmt::format("cannot write the jammed state file {}", tmp));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message()));
+  write_text_file(path, format_jammed_state(s), "jammed state file");
 }
 
 #define NETDEM_JAMMED(D)                                                                          \
