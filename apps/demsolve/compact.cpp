@@ -11,15 +11,19 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "netdem/dynamic/compaction.hpp"
+#include "netdem/dynamic/jammed.hpp"
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
+#include "netdem/system/archive.hpp"
+#include "netdem/system/jammed_state.hpp"
 #include "output.hpp"
 #include "protocol.hpp"
 #include "run_status.hpp"
@@ -79,6 +83,25 @@ packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) 
                          a.pack.mono ? 1.0 : a.pack.r_min, a.pack.mono ? 1.0 : a.pack.r_max, a.pack.seed);
     return netdem::app::netsolve::make_packing_3d(a.pack);
   }
+}
+
+/// The jammed state of --state, checked against the command line (dimension, walls, law).
+template <int D>
+std::optional<sys::JammedStateT<D>> input_state(const DemCompactArgs& a, bool walls, const DynamicOptions& o) {
+  if (a.state_file.empty()) return std::nullopt;
+  if (!a.packing_file.empty()) throw UsageError("--state and --packing exclude each other");
+  const std::string text = sys::read_text_file(a.state_file, "jammed state file");
+  if (const int dim = sys::jammed_state_dim(text, a.state_file); dim != D)
+    throw UsageError(fmt::format("--state {} is a {}D state: run it with --dim {}", packing::quote_input(a.state_file), dim, dim));
+  sys::JammedStateT<D> j = sys::parse_jammed_state<D>(text, a.state_file);
+  if (j.walls != walls)
+    throw UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} --boundary walls",
+                                 packing::quote_input(a.state_file), j.walls ? "with" : "without", j.walls ? "with" : "without"));
+  if (const std::string d = sys::law_difference(j.law, o.plastic); !d.empty())
+    throw UsageError(fmt::format("--state {}: its contact law is not the command line's ({}; state vs command line): give "
+                                 "the state's --friction, --k-t, --first-touch and --normal-unloading",
+                                 packing::quote_input(a.state_file), d));
+  return j;
 }
 
 /// The checks of the options that depend on the dimension.
@@ -219,6 +242,19 @@ void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const Dynami
   j["neighbour_rebuilds"] = s.rebuilds();
 }
 
+/// jammed.json: the final state at rest, its strain the state's (if it started from one) plus the run's.
+template <int D>
+void save_jammed(const DynamicSolverT<D>& s, const CompactionRateT<D>& rate, Eigen::Matrix<double, D, D> E,
+                 std::uint64_t seed, const fs::path& out) {
+  for (int k = 0; k < kVoigt<D>; ++k) {
+    const double e = rate.rate[static_cast<std::size_t>(k)] * s.time();
+    const int r = sys::voigt_row<D>(k), c = sys::voigt_col<D>(k);
+    E(r, c) += e;
+    if (r != c) E(c, r) += e;
+  }
+  sys::write_jammed_state(jammed_state(s, E, seed), (out / "jammed.json").string());
+}
+
 /// How a run that cannot be trusted ends: its status and reason in summary.json, the text that
 /// closes the files, the one line on stderr.
 struct UntrustedEnd {
@@ -259,21 +295,24 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
   std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
   std::sort(snaps.begin(), snaps.end());
-  const RunDirOptions rdo = check_scene_run_dir(out, a.overwrite, a.packing_file, a.pack);
-  std::string source;
-  const packing::Packing pk = input_packing_of<D>(a, source);
+  const RunDirOptions rdo =
+      check_scene_run_dir(out, a.overwrite, a.state_file.empty() ? a.packing_file : a.state_file, a.pack);
+  const DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
+                                           a.drag, a.steps_per_contact);
+  const auto jammed = input_state<D>(a, walls, o);
+  std::string source = jammed ? "jammed state " + a.state_file : std::string();
+  const packing::Packing pk = jammed ? jammed->packing() : input_packing_of<D>(a, source);
   check_memory(pk.size());
   const std::size_t n = pk.size();
   if (n == 0) throw UsageError("the packing has no particles");
 
   Particles P = D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);  // rho = 1
-  // the walls enclose every particle at the start (the deposition's top particles stick out of its box)
-  Box box(walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
+  // the walls enclose every particle at the start (the deposition's top particles stick out of its
+  // box); a jammed state brings its own box
+  Box box(jammed ? jammed->box : walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
   box.contact_walls = walls;
   box.right.mode = box.top.mode = WallMode::Affine;
   if constexpr (D == 3) box.back.mode = WallMode::Affine;
-  const DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
-                                           a.drag, a.steps_per_contact);
   double solid = 0.0;
   for (double r : P.radius) solid += D == 2 ? std::numbers::pi * r * r : 4.0 / 3.0 * std::numbers::pi * r * r * r;
   double box_measure = (box.x_max - box.x_min) * (box.y_max - box.y_min);
@@ -283,7 +322,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   const CompactionRateT<D> rate = compaction_rate(path, a.inertial_number, D0, a.to_density);
 
   activity() = "setting up the explicit solver";
-  DynamicSolverT<D> s(std::move(P), o.plastic, box, o);
+  DynamicSolverT<D> s = jammed ? solver_from_jammed(*jammed, 1.0, box, o) : DynamicSolverT<D>(std::move(P), o.plastic, box, o);
   set_strain_rate(s, rate.rate);
   s.set_affine_velocities();
   std::vector<std::uint32_t> pre;
@@ -335,6 +374,8 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   files.finish("");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_compact_snapshot(s, out, "final", files.contacts_buffer());
+  if (a.save_state) save_jammed<D>(s, rate, jammed ? jammed->strain : Eigen::Matrix<double, D, D>::Zero(), pk.seed, out);
+  if (a.save_state || jammed) summary["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
   summary["status"] = r.status;
   std::string reason = r.ok() ? "every instability check passed" : r.reason;
   for (const auto& w : r.warnings) reason += "; warning: " + w;

@@ -12,6 +12,8 @@ namespace netdem::app::dem {
 struct DemCompactArgs {
   netdem::app::netsolve::PackArgs pack;  ///< netsolve's deposition options and defaults
   std::string packing_file;
+  std::string state_file;   ///< a jammed state to start from (netdem/system/jammed_state.hpp)
+  bool save_state = false;  ///< write the final jammed state, jammed.json
   std::string path = "hydrostatic";
   std::string boundary = "layer";  ///< layer | walls
   std::string friction = netdem::app::netsolve::LawArgs{}.friction;

@@ -105,6 +105,10 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
                                                                         "the explicit DEM has no periodic boundaries)")
                             ->capture_default_str();
   dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
+  dcomp->add_option("--state", dc.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) "
+                                             "instead of a new deposition: its particles, box, walls and contact histories");
+  dcomp->add_flag("--save-state", dc.save_state, "write the final jammed state to jammed.json (netsolve and demsolve compact "
+                                                 "--state start from it)");
   dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
   dcomp->add_option("--path", dc.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction (walls: E12 = 0 only); "
                                        "--dim 3: E11,E22,E33[,E23,E13,E12] (closed-die along z)")->capture_default_str();

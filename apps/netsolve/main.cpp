@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -29,6 +30,8 @@
 #include "netdem/quasistatic/compaction.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/archive.hpp"
+#include "netdem/system/jammed_state.hpp"
 #include "output.hpp"
 #include "pack_green.hpp"
 #include "parse.hpp"
@@ -61,6 +64,7 @@ struct RunArgs {
 struct CompactArgs {
   bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
   std::string path = "hydrostatic", packing_file, boundary = "layer";
+  std::string state_file;  ///< a jammed state to start from (netdem/system/jammed_state.hpp)
   std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
   int increments = 100;
@@ -183,8 +187,28 @@ void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem
   if (so.mode == qs::BoundaryMode::Walls && co.path.E12 != 0.0)
     throw std::invalid_argument(fmt::format("--boundary walls: the walls stay axis-parallel, so the path needs E12 = 0, got {}",
                                             co.path.E12));
-  if (so.mode == qs::BoundaryMode::Walls && a.save_state)
-    throw std::invalid_argument("--save-state: the state file does not hold wall contacts (--boundary walls) yet");
+}
+
+/// The jammed state of --state, checked against the command line (walls, law).
+std::optional<netdem::sys::JammedStateT<2>> input_state(const CompactArgs& a, const netdem::qs::SolverOptions& so) {
+  namespace sys = netdem::sys;
+  if (a.state_file.empty()) return std::nullopt;
+  if (!a.packing_file.empty()) throw netdem::app::UsageError("--state and --packing exclude each other");
+  const std::string text = sys::read_text_file(a.state_file, "jammed state file");
+  if (const int dim = sys::jammed_state_dim(text, a.state_file); dim != 2)
+    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; netsolve compact is 2D",
+                                              netdem::packing::quote_input(a.state_file), dim));
+  sys::JammedStateT<2> j = sys::parse_jammed_state<2>(text, a.state_file);
+  const bool walls = so.mode == netdem::qs::BoundaryMode::Walls;
+  if (j.walls != walls)
+    throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} --boundary walls",
+                                              netdem::packing::quote_input(a.state_file), j.walls ? "with" : "without",
+                                              j.walls ? "with" : "without"));
+  if (const std::string d = sys::law_difference(j.law, so.law); !d.empty())
+    throw netdem::app::UsageError(fmt::format("--state {}: its contact law is not the command line's ({}; state vs command "
+                                              "line): give the state's --friction, --k-t, --first-touch and --normal-unloading",
+                                              netdem::packing::quote_input(a.state_file), d));
+  return j;
 }
 
 /// Disk centres outside the initial box: die mode prescribes only the peripheral layer, and a
@@ -269,7 +293,10 @@ nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const ne
   j["solver"]["max_eq13_vs_contacts"] = equilibrium.max;
   j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
   j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
-  j["state"] = a.save_state && stopped.empty() ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  const bool saved = a.save_state && stopped.empty();
+  j["state"] = saved && so.mode != qs::BoundaryMode::Walls ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  if (a.save_state || !a.state_file.empty())
+    j["jammed_state"] = {{"from", a.state_file}, {"saved", saved ? "jammed.json" : ""}};
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
   return j;
@@ -283,22 +310,25 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
   std::sort(snaps.begin(), snaps.end());
 
-  app::check_run_dir(out, run_dir_options(ra, a.packing_file));
+  const std::string input = a.state_file.empty() ? a.packing_file : a.state_file;
+  app::check_run_dir(out, run_dir_options(ra, input));
   std::string source;
-  if (a.packing_file.empty()) app::netsolve::check_deposition_size(pa, true);
-  activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
-  packing::Packing pk = app::netsolve::input_packing(a.packing_file, pa, source);
-  // the walls enclose every disk at the start (as demsolve compact --boundary walls)
-  if (so.mode == qs::BoundaryMode::Walls) pk.box = app::netsolve::walls_box(pk);
+  const auto jammed = input_state(a, so);
+  if (input.empty()) app::netsolve::check_deposition_size(pa, true);
+  activity() = input.empty() ? "building the ballistic deposition" : "reading " + input;
+  packing::Packing pk = jammed ? jammed->packing() : app::netsolve::input_packing(a.packing_file, pa, source);
+  if (jammed) source = "jammed state " + a.state_file;
+  // the walls enclose every disk at the start (as demsolve compact --boundary walls); a state has its box
+  if (so.mode == qs::BoundaryMode::Walls && !jammed) pk.box = app::netsolve::walls_box(pk);
   co.validate(pk.density());
   activity() = "setting up the network solver";
-  app::open_run_dir(out, g_command, run_dir_options(ra, a.packing_file));
+  app::open_run_dir(out, g_command, run_dir_options(ra, input));
   packing::write_packing_csv(pk, out / "packing.csv");
   if (!a.quiet) std::fprintf(stderr, "netsolve: %zu particles, D0 = %.4f, seed %llu (%s)\n", pk.size(), pk.density(),
                              static_cast<unsigned long long>(pk.seed), source.c_str());
 
   const auto t0 = std::chrono::steady_clock::now();
-  qs::NetworkSolver solver(pk, so);
+  qs::NetworkSolver solver = jammed ? qs::NetworkSolver(*jammed, so) : qs::NetworkSolver(pk, so);
   write_snapshot(solver, out, "initial");
   std::string csv =
       "increment,E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
@@ -367,7 +397,8 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   app::write_file_atomic(out / "history.csv", csv);
   if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
     write_snapshot(solver, out, "final");
-    if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
+    if (a.save_state && so.mode != qs::BoundaryMode::Walls) qs::save_state(solver.state(), (out / "state.txt").string());
+    if (a.save_state) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
   }
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
@@ -520,7 +551,10 @@ int main(int argc, char** argv) {
   netdem::app::netsolve::add_law_options(*comp, ca.law,
                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4");
-  comp->add_flag("--save-state", ca.save_state, "write the final solver state to state.txt (exact; netsolve yield --from-state continues from it)");
+  comp->add_flag("--save-state", ca.save_state, "write the final state: jammed.json (the jammed state netsolve and demsolve compact --state start from) "
+                 "and, except with --boundary walls, state.txt (exact; netsolve yield --from-state continues from it)");
+  comp->add_option("--state", ca.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) instead of "
+                   "a packing: its disks, box, walls and contact histories");
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_flag("--allow-unconverged", ra.allow_unconverged,

@@ -150,6 +150,16 @@ SolverState DynamicSolverT<D>::state() const {
 }
 
 template <int D>
+void DynamicSolverT<D>::refresh_forces() {
+  for (const auto* v : {&P_.vx, &P_.vy, &P_.omega, &P_.vz, &P_.wx, &P_.wy})
+    for (double x : *v)
+      if (x != 0.0) throw std::logic_error("refresh_forces: a particle moves (the forces of a state at rest only)");
+  for (int a = 0; a < D; ++a)
+    if (wall_v_[a] != 0.0) throw std::logic_error("refresh_forces: a wall moves (the forces of a state at rest only)");
+  compute_forces_dispatch();
+}
+
+template <int D>
 void DynamicSolverT<D>::advance_temperature(double T_new, double dt, double t0) {
   if (opt_.model != ContactModel::Full)
     fail("advance_temperature: a temperature needs ContactModel::Full");
@@ -406,6 +416,7 @@ void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
 // the members defined here, for both dimensions (the class: solver.cpp)
 template DynamicSolverT<2>::DynamicSolverT(const SolverState&, const DynamicOptions&);
 template SolverState DynamicSolverT<2>::state() const;
+template void DynamicSolverT<2>::refresh_forces();
 template void DynamicSolverT<2>::advance_temperature(double, double, double);
 template void DynamicSolverT<2>::set_params(const LudingParams&);
 template void DynamicSolverT<2>::set_walls(const MovingWall&, const MovingWall&);
@@ -416,6 +427,7 @@ template std::size_t DynamicSolverT<2>::wall_contacts() const;
 template void DynamicSolverT<2>::contacts(std::vector<ContactInfo>&) const;
 template DynamicSolverT<3>::DynamicSolverT(const SolverState&, const DynamicOptions&);
 template SolverState DynamicSolverT<3>::state() const;
+template void DynamicSolverT<3>::refresh_forces();
 template void DynamicSolverT<3>::advance_temperature(double, double, double);
 template void DynamicSolverT<3>::set_params(const LudingParams&);
 template void DynamicSolverT<3>::set_walls(const MovingWall&, const MovingWall&);

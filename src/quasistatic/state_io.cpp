@@ -187,18 +187,7 @@ void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
   if (!s.wall_history.empty())
     throw std::invalid_argument("the state file does not hold wall contacts (the walls boundary) yet");
-  const std::string out = sys::dump_archive(state_json(s));
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error(fmt::format("cannot write the state file {}", tmp));
-    f << out;
-    f.flush();
-    if (!f) throw std::runtime_error(fmt::format("cannot write the state file {}", tmp));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message()));
+  sys::write_text_file(path, sys::dump_archive(state_json(s)), "state file");
 }
 
 NetworkState load_state(const std::string& path) {

@@ -216,4 +216,18 @@ std::string read_text_file(const std::string& path, std::string_view what) {
   return s.str();
 }
 
+void write_text_file(const std::string& path, std::string_view text, std::string_view what) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw std::runtime_error(fmt::format("cannot write the {} {}", what, tmp));
+    f << text;
+    f.flush();
+    if (!f) throw std::runtime_error(fmt::format("cannot write the {} {}", what, tmp));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error(fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message()));
+}
+
 }  // namespace netdem::sys

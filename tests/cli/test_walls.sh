@@ -29,6 +29,6 @@ sys.exit(0 if ok else 1)
 PY
 check_bad walls_shear "E12" compact --width 12 --boundary walls --path 1,0,0.5
 check_bad walls_affine "exclude" compact --width 12 --boundary walls --affine
-check_bad walls_state "state" compact --width 12 --boundary walls --save-state
+check_bad walls_state_packing "exclude" compact --width 12 --boundary walls --state "$tmp/none.json" --packing x.csv
 check_bad walls_word "boundary" compact --width 12 --boundary wall
 finish

@@ -303,6 +303,11 @@ class DynamicSolverT {
   DynamicSolverT(const SolverState& state, const DynamicOptions& options);
   /// The complete state at the current time (for state files and restarts).
   SolverState state() const;
+  const DynamicOptions& options() const { return opt_; }
+  /// Evaluates the forces again at the current positions on the committed histories (a state at
+  /// rest whose forces are not those of a last step: a jammed state, jammed.hpp). With zero
+  /// velocities no slip is committed; throws std::logic_error if a particle or wall moves.
+  void refresh_forces();
 
   /// The Luding law (options.model: Linear, Hysteretic or Full) with its parameters. Validates,
   /// chooses the time step, builds the neighbour table, computes the first forces.

@@ -50,6 +50,7 @@
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/solver_options.hpp"
+#include "netdem/system/jammed_state.hpp"
 #include "netdem/system/particle_set.hpp"
 
 namespace netdem::qs {
@@ -243,6 +244,16 @@ class NetworkSolverT {
   /// Continues from a state (bit-identical to the solver it was taken from when `options` are
   /// that solver's). The boundary mode may differ; throws std::invalid_argument on a bad state.
   NetworkSolverT(const State& state, const SolverOptions& options);
+  /// Starts from a jammed state (netdem/system/jammed_state.hpp, the state both solvers share):
+  /// its particles in its box (the run's initial box, box deformation I), its strain, its
+  /// histories (jammed.cpp); the committed forces are the law's on these histories at these
+  /// positions (no Newton iteration: the state is taken as it is). options.law is the run's (the
+  /// caller checks it against the state's: sys::law_difference). Throws std::invalid_argument on a
+  /// bad state or wall contacts without the walls mode.
+  NetworkSolverT(const sys::JammedStateT<D>& state, const SolverOptions& options);
+  /// The committed state as a jammed state: the rows and wall contacts with a history. Throws
+  /// std::invalid_argument for a sheared box (the jammed state's box is axis-aligned).
+  sys::JammedStateT<D> jammed_state() const;
   ~NetworkSolverT();
   NetworkSolverT(const NetworkSolverT& other);  ///< = NetworkSolverT(other.state(), other.options())
   NetworkSolverT& operator=(const NetworkSolverT&) = delete;

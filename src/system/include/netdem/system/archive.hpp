@@ -117,5 +117,8 @@ std::string dump_archive(const Json& j);
 /// Reads `path` whole; a missing file or a folder is a one-line std::invalid_argument naming
 /// `what` (e.g. "state file").
 std::string read_text_file(const std::string& path, std::string_view what);
+/// Writes `text` to `path` atomically (PATH.tmp, then a rename); std::runtime_error naming the
+/// file and `what` (e.g. "state file") on failure.
+void write_text_file(const std::string& path, std::string_view text, std::string_view what);
 
 }  // namespace netdem::sys
