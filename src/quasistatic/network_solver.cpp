@@ -203,6 +203,19 @@ typename NetworkSolverT<D>::State NetworkSolverT<D>::state() const {
 }
 
 /// The 3D state: sizes, order and finiteness (the 2D state below checks the 2D file's fields).
+namespace {
+/// No entry of a state's box deformation may exceed this in magnitude: compaction shrinks the box
+/// and a probe stretches it by e^|E| <= e; a 1e300 or 2^64 entry (robustness campaign, issue 27)
+/// passed the density check and reached the analytic yield surface as null.
+constexpr double kMaxBoxStretch = 1e3;
+
+template <int D, typename Bad>
+void check_box_stretch(const Eigen::Matrix<double, D, D>& F, const Bad& bad) {
+  if (!(F.cwiseAbs().maxCoeff() <= kMaxBoxStretch))
+    bad(fmt::format("box deformation entry {} is beyond {:g} in magnitude", F.cwiseAbs().maxCoeff(), kMaxBoxStretch));
+}
+}  // namespace
+
 template <int D>
 void NetworkStateT<D>::validate() const {
   auto bad = [](const std::string& m) { throw std::invalid_argument("network state: " + m); };
@@ -229,6 +242,7 @@ void NetworkStateT<D>::validate() const {
   if (!(solid_area > 0 && box_area0 > 0 && initial_density > 0)) bad("solid and box measures must be positive");
   if (!box_deformation.allFinite() || !(box_deformation.determinant() > 0.0) || !strain.allFinite())
     bad("box deformation must be finite with a positive determinant");
+  check_box_stretch(box_deformation, bad);
 }
 
 void NetworkStateT<2>::validate() const {
@@ -287,6 +301,8 @@ void NetworkStateT<2>::validate() const {
   if (!box_deformation.allFinite() || !(box_deformation.determinant() > 0.0) || !box_deformation_build.allFinite() ||
       !(box_deformation_build.determinant() > 0.0))
     bad("box deformation must be finite with a positive determinant");
+  check_box_stretch(box_deformation, bad);
+  check_box_stretch(box_deformation_build, bad);
   if (!strain.allFinite() || !dE_prev.allFinite()) bad("non-finite strain");
 }
 

@@ -589,4 +589,10 @@ TEST(NetworkSolverState, InconsistentSumsAreRefused) {
   refused([](qs::NetworkState& st) { st.solid_area *= 0.99; });
   refused([](qs::NetworkState& st) { st.initial_density *= 1.001; });
   refused([](qs::NetworkState& st) { st.box_deformation *= 0.5; });  // density 4 x: above 1
+  refused([](qs::NetworkState& st) { st.box_deformation(0, 0) = 1e300; });  // density tiny but positive
+  refused([](qs::NetworkState& st) { st.box_deformation(1, 1) = 18446744073709551616.0; });
+  refused([](qs::NetworkState& st) { st.box_deformation_build(0, 1) = 2e3; });
+  qs::NetworkState stretched = good;  // a probe's stretch (e^1 along one axis) stays allowed
+  stretched.box_deformation(0, 0) = std::exp(1.0);
+  EXPECT_NO_THROW(stretched.validate());
 }
