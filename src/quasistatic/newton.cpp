@@ -103,11 +103,11 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
     }
     if (!want_tangent) break;
     if (pseudo_transient() && fresh) adapt_drag(newton_res, rep);
-    du_before = du;
+    if (!pseudo_transient()) du_before = du;  // pseudo-transient: the step starts at du_ref
     linear_step(fresh, nonsym, rep);
     const bool f_current = line_search(newton_res);
     f_valid = local_sweeps(f_current);  // relax_worst refreshes the pairs of the particles it moved
-    rep.drag_work += drag_work(du_before);
+    rep.drag_work += drag_work(pseudo_transient() ? du_ref : du_before);
     ++rep.newton_iterations;
   }
   rep.residual = nfree > 0 ? unbalance(fbar, &rep.residual_rms) : 0.0;

@@ -165,7 +165,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   int rises = 0;               // fresh iterations in a row whose residual rose
   double kl_ref = 1.0;         // mean translational diagonal (local regularisation)
   std::vector<double> du_start;  // du at the start of a line search
-  std::vector<double> du_before;  // du at the start of a Newton step (its drag work)
+  std::vector<double> du_before;  // legacy drag: du at the start of a Newton step (its drag work)
   VecX rhs, sol;
 
   LinearSolver lin;
