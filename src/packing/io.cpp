@@ -101,7 +101,7 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
     if (control_char(c) != std::string_view::npos)
       throw std::invalid_argument("write_packing_csv: a comment contains a control character");
     const std::string_view k = keyword(c);
-    if (k == "box" || k == "seed" || k == "dim")
+    if (k == "box" || k == "seed" || k == "dim" || k == "periodic" || k == "cell")
       throw std::invalid_argument(fmt::format("write_packing_csv: comment '{}' starts with a reserved word", quote_input(c)));
   }
   std::string text;
@@ -113,6 +113,14 @@ void write_packing_csv(const Packing& p, const std::filesystem::path& path) {
     text += fmt::format("# box {:.17g} {:.17g} {:.17g} {:.17g}\n", p.box.x_min, p.box.y_min, p.box.x_max, p.box.y_max);
   }
   if (p.seed != 0) text += fmt::format("# seed {}\n", p.seed);
+  if (p.periodic) {  // issue 29: the cell (the box's edges unless a '# cell' line gives its vectors)
+    text += "# periodic\n";
+    if (!p.cell.empty()) {
+      text += "# cell";
+      for (double v : p.cell) text += fmt::format(" {:.17g}", v);
+      text += "\n";
+    }
+  }
   for (const std::string& c : p.comments) text += "# " + std::string(trim(c)) + "\n";
   if (p.dim == 3) {
     text += "id,x,y,z,r\n";
@@ -200,6 +208,12 @@ class CsvParser {
       p_.dim = w[1] == "3" ? 3 : 2;
       have_dim_ = true;
       dim_line_ = ln_;
+    } else if (k == "periodic") {
+      if (split_ws(body).size() != 1) fail(ln_, "periodic line must be '# periodic'");
+      if (p_.periodic) fail(ln_, "second periodic line");
+      p_.periodic = true;
+    } else if (k == "cell") {
+      cell_line(body);
     } else if (k == "seed") {
       const auto w = split_ws(body);
       if (w.size() != 2 || !parse_int(w[1], p_.seed)) fail(ln_, "seed line must be '# seed <unsigned integer>'");
@@ -242,6 +256,22 @@ class CsvParser {
     box_dim_ = nv == 6 ? 3 : 2;
     have_box_ = true;
     box_line_ = ln_;
+  }
+
+  void cell_line(std::string_view body) {
+    const auto w = split_ws(body);
+    if (w.size() != 5 && w.size() != 10)
+      fail(ln_, "cell line must be '# cell a1x a1y a2x a2y' (2D) or '# cell' with the 9 components of a1 a2 a3 (3D)");
+    if (cell_line_ != 0) fail(ln_, fmt::format("second cell line (first on line {})", cell_line_));
+    p_.cell.clear();
+    for (std::size_t i = 1; i < w.size(); ++i) {
+      double v = 0;
+      if (!parse_double(w[i], v)) fail(ln_, fmt::format("cell line: non-numeric field '{}'", quote_input(w[i])));
+      if (!std::isfinite(v)) fail(ln_, "cell line: NaN or infinite component");
+      coordinate(ln_, "cell component", v);
+      p_.cell.push_back(v);
+    }
+    cell_line_ = ln_;
   }
 
   void header_line(std::string_view line) {
@@ -297,7 +327,7 @@ class CsvParser {
   std::string file_;
   Packing p_;
   bool have_box_ = false, have_seed_ = false, have_header_ = false, have_dim_ = false;
-  std::size_t box_line_ = 0, dim_line_ = 0, header_line_ = 0;
+  std::size_t box_line_ = 0, dim_line_ = 0, header_line_ = 0, cell_line_ = 0;
   int box_dim_ = 2;  // 4 numbers: 2D box, 6 numbers: 3D box
   std::vector<long long> ids_;
   std::vector<std::size_t> lines_;  // source line of each disk
@@ -316,6 +346,9 @@ void CsvParser::check_structure() const {
                                : "box line has 6 numbers (a 3D box), but there is no '# dim 3' line (a 2D box is "
                                  "'# box x_min y_min x_max y_max')");
   if (!have_header_) fail(ln_, p.dim == 3 ? "missing header 'id,x,y,z,r'" : "missing header 'id,x,y,r'");
+  if (cell_line_ != 0 && !p.periodic) fail(cell_line_, "a cell line needs a '# periodic' line");
+  if (cell_line_ != 0 && p.cell.size() != static_cast<std::size_t>(p.dim * p.dim))
+    fail(cell_line_, fmt::format("cell line has {} numbers, a {}D cell {}", p.cell.size(), p.dim, p.dim * p.dim));
   if (p.size() == 0) fail(ln_, "no disks");
 
   for (std::size_t i = 0; i < p.size(); ++i) {  // same criterion as validate(): centre in the box
@@ -373,6 +406,8 @@ Packing CsvParser::finish() {
   q.dim = p_.dim;
   q.seed = p_.seed;
   q.comments = std::move(p_.comments);
+  q.periodic = p_.periodic;
+  q.cell = p_.cell;
   q.x.reserve(p_.size());
   q.y.reserve(p_.size());
   q.r.reserve(p_.size());

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "netdem/packing/cell_grid.hpp"
+#include "netdem/packing/periodic.hpp"
 
 namespace netdem::packing {
 
@@ -48,6 +49,10 @@ double Packing::solid_volume() const {
 }
 
 double Packing::density() const {
+  if (periodic && !cell.empty() && (cell.size() == 4 || cell.size() == 9)) {
+    const double m = dim == 3 ? periodic_cell<3>(*this).measure() : periodic_cell<2>(*this).measure();
+    return m > 0 ? solid_measure() / m : 0.0;
+  }
   if (dim == 3) {
     const double v = box.volume();
     return v > 0 ? solid_volume() / v : 0.0;
@@ -97,6 +102,7 @@ std::vector<std::pair<int, int>> touching_pairs_periodic_xy(const Packing& p, do
 }
 
 std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol) {
+  if (p.periodic) return touching_pairs_periodic(p, tol);
   if (p.dim == 3) return touching_pairs_3d(p, tol, false);
   std::vector<std::pair<int, int>> pairs;
   const std::size_t n = p.size();
@@ -120,6 +126,13 @@ std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol) {
 ContactStats contact_stats(const Packing& p, double tol, bool periodic_xy) {
   ContactStats s;
   s.particles = p.size();
+  if (p.periodic) {  // no walls
+    if (periodic_xy) throw std::invalid_argument("contact_stats: periodic_xy is for lateral-periodic packings, not periodic ones");
+    s.disk_contacts = touching_pairs(p, tol).size();
+    s.density = p.density();
+    s.coordination = s.particles ? 2.0 * static_cast<double>(s.disk_contacts) / static_cast<double>(s.particles) : 0.0;
+    return s;
+  }
   if (p.dim == 3) {
     s.disk_contacts = (periodic_xy ? touching_pairs_periodic_xy(p, tol) : touching_pairs(p, tol)).size();
     const Box& b = p.box;
@@ -282,6 +295,7 @@ void validate(const Packing& p) {
   if (p.dim != 2 && p.dim != 3) fail(fmt::format("dim is {}, not 2 or 3", p.dim));
   if (p.dim == 3) {
     validate_3d(p);
+    if (p.periodic) validate_periodic(p);
     return;
   }
   if (!std::isfinite(b.x_min) || !std::isfinite(b.y_min) || !std::isfinite(b.x_max) || !std::isfinite(b.y_max))
@@ -313,6 +327,7 @@ void validate(const Packing& p) {
     fail(fmt::format("disks {} and {} are too close: centre distance {:.6g} < max(r_i, r_j) = {:.6g}",
                      std::min(c->i, c->j), std::max(c->i, c->j), c->distance, p.r[c->i]));
   }
+  if (p.periodic) validate_periodic(p);
 }
 
 std::optional<ClosePair> find_close_pair(const Packing& p) {

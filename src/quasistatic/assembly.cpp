@@ -34,7 +34,7 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
   Element e;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const int i = pi[k], j = pj[k];
-    const Geometry g1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]);
+    const Geometry g1 = ct::pair_geometry(moved(i), moved_j(k), ps.r[i], ps.r[j]);
     // pairs that are apart and have never touched cost only the geometry
     if (g1.overlap <= 0.0 && !law.has_history(hist[k])) {
       set_apart(k);
@@ -142,7 +142,7 @@ void NetworkSolverT<D>::Impl::set_apart(std::size_t k) {
 template <int D>
 void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
   const int i = pi[k], j = pj[k];
-  const Vec xi = moved(i), xj = moved(j);
+  const Vec xi = moved(i), xj = moved_j(k);
   if (!law.has_history(hist[k])) {
     const double rs = ps.r[i] + ps.r[j];
     if ((xj - xi).squaredNorm() > rs * rs * (1.0 + 1e-9)) {  // overlap < 0 beyond any rounding

@@ -5,13 +5,15 @@
 namespace netdem::qs {
 
 void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free,
-                   const std::vector<std::uint8_t>& periph) {
+                   const std::vector<std::uint8_t>& periph, int pinned) {
   const int n = static_cast<int>(periph.size()), kn = dim + rot_dofs;
   dof.assign(static_cast<std::size_t>(kn) * n, -1);
   nfree = 0;
   for (int p = 0; p < n; ++p) {
-    const bool walls = mode == BoundaryMode::Walls;  // nothing prescribed
-    const bool translations_free = walls || (mode == BoundaryMode::Die && !periph[p]);
+    // walls: nothing prescribed; periodic: only the pinned particle's translations
+    const bool walls = mode == BoundaryMode::Walls || mode == BoundaryMode::Periodic;
+    const bool translations_free =
+        (walls && p != pinned) || (mode == BoundaryMode::Die && !periph[p]);
     if (translations_free)
       for (int a = 0; a < dim; ++a) dof[kn * p + a] = nfree++;
     // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes
@@ -75,7 +77,7 @@ void NetworkSolverT<D>::set_reversible_normal(bool reversible) {
   if (!reversible && s.opt.law.reversible) {
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
-      const double u = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]).overlap;
+      const double u = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]).overlap;
       s.hist[k] = Impl::Law::start_unloading_branch(s.hist[k], u);
     }
   }

@@ -8,8 +8,8 @@ namespace netdem::qs {
 
 template <int D>
 void ContactTableT<D>::rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max,
-                               const Mat& E, const Mat& Fbox) {
-  sys::ContactTable<typename LawT<D>::History, D>::rebuild(law, ps, skin, r_max, Fbox);
+                               const Mat& E, const Mat& Fbox, const packing::PeriodicCellT<D>* cell) {
+  sys::ContactTable<typename LawT<D>::History, D>::rebuild(law, ps, skin, r_max, Fbox, cell);
   PairAuxT<D> fresh;
   fresh.E_form = E;
   this->carry(aux, fresh);
@@ -21,7 +21,12 @@ void ContactTableT<D>::rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps
 template <int D>
 void NetworkSolverT<D>::Impl::build_neighbours() {
   const auto t0 = std::chrono::steady_clock::now();
-  Table::rebuild(law, ps, opt.skin * r_mean, r_max, E, Fbox);
+  if (periodic()) {
+    const packing::PeriodicCellT<D> cell = cell0.deformed(Fbox);
+    Table::rebuild(law, ps, opt.skin * r_mean, r_max, E, Fbox, &cell);
+  } else {
+    Table::rebuild(law, ps, opt.skin * r_mean, r_max, E, Fbox);
+  }
   apart.assign(pi.size(), 0);  // new pair indices: nothing is known to be zero
   build_pattern();
   tim.neighbours += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

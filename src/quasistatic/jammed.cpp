@@ -90,6 +90,7 @@ sys::JammedStateT<D> raw_jammed(const typename NetworkSolverT<D>::Impl& s) {
 /// jammed_state() (the same state read by either solver is then a fixed point of it).
 template <int D>
 sys::JammedStateT<D> NetworkSolverT<D>::jammed_state() const {
+  if (impl_->periodic()) throw std::invalid_argument("jammed state: a periodic cell is not a jammed state's box (not yet)");
   const NetworkSolverT rest(raw_jammed<D>(*impl_), impl_->opt);
   return raw_jammed<D>(*rest.impl_);
 }

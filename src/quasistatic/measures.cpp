@@ -66,6 +66,7 @@ StateMeasures NetworkSolverT<D>::measures() const
   }
   S /= V;
   m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
+  if (s.periodic()) m.net_force_ratio = 0.0;  // one held particle: no boundary to sum over
   m.S11 = S(0, 0);
   m.S22 = S(1, 1);
   m.S12 = 0.5 * (S(0, 1) + S(1, 0));
@@ -79,7 +80,7 @@ StateMeasures NetworkSolverT<D>::measures() const
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const auto g = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]);
+    const auto g = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]);
     const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
     SC -= fj * (g.L * g.n).transpose();
     ++loaded;
@@ -96,6 +97,12 @@ StateMeasures NetworkSolverT<D>::measures() const
   m.S11_contacts = SC(0, 0);
   m.S22_contacts = SC(1, 1);
   m.S12_contacts = 0.5 * (SC(0, 1) + SC(1, 0));
+  if (s.periodic()) {  // no prescribed boundary, so no Eq 13: the stress is the contact stress
+    m.S11 = m.S11_contacts;
+    m.S22 = m.S22_contacts;
+    m.S12 = m.S12_contacts;
+    m.S_asym = 0.5 * (SC(0, 1) - SC(1, 0));
+  }
   {  // the equilibrium gap: symmetric parts, Frobenius norms (the off-diagonal counted twice)
     const double d11 = m.S11 - m.S11_contacts, d22 = m.S22 - m.S22_contacts, d12 = m.S12 - m.S12_contacts;
     const double d = std::sqrt(d11 * d11 + d22 * d22 + 2 * d12 * d12);
@@ -106,7 +113,8 @@ StateMeasures NetworkSolverT<D>::measures() const
   if (loaded == 0) {  // initial state: count geometric contacts
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
-      const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+      const Eigen::Vector2d d = s.at_j(k) - s.at(i);
+      const double L = std::hypot(d.x(), d.y());
       if (L <= (s.ps.r[i] + s.ps.r[j]) * (1.0 + 1e-6)) ++loaded;
     }
   }
@@ -129,10 +137,11 @@ std::vector<ContactView> NetworkSolverT<D>::contacts() const {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
     if constexpr (D == 2) {
-      const double L = std::hypot(s.ps.pos[2 * j] - s.ps.pos[2 * i], s.ps.pos[2 * j + 1] - s.ps.pos[2 * i + 1]);
+      const Eigen::Vector2d d = s.at_j(k) - s.at(i);
+      const double L = std::hypot(d.x(), d.y());
       out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
     } else {
-      const double L = (s.at(j) - s.at(i)).norm();
+      const double L = (s.at_j(k) - s.at(i)).norm();
       out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
     }
   }
@@ -175,7 +184,7 @@ StressMeasuresT<D> NetworkSolverT<D>::stress() const {
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
-    const auto g = ct::pair_geometry(s.at(i), s.at(j), s.ps.r[i], s.ps.r[j]);
+    const auto g = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]);
     Vec fj;
     if constexpr (D == 2) {
       fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
@@ -189,6 +198,10 @@ StressMeasuresT<D> NetworkSolverT<D>::stress() const {
   }
   SC /= V;
   m.contacts = 0.5 * (SC + SC.transpose());
+  if (s.periodic()) {  // no prescribed boundary, so no Eq 13: the stress is the contact stress
+    m.eq13 = m.contacts;
+    m.net_force_ratio = 0.0;
+  }
   const double c = m.contacts.norm(), d = (m.eq13 - m.contacts).norm();
   m.eq13_vs_contacts = c > 0.0 ? d / c : (d > 0.0 ? 1.0 : 0.0);
   m.Z = 2.0 * m.contact_count / s.n;

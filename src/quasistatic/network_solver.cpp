@@ -24,7 +24,7 @@ void NetworkSolverT<D>::Impl::init_linear_solver() {
   lin = LinearSolver(lo);
   r_mean = std::accumulate(ps.r.begin(), ps.r.end(), 0.0) / n;
   r_max = *std::max_element(ps.r.begin(), ps.r.end());
-  DofMap::build(D, kR, opt.mode, opt.rotations && opt.law.frictional(), periph);
+  DofMap::build(D, kR, opt.mode, opt.rotations && opt.law.frictional(), periph, pinned);
   std::vector<int> particle_of_dof(static_cast<std::size_t>(nfree));
   for (int q = 0; q < kN * n; ++q)
     if (dof[q] >= 0) particle_of_dof[dof[q]] = q / kN;
@@ -81,17 +81,29 @@ NetworkSolverT<D>::NetworkSolverT(const packing::Packing& pk, const SolverOption
   if (pk.dim != D)
     throw std::invalid_argument(fmt::format("network solver: the packing has dimension {}, the solver {}", pk.dim, D));
   packing::validate(pk);
+  const bool periodic = options.mode == BoundaryMode::Periodic;
+  if (pk.periodic != periodic)
+    throw std::invalid_argument(periodic ? "network solver: the periodic boundary mode needs a periodic packing"
+                                         : "network solver: the packing is periodic; only the periodic boundary mode "
+                                           "can use it");
   auto& s = *impl_;
   s.set_options(options);
   s.n = static_cast<int>(pk.size());
   s.ps = sys::ParticleSet<D>::from_packing(pk);
-  if constexpr (D == 2) {
+  if (periodic) {  // no peripheral layer; the best-connected particle holds the rigid translation
+    s.periph.assign(pk.size(), 0);
+    s.cell0 = packing::periodic_cell<D>(pk);
+    s.cell_vectors = pk.cell;
+    std::vector<int> touching(pk.size(), 0);
+    for (const auto& [i, j] : packing::touching_pairs(pk)) ++touching[i], ++touching[j];
+    s.pinned = static_cast<int>(std::max_element(touching.begin(), touching.end()) - touching.begin());
+  } else if constexpr (D == 2) {
     s.periph = packing::peripheral_layer(pk);
   } else {
     s.periph = peripheral_layer_3d(pk);
   }
   s.solid_area = pk.solid_measure();
-  s.box_area0 = pk.box_measure();
+  s.box_area0 = periodic ? s.cell0.measure() : pk.box_measure();
   s.box0 = pk.box;
   s.seed = pk.seed;
   s.D0 = s.solid_area / s.box_area0;
@@ -124,6 +136,20 @@ NetworkSolverT<D>::NetworkSolverT(const State& st, const SolverOptions& options)
     s.pos_build = st.pos_build;
   }
   s.periph = st.peripheral;
+  if (st.periodic != (options.mode == BoundaryMode::Periodic))
+    throw std::invalid_argument(st.periodic ? "network solver: the state is of a periodic cell; only the periodic "
+                                              "boundary mode can continue it"
+                                            : "network solver: the periodic boundary mode needs a periodic state");
+  if (st.periodic) {
+    packing::Packing cell_of;  // the cell from the state's box and vectors
+    cell_of.dim = D;
+    cell_of.box = st.box0;
+    cell_of.periodic = true;
+    cell_of.cell = st.cell;
+    s.cell0 = packing::periodic_cell<D>(cell_of);
+    s.cell_vectors = st.cell;
+    s.pinned = st.pinned;
+  }
   s.solid_area = st.solid_area;
   s.box_area0 = st.box_area0;
   s.box0 = st.box0;
@@ -134,6 +160,10 @@ NetworkSolverT<D>::NetworkSolverT(const State& st, const SolverOptions& options)
   s.init_linear_solver();
   s.pi = st.pair_i;
   s.pj = st.pair_j;
+  if (st.periodic)
+    s.shift = st.shift;
+  else
+    s.shift.assign(st.pair_i.size(), {});
   s.hist = st.history;
   s.aux = st.aux;
   s.fn_c = st.f_n;
@@ -195,6 +225,12 @@ typename NetworkSolverT<D>::State NetworkSolverT<D>::state() const {
   st.f_t = s.ft_c;
   st.sliding = s.slide_c;
   st.box_deformation_build = s.F_build;
+  st.periodic = s.periodic();
+  if (st.periodic) {
+    st.cell = s.cell_vectors;
+    st.shift = s.shift;
+    st.pinned = s.pinned;
+  }
   st.f_contact = s.f_c;
   st.du_prev = s.du_prev;
   st.dE_prev = s.dE_prev;
@@ -208,6 +244,25 @@ namespace {
 /// and a probe stretches it by e^|E| <= e; a 1e300 or 2^64 entry (robustness campaign, issue 27)
 /// passed the density check and reached the analytic yield surface as null.
 constexpr double kMaxBoxStretch = 1e3;
+
+/// The periodic fields of a state: shifts per row only in a periodic cell, a held particle, cell
+/// numbers D x D or none (the cell's measure is checked by the caller's box-area check).
+template <class State, typename Bad>
+void check_periodic(const State& st, std::size_t n, std::size_t np, const Bad& bad) {
+  if (!st.periodic) {
+    if (!st.shift.empty() || !st.cell.empty() || st.pinned != -1) bad("periodic-cell fields in a state without a periodic cell");
+    return;
+  }
+  if (st.shift.size() != np) bad(fmt::format("{} periodic images for {} pairs", st.shift.size(), np));
+  if (st.pinned < 0 || static_cast<std::size_t>(st.pinned) >= n) bad(fmt::format("held particle {} is not in [0, {})", st.pinned, n));
+  const std::size_t d = st.shift.empty() ? 0 : st.shift.front().size();
+  if (!st.cell.empty() && st.cell.size() != d * d && d != 0) bad(fmt::format("{} cell numbers", st.cell.size()));
+  for (double v : st.cell)
+    if (!std::isfinite(v)) bad("a non-finite cell vector");
+  for (const auto& sh : st.shift)
+    for (int v : sh)
+      if (v < -1000000 || v > 1000000) bad(fmt::format("a periodic image {} cells away", v));
+}
 
 template <int D, typename Bad>
 void check_box_stretch(const Eigen::Matrix<double, D, D>& F, const Bad& bad) {
@@ -230,6 +285,7 @@ void NetworkStateT<D>::validate() const {
       sliding.size() != np)
     bad(fmt::format("per-pair arrays do not all have {} entries", np));
   if (!wall_history.empty() || !wall_f_n.empty()) bad("the walls mode is 2D only");
+  check_periodic(*this, n, np, bad);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pair_i[k], j = pair_j[k];
     if (i < 0 || j <= i || static_cast<std::size_t>(j) >= n) bad(fmt::format("pair {} ({}, {}) is not i < j < N", k, i, j));
@@ -257,6 +313,7 @@ void NetworkStateT<2>::validate() const {
     bad(fmt::format("per-pair arrays do not all have {} entries", np));
   if ((!wall_history.empty() && wall_history.size() != 4 * n) || wall_f_n.size() != wall_history.size())
     bad(fmt::format("the wall-contact arrays must be empty or have 4 x {} entries", n));
+  check_periodic(*this, n, np, bad);
   for (std::size_t p = 0; p < n; ++p) {
     if (!(std::isfinite(x[p]) && std::isfinite(y[p]) && std::isfinite(theta[p]) && std::isfinite(x_build[p]) &&
           std::isfinite(y_build[p])))
@@ -287,7 +344,8 @@ void NetworkStateT<2>::validate() const {
     for (const double rp : r) area += std::numbers::pi * rp * rp;
     if (!near(solid_area, area))
       bad(fmt::format("the solid area {} is not the particles' sum pi r^2 = {}", solid_area, area));
-    const double box_area = (box0.x_max - box0.x_min) * (box0.y_max - box0.y_min);
+    const double box_area = periodic && cell.size() == 4 ? std::fabs(cell[0] * cell[3] - cell[1] * cell[2])
+                                                          : (box0.x_max - box0.x_min) * (box0.y_max - box0.y_min);
     if (!near(box_area0, box_area)) bad(fmt::format("the initial box area {} is not the initial box's {}", box_area0, box_area));
     if (!near(initial_density, solid_area / box_area0))
       bad(fmt::format("the initial density {} is not solid area / box area = {}", initial_density, solid_area / box_area0));

@@ -170,7 +170,7 @@ double NetworkSolverT<D>::Impl::contact_work() const {
     const auto& t = trial[k];
     if (!t.loaded && fn_c[k] <= 0.0) continue;
     const int i = pi[k], j = pj[k];
-    const double u1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]).overlap;
+    const double u1 = ct::pair_geometry(moved(i), moved_j(k), ps.r[i], ps.r[j]).overlap;
     w += 0.5 * (fn_c[k] + t.f_n) * (u1 - g0[k].overlap);
     if constexpr (D == 2) {
       w += 0.5 * (ft_c[k] + t.f_t) * trial_slip[k];
@@ -191,7 +191,7 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
   trial_slip.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pi[k], j = pj[k];
-    g0[k] = ct::pair_geometry(at(i), at(j), ps.r[i], ps.r[j]);
+    g0[k] = ct::pair_geometry(at(i), at_j(k), ps.r[i], ps.r[j]);
   }
   prescribe(dE);
   last_sliding.assign(np, 0);
@@ -324,7 +324,7 @@ void NetworkSolverT<D>::Impl::commit(const Mat& dE, IncrementReport& rep) {
         // tangential displacement of the centres, L dphi (only needed here: not in the evaluation)
         const int i = pi[k], j = pj[k];
         const Geometry& g = g0[k];
-        const Geometry g1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]);
+        const Geometry g1 = ct::pair_geometry(moved(i), moved_j(k), ps.r[i], ps.r[j]);
         aux[k].centre += std::atan2(ct::cross(g.n, g1.n), g.n.dot(g1.n)) * 0.5 * (g.L + g1.L);
       }
     }

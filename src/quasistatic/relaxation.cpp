@@ -29,7 +29,7 @@ void NetworkSolverT<D>::Impl::local_eval(const int* group, int m, Eigen::VectorX
       const int k = adj_pair[q], i = pi[k], j = pj[k];
       const int si = slot(i), sj = slot(j);
       if ((si >= 0 && si < sp) || (sj >= 0 && sj < sp)) continue;  // pair inside the set: once
-      const Geometry g1 = ct::pair_geometry(moved(i), moved(j), ps.r[i], ps.r[j]);
+      const Geometry g1 = ct::pair_geometry(moved(i), moved_j(k), ps.r[i], ps.r[j]);
       if (g1.overlap <= 0.0 && !law.has_history(hist[k])) continue;
       ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, &topt);
       const int sl[2] = {si, sj};

@@ -28,6 +28,7 @@
 
 #include "netdem/contact/element.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/packing/periodic.hpp"
 #include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/system/contact_table.hpp"
@@ -60,17 +61,20 @@ struct ContactTableT : sys::ContactTable<typename LawT<D>::History, D> {
 
   /// New rows (gap < skin) merged with the committed history and the per-row data above.
   void rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max, const Mat& E,
-               const Mat& Fbox);
+               const Mat& Fbox, const packing::PeriodicCellT<D>* cell = nullptr);
 };
 
 /// The boundary conditions as a DOF map: dof[kN p + c] = free index or -1 (prescribed).
 /// Die mode: the peripheral layer's translations are prescribed; affine mode: every centre's.
+/// Walls: nothing is prescribed.
 /// Peripheral rotations are always held (section 2.4); interior rotations are free when the law
 /// has friction and rotations are allowed.
+/// Periodic: every DOF is free but the translations of particle `pinned` (the rigid translation).
 struct DofMap {
   std::vector<int> dof;
   int nfree = 0;
-  void build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph);
+  void build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph,
+             int pinned = -1);
 };
 
 /// BoundaryMode::Walls (2D): the contacts of every particle with the four walls (slot 4 p + w;
@@ -130,6 +134,12 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   std::uint64_t seed = 0;
   Mat Fbox = Mat::Identity();
   Mat E = Mat::Zero();
+  // BoundaryMode::Periodic (issue 29): the initial cell (the current one is Fbox h0), its vectors
+  // as the packing gave them (empty: the box's edges), the particle whose translation is held
+  // (it removes the rigid translation, the periodic network's null space; -1 in other modes)
+  packing::PeriodicCellT<D> cell0;
+  std::vector<double> cell_vectors;
+  int pinned = -1;
   std::vector<double> f_c;  ///< kN n contact forces on the particles (committed state)
   std::vector<double> du_prev;  ///< the last committed increment's displacements (predictor)
   Mat dE_prev = Mat::Zero();
@@ -186,6 +196,20 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
     } else {
       return Vec(ps.pos[3 * p] + du[6 * p], ps.pos[3 * p + 1] + du[6 * p + 1], ps.pos[3 * p + 2] + du[6 * p + 2]);
     }
+  }
+  bool periodic() const { return opt.mode == BoundaryMode::Periodic; }
+  /// The offset of row k's image of j under the box deformation F (zero outside periodic cells).
+  Vec image(std::size_t k, const Mat& F) const {
+    const auto& sh = this->shift[k];
+    Vec nv;
+    for (int a = 0; a < D; ++a) nv[a] = sh[static_cast<std::size_t>(a)];
+    return F * (cell0.h * nv);
+  }
+  /// Row k's particle j as i meets it (its periodic image) in the committed state and at the end
+  /// of the trial increment (the trial cell Fbox_trial h0).
+  Vec at_j(std::size_t k) const { return periodic() ? Vec(at(pj[k]) + image(k, Fbox)) : at(pj[k]); }
+  Vec moved_j(std::size_t k) const {
+    return periodic() ? Vec(moved(pj[k]) + image(k, this->Fbox_trial)) : moved(pj[k]);
   }
   /// The rotation increment of p in du (2D: the angle; 3D: the rotation vector).
   typename ct::Dim<D>::Rot rotation(int p) const {

@@ -187,6 +187,7 @@ void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
   if (!s.wall_history.empty())
     throw std::invalid_argument("the state file does not hold wall contacts (the walls boundary) yet");
+  if (s.periodic) throw std::invalid_argument("the state file does not hold periodic cells yet");
   sys::write_text_file(path, sys::dump_archive(state_json(s)), "state file");
 }
 

@@ -3,6 +3,9 @@
 //
 //   # box <x_min> <y_min> <x_max> <y_max>      required, once
 //   # seed <S>                                   optional (unsigned 64-bit; absent -> seed 0)
+//   # periodic                                   optional: periodic in every axis (issue 29)
+//   # cell <a1x> <a1y> <a2x> <a2y>               optional, periodic only: the cell vectors (3D: 9
+//                                                numbers); absent: the box's edges
 //   # <free comment>                             optional, any number, kept in Packing::comments
 //   id,x,y,r                                     header, exactly these four names
 //   0,<x>,<y>,<r>                                one line per disk
@@ -23,8 +26,8 @@ namespace netdem::packing {
 
 /// Writes `p` atomically: to a temporary file in the same directory, then renamed over `path`
 /// (no half-written file is ever visible). Throws std::invalid_argument if validate(p) fails or a
-/// comment cannot be stored (contains a line break, or starts with the reserved words "box" or
-/// "seed"); std::runtime_error on an I/O failure.
+/// comment cannot be stored (contains a line break, or starts with a reserved word: "box",
+/// "seed", "dim", "periodic", "cell"); std::runtime_error on an I/O failure.
 void write_packing_csv(const Packing& p, const std::filesystem::path& path);
 
 /// At most `max_chars` printable ASCII characters of `s` for an error message: other bytes become

@@ -38,13 +38,19 @@ struct Packing {
   Box box;
   std::uint64_t seed = 0;              ///< 0 if unknown (hand-made file)
   std::vector<std::string> comments;  ///< extra '# ...' lines carried through I/O (without the '# ')
+  /// Periodic in every axis (issue 29; file line '# periodic'): the box is the cell, or `cell` is.
+  bool periodic = false;
+  /// '# cell' (periodic only): D x D numbers, cell vector a at [D a, D a + D), lower corner at the
+  /// box's lower corner, the box the cell's bounding box; empty: the box's edges (periodic.hpp).
+  std::vector<double> cell;
 
   std::size_t size() const { return x.size(); }
   double solid_area() const;    ///< sum pi r^2 (the 2D solid area, whatever dim)
   double solid_volume() const;  ///< sum 4/3 pi r^3 (spheres)
   double solid_measure() const { return dim == 3 ? solid_volume() : solid_area(); }
   double box_measure() const { return dim == 3 ? box.volume() : box.area(); }
-  /// Relative density D: 2D solid_area / box.area() (section 2.2), 3D solid_volume / box.volume().
+  /// Relative density D: 2D solid_area / box.area() (section 2.2), 3D solid_volume / box.volume();
+  /// a periodic packing: over the cell's area or volume.
   double density() const;
 };
 
@@ -57,7 +63,7 @@ struct ContactStats {
 };
 
 /// Pairs (i < j, sorted) with |x_i - x_j| <= (r_i + r_j) * (1 + tol). Cell list, not all pairs.
-/// 3D: the distance of the centres (x, y, z).
+/// 3D: the distance of the centres (x, y, z). A periodic packing: through the nearest image.
 std::vector<std::pair<int, int>> touching_pairs(const Packing& p, double tol = 1e-6);
 
 /// 3D packings periodic in x and y (ballistic_deposition_3d with Lateral::Periodic): the same
@@ -69,7 +75,7 @@ std::vector<std::pair<int, int>> touching_pairs_periodic_xy(const Packing& p, do
 /// Disk contacts as touching_pairs(); wall contacts: a disk within tol * r of the left, right or
 /// bottom wall counts once per wall it touches. 3D: the four side walls x_min, x_max, y_min,
 /// y_max and the floor z_min (not the lid z_max); `periodic_xy` (3D only): the contacts of
-/// touching_pairs_periodic_xy() and only the floor as a wall.
+/// touching_pairs_periodic_xy() and only the floor as a wall. A periodic packing has no walls.
 ContactStats contact_stats(const Packing& p, double tol = 1e-6, bool periodic_xy = false);
 
 /// Peripheral layer for the die-compaction boundary conditions (section 2.4): flag 1 for disks
@@ -106,7 +112,10 @@ std::optional<ClosePair> find_close_pair(const Packing& p);
 /// (find_close_pair(); "disk j duplicates disk i" for centres closer than 1e-12 (r_i + r_j)).
 /// Disks overlapping each other by less than that, or poking through a wall by less than their
 /// radius, are allowed: compacted packings (section 2.4, affine boundary motion) do both.
-/// Deposited packings lie entirely inside the box.
+/// Deposited packings lie entirely inside the box. A periodic packing (issue 29): `cell` holds 0 or
+/// D x D finite numbers spanning a cell whose bounding box is the box (1e-9 relative), every centre
+/// lies in the cell (0 <= s < 1, 1e-9 tolerance), the cell is at least 4 r_max wide across every
+/// axis, and the close-pair check also runs through the images.
 void validate(const Packing& p);
 
 }  // namespace netdem::packing

@@ -36,6 +36,7 @@
 // restored from a state continues bit-identically to the solver it was taken from.
 //
 // Where the parts live: src/quasistatic/solver_impl.hpp.
+#include <array>
 #include <cstdint>
 #include <istream>
 #include <memory>
@@ -179,6 +180,13 @@ struct NetworkStateT {
   SolverTimings timings;
   std::vector<contact::PlasticIndentationHistoryT<D>> wall_history;  ///< empty (walls are 2D)
   std::vector<double> wall_f_n;
+  /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
+  /// the box's edges), each row's image of j (empty in other modes), the particle whose
+  /// translation is held. (The state file does not hold them yet: save_state refuses them.)
+  bool periodic = false;
+  std::vector<double> cell;
+  std::vector<std::array<int, D>> shift;
+  int pinned = -1;
 
   /// Throws std::invalid_argument (one line) if sizes or values are inconsistent.
   void validate() const;
@@ -213,6 +221,13 @@ struct NetworkStateT<2> {
   /// history and normal force; empty otherwise. (The state file does not hold them yet.)
   std::vector<contact::PlasticIndentationHistory> wall_history;
   std::vector<double> wall_f_n;
+  /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
+  /// the box's edges), each row's image of j (empty in other modes), the particle whose
+  /// translation is held. (The state file does not hold them yet: save_state refuses them.)
+  bool periodic = false;
+  std::vector<double> cell;
+  std::vector<std::array<int, 2>> shift;
+  int pinned = -1;
 
   /// Throws std::invalid_argument (one line) if sizes, order or values are inconsistent.
   void validate() const;

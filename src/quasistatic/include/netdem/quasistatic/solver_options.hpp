@@ -21,7 +21,10 @@ namespace netdem::qs {
 /// centre follows the macroscopic strain, only the interior rotations are free.
 /// Die: the peripheral layer is prescribed (section 2.4); Affine: every centre; Walls: nothing is
 /// prescribed, four rigid frictionless walls at the faces of the box move with it (E12 = 0).
-enum class BoundaryMode { Die, Affine, Walls };
+/// Periodic (issue 29): a periodic packing whose cell follows the strain; contacts across the
+/// cell's faces meet the images, every particle is free but one whose translation is held (the
+/// rigid translation); the stress is the contact stress (Eq 13 has no reactions to sum).
+enum class BoundaryMode { Die, Affine, Walls, Periodic };
 
 /// The nonlinear iteration of an increment.
 ///  PseudoTransient: pseudo-transient continuation (Kelley & Keyes 1998). Each Newton step solves
