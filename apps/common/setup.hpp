@@ -132,7 +132,7 @@ inline packing::Packing make_packing_3d(const PackArgs& a) {
 /// The packing file if one is given, else a new deposition; `source` describes which. `command`
 /// names the (2D only) subcommand in the refusal of a 3D packing file.
 inline packing::Packing input_packing(const std::string& packing_file, const PackArgs& a, std::string& source,
-                                      const char* command = "netsolve compact") {
+                                      const char* command = "netsolve compact", bool periodic = false) {
   if (!packing_file.empty()) {
     if (std::filesystem::is_directory(packing_file))
       throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes DIR/packing.csv)",
@@ -141,8 +141,17 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
     packing::Packing p = packing::read_packing_csv(packing_file);
     if (p.dim != 2)
       throw UsageError(fmt::format("--packing {} is a 3D packing; {} is 2D only", packing_file.substr(0, 200), command));
+    if (p.periodic && !periodic)
+      throw UsageError(fmt::format("--packing {} is a periodic packing (a '# periodic' line): {} uses it only with "
+                                   "--boundary periodic",
+                                   packing_file.substr(0, 200), command));
+    if (!p.periodic && periodic)
+      throw UsageError(fmt::format("--boundary periodic needs a periodic packing, and --packing {} has no '# periodic' line",
+                                   packing_file.substr(0, 200)));
     return p;
   }
+  if (periodic)
+    throw UsageError("--boundary periodic needs --packing FILE with a periodic packing (a '# periodic' line; docs/packing.md)");
   source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", a.width, a.mono ? 1.0 : a.r_min,
                        a.mono ? 1.0 : a.r_max, a.seed);
   return make_packing(a);

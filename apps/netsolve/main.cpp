@@ -172,10 +172,17 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
 void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem::qs::CompactionOptions& co) {
   namespace qs = netdem::qs;
   so = a.solver;  // the Newton knobs bound directly by the command line
-  so.mode = a.affine ? qs::BoundaryMode::Affine
-                     : a.boundary == "walls" ? qs::BoundaryMode::Walls : qs::BoundaryMode::Die;
-  if (a.affine && a.boundary == "walls")
-    throw std::invalid_argument("--affine and --boundary walls exclude each other (--affine prescribes every centre)");
+  so.mode = a.affine                 ? qs::BoundaryMode::Affine
+            : a.boundary == "walls"    ? qs::BoundaryMode::Walls
+            : a.boundary == "periodic" ? qs::BoundaryMode::Periodic
+                                       : qs::BoundaryMode::Die;
+  if (a.affine && a.boundary != "layer")
+    throw std::invalid_argument(fmt::format("--affine and --boundary {} exclude each other (--affine prescribes every centre)",
+                                            a.boundary));
+  if (so.mode == qs::BoundaryMode::Periodic && a.save_state)
+    throw netdem::app::UsageError("--save-state: the state files do not hold a periodic cell yet (--boundary periodic)");
+  if (so.mode == qs::BoundaryMode::Periodic && !a.state_file.empty())
+    throw netdem::app::UsageError("--state: a jammed state has walls or a layer, not a periodic cell (--boundary periodic)");
   so.rotations = !a.no_rotation;
   netdem::app::netsolve::apply_law_args(a.law, so);
   so.verbose = a.verbose;
@@ -258,7 +265,9 @@ nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const ne
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
   j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : "die";
+  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : so.mode == qs::BoundaryMode::Periodic ? "periodic" : "die";
+  if (so.mode == qs::BoundaryMode::Periodic)  // no prescribed boundary: Eq 13 has no reactions to sum
+    j["stress_measure"] = "contact stress (periodic cell: S = S_contacts, eq13_vs_contacts 0 by construction)";
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E11", co.path.E11}, {"E22", co.path.E22}, {"E12", co.path.E12}};
   j["increments"] = co.increments;
@@ -316,7 +325,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const auto jammed = input_state(a, so);
   if (input.empty()) app::netsolve::check_deposition_size(pa, true);
   activity() = input.empty() ? "building the ballistic deposition" : "reading " + input;
-  packing::Packing pk = jammed ? jammed->packing() : app::netsolve::input_packing(a.packing_file, pa, source);
+  const bool periodic = so.mode == qs::BoundaryMode::Periodic;
+  packing::Packing pk =
+      jammed ? jammed->packing() : app::netsolve::input_packing(a.packing_file, pa, source, "netsolve compact", periodic);
   if (jammed) source = "jammed state " + a.state_file;
   // the walls enclose every disk at the start (as demsolve compact --boundary walls); a state has its box
   if (so.mode == qs::BoundaryMode::Walls && !jammed) pk.box = app::netsolve::walls_box(pk);
@@ -403,7 +414,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)
   // die mode can squeeze disks out between the peripheral disks: count them and say so
-  const int outside = centres_outside(solver, pk.box);
+  const int outside = periodic ? 0 : centres_outside(solver, pk.box);  // a periodic cell has no outside
   if (outside > 0)
     std::fprintf(stderr, "netsolve: warning: %d disk centres left the box between the peripheral disks (die mode)\n",
                  outside);
@@ -523,8 +534,9 @@ int main(int argc, char** argv) {
   comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
   comp->add_option("--boundary", ca.boundary,
                    "layer: the peripheral layer follows the strain (die mode, section 2.4); walls: nothing prescribed, four "
-                   "rigid frictionless walls at the box faces move with the box (E12 = 0; Eq 13 from the wall forces)")
-      ->check(CLI::IsMember({"layer", "walls"}))
+                   "rigid frictionless walls at the box faces move with the box (E12 = 0; Eq 13 from the wall forces); periodic: a "
+                   "periodic packing (--packing with '# periodic') in a cell that follows the strain, the contact stress")
+      ->check(CLI::IsMember({"layer", "walls", "periodic"}))
       ->capture_default_str();
   comp->add_option("--path", ca.path, "hydrostatic | closed-die | E11,E22,E12 strain-rate direction")->capture_default_str();
   comp->add_flag("--no-rotation", ca.no_rotation, "forbid all particle rotations");

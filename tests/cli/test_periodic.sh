@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# netsolve compact --boundary periodic (issue 29): a periodic triangular lattice of touching disks
+# (6 x 6, a '# periodic' packing file) compacted hydrostatically to 1.03 x its density follows the
+# infinite lattice's closed form, Sigma = -(3/2) N F L / V with F = 3 sigma_y sqrt(8 u R/2),
+# L = 2 R e^E (no edge factor), to 1e-8; summary mode "periodic", exit 0. The door refuses a
+# periodic packing without --boundary periodic, --boundary periodic without a periodic packing,
+# --save-state and --affine with it: one line, exit 2, nothing written.
+# usage: test_periodic.sh PATH/TO/netsolve
+set -u
+ns="$(readlink -f "$1")"
+tool="$ns"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+
+/usr/bin/python3 - "$tmp/lat.csv" <<'PY'
+import math, sys
+nc = nr = 6
+h = math.sqrt(3.0)
+rows = [f"# box 0 0 {2 * nc!r} {h * nr!r}", "# periodic", "id,x,y,r"]
+for r in range(nr):
+    for c in range(nc):
+        rows.append(f"{r * nc + c},{(r % 2) + 2 * c + 0.5!r},{h * r + 0.5 * h!r},1")
+open(sys.argv[1], "w").write("\n".join(rows) + "\n")
+PY
+"$ns" compact --boundary periodic --packing "$tmp/lat.csv" --to-density 0.934 --increments 10 --tol 1e-10 \
+  --max-newton 50 --quiet --out "$tmp/p" >/dev/null 2>"$tmp/stderr"
+rc=$?
+if /usr/bin/python3 - "$tmp/p" "$rc" <<'PY'; then pass=$((pass + 1)); else fail=$((fail + 1)); fi
+import csv, json, math, sys
+d, rc = sys.argv[1], int(sys.argv[2])
+rows = list(csv.DictReader(l for l in open(d + "/history.csv") if not l.startswith("#")))
+s = json.load(open(d + "/summary.json"))
+last = rows[-1]
+E = float(last["E11"])
+L = 2 * math.exp(E)
+F = 3 * math.sqrt(8 * (2 - L) / 2)  # per sigma_y
+V = 12 * 6 * math.sqrt(3) * math.exp(2 * E)
+expect = -1.5 * 36 * F * L / V
+got = [float(last["S11"]), float(last["S22"]), float(last["S12"])]
+err = max(abs(got[0] - expect), abs(got[1] - expect), abs(got[2])) / abs(expect)
+print(f"periodic lattice: D {float(last['D']):.4f}, S11 {got[0]:.9f} S22 {got[1]:.9f} against {expect:.9f} "
+      f"(relative {err:.1e}), contacts {last['contacts']}, mode {s['mode']}, exit {rc}")
+ok = rc == 0 and s["mode"] == "periodic" and err < 1e-8 and int(last["contacts"]) == 108
+sys.exit(0 if ok else 1)
+PY
+/usr/bin/python3 -c "
+import sys; t = open(sys.argv[1]).read().replace('# periodic\n', ''); open(sys.argv[2], 'w').write(t)" "$tmp/lat.csv" "$tmp/walled.csv"
+check_bad periodic_no_packing "periodic packing" compact --boundary periodic
+check_bad periodic_walled_packing "no '# periodic'" compact --boundary periodic --packing "$tmp/walled.csv"
+check_bad periodic_packing_layer "--boundary periodic" compact --packing "$tmp/lat.csv"
+check_bad periodic_save_state "periodic cell" compact --boundary periodic --packing "$tmp/lat.csv" --save-state
+check_bad periodic_affine "exclude" compact --boundary periodic --packing "$tmp/lat.csv" --affine
+finish
