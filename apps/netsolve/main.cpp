@@ -179,8 +179,6 @@ void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem
   if (a.affine && a.boundary != "layer")
     throw std::invalid_argument(fmt::format("--affine and --boundary {} exclude each other (--affine prescribes every centre)",
                                             a.boundary));
-  if (so.mode == qs::BoundaryMode::Periodic && a.save_state)
-    throw netdem::app::UsageError("--save-state: the state files do not hold a periodic cell yet (--boundary periodic)");
   if (so.mode == qs::BoundaryMode::Periodic && !a.state_file.empty())
     throw netdem::app::UsageError("--state: a jammed state has walls or a layer, not a periodic cell (--boundary periodic)");
   so.rotations = !a.no_rotation;
@@ -304,8 +302,9 @@ nlohmann::json compact_summary(const CompactArgs& a, const RunArgs& ra, const ne
   j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
   const bool saved = a.save_state && stopped.empty();
   j["state"] = saved && so.mode != qs::BoundaryMode::Walls ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
-  if (a.save_state || !a.state_file.empty())
-    j["jammed_state"] = {{"from", a.state_file}, {"saved", saved ? "jammed.json" : ""}};
+  if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
+    j["jammed_state"] = {{"from", a.state_file},
+                         {"saved", saved && so.mode != qs::BoundaryMode::Periodic ? "jammed.json" : ""}};
   j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
                    {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
   return j;
@@ -409,7 +408,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
     write_snapshot(solver, out, "final");
     if (a.save_state && so.mode != qs::BoundaryMode::Walls) qs::save_state(solver.state(), (out / "state.txt").string());
-    if (a.save_state) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
+    if (a.save_state && !periodic) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
   }
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
   // of the box between peripheral disks; count them and say so (docs/quasistatic.md)

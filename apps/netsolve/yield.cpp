@@ -92,10 +92,13 @@ struct YieldArgs {
 qs::BoundaryMode parse_bc(const std::string& s, const char* opt) {
   if (s == "affine") return qs::BoundaryMode::Affine;
   if (s == "die" || s == "lr" || s == "l.r.") return qs::BoundaryMode::Die;
-  throw std::invalid_argument(fmt::format("{} '{}' is not 'affine' or 'die' (local relaxation)", opt, s));
+  if (s == "periodic") return qs::BoundaryMode::Periodic;
+  throw std::invalid_argument(fmt::format("{} '{}' is not 'affine', 'die' (local relaxation) or 'periodic'", opt, s));
 }
 
-const char* bc_name(qs::BoundaryMode m) { return m == qs::BoundaryMode::Affine ? "affine" : "die"; }
+const char* bc_name(qs::BoundaryMode m) {
+  return m == qs::BoundaryMode::Affine ? "affine" : m == qs::BoundaryMode::Periodic ? "periodic" : "die";
+}
 
 /// Probe indices of this run: all, a job-array slice "i/N" (indices k with k mod N == i) or a list.
 std::vector<int> select_probes(const YieldArgs& a) {
@@ -147,6 +150,8 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   probe.max_cuts = pre.max_cuts;
   if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
+  if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
+    throw std::invalid_argument("--compact-bc and --probe-bc: a periodic cell is probed periodic (both 'periodic' or neither)");
 }
 
 /// The compacted state of --from-state; its strain must lie along --precompact's path.
@@ -301,7 +306,8 @@ void YieldRun::open_input() {
   if (a.from_state.empty()) {
     if (a.packing_file.empty()) app::netsolve::check_deposition_size(a.pack, true);
     app::netsolve::activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
-    pk_ = app::netsolve::input_packing(a.packing_file, a.pack, source_, "netsolve yield");
+    pk_ = app::netsolve::input_packing(a.packing_file, a.pack, source_, "netsolve yield",
+                                       so_.mode == qs::BoundaryMode::Periodic);
     co_.validate(pk_.density());
   } else {
     solver_ = restore_compacted(a, co_.path, so_);
@@ -642,8 +648,10 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
     app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();
-    app.add_option("--compact-bc", a.compact_bc, "affine | die (local relaxation) during precompaction")->capture_default_str();
-    app.add_option("--probe-bc", a.probe_bc, "affine | die during unloading and probing (default: --compact-bc)");
+    app.add_option("--compact-bc", a.compact_bc,
+                   "affine | die (local relaxation) | periodic (a '# periodic' --packing) during precompaction")
+        ->capture_default_str();
+    app.add_option("--probe-bc", a.probe_bc, "affine | die | periodic during unloading and probing (default: --compact-bc)");
     app.add_option("--directions", a.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
     app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays)");
     netdem::app::netsolve::add_list_option(app, "--probes", a.probe_list, "run only these probe indices, e.g. 0,3,5");

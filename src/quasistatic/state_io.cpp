@@ -82,6 +82,11 @@ Json state_json(const NetworkState& s) {
   j["pairs"] = Json{{"i", s.pair_i},        {"j", s.pair_j},   {"history", hist}, {"E_form", e},
                     {"slip", slip},         {"centre", centre}, {"f_n", reals(s.f_n, "f_n")},
                     {"f_t", reals(s.f_t, "f_t")}, {"sliding", sl}};
+  if (s.periodic) {  // issue 29: the cell's vectors (empty: the box's edges), each row's image, the held particle
+    Json shift = Json::array();
+    for (const auto& n : s.shift) shift.push_back(Json::array({n[0], n[1]}));
+    j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
+  }
   const auto& t = s.timings;
   j["timings"] = Json{{"assemble", real_json(t.assemble, "timing")},     {"analyse", real_json(t.analyse, "timing")},
                       {"factorise", real_json(t.factorise, "timing")},   {"solve", real_json(t.solve, "timing")},
@@ -163,6 +168,25 @@ void read_pairs(const Field& root, NetworkState& s) {
   s.f_t = reals(p["f_t"], np);
 }
 
+/// The optional periodic cell (absent: walls, die or affine).
+void read_periodic(const Field& root, NetworkState& s) {
+  if (!root.has("periodic")) return;
+  const Field p = root["periodic"];
+  p.object({"cell", "shift", "pinned"});
+  s.periodic = true;
+  const std::size_t nc = p["cell"].array(0, 4);
+  if (nc != 0 && nc != 4) p["cell"].fail("expected 0 or 4 numbers (the cell vectors a1, a2)");
+  s.cell = reals(p["cell"], nc);
+  const std::size_t np = s.pair_i.size();
+  p["shift"].array(np);
+  s.shift.resize(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    p["shift"][k].array(2);
+    for (std::size_t a = 0; a < 2; ++a) s.shift[k][a] = static_cast<int>(p["shift"][k][a].integer(-1000000, 1000000));
+  }
+  s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(s.x.size()) - 1));
+}
+
 void read_timings(const Field& root, SolverTimings& T) {
   const Field t = root["timings"];
   t.object({"assemble", "analyse", "factorise", "solve", "neighbours", "total", "analyses", "factorisations", "solves",
@@ -187,7 +211,6 @@ void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
   if (!s.wall_history.empty())
     throw std::invalid_argument("the state file does not hold wall contacts (the walls boundary) yet");
-  if (s.periodic) throw std::invalid_argument("the state file does not hold periodic cells yet");
   sys::write_text_file(path, sys::dump_archive(state_json(s)), "state file");
 }
 
@@ -206,11 +229,12 @@ NetworkState load_state_text(std::string_view text, const std::string& path) {
   const Field root(j, path);
   sys::check_header(root, "network", kNetworkStateVersion);
   root.object({"format", "kind", "version", "particles", "solid_area", "initial_density", "box_area0", "box0", "seed",
-               "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "timings"});
+               "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "periodic", "timings"});
   NetworkState s;
   read_particles(root, s);
   read_globals(root, s);
   read_pairs(root, s);
+  read_periodic(root, s);
   read_timings(root, s.timings);
   try {
     s.validate();

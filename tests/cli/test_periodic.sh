@@ -4,7 +4,9 @@
 # infinite lattice's closed form, Sigma = -(3/2) N F L / V with F = 3 sigma_y sqrt(8 u R/2),
 # L = 2 R e^E (no edge factor), to 1e-8; summary mode "periodic", exit 0. The door refuses a
 # periodic packing without --boundary periodic, --boundary periodic without a periodic packing,
-# --save-state and --affine with it: one line, exit 2, nothing written.
+# --state and --affine with it, and yield's die or mixed modes on it: one line, exit 2, nothing
+# written. --save-state writes state.txt with the cell (no jammed.json: a jammed state has no
+# periodic cell yet), and yield --compact-bc periodic --from-state starts from it.
 # usage: test_periodic.sh PATH/TO/netsolve
 set -u
 ns="$(readlink -f "$1")"
@@ -48,6 +50,25 @@ import sys; t = open(sys.argv[1]).read().replace('# periodic\n', ''); open(sys.a
 check_bad periodic_no_packing "periodic packing" compact --boundary periodic
 check_bad periodic_walled_packing "no '# periodic'" compact --boundary periodic --packing "$tmp/walled.csv"
 check_bad periodic_packing_layer "--boundary periodic" compact --packing "$tmp/lat.csv"
-check_bad periodic_save_state "periodic cell" compact --boundary periodic --packing "$tmp/lat.csv" --save-state
+check_bad periodic_state "periodic cell" compact --boundary periodic --packing "$tmp/lat.csv" --state "$tmp/none.json"
+check_bad yield_periodic_die "--boundary periodic" yield --packing "$tmp/lat.csv" --jobs 1
+check_bad yield_periodic_probe_die "periodic" yield --packing "$tmp/lat.csv" --compact-bc periodic --probe-bc die --jobs 1
+# the state file carries the cell: compact --save-state, then yield --from-state probes the same lattice
+"$ns" compact --boundary periodic --packing "$tmp/lat.csv" --to-density 0.934 --increments 10 --tol 1e-10 \
+  --max-newton 50 --save-state --quiet --out "$tmp/s" >/dev/null 2>&1
+"$ns" yield --compact-bc periodic --from-state "$tmp/s/state.txt" --to-density 0.934 --directions 4 --jobs 1 \
+  --quiet --out "$tmp/y" >/dev/null 2>"$tmp/stderr"
+rc=$?
+if /usr/bin/python3 - "$tmp/s" "$tmp/y" "$rc" <<'PY'; then pass=$((pass + 1)); else fail=$((fail + 1)); fi
+import csv, json, os, sys
+s, y, rc = sys.argv[1], sys.argv[2], int(sys.argv[3])
+last = list(csv.DictReader(l for l in open(s + "/history.csv") if not l.startswith("#")))[-1]
+j = json.load(open(y + "/summary.json"))
+print(f"periodic state: state.txt {os.path.exists(s + '/state.txt')}, jammed.json {os.path.exists(s + '/jammed.json')}; "
+      f"yield --from-state exit {rc}, loading S22 {j['setup']['loading']['S22']:.9f} against compact's {float(last['S22']):.9f}")
+ok = rc == 0 and os.path.exists(s + "/state.txt") and not os.path.exists(s + "/jammed.json")
+ok = ok and abs(j["setup"]["loading"]["S22"] - float(last["S22"])) < 1e-8
+sys.exit(0 if ok else 1)
+PY
 check_bad periodic_affine "exclude" compact --boundary periodic --packing "$tmp/lat.csv" --affine
 finish

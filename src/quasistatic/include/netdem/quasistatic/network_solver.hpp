@@ -182,7 +182,7 @@ struct NetworkStateT {
   std::vector<double> wall_f_n;
   /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
   /// the box's edges), each row's image of j (empty in other modes), the particle whose
-  /// translation is held. (The state file does not hold them yet: save_state refuses them.)
+  /// translation is held (3D: no state file yet).
   bool periodic = false;
   std::vector<double> cell;
   std::vector<std::array<int, D>> shift;
@@ -223,7 +223,7 @@ struct NetworkStateT<2> {
   std::vector<double> wall_f_n;
   /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
   /// the box's edges), each row's image of j (empty in other modes), the particle whose
-  /// translation is held. (The state file does not hold them yet: save_state refuses them.)
+  /// translation is held (the 2D state file's optional "periodic" member).
   bool periodic = false;
   std::vector<double> cell;
   std::vector<std::array<int, 2>> shift;
