@@ -149,23 +149,46 @@ int run_pack(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
 }
 
 void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, const std::string& tag) {
-  const auto& x = s.x();
-  const auto& y = s.y();
+  std::vector<double> x = s.x(), y = s.y();
+  const auto cell = s.periodic_cell();
+  if (cell) {  // a periodic cell: the centres wrapped into it, contacts drawn to j's image, the cell's outline
+    for (std::size_t p = 0; p < x.size(); ++p) {
+      const Eigen::Vector2d w = cell->wrap(Eigen::Vector2d(x[p], y[p]));
+      x[p] = w.x();
+      y[p] = w.y();
+    }
+    const Eigen::Vector2d o = cell->origin, a = cell->h.col(0), b = cell->h.col(1);
+    const Eigen::Vector2d c[4] = {o, o + a, o + a + b, o + b};
+    netdem::app::write_file_atomic(out / fmt::format("cell_{}.vtp", tag),
+                                   netdem::app::vtp_network({c[0].x(), c[1].x(), c[2].x(), c[3].x()},
+                                                            {c[0].y(), c[1].y(), c[2].y(), c[3].y()}, {0, 1, 2, 3},
+                                                            {1, 2, 3, 0}, {}));
+  }
   std::vector<double> rad = s.radius(), th = s.theta(), per(s.peripheral().begin(), s.peripheral().end());
   netdem::app::write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
                                  netdem::app::vtp_particles(x, y, {{"radius", 1, rad}, {"theta", 1, th}, {"peripheral", 1, per}}));
   const auto cs = s.contacts();
   std::vector<int> ci, cj;
   Field fn{"normal_force", 1, {}}, ft{"tangential_force", 1, {}}, ov{"overlap", 1, {}}, sl{"sliding", 1, {}};
+  std::vector<double> nx = x, ny = y;  // the network's points: the centres, then the images a contact reaches
   for (const auto& c : cs) {
     ci.push_back(c.i);
-    cj.push_back(c.j);
+    int j = c.j;
+    if (cell) {  // j's image as i meets it: a new point where it is not j's wrapped centre
+      const double ex = x[c.i] + c.l[0], ey = y[c.i] + c.l[1];
+      if (std::hypot(ex - x[c.j], ey - y[c.j]) > 1e-9 * (std::fabs(ex) + std::fabs(ey) + 1.0)) {
+        j = static_cast<int>(nx.size());
+        nx.push_back(ex);
+        ny.push_back(ey);
+      }
+    }
+    cj.push_back(j);
     fn.values.push_back(c.f_n);
     ft.values.push_back(c.f_t);
     ov.values.push_back(c.overlap);
     sl.values.push_back(c.sliding ? 1.0 : 0.0);
   }
-  netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
+  netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(nx, ny, ci, cj, {fn, ft, ov, sl}));
 }
 
 /// The solver and compaction options of `compact`, checked (before the output folder exists).

@@ -136,16 +136,22 @@ std::vector<ContactView> NetworkSolverT<D>::contacts() const {
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
+    const typename Impl::Vec d = s.at_j(k) - s.at(i);
     if constexpr (D == 2) {
-      const Eigen::Vector2d d = s.at_j(k) - s.at(i);
       const double L = std::hypot(d.x(), d.y());
-      out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0, {d.x(), d.y(), 0.0}});
     } else {
-      const double L = (s.at_j(k) - s.at(i)).norm();
-      out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0});
+      const double L = d.norm();
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0, {d.x(), d.y(), d.z()}});
     }
   }
   return out;
+}
+
+template <int D>
+std::optional<packing::PeriodicCellT<D>> NetworkSolverT<D>::periodic_cell() const {
+  if (!impl_->periodic()) return std::nullopt;
+  return impl_->cell0.deformed(impl_->Fbox);
 }
 
 // The Eq 13 stress of the prescribed particles' reactions (lever arms from the centre of the
@@ -294,6 +300,7 @@ void NetworkSolverT<D>::Impl::print_worst(double fbar) const {
 template class NetworkSolverT<2>;
 // 3D: member by member (measures() is 2D only, and clang 14 instantiates constrained members too)
 template std::vector<ContactView> NetworkSolverT<3>::contacts() const;
+template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3>::periodic_cell() const;
 template StressMeasuresT<3> NetworkSolverT<3>::stress() const;
 template struct NetworkSolverT<3>::Impl;
 

@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <istream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -50,6 +51,7 @@
 #include "netdem/contact/dim.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/packing.hpp"
+#include "netdem/packing/periodic.hpp"
 #include "netdem/quasistatic/solver_options.hpp"
 #include "netdem/system/jammed_state.hpp"
 #include "netdem/system/particle_set.hpp"
@@ -124,6 +126,7 @@ struct ContactView {
   int i, j;
   double f_n, f_t, overlap;
   bool sliding;
+  double l[3] = {0, 0, 0};  ///< the branch vector from i to j (to j's image in a periodic cell)
 };
 
 /// The Eq 13 and Love-Weber stresses of the committed state in dimension D (tension positive):
@@ -305,6 +308,8 @@ class NetworkSolverT {
   const std::vector<std::uint8_t>& peripheral() const;
   std::vector<ContactView> contacts() const;  ///< load-bearing contacts only (3D: f_t = |f_t|)
   Mat box_deformation() const;                ///< maps the initial box to the current one
+  /// The current periodic cell (BoundaryMode::Periodic), else none.
+  std::optional<packing::PeriodicCellT<D>> periodic_cell() const;
   double solid_area() const;                  ///< 3D: the solid volume
   double initial_density() const;
   const packing::Box& initial_box() const;  ///< the packing's box
