@@ -60,6 +60,17 @@ check_bad_rc sn_profile_10001 "10001 breakpoints of the temperature profile with
 ok sn_profile_9999_runs [ $? -eq 0 -a "$(grep -c . "$tmp/sn_profile_9999/history.csv")" -gt 10000 ]
 "$tool" sinter --packing "$lat" --time 100.02 --profile "$tmp/profile_1e4.csv" --allow-long --quiet --out "$tmp/sn_profile_long" >/dev/null 2>&1
 ok sn_profile_allow_long [ $? -eq 0 -a "$(grep -c '"status": "ok"' "$tmp/sn_profile_long/summary.json")" -eq 1 ]
+# issue 27: the work at the door, spheres x the least number of global steps, above 1e8 is refused
+# unless --allow-long: --time 1e8 on the lattice is 1e7 steps (within --max-steps) of 27 spheres,
+# 2.7e8 sphere-steps, about 25 minutes; refused in well under a second (timeout: before, it ran)
+start=$SECONDS
+timeout 20 "$tool" sinter --packing "$lat" --time 1e8 --quiet --out "$tmp/sn_work" >/dev/null 2>"$tmp/stderr"
+rc=$?
+ok sn_work_refused [ $rc -eq 2 -a $((SECONDS - start)) -le 3 -a "$(grep -c . "$tmp/stderr")" -eq 1 -a ! -e "$tmp/sn_work" ]
+ok sn_work_message grep -q -- "--time 1e+08: the run needs at least 2.7e+08 sphere-steps (27 spheres x 1e+07 global steps of at most 10 s), more than 1e+08, hours of one core: pass --allow-long" "$tmp/stderr"
+# with --allow-long the run starts (stopped here after 2 s: it holds its folder)
+timeout 2 "$tool" sinter --packing "$lat" --time 1e8 --allow-long --quiet --out "$tmp/sn_work_long" >/dev/null 2>&1
+ok sn_work_allow_long [ $? -eq 124 -a -e "$tmp/sn_work_long/.incomplete" ]
 check_bad_rc sn_restart_beyond_max_steps "more than the step limit 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
 # the library checks the options once (StaggeredOptions, StaggeredRunOptions) and names the
 # quantity; the message names the option (netdem::FieldError, the field renamed where it differs)
