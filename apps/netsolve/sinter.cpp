@@ -6,7 +6,7 @@
 //   netsolve sinter [--packing FILE | --generate cu [--green-density 0.58] [--seed S]] [--material cu|ti|FILE] [--set KEY=VALUE]...
 //                   [--temperature T | --profile FILE] [--time T_END] [--strategy 1|2] [--dt-max S] [--dt-initial S]
 //                   [--eps-lim E] [--alpha A] [--new-contacts on|off] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--E PA] [--nu NU]
-//                   [--planes box|spheres] [--snapshots N] [--restart STATE] [--checkpoints T1,T2,...] [--max-steps N] [--out DIR] [--quiet] [--overwrite] [--allow-unconverged]
+//                   [--planes box|spheres] [--snapshots N] [--restart STATE] [--checkpoints T1,T2,...] [--max-steps N] [--allow-long] [--out DIR] [--quiet] [--overwrite] [--allow-unconverged]
 //
 // SI units everywhere (m, s, K, N, Pa). Defaults: the Cu benchmark (the green-body packing of 805
 // spheres made in-process, Cu, 1293 K, 5000 s, strategy 2, dt_max = 10 s, new contacts on).
@@ -73,7 +73,7 @@ struct Args {
   int strategy = 2, snapshots = 5;
   long max_steps = 10'000'000;
   std::uint64_t seed = 1;
-  bool quiet = false, overwrite = false, allow_unconverged = false;
+  bool quiet = false, overwrite = false, allow_unconverged = false, allow_long = false;
 };
 
 constexpr const char* kHistoryHeader = "t,T,dt,shrink_x,shrink_y,shrink_z,density,neck_mean,neck_std,contacts,newton,substeps";
@@ -131,6 +131,11 @@ using netdem::app::netsolve::write_snapshot;
 using netdem::app::netsolve::pvd;
 using netdem::app::netsolve::options_json;
 using netdem::app::netsolve::material_json;
+
+/// Work (spheres x the least number of global steps) above which a run is refused unless
+/// --allow-long: at the 15-90 us per sphere-step of the validation runs (805 Cu spheres: 12 ms a
+/// step; the Ti packing: 125-180 ms) 1e8 is 0.4-2.5 h of one core, and the steps are a lower bound.
+constexpr double kMaxSphereSteps = 1e8;
 
 /// The options that a restart state fixes: given with --restart they are refused.
 const char* const kFixedByState[] = {"--packing", "--generate", "--green-density", "--seed", "--material", "--set",
@@ -301,11 +306,22 @@ Setup setup(const Args& a, const CLI::App& app) {
     setup_restart(a, u);
   else
     setup_new(a, u);
-  // the work estimate with the temperature profile's breakpoints (each ends a global step)
-  if (u.sim)
-    as_options([&] { u.ro.validate(u.sim->time(), u.sim->options().dt_max, u.sim->temperature()); });
-  else
-    as_options([&] { u.ro.validate(0.0, u.so.dt_max, u.prof); });
+  // the work estimate with the temperature profile's breakpoints (each ends a global step): the
+  // steps against --max-steps, and the breakpoints against kMaxProfileBreakpoints (--allow-long)
+  const double t0 = u.sim ? u.sim->time() : 0.0;
+  const sp::TemperatureProfile& T = u.sim ? u.sim->temperature() : u.prof;
+  const double dt_max = u.sim ? u.sim->options().dt_max : u.so.dt_max;
+  as_options([&] { u.ro.validate(t0, dt_max, T); });
+  const double n = static_cast<double>(u.sim ? u.sim->particles().size() : u.generate ? u.gb.n : u.pk.size());
+  const double steps = std::max(std::ceil((a.t_end - t0) / dt_max),
+                                1.0 + static_cast<double>(netdem::app::netsolve::profile_breakpoints_within(T, t0, a.t_end)));
+  if (!a.allow_long && !(n * steps <= kMaxSphereSteps))
+    throw UsageError(fmt::format("--time {:g}: the run needs at least {:.3g} sphere-steps ({:g} spheres x {:.3g} global steps of at "
+                                 "most {:g} s), more than {:.3g}, hours of one core: pass --allow-long to run it",
+                                 a.t_end, n * steps, n, steps, dt_max, kMaxSphereSteps));
+  netdem::app::netsolve::check_profile_work(
+      T, t0, a.t_end, a.allow_long,
+      fmt::format("{} '{}'", u.restart ? "--restart" : "--profile", netdem::packing::quote_input(u.restart ? a.restart : a.profile)));
   return u;
 }
 
@@ -670,6 +686,8 @@ int run_sinter_command(int argc, char** argv) {
   netdem::app::netsolve::add_list_option(app, "--checkpoints", a.checkpoints,
                                          "comma list of increasing times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
   app.add_option("--max-steps", a.max_steps, "stop (incomplete, exit 3) after this many steps")->capture_default_str();
+  app.add_flag("--allow-long", a.allow_long, "run above 1e8 sphere-steps (spheres x --time / --dt-max, hours of one core) or a "
+                                            "temperature profile of more than 1e4 breakpoints within the run (each ends a step)");
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
   app.add_flag("--allow-unconverged", a.allow_unconverged, "exit 0 for a run that reached --time but summary.json marks untrustworthy");

@@ -1,6 +1,7 @@
 #pragma once
 // The sintering material of `netsolve sinter-pair` and `netsolve sinter`: --material cu|ti|FILE
-// with --set KEY=VALUE overrides (appended assignments; docs/sintering_pair.md "Material file format").
+// with --set KEY=VALUE overrides (appended assignments; docs/sintering_pair.md "Material file format"),
+// and the work a temperature profile adds (check_profile_work).
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -56,6 +57,35 @@ inline contact::sinter::SinterMaterial load_sinter_material(const std::string& m
       throw;
     throw UsageError(fmt::format("--set '{}':{}", packing::quote_input(set[static_cast<std::size_t>(k)]), what.substr(colon + 1)));
   }
+}
+
+/// The most breakpoints a temperature profile may place within a run unless --allow-long: each one
+/// ends a global step of `netsolve sinter` (and an integration segment and a row of pair.csv in
+/// `sinter-pair`), whatever --dt-max, so that a profile of 1e5 rows is 1e5 steps (13 s on a
+/// 27-sphere lattice, minutes on a green body; docs/staggered.md "Run status and exit").
+inline constexpr long kMaxProfileBreakpoints = 10000;
+
+/// The breakpoints of T strictly inside (t_start, t_end), a jump's two rows counted once.
+inline long profile_breakpoints_within(const contact::sinter::TemperatureProfile& T, double t_start, double t_end) {
+  long n = 0;
+  double prev = t_start;
+  for (double b : T.times())
+    if (b > prev && b < t_end) {
+      ++n;
+      prev = b;
+    }
+  return n;
+}
+
+/// Refuses (UsageError, exit 2) a profile with more than kMaxProfileBreakpoints breakpoints within
+/// the run unless allow_long; `source` names where the profile came from ("--profile 'FILE'").
+inline void check_profile_work(const contact::sinter::TemperatureProfile& T, double t_start, double t_end, bool allow_long,
+                               const std::string& source) {
+  const long n = profile_breakpoints_within(T, t_start, t_end);
+  if (allow_long || n <= kMaxProfileBreakpoints) return;
+  throw UsageError(fmt::format("{}: {} breakpoints of the temperature profile within the run ({:g} to {:g} s), more than {}; "
+                               "each ends a step: pass --allow-long to run it",
+                               source, n, t_start, t_end, kMaxProfileBreakpoints));
 }
 
 }  // namespace netdem::app::netsolve

@@ -5,7 +5,7 @@
 //   netsolve sinter-pair [--material cu|ti|FILE] [--set KEY=VALUE]... [--radius R | --radii RA,RB]
 //                        [--temperature T | --profile FILE] [--time T_END] [--integrator dp45|rk4|cvode|arkode]
 //                        [--rtol RTOL] [--rk4-c C] [--x0 X0_OVER_R] [--x-max X_OVER_R] [--force F] [--paths LIST]
-//                        [--per-decade N] [--t-first T] [--out DIR]
+//                        [--per-decade N] [--t-first T] [--allow-long] [--out DIR]
 //
 // SI units everywhere (m, s, K, N). Writes command.txt, pair.csv (one row per output time: a log
 // grid from --t-first, 20 per decade, plus 60, 600, 3600, 14400, 57600 s, the profile breakpoints and t_end when in
@@ -51,7 +51,7 @@ struct Args {
   double radius = 50e-6, temperature = 1273.15, t_end = 57600.0, rtol = 1e-8, rk4_c = 0.02, x0 = 0.01, x_max = 0.6,
          force = 0.0, t_first = 1.0;
   int per_decade = 20;
-  bool quiet = false, overwrite = false, allow_unconverged = false;
+  bool quiet = false, overwrite = false, allow_unconverged = false, allow_long = false;
 };
 
 struct Row {
@@ -188,6 +188,8 @@ int run(const Args& a, const std::string& command) {
   if (!std::isfinite(a.force)) throw std::invalid_argument("--force must be finite");
   const sp::TemperatureProfile prof =
       a.profile.empty() ? sp::TemperatureProfile::constant(a.temperature) : sp::TemperatureProfile::read_csv(a.profile);
+  netdem::app::netsolve::check_profile_work(prof, 0.0, a.t_end, a.allow_long,
+                                            fmt::format("--profile '{}'", netdem::packing::quote_input(a.profile)));
   sp::IntegratorOptions io;
   io.kind = sp::parse_integrator(a.integrator);
   io.rtol = a.rtol;
@@ -333,6 +335,7 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_option("--t-first", a.t_first, "first time of the logarithmic output grid [s]")->capture_default_str();
   app.add_option("--paths", a.paths, "transport paths on: all, or a list of I (GB), II (surface), III, IV, V (lattice); note section 3")
       ->capture_default_str();
+  app.add_flag("--allow-long", a.allow_long, "run a temperature profile of more than 1e4 breakpoints within the run (each ends a step)");
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
   app.add_flag("--allow-unconverged", a.allow_unconverged, "exit 0 for a run that summary.json marks 'unstable' (the status is kept)");

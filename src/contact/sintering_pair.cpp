@@ -625,9 +625,12 @@ struct Rhs {
   DiffCache cache;
   long* evals;
   TemperatureProfile::Segment seg;  // the piece of T(t) of the current segment
+  bool left_geometry = false;       // an evaluation failed at a state outside the cap-cone geometry
   bool operator()(double t, const State& q, State& dq) {
     ++*evals;
-    return pair_rhs(q, cache.at(seg(t)), p.F, *p.material, p.paths, dq);
+    if (pair_rhs(q, cache.at(seg(t)), p.F, *p.material, p.paths, dq)) return true;
+    left_geometry = left_geometry || check_state(q, 1.0, HUGE_VAL) == PairStatus::ConeDegenerate;
+    return false;
   }
 };
 
@@ -668,10 +671,13 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
       return fail(s == PairStatus::Ok ? PairStatus::NonFinite : s);
     }
     if (opts.kind == IntegratorKind::RK4) {
-      // the paper's RK4 (Ivannikov et al. section 2.2) with dt = c x / |dx/dt| (note §4.6)
+      // the paper's RK4 (Ivannikov et al. section 2.2) with dt = c x / |dx/dt| (note §4.6); a step
+      // whose stages leave the cap-cone geometry is cut by 4 until it stalls there (kStalledStep)
+      double cut = 1.0;
+      long geo_cuts = 0, clean = 0;  // steps cut at the geometry, clean steps since the last
       while (c.t < seg_end) {
         if (++steps > opts.max_steps) return fail(PairStatus::StepFailure);
-        double dt = opts.rk4_c * c.q[kX] / std::fabs(k1[kX]);
+        double dt = cut * opts.rk4_c * c.q[kX] / std::fabs(k1[kX]);
         if (!(dt > 0.0) || !std::isfinite(dt)) dt = seg_end - c.t;
         bool last = false;
         if (c.t + 1.000001 * dt >= seg_end) {  // land on the stop (no sliver of a step after it)
@@ -679,12 +685,18 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
           last = true;
         }
         State k2{}, k3{}, k4{};
-        const State y2 = axpy(c.q, 0.5 * dt, {{1.0, &k1}});
-        if (!f(c.t + 0.5 * dt, y2, k2)) return fail(PairStatus::StepFailure);
-        const State y3 = axpy(c.q, 0.5 * dt, {{1.0, &k2}});
-        if (!f(c.t + 0.5 * dt, y3, k3)) return fail(PairStatus::StepFailure);
-        const State y4 = axpy(c.q, dt, {{1.0, &k3}});
-        if (!f(c.t + dt, y4, k4)) return fail(PairStatus::StepFailure);
+        const bool ok = f(c.t + 0.5 * dt, axpy(c.q, 0.5 * dt, {{1.0, &k1}}), k2) &&
+                        f(c.t + 0.5 * dt, axpy(c.q, 0.5 * dt, {{1.0, &k2}}), k3) && f(c.t + dt, axpy(c.q, dt, {{1.0, &k3}}), k4);
+        if (!ok) {
+          if (!f.left_geometry) return fail(PairStatus::StepFailure);
+          if (++geo_cuts >= kStalledSteps || dt < kStalledStep * c.t || cut < 1e-30) return fail(PairStatus::ConeDegenerate);
+          f.left_geometry = false;
+          clean = 0;
+          cut *= 0.25;
+          continue;
+        }
+        if (++clean >= 10) geo_cuts = 0;
+        cut = std::min(1.0, 2.0 * cut);
         c.q = axpy(c.q, dt / 6.0, {{1.0, &k1}, {2.0, &k2}, {2.0, &k3}, {1.0, &k4}});
         c.t = last ? seg_end : c.t + dt;
         ++c.steps;
@@ -701,6 +713,8 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
       h = 1e-3 * c.q[kX] / std::max(std::fabs(k1[kX]), 1e-300);
       h *= std::pow(opts.rtol / 1e-6, 0.2);
     }
+    long stalled = 0;              // attempts in a row shorter than kStalledStep t
+    long geo_cuts = 0, clean = 0;  // steps cut at the geometry (kStalledSteps: at its limit), clean steps since
     while (c.t < seg_end) {
       if (++steps > opts.max_steps) return fail(PairStatus::StepFailure);
       const double remaining = seg_end - c.t;
@@ -710,7 +724,10 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
         hs = remaining;
         last = true;
       }
-      if (!(hs > 0.0) || c.t + hs == c.t) return fail(PairStatus::StepFailure);  // step size underflow
+      stalled = hs < kStalledStep * c.t ? stalled + 1 : 0;
+      if (geo_cuts >= kStalledSteps) return fail(PairStatus::ConeDegenerate);
+      if (stalled >= kStalledSteps || !(hs > 0.0) || c.t + hs == c.t)  // a stall or a step size underflow
+        return fail(geo_cuts > 0 ? PairStatus::ConeDegenerate : PairStatus::StepFailure);
       State k2{}, k3{}, k4{}, k5{}, k6{}, k7{};
       const double t = c.t;
       bool ok = f(t + c2 * hs, axpy(c.q, hs, {{a21, &k1}}), k2) &&
@@ -736,6 +753,11 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
         ok = std::isfinite(err);
       }
       if (!ok) {  // a stage left the domain: cut the step
+        if (f.left_geometry) {
+          ++geo_cuts;
+          clean = 0;
+          f.left_geometry = false;
+        }
         h = 0.25 * hs;
         ++c.rejected;
         continue;
@@ -746,6 +768,7 @@ PairStatus advance(PairContact& c, const PairProblem& p, double t_end, const Int
         c.t = last ? seg_end : t + hs;
         k1 = k7;  // FSAL
         ++c.steps;
+        if (++clean >= 10) geo_cuts = 0;
         // the step memory: the controller's proposal, not a step clipped to land on a stop
         h = hs < h ? std::max(h, hs * fac) : hs * fac;
         const PairStatus s = check_state(c.q, Rmin, opts.x_over_R_max);

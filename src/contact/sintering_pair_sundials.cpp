@@ -33,10 +33,6 @@ SundialsError::SundialsError(const std::string& call, int flag)
     : std::runtime_error(flag_text(call, flag)), flag_(flag) {}
 
 namespace {
-// A step shorter than kStalledStep times the time, kStalledSteps times in a row, is a stalled
-// integration (StepFailure): at that rate doubling t takes 1e12 steps
-constexpr double kStalledStep = 1e-12;
-constexpr long kStalledSteps = 1000;
 
 void check(int flag, const char* call) {
   if (flag < 0) throw SundialsError(call, flag);
@@ -55,6 +51,7 @@ struct CallbackData {
   TemperatureProfile::Segment seg{};  // the piece of T(t) of the current segment
   const State* offset = nullptr;      // q0 of the contact with x zeroed: y = q - offset
   long evals = 0;
+  bool left_geometry = false;  // a right-hand side failed at a state outside the cap-cone geometry
 };
 
 int rhs_callback(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
@@ -67,7 +64,10 @@ int rhs_callback(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
   const double T = cd->seg(t);
   if (T != cd->d.T) cd->d = diffusivities(*cd->m, T);
   State r{};
-  if (!pair_rhs(q, cd->d, cd->p->F, *cd->m, cd->p->paths, r)) return 1;  // recoverable: cut the step
+  if (!pair_rhs(q, cd->d, cd->p->F, *cd->m, cd->p->paths, r)) {  // recoverable: cut the step
+    cd->left_geometry = cd->left_geometry || check_state(q, 1.0, HUGE_VAL) == PairStatus::ConeDegenerate;
+    return 1;
+  }
   std::copy(r.begin(), r.end(), dy);
   return 0;
 }
@@ -120,6 +120,9 @@ SundialsPairIntegrator::SundialsPairIntegrator(IntegratorKind kind) : impl_(new 
       impl_->mem = check_ptr(ERKStepCreate(rhs_callback, 0.0, impl_->y, impl_->ctx), "ERKStepCreate");
       check(ERKStepSetErrHandlerFn(impl_->mem, quiet_handler, nullptr), "ERKStepSetErrHandlerFn");
       check(ERKStepSetTableNum(impl_->mem, ARKODE_DORMAND_PRINCE_7_4_5), "ERKStepSetTableNum");
+      // as many error-test failures in one step as the DP45's own controller allows (it never gives
+      // up): the default 7 ends a contact that approaches the geometry's limit u_t -> 0 short of it
+      check(ERKStepSetMaxErrTestFails(impl_->mem, 100), "ERKStepSetMaxErrTestFails");
       check(ERKStepSetUserData(impl_->mem, &impl_->cd), "ERKStepSetUserData");
     }
   } catch (...) {
@@ -129,6 +132,16 @@ SundialsPairIntegrator::SundialsPairIntegrator(IntegratorKind kind) : impl_(new 
 }
 
 SundialsPairIntegrator::~SundialsPairIntegrator() { delete impl_; }
+
+namespace {
+// ERKStep (re)started at (t0, y) with the first step h0 (0: its own estimate)
+void erk_start(void* mem, N_Vector y, double t0, double h0, double rtol, double atol, long max_steps) {
+  check(ERKStepReInit(mem, rhs_callback, t0, y), "ERKStepReInit");
+  check(ERKStepSStolerances(mem, rtol, atol), "ERKStepSStolerances");
+  check(ERKStepSetInitStep(mem, h0), "ERKStepSetInitStep");
+  check(ERKStepSetMaxNumSteps(mem, max_steps), "ERKStepSetMaxNumSteps");
+}
+}  // namespace
 
 PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p, double t_end,
                                            const IntegratorOptions& opts) {
@@ -148,6 +161,7 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   I.cd.d = Diffusivities{};
   I.cd.d.T = -1.0;
   I.cd.evals = 0;
+  I.cd.left_geometry = false;
   // The integrated variable is y = q - offset, offset = (0, R_A0, h_A0, R_B0, h_B0): rtol then bounds
   // the error of the changes of R_k and h_k (the shrinkage), as the DP45 weights do. The contact's
   // state is shifted in place for each segment (the no-copy view aliases it) and shifted back at the
@@ -158,6 +172,7 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
   bool shifted = false;
   long steps = 0;    // internal steps of this advance (the step cap)
   long stalled = 0;  // consecutive steps shorter than kStalledStep t (CVODE keeps taking steps of t eps)
+  long geo_cuts = 0, clean = 0;  // ARKODE's restarts at the geometry's limit, clean steps since the last
   auto shift = [&](double sign) {
     for (int i = 1; i < 5; ++i) c.q[i] += sign * offset[i];
     shifted = sign < 0.0;
@@ -187,13 +202,10 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
         check(CVodeSetStopTime(I.mem, seg_end), "CVodeSetStopTime");
         check(CVodeSetMaxNumSteps(I.mem, opts.max_steps), "CVodeSetMaxNumSteps");
       } else {
-        check(ERKStepReInit(I.mem, rhs_callback, c.t, I.y), "ERKStepReInit");
-        check(ERKStepSStolerances(I.mem, opts.rtol, atol), "ERKStepSStolerances");
-        check(ERKStepSetInitStep(I.mem, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0), "ERKStepSetInitStep");
         // no stop time: ARKODE clips its step proposal to a stop time ahead of the step, which
         // hides the unclipped proposal from the step memory; it steps past seg_end instead and the
         // state at seg_end is its interpolant (ERKStepGetDky), from which the next segment restarts
-        check(ERKStepSetMaxNumSteps(I.mem, opts.max_steps), "ERKStepSetMaxNumSteps");
+        erk_start(I.mem, I.y, c.t, c.h > 0.0 ? std::min(c.h, seg_end - c.t) : 0.0, opts.rtol, atol, opts.max_steps);
       }
       PairStatus s = PairStatus::Ok;
       for (;;) {
@@ -211,14 +223,33 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
                       : (flag == ARK_TOO_MUCH_WORK || flag == ARK_ERR_FAILURE || flag == ARK_REPTD_RHSFUNC_ERR ||
                          flag == ARK_RHSFUNC_FAIL || flag == ARK_TOO_CLOSE);
           const bool first_rhs = I.cvode ? flag == CV_FIRST_RHSFUNC_ERR : flag == ARK_FIRST_RHSFUNC_ERR;
+          // ERKStep cannot retry a step whose stage left the cap-cone geometry (the right-hand side's
+          // recoverable failure ends it): it restarts from the last accepted state with a quarter of
+          // the step, as DP45 cuts, until it stalls at that limit (kStalledSteps)
+          if (!I.cvode && flag == ARK_UNREC_RHSFUNC_ERR && I.cd.left_geometry) {
+            double h_try = 0.0, h_ok = 0.0;
+            check(ERKStepGetCurrentStep(I.mem, &h_try), "ERKStepGetCurrentStep");
+            check(ERKStepGetLastStep(I.mem, &h_ok), "ERKStepGetLastStep");
+            const double h_cut = 0.25 * (h_ok > 0.0 ? std::min(h_try, h_ok) : h_try);
+            clean = 0;
+            if (++geo_cuts >= kStalledSteps || !(h_cut > kStalledStep * c.t)) {
+              s = PairStatus::ConeDegenerate;
+              break;
+            }
+            I.cd.left_geometry = false;
+            erk_start(I.mem, I.y, c.t, h_cut, opts.rtol, atol, opts.max_steps);
+            continue;
+          }
           if (!step_failure && !first_rhs) throw SundialsError(I.cvode ? "CVode" : "ERKStepEvolve", flag);
           // a right-hand side that cannot be evaluated at a state outside the validity limits is
           // that limit (as for DP45 and RK4); otherwise the step failed
           s = check_state(state_now(), Rmin, opts.x_over_R_max);
-          if (s == PairStatus::Ok || s == PairStatus::NonFinite) s = PairStatus::StepFailure;
+          if (s == PairStatus::Ok || s == PairStatus::NonFinite)
+            s = I.cd.left_geometry ? PairStatus::ConeDegenerate : PairStatus::StepFailure;
           break;
         }
         ++c.steps;
+        if (++clean >= 10) geo_cuts = 0;
         if (!I.cvode && t > seg_end) {
           check(ERKStepGetDky(I.mem, seg_end, 0, I.y), "ERKStepGetDky");
           t = seg_end;
@@ -240,9 +271,11 @@ PairStatus SundialsPairIntegrator::advance(PairContact& c, const PairProblem& p,
         if (s != PairStatus::Ok) break;
         // a stalled step is a step size underflow: CVODE warns "t + h = t" and goes on, 1e7 steps of
         // ~1e-20 s at t = 7e-5 s for radii 5e-5, 1e-3 m (42 s, then the step cap)
+        // (the geometry flag counts the right-hand side failures of the current stall only)
         stalled = h_last < kStalledStep * t ? stalled + 1 : 0;
+        if (stalled == 0) I.cd.left_geometry = false;
         if (stalled >= kStalledSteps) {
-          s = PairStatus::StepFailure;
+          s = I.cd.left_geometry ? PairStatus::ConeDegenerate : PairStatus::StepFailure;
           break;
         }
         if (t >= seg_end) break;

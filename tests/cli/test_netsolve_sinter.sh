@@ -46,6 +46,31 @@ check_bad_rc sn_time_beyond_max_steps "--max-steps: the run of 1e+12 s needs at 
 awk 'BEGIN { print "time,T"; for (k = 0; k < 2000; k++) printf "%.17g,1293\n", 0.05 * k }' >"$tmp/dense_profile.csv"
 check_bad_rc sn_profile_breakpoints "--max-steps: the run of 100 s needs at least 2e+03 steps .*each of the 1999 breakpoints" \
   sinter --packing "$lat" --time 100 --profile "$tmp/dense_profile.csv" --max-steps 500 --quiet
+# issue 27: a profile of more than 1e4 breakpoints within the run is refused at the door unless
+# --allow-long (1e5 rows within 100 s: 1e5 forced steps, 12-20 s on this lattice under the default
+# --max-steps before the limit), in well under a second; the limit counts the run's breakpoints only
+awk 'BEGIN { print "time,T"; for (k = 0; k < 100000; k++) printf "%.17g,1293\n", 0.001 * k }' >"$tmp/profile_1e5.csv"
+start=$SECONDS
+check_bad_rc sn_profile_1e5_rows "--profile '.*profile_1e5.csv': 99999 breakpoints of the temperature profile within the run (0 to 100 s), more than 10000; each ends a step: pass --allow-long" \
+  sinter --packing "$lat" --time 100 --profile "$tmp/profile_1e5.csv" --quiet
+ok sn_profile_1e5_rows_seconds [ $((SECONDS - start)) -le 4 ]
+awk 'BEGIN { print "time,T"; for (k = 0; k <= 10001; k++) printf "%.17g,1293\n", 0.01 * k }' >"$tmp/profile_1e4.csv"
+check_bad_rc sn_profile_10001 "10001 breakpoints of the temperature profile within the run (0 to 100.02 s), more than 10000" sinter --packing "$lat" --time 100.02 --profile "$tmp/profile_1e4.csv" --quiet
+"$tool" sinter --packing "$lat" --time 100 --profile "$tmp/profile_1e4.csv" --quiet --out "$tmp/sn_profile_9999" >/dev/null 2>&1
+ok sn_profile_9999_runs [ $? -eq 0 -a "$(grep -c . "$tmp/sn_profile_9999/history.csv")" -gt 10000 ]
+"$tool" sinter --packing "$lat" --time 100.02 --profile "$tmp/profile_1e4.csv" --allow-long --quiet --out "$tmp/sn_profile_long" >/dev/null 2>&1
+ok sn_profile_allow_long [ $? -eq 0 -a "$(grep -c '"status": "ok"' "$tmp/sn_profile_long/summary.json")" -eq 1 ]
+# issue 27: the work at the door, spheres x the least number of global steps, above 1e8 is refused
+# unless --allow-long: --time 1e8 on the lattice is 1e7 steps (within --max-steps) of 27 spheres,
+# 2.7e8 sphere-steps, about 25 minutes; refused in well under a second (timeout: before, it ran)
+start=$SECONDS
+timeout 20 "$tool" sinter --packing "$lat" --time 1e8 --quiet --out "$tmp/sn_work" >/dev/null 2>"$tmp/stderr"
+rc=$?
+ok sn_work_refused [ $rc -eq 2 -a $((SECONDS - start)) -le 3 -a "$(grep -c . "$tmp/stderr")" -eq 1 -a ! -e "$tmp/sn_work" ]
+ok sn_work_message grep -q -- "--time 1e+08: the run needs at least 2.7e+08 sphere-steps (27 spheres x 1e+07 global steps of at most 10 s), more than 1e+08, hours of one core: pass --allow-long" "$tmp/stderr"
+# with --allow-long the run starts (stopped here after 2 s: it holds its folder)
+timeout 2 "$tool" sinter --packing "$lat" --time 1e8 --allow-long --quiet --out "$tmp/sn_work_long" >/dev/null 2>&1
+ok sn_work_allow_long [ $? -eq 124 -a -e "$tmp/sn_work_long/.incomplete" ]
 check_bad_rc sn_restart_beyond_max_steps "more than the step limit 5" sinter --packing "$lat" --time 100 --dt-max 1 --max-steps 5 --quiet
 # the library checks the options once (StaggeredOptions, StaggeredRunOptions) and names the
 # quantity; the message names the option (netdem::FieldError, the field renamed where it differs)
@@ -136,6 +161,11 @@ sed 's/"seed":7}/"seed":-1}/' "$tmp/lone/state.txt" >"$tmp/lone/seed.txt"
 check_bad_rc sn_restart_origin_seed "/origin/seed: expected a whole number" sinter --restart "$tmp/lone/seed.txt" --time 100 --quiet
 sed 's/"seed":7}/"seed":1e300}/' "$tmp/lone/state.txt" >"$tmp/lone/seed2.txt"
 check_bad_rc sn_restart_origin_seed_float "/origin/seed" sinter --restart "$tmp/lone/seed2.txt" --time 100 --quiet
+# issue 27 item 8: a NaN clock in a restart state is named by its field, not blamed on --time
+sed -E 's/"t":50.0}/"t":"nan"}/' "$tmp/lone/state.txt" >"$tmp/lone/nan_clock.txt"
+check_bad_rc sn_restart_nan_clock "nan_clock.txt: /clock/t: expected a number" sinter --restart "$tmp/lone/nan_clock.txt" --time 100 --quiet
+"$tool" sinter --restart "$tmp/lone/nan_clock.txt" --time 100 --quiet --out "$tmp/nan_clock" >/dev/null 2>"$tmp/stderr"
+ok sn_restart_nan_clock_not_time [ "$(grep -c -- "--time" "$tmp/stderr")" -eq 0 ]
 ok sn_restart_old_untouched [ "$(tail -1 "$tmp/r1/history.csv")" = "$(grep '^50,' "$c/history.csv")" ]
 # the same from the checkpoint's state
 "$tool" sinter --restart "$c/state_1.txt" --time 100 --quiet --out "$tmp/r3" >/dev/null 2>&1

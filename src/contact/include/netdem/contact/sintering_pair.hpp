@@ -190,6 +190,14 @@ const char* to_string(PairStatus s);
 constexpr bool validity_limit(PairStatus s) {
   return s == PairStatus::NeckLimit || s == PairStatus::ConeDegenerate || s == PairStatus::NeckVanished;
 }
+/// A stalled integration ends every integrator: kStalledSteps steps in a row shorter than
+/// kStalledStep times the time (doubling t would take 1e12 steps), or (DP45, RK4) kStalledSteps
+/// steps cut because a stage left the cap-cone geometry, fewer than 10 clean steps apart. It ends
+/// ConeDegenerate when stages left the geometry (a contact that slides onto the limit u_t -> 0 with
+/// a diverging rate, e.g. radii 5e-5 and 1e-3 m at t = 6.86e-5 s: the validity limit is reached,
+/// not stepped across), StepFailure otherwise.
+inline constexpr double kStalledStep = 1e-12;
+inline constexpr long kStalledSteps = 1000;
 /// The neck x / min(R_A0, R_B0) below which check_state() calls it vanished (PairStatus::NeckVanished).
 inline constexpr double kNeckVanished = 1e-4;
 /// One-sentence reason for a status (for summary.json and messages).
