@@ -574,7 +574,8 @@ void IntegratorOptions::validate() const {
   };
   if (!(std::isfinite(rtol) && rtol >= 1e-14 && rtol < 1.0)) bad("rtol must be in [1e-14, 1)", rtol);
   if (!(std::isfinite(atol_scale) && atol_scale > 0.0)) bad("atol_scale must be positive", atol_scale);
-  if (!(std::isfinite(rk4_c) && rk4_c > 0.0 && rk4_c <= 1.0)) bad("rk4 step factor c must be in (0, 1]", rk4_c);
+  // below 1e-4 (200 x finer than the default 0.02) a run only creeps to its step cap (issue 27)
+  if (!(std::isfinite(rk4_c) && rk4_c >= 1e-4 && rk4_c <= 1.0)) bad("rk4 step factor c must be in [1e-4, 1]", rk4_c);
   if (!(std::isfinite(x_over_R_max) && x_over_R_max > 0.0)) bad("x_over_R_max must be positive", x_over_R_max);
   if (max_steps < 1) bad("max_steps must be >= 1", static_cast<double>(max_steps));
 }

@@ -10,6 +10,7 @@ tool="$1"
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 check_bad sp_material "material" sinter-pair --material unobtainium
 check_bad sp_radius "radius" sinter-pair --radius -1
+check_bad sp_rk4_c_tiny "step factor" sinter-pair --integrator rk4 --rk4-c 1e-300
 check_bad sp_radius_um "metres" sinter-pair --radius 50
 check_bad sp_radii "radii" sinter-pair --radii 1e-5
 check_bad sp_both_radii "excludes" sinter-pair --radius 1e-5 --radii 1e-5,2e-5

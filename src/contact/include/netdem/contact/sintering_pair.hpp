@@ -259,7 +259,7 @@ struct IntegratorOptions {
   double rtol = 1e-6;
   /// Absolute tolerance of every component = atol_scale * rtol * min(R_A0, R_B0) [m].
   double atol_scale = 1e-3;
-  double rk4_c = 0.02;       ///< RK4 step dt = c x / |dx/dt| (the paper's integrator; note §4.6)
+  double rk4_c = 0.02;       ///< RK4 step dt = c x / |dx/dt| (the paper's integrator; note §4.6), in [1e-4, 1]
   double x_over_R_max = 0.6; ///< useful range of the neck (note §4.6)
   long max_steps = 10'000'000;  ///< per advance() call
   void validate() const;
