@@ -128,6 +128,28 @@ template <class Law, bool InPlace>
 
 // The particle-particle contacts of the Verlet table: forces, torques, the 2D stress sums, the
 // elastic energy and the largest normal force (the sums in locals: the loop stores forces).
+// Periodic: the cell h and the strain rate L as 3 x 3 (zeros beyond D), for the force loop.
+template <int D>
+void DynamicSolverT<D>::hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const {
+  for (int r = 0; r < D; ++r)
+    for (int c = 0; c < D; ++c) {
+      hc[r][c] = cell_.h(r, c);
+      Lr[r][c] = D == 2 ? (r == c ? edot_[r] : edot_[2]) : L3_[r][c];
+    }
+}
+
+namespace {
+// The offset h n of the image n (D integers) added to the branch (dx, dy, dz).
+template <int D>
+inline void add_image(const int* n, const double (&hc)[3][3], double& dx, double& dy, double& dz) {
+  if (!(n[0] | n[1] | (D == 3 ? n[D - 1] : 0))) return;
+  const double n0 = n[0], n1 = n[1], n2 = D == 3 ? n[D - 1] : 0;
+  dx += hc[0][0] * n0 + hc[0][1] * n1 + hc[0][2] * n2;
+  dy += hc[1][0] * n0 + hc[1][1] * n1 + hc[1][2] * n2;
+  dz += hc[2][0] * n0 + hc[2][1] * n1 + hc[2][2] * n2;
+}
+}  // namespace
+
 // Periodic (issue 29): the branch to the image of j, x_j + h n - x_i, and the velocities are the
 // fluctuations about the affine field, so that the relative velocity adds L times the branch.
 template <int D>
@@ -160,13 +182,7 @@ template <class Law, bool InPlace, bool Periodic>
   // the cell and the strain rate (Periodic), hoisted: 3 x 3 with zeros beyond D
   double hc[3][3] = {}, Lr[3][3] = {};
   const int* const shift = pair_shift_.data();
-  if constexpr (Periodic) {
-    for (int r = 0; r < D; ++r)
-      for (int c = 0; c < D; ++c) {
-        hc[r][c] = cell_.h(r, c);
-        Lr[r][c] = D == 2 ? (r == c ? edot_[r] : edot_[2]) : L3_[r][c];
-      }
-  }
+  if constexpr (Periodic) hoist_cell(hc, Lr);
   double s3p[3][3] = {};  // Periodic, 3D: the stress sums per contact
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
@@ -175,15 +191,7 @@ template <class Law, bool InPlace, bool Periodic>
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
     if constexpr (D == 3) dz = p_z[j] - p_z[i];
-    if constexpr (Periodic) {
-      const int* n = shift + D * k;
-      if (n[0] | n[1] | (D == 3 ? n[D - 1] : 0)) {
-        const double n0 = n[0], n1 = n[1], n2 = D == 3 ? n[D - 1] : 0;
-        dx += hc[0][0] * n0 + hc[0][1] * n1 + hc[0][2] * n2;
-        dy += hc[1][0] * n0 + hc[1][1] * n1 + hc[1][2] * n2;
-        dz += hc[2][0] * n0 + hc[2][1] * n1 + hc[2][2] * n2;
-      }
-    }
+    if constexpr (Periodic) add_image<D>(shift + D * k, hc, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)

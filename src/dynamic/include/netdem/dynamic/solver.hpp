@@ -586,6 +586,7 @@ class DynamicSolverT {
   void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
   void remove_mean_velocity();
   void set_box_to_cell();  ///< box_ = the cell's bounding box
+  void hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const;  ///< h and L as 3 x 3 (the force loop)
   /// The branch x_j (+ h n) - x_i of table row k (D components).
   void branch(std::size_t k, std::size_t i, std::size_t j, double* d) const {
     d[0] = P_.x[j] - P_.x[i];
