@@ -122,8 +122,8 @@ void check_boundary(const DemCompactArgs& a, bool walls) {
   }
   if constexpr (D == 3) {
     if (!walls && !a.affine)
-      throw UsageError("--dim 3 takes --boundary walls, periodic or --affine (--boundary layer, netsolve's peripheral layer, "
-                       "is 2D only)");
+      throw UsageError("--dim 3 takes --boundary walls or --affine, or --boundary periodic with a periodic packing "
+                       "(--boundary layer, netsolve's peripheral layer, is 2D only)");
     if (a.pack.lateral != "walls")
       throw UsageError(fmt::format("--lateral '{}': the explicit DEM has no periodic boundaries (demsolve compact --dim 3 "
                                    "takes --lateral walls)", packing::quote_input(a.pack.lateral)));

@@ -145,7 +145,7 @@ void set_isotropic_rate(DynamicSolverT<D>& s, double e) {
 
 /// The measures of the end state: coordination with and without rattlers, psi6 (2D), overlaps.
 template <int D>
-void measure(const DynamicSolverT<D>& s, PeriodicPackSummary& m, double r_mean) {
+void measure(const DynamicSolverT<D>& s, PeriodicPackSummary& m, double r_mean, bool friction) {
   std::vector<ContactInfo> cs;
   s.contacts(cs);
   const std::size_t n = s.particles().size();
@@ -161,18 +161,19 @@ void measure(const DynamicSolverT<D>& s, PeriodicPackSummary& m, double r_mean) 
   m.Z = 2.0 * static_cast<double>(cs.size()) / static_cast<double>(n);
   m.mean_overlap = cs.empty() ? 0.0 : sum_ov / static_cast<double>(cs.size()) / r_mean;
   m.max_overlap = max_ov / r_mean;
-  // rattlers: fewer than D + 1 contacts, removed until none is left
+  // rattlers: fewer than D + 1 contacts (frictional: fewer than D), removed until none is left
+  const int need = friction ? D : D + 1;
   std::vector<std::vector<std::uint32_t>> adj(n);
   for (const auto& c : cs) adj[c.i].push_back(c.j), adj[c.j].push_back(c.i);
   std::vector<std::uint8_t> gone(n, 0);
   std::vector<std::uint32_t> stack;
   for (std::size_t i = 0; i < n; ++i)
-    if (deg[i] < D + 1) gone[i] = 1, stack.push_back(static_cast<std::uint32_t>(i));
+    if (deg[i] < need) gone[i] = 1, stack.push_back(static_cast<std::uint32_t>(i));
   while (!stack.empty()) {
     const std::uint32_t i = stack.back();
     stack.pop_back();
     for (std::uint32_t j : adj[i])
-      if (!gone[j] && --deg[j] < D + 1) gone[j] = 1, stack.push_back(j);
+      if (!gone[j] && --deg[j] < need) gone[j] = 1, stack.push_back(j);
   }
   std::size_t kept = 0, kept_contacts = 0;
   for (std::size_t i = 0; i < n; ++i) kept += !gone[i];
@@ -233,7 +234,7 @@ bool servo(DynamicSolverT<D>& s, double target, const PeriodicPackOptions& o, Pe
     if (k % 200 != 0) continue;
     if (progress) progress(static_cast<double>(k) / static_cast<double>(limit));
     if (std::fabs(p / target - 1.0) < o.pressure_tol && std::fabs(p_now / target - 1.0) < o.pressure_tol) {
-      measure<D>(s, m, r_mean);
+      measure<D>(s, m, r_mean, o.friction > 0.0);
       if (m.unbalanced < o.force_tol) return true;
     }
   }
@@ -285,7 +286,7 @@ packing::Packing make(const PeriodicPackOptions& o, PeriodicPackSummary& m, cons
   }
   set_isotropic_rate<D>(s, 0.0);
   m.steps = k;
-  measure<D>(s, m, r_mean);
+  measure<D>(s, m, r_mean, o.friction > 0.0);
   m.pressure = pressure_of<D>(s);
   m.density = s.density();
   if (!done) {

@@ -44,7 +44,8 @@ struct PeriodicPackSummary {
   double pressure = 0.0;          ///< p / k_n at the end (contact stress, trace / D)
   double unbalanced = 0.0;        ///< RMS unbalanced force / mean contact force at the end
   double Z = 0.0;                 ///< 2 contacts / N (every particle)
-  double Z_backbone = 0.0;        ///< the same without the rattlers (fewer than D + 1 contacts, removed recursively)
+  /// the same without the rattlers (fewer than D + 1 contacts, frictional: fewer than D; removed recursively)
+  double Z_backbone = 0.0;
   double rattler_fraction = 0.0;  ///< rattlers / N
   double psi6_global = 0.0;       ///< 2D: |(1/N') sum_j psi6_j|, psi6_j = mean over j's contacts of exp(6 i theta)
   double psi6_local = 0.0;        ///< 2D: (1/N') sum_j |psi6_j| (N': the particles with a contact)
