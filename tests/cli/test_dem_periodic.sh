@@ -4,7 +4,7 @@
 # demsolve compact --boundary periodic runs it (history.csv with the kinetic stress apart, the
 # cell drawn in cell_*.vtp); the options' bad values and the commands that cannot use a periodic
 # packing are refused with one line and exit 2, nothing written.
-# usage: test_periodic.sh PATH/TO/netsolve PATH/TO/demsolve
+# usage: test_dem_periodic.sh PATH/TO/netsolve PATH/TO/demsolve
 set -u
 ns="$1"
 ds="$2"
