@@ -74,7 +74,7 @@ packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) 
         throw UsageError(fmt::format("--packing {} is a 2D packing; --dim 3 needs a 3D packing file (id,x,y,z,r with "
                                      "'# dim 3', netsolve pack --dim 3)", packing::quote_input(a.packing_file)));
       for (const auto& c : p.comments)
-        if (c.find("lateral periodic") != std::string::npos)
+        if (!p.periodic && c.find("lateral periodic") != std::string::npos)
           throw UsageError(fmt::format("--packing {} is a periodic deposition; the explicit DEM has no periodic "
                                        "boundaries (use --lateral walls)", packing::quote_input(a.packing_file)));
       return p;
@@ -108,9 +108,22 @@ std::optional<sys::JammedStateT<D>> input_state(const DemCompactArgs& a, bool wa
 template <int D>
 void check_boundary(const DemCompactArgs& a, bool walls) {
   if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
+  const bool periodic = a.boundary == "periodic";
+  if (periodic) {
+    if (a.affine)
+      throw UsageError("--affine and --boundary periodic exclude each other (in a periodic cell the cell follows the strain "
+                       "and every particle is free)");
+    if (!a.state_file.empty())
+      throw UsageError("--state: a jammed state has no periodic cell yet; --boundary periodic takes --packing FILE");
+    if (a.save_state) throw UsageError("--save-state: a jammed state has no periodic cell yet (--boundary periodic)");
+    if (a.packing_file.empty())
+      throw UsageError("--boundary periodic needs --packing FILE, a periodic packing ('# periodic'; netsolve pack --periodic)");
+    return;
+  }
   if constexpr (D == 3) {
     if (!walls && !a.affine)
-      throw UsageError("--dim 3 takes --boundary walls or --affine (--boundary layer, netsolve's peripheral layer, is 2D only)");
+      throw UsageError("--dim 3 takes --boundary walls or --affine, or --boundary periodic with a periodic packing "
+                       "(--boundary layer, netsolve's peripheral layer, is 2D only)");
     if (a.pack.lateral != "walls")
       throw UsageError(fmt::format("--lateral '{}': the explicit DEM has no periodic boundaries (demsolve compact --dim 3 "
                                    "takes --lateral walls)", packing::quote_input(a.pack.lateral)));
@@ -125,7 +138,8 @@ class CompactFiles : public CompactionObserverT<D> {
  public:
   CompactFiles(const DynamicSolverT<D>& s, const fs::path& out, std::vector<double> snaps, bool walls, double t_end,
                bool quiet)
-      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), progress_("compact", t_end, quiet) {
+      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), periodic_(s.periodic()),
+        progress_("compact", t_end, quiet) {
     const auto& lab = sys::voigt_labels<D>();
     csv_ = "increment";
     for (const char* l : lab) csv_ += fmt::format(",E{}", l);
@@ -135,6 +149,8 @@ class CompactFiles : public CompactionObserverT<D> {
     csv_ += ",Z,contacts,sliding,mean_fn,dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,"
             "samples,dt,outside,D_in_box";
     if (walls_) csv_ += ",wall_vs_contact_gap";
+    if (periodic_)
+      for (const char* l : lab) csv_ += fmt::format(",S{}_kinetic", l);
     csv_ += "\n";
   }
   void row(const CompactionRowT<D>& r) override {
@@ -150,6 +166,8 @@ class CompactFiles : public CompactionObserverT<D> {
                         r.samples, r.dt);
     csv_ += fmt::format(",{},{:.9g}", r.outside, r.density_in_box);
     if (walls_) csv_ += fmt::format(",{:.4e}", r.wall_gap);
+    if (periodic_)
+      for (double v : m.Sk) csv_ += fmt::format(",{:.6g}", v);
     csv_ += "\n";
     if (r.increment == 0) return;
     while (next_snap_ < snaps_.size() && s_.density() >= snaps_[next_snap_] - 1e-9) {
@@ -170,7 +188,7 @@ class CompactFiles : public CompactionObserverT<D> {
   const DynamicSolverT<D>& s_;
   fs::path out_;
   std::vector<double> snaps_;
-  bool walls_;
+  bool walls_, periodic_;
   Progress progress_;
   std::string csv_;
   std::size_t next_snap_ = 0;
@@ -192,7 +210,7 @@ nlohmann::json compact_summary(const std::string& command, const DemCompactArgs&
   j["initial_density"] = rate.initial_density;
   j["sigma_y"] = 1.0;
   j["friction"] = a.friction;
-  j["mode"] = a.affine ? "affine" : a.boundary == "walls" ? "walls" : "die";
+  j["mode"] = a.affine ? "affine" : a.boundary == "walls" ? "walls" : a.boundary == "periodic" ? "periodic" : "die";
   j["boundary"] = a.affine ? "affine" : a.boundary;
   j["prescribed"] = prescribed;
   j["rotations"] = !a.no_rotation;
@@ -230,6 +248,13 @@ void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const Dynami
     fin[std::string("S") + lab[k]] = m.S[k];
     fin[std::string("S") + lab[k] + "_contacts"] = m.Sc[k];
     fin[std::string("E") + lab[k]] = r.last.E[k];
+  }
+  if (s.periodic()) {  // the kinetic stress of the fluctuations, apart from the contact stress
+    for (std::size_t k = 0; k < lab.size(); ++k) fin[std::string("S") + lab[k] + "_kinetic"] = m.Sk[k];
+    nlohmann::json cell = nlohmann::json::array();
+    for (int c = 0; c < D; ++c)
+      for (int r = 0; r < D; ++r) cell.push_back(s.cell().h(r, c));
+    fin["cell"] = cell;
   }
   j["final"] = fin;
   if (walls) {
@@ -288,9 +313,9 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   co.walls = a.boundary == "walls";
   co.check_numbers();
   check_compact_numbers(a);
-  if (a.boundary != "layer" && a.boundary != "walls")
-    throw UsageError(fmt::format("--boundary '{}' is not 'layer' or 'walls'", packing::quote_input(a.boundary)));
-  const bool walls = a.boundary == "walls";
+  if (a.boundary != "layer" && a.boundary != "walls" && a.boundary != "periodic")
+    throw UsageError(fmt::format("--boundary '{}' is not 'layer', 'walls' or 'periodic'", packing::quote_input(a.boundary)));
+  const bool walls = a.boundary == "walls", periodic = a.boundary == "periodic";
   check_boundary<D>(a, walls);
   const double mu = netdem::app::netsolve::parse_friction(a.friction);
   std::vector<double> snaps = a.snapshots;  // a set of densities (the file names carry each): any order
@@ -305,8 +330,15 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   check_memory(pk.size());
   const std::size_t n = pk.size();
   if (n == 0) throw UsageError("the packing has no particles");
+  if (pk.periodic && !periodic)
+    throw UsageError(fmt::format("--packing {} is periodic ('# periodic'): run it with --boundary periodic (a box would cut "
+                                 "its contacts across the faces)", packing::quote_input(a.packing_file)));
+  if (periodic && !pk.periodic)
+    throw UsageError(fmt::format("--boundary periodic needs a periodic packing ('# periodic'; netsolve pack --periodic); "
+                                 "--packing {} is not", packing::quote_input(a.packing_file)));
 
-  Particles P = D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);  // rho = 1
+  // rho = 1
+  Particles P = periodic ? periodic_particles_from(pk, 1.0) : D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);
   // the walls enclose every particle at the start (the deposition's top particles stick out of its
   // box); a jammed state brings its own box
   Box box(jammed ? jammed->box : walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
@@ -317,16 +349,20 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   for (double r : P.radius) solid += D == 2 ? std::numbers::pi * r * r : 4.0 / 3.0 * std::numbers::pi * r * r * r;
   double box_measure = (box.x_max - box.x_min) * (box.y_max - box.y_min);
   if constexpr (D == 3) box_measure *= box.z_max - box.z_min;
+  if (periodic) box_measure = packing::periodic_cell<D>(pk).measure();
   const double D0 = solid / box_measure;
   co.validate(path, D0);
   const CompactionRateT<D> rate = compaction_rate(path, a.inertial_number, D0, a.to_density);
 
   activity() = "setting up the explicit solver";
-  DynamicSolverT<D> s = jammed ? solver_from_jammed(*jammed, 1.0, box, o) : DynamicSolverT<D>(std::move(P), o.plastic, box, o);
+  DynamicSolverT<D> s = jammed      ? solver_from_jammed(*jammed, 1.0, box, o)
+                        : periodic  ? DynamicSolverT<D>(std::move(P), o.plastic, packing::periodic_cell<D>(pk), o)
+                                    : DynamicSolverT<D>(std::move(P), o.plastic, box, o);
   set_strain_rate(s, rate.rate);
   s.set_affine_velocities();
   std::vector<std::uint32_t> pre;
-  if constexpr (D == 2) {
+  if (periodic) {  // every particle free, the cell follows the strain
+  } else if constexpr (D == 2) {
     // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free
     // except the peripheral layer's, as netsolve and Redanz & Fleck section 2.4 ("the rotation of
     // particles in the peripheral layer is prevented")

@@ -116,7 +116,8 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
   dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
   dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
   dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
-                                               "frictionless walls driven along the path")->capture_default_str();
+                                               "frictionless walls driven along the path; periodic: a periodic cell "
+                                               "following the path (--packing of netsolve pack --periodic)")->capture_default_str();
   dcomp->add_option("--normal-unloading", dc.normal_unloading, "reversible (Eq 2 retraced) | elastic (section 3.4 branch)")
       ->check(CLI::IsMember({"reversible", "elastic"}))
       ->capture_default_str();

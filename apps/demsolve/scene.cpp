@@ -40,12 +40,33 @@ void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, con
   Field fn{"normal_force", 1, {}}, ft{"tangential_force", 1, {}}, ov{"overlap", 1, {}}, sl{"sliding", 1, {}};
   for (const auto& c : cs) {
     if (c.wall >= 0 || !(c.f_spring > 0.0)) continue;  // the meter's loaded contacts (compaction.hpp)
+    if (s.periodic()) {  // a contact through an image is not drawn (a line across the cell)
+      const double dx = P.x[c.j] - P.x[c.i], dy = P.y[c.j] - P.y[c.i], dz = D == 3 ? P.z[c.j] - P.z[c.i] : 0.0;
+      if (std::sqrt(dx * dx + dy * dy + dz * dz) > c.d_i + c.d_j + 1e-9 * (c.d_i + c.d_j)) continue;
+    }
     ci.push_back(static_cast<int>(c.i));
     cj.push_back(static_cast<int>(c.j));
     fn.values.push_back(c.f_spring);
     ft.values.push_back(c.f_t);
     ov.values.push_back(c.overlap);
     sl.values.push_back(c.sliding ? 1.0 : 0.0);
+  }
+  if (s.periodic()) {  // the cell, as lines between its corners (2D: 4, 3D: 12 edges)
+    const auto& cell = s.cell();
+    std::vector<double> cx, cy, cz;
+    for (int corner = 0; corner < (1 << D); ++corner) {
+      auto p = cell.origin;
+      for (int a = 0; a < D; ++a)
+        if ((corner >> a) & 1) p += cell.h.col(a);
+      cx.push_back(p(0));
+      cy.push_back(p(1));
+      cz.push_back(D == 3 ? p(D - 1) : 0.0);
+    }
+    std::vector<int> ei, ej;
+    for (int c = 0; c < (1 << D); ++c)
+      for (int a = 0; a < D; ++a)
+        if (!((c >> a) & 1)) ei.push_back(c), ej.push_back(c | (1 << a));
+    write_file_atomic(out / fmt::format("cell_{}.vtp", tag), vtp_network_3d(cx, cy, D == 3 ? &cz : nullptr, ei, ej, {}));
   }
   const auto file = out / fmt::format("contacts_{}.vtp", tag);
   if constexpr (D == 2) {

@@ -34,6 +34,7 @@
 #include "netdem/system/jammed_state.hpp"
 #include "output.hpp"
 #include "pack_green.hpp"
+#include "pack_periodic.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
 #include "status.hpp"
@@ -502,6 +503,39 @@ std::vector<CLI::Option*> add_green_body_options(CLI::App* pack, netdem::app::ne
       pack->add_flag("--allow-long", ga.allow_long, "green-body: run even above 5e10 particle-steps (hours of one core)")};
 }
 
+/// The options of `pack --periodic` (pack_periodic.hpp) but the flag itself, returned so that main
+/// can refuse them without it.
+std::vector<CLI::Option*> add_periodic_options(CLI::App* pack, netdem::app::netsolve::PeriodicPackArgs& pp) {
+  pack->add_flag("--periodic", pp.periodic, "a periodic packing: a random gas in a periodic cell compressed by the DEM until "
+                                            "it jams at --jam-pressure (--n particles, default 1600; r = R[--r-min, --r-max])");
+  return {pack->add_option("--pack-friction", pp.pack.friction, "--periodic: Coulomb friction of the packing's linear contact law")
+              ->capture_default_str(),
+          pack->add_option("--jam-pressure", pp.pack.pressure,
+                           "--periodic: the pressure p / k_n (3D: p R / k_n) at which the packing is held at rest (overlaps "
+                           "of this order x R)")
+              ->capture_default_str()};
+}
+
+/// netsolve pack --periodic: the deposition's and the green body's options it does not take are
+/// refused; --n and --quiet are the green body's, --r-min, --r-max, --mono and --seed the deposition's.
+int run_pack_periodic_cli(CLI::App* pack, const std::vector<CLI::Option*>& green_opts,
+                          const netdem::app::netsolve::GreenArgs& ga, const PackArgs& pa,
+                          netdem::app::netsolve::PeriodicPackArgs pp, const RunArgs& ra, const std::string& out) {
+  if (ga.route == "green-body") throw netdem::app::UsageError("--periodic and --route green-body exclude each other");
+  for (const char* name : {"--width", "--lid", "--lateral", "--route"})
+    if (pack->count(name) > 0)
+      throw netdem::app::UsageError(fmt::format("{} is an option of the deposition, not of --periodic (use --n)", name));
+  for (std::size_t k = 1; k < green_opts.size(); ++k)  // all but --n and --quiet
+    if (green_opts[k]->count() > 0 && green_opts[k]->get_name() != "--quiet")
+      throw netdem::app::UsageError(fmt::format("{} is an option of --route green-body", green_opts[k]->get_name()));
+  if (green_opts[0]->count() > 0) pp.pack.n = ga.body.n;
+  pp.pack.r_min = pa.mono ? 1.0 : pa.r_min;
+  pp.pack.r_max = pa.mono ? 1.0 : pa.r_max;
+  pp.pack.seed = pa.seed;
+  pp.quiet = ga.quiet;
+  return netdem::app::netsolve::run_pack_periodic(pp, pa.dim, ra.overwrite, g_command, out);
+}
+
 int main(int argc, char** argv) {
   for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
@@ -550,6 +584,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"ballistic", "green-body"}))
       ->capture_default_str();
   const std::vector<CLI::Option*> green_opts = add_green_body_options(pack, ga);
+  // --periodic: the periodic route (pack_periodic.hpp); its --n and --quiet are the green body's options
+  netdem::app::netsolve::PeriodicPackArgs pp;
+  const std::vector<CLI::Option*> periodic_opts = add_periodic_options(pack, pp);
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   auto* o_packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
@@ -609,6 +646,9 @@ int main(int argc, char** argv) {
       if (pa.dim == 3 && pack->count("--lid") > 0 && pa.lid != "inside")
         throw netdem::app::UsageError(fmt::format("--lid '{}': the 3D deposition implements only --lid inside (whole spheres below the lid)",
                                                   netdem::packing::quote_input(pa.lid)));
+      if (pp.periodic) return run_pack_periodic_cli(pack, green_opts, ga, pa, pp, ra, out);
+      for (CLI::Option* opt : periodic_opts)
+        if (opt->count() > 0) throw netdem::app::UsageError(fmt::format("{} is an option of --periodic", opt->get_name()));
       if (ga.route == "green-body") {
         if (pa.dim != 3) throw netdem::app::UsageError("--route green-body is 3D: add --dim 3");
         for (const char* name : {"--width", "--r-min", "--r-max", "--mono", "--lateral", "--lid"})

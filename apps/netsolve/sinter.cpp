@@ -224,6 +224,9 @@ void read_packing(const Args& a, Setup& u) {
   if (u.pk.dim != 3)
     throw UsageError(fmt::format("--packing {} is a 2D packing; netsolve sinter needs spheres (id,x,y,z,r, SI metres)",
                                  netdem::packing::quote_input(a.packing, 200)));
+  if (u.pk.periodic)
+    throw UsageError(fmt::format("--packing {} is periodic ('# periodic'): netsolve sinter has no periodic cell (its boundary "
+                                 "planes are the box's)", netdem::packing::quote_input(a.packing, 200)));
   if (u.pk.size() < 2) throw UsageError(fmt::format("--packing {} holds fewer than two spheres", netdem::packing::quote_input(a.packing, 200)));
   for (double r : u.pk.r)
     if (!(r <= 1e-2))

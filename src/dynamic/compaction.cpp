@@ -52,6 +52,7 @@ double fluctuating_kinetic(const DynamicSolverT<D>& s, const std::vector<std::ui
   const Particles& P = s.particles();
   const Box& bx = s.box();
   double e = 0.0;
+  if (s.periodic()) return s.energies().kinetic;  // the velocities are the fluctuations
   for (std::size_t i = 0; i < P.size(); ++i) {
     if constexpr (D == 2) {
       e += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
@@ -104,6 +105,7 @@ class OutsideTest {
  public:
   OutsideTest(const DynamicSolverT<D>& s, bool shear) : s_(s), box0_(s.box()), shear_(shear) {}
   bool operator()(std::size_t p) const {
+    if (s_.periodic()) return false;  // a periodic cell has no outside
     const Particles& Q = s_.particles();
     const Box& b = s_.box();
     if constexpr (D == 2) {
@@ -152,7 +154,7 @@ double wall_gap(const CompactionSampleT<D>& m) {
 
 template <int D>
 void CompactionSampleT<D>::add(const CompactionSampleT& o, double w) {
-  for (std::size_t k = 0; k < S.size(); ++k) S[k] += w * o.S[k], Sc[k] += w * o.Sc[k];
+  for (std::size_t k = 0; k < S.size(); ++k) S[k] += w * o.S[k], Sc[k] += w * o.Sc[k], Sk[k] += w * o.Sk[k];
   Z += w * o.Z, contacts += w * o.contacts, sliding += w * o.sliding, mean_fn += w * o.mean_fn;
   dev_mean_ratio += w * o.dev_mean_ratio, dev_ratio_of_means += w * o.dev_ratio_of_means, affine_ut += w * o.affine_ut;
   kinetic += w * o.kinetic, work += w * o.work;
@@ -161,8 +163,9 @@ void CompactionSampleT<D>::add(const CompactionSampleT& o, double w) {
 template <int D>
 CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, const Voigt<D>& E) {
   CompactionSampleT<D> m;
-  m.S = voigt_of<D>(walls_ ? s.wall_stress() : s.boundary_stress());
   m.Sc = voigt_of<D>(s.contact_stress());
+  m.S = s.periodic() ? m.Sc : voigt_of<D>(walls_ ? s.wall_stress() : s.boundary_stress());
+  m.Sk = voigt_of<D>(s.kinetic_stress());
   s.contacts(cs_);
   const Particles& P = s.particles();
   auto& formed = formed_;  // (a member: its buckets are reused from sample to sample)
@@ -304,7 +307,7 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
       r.outside += out;
       if (!out) in += particle_measure<D>(s.particles().radius[p]);
     }
-    r.density_in_box = in / box_measure<D>(s.box());
+    r.density_in_box = s.periodic() ? s.density() : in / box_measure<D>(s.box());
     if (o.walls) {
       r.wall_gap = wall_gap<D>(m);
       if (k > 0) {

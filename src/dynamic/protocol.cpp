@@ -145,6 +145,9 @@ Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box,
   if (spec.packing_file.empty()) return place_sample3(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
   if (p.dim != 3) throw std::invalid_argument(fmt::format("{} is a 2D packing; a sample of spheres needs a 3D one (# dim 3)", spec.packing_file));
+  if (p.periodic)
+    throw std::invalid_argument(fmt::format("{} is a periodic packing ('# periodic'): the sample's box has walls, which would "
+                                            "cut its contacts across the faces", spec.packing_file));
   packing::validate(p);
   const double s = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = s;
@@ -178,6 +181,9 @@ Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, 
   if (spec.packing_file.empty()) return place_sample(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
   if (p.dim != 2) throw std::invalid_argument(fmt::format("{} is a 3D packing (# dim 3): its spheres need the 3D solver", spec.packing_file));
+  if (p.periodic)
+    throw std::invalid_argument(fmt::format("{} is a periodic packing ('# periodic'): the sample's box has walls, which would "
+                                            "cut its contacts across the faces", spec.packing_file));
   const double unit = packing_length_unit(p, lp, spec.length_unit);
   if (length_unit) *length_unit = unit;
   return particles_from_packing(p, lp, unit, box);

@@ -104,8 +104,12 @@ template <class Law, bool InPlace>
     }
   }
   forces_initialised_ = false;
-  pair_forces<Law, InPlace>(pair_law, a);
-  if constexpr (D == 3) pair_stress_3d(a);
+  if (periodic_) {  // (the 3D stress sums per contact, through the images)
+    pair_forces<Law, InPlace, true>(pair_law, a);
+  } else {
+    pair_forces<Law, InPlace, false>(pair_law, a);
+    if constexpr (D == 3) pair_stress_3d(a);
+  }
   if (walls_active()) {
     if constexpr (D == 2)
       wall_forces_2d<Law, InPlace>(wall_law, a);
@@ -124,8 +128,32 @@ template <class Law, bool InPlace>
 
 // The particle-particle contacts of the Verlet table: forces, torques, the 2D stress sums, the
 // elastic energy and the largest normal force (the sums in locals: the loop stores forces).
+// Periodic: the cell h and the strain rate L as 3 x 3 (zeros beyond D), for the force loop.
 template <int D>
-template <class Law, bool InPlace>
+void DynamicSolverT<D>::hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const {
+  for (int r = 0; r < D; ++r)
+    for (int c = 0; c < D; ++c) {
+      hc[r][c] = cell_.h(r, c);
+      Lr[r][c] = D == 2 ? (r == c ? edot_[r] : edot_[2]) : L3_[r][c];
+    }
+}
+
+namespace {
+// The offset h n of the image n (D integers) added to the branch (dx, dy, dz).
+template <int D>
+inline void add_image(const int* n, const double (&hc)[3][3], double& dx, double& dy, double& dz) {
+  if (!(n[0] | n[1] | (D == 3 ? n[D - 1] : 0))) return;
+  const double n0 = n[0], n1 = n[1], n2 = D == 3 ? n[D - 1] : 0;
+  dx += hc[0][0] * n0 + hc[0][1] * n1 + hc[0][2] * n2;
+  dy += hc[1][0] * n0 + hc[1][1] * n1 + hc[1][2] * n2;
+  dz += hc[2][0] * n0 + hc[2][1] * n1 + hc[2][2] * n2;
+}
+}  // namespace
+
+// Periodic (issue 29): the branch to the image of j, x_j + h n - x_i, and the velocities are the
+// fluctuations about the affine field, so that the relative velocity adds L times the branch.
+template <int D>
+template <class Law, bool InPlace, bool Periodic>
 [[gnu::flatten]] void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   using H = typename Law::History;
   const double dt = ts_.dt;
@@ -151,13 +179,19 @@ template <class Law, bool InPlace>
   double* const p_tx = P_.tx.data();
   double* const p_ty = P_.ty.data();
   double* const p_torque = P_.torque.data();
+  // the cell and the strain rate (Periodic), hoisted: 3 x 3 with zeros beyond D
+  double hc[3][3] = {}, Lr[3][3] = {};
+  const int* const shift = pair_shift_.data();
+  if constexpr (Periodic) hoist_cell(hc, Lr);
+  double s3p[3][3] = {};  // Periodic, 3D: the stress sums per contact
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
     const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
-    const double dx = p_x[j] - p_x[i], dy = p_y[j] - p_y[i];
+    double dx = p_x[j] - p_x[i], dy = p_y[j] - p_y[i];
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
     if constexpr (D == 3) dz = p_z[j] - p_z[i];
+    if constexpr (Periodic) add_image<D>(shift + D * k, hc, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
@@ -177,7 +211,11 @@ template <class Law, bool InPlace>
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
-      const double rvx = p_vx[j] - p_vx[i], rvy = p_vy[j] - p_vy[i];
+      double rvx = p_vx[j] - p_vx[i], rvy = p_vy[j] - p_vy[i];
+      if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
+        rvx += Lr[0][0] * dx + Lr[0][1] * dy;
+        rvy += Lr[1][0] * dx + Lr[1][1] * dy;
+      }
       const double vn = rvx * nx + rvy * ny;
       const double vt = rvx * tx + rvy * ty - p_omega[i] * di - p_omega[j] * dj;
       contact::ContactKinematics in;
@@ -212,7 +250,11 @@ template <class Law, bool InPlace>
       const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
-      const Eigen::Vector3d vrel(p_vx[j] - p_vx[i], p_vy[j] - p_vy[i], p_vz[j] - p_vz[i]);
+      Eigen::Vector3d vrel(p_vx[j] - p_vx[i], p_vy[j] - p_vy[i], p_vz[j] - p_vz[i]);
+      if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
+        const double br[3] = {dx, dy, dz};
+        for (int r = 0; r < 3; ++r) vrel(r) += Lr[r][0] * br[0] + Lr[r][1] * br[1] + Lr[r][2] * br[2];
+      }
       const Eigen::Vector3d wi(p_wx[i], p_wy[i], p_omega[i]), wj(p_wx[j], p_wy[j], p_omega[j]);
       const Eigen::Vector3d W = di * wi + dj * wj;  // L x the pair's rotation rate (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
@@ -250,10 +292,16 @@ template <class Law, bool InPlace>
       p_tx[j] -= dj * m.x();
       p_ty[j] -= dj * m.y();
       p_torque[j] -= dj * m.z();
+      if constexpr (Periodic) {  // Sigma V = sum f (x) l, l the branch to the image
+        const double br[3] = {dx, dy, dz};
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) s3p[r][c] += f(r) * br[c];
+      }
       if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     }
   }
   a.sxx = sxx, a.sxy = sxy, a.syx = syx, a.syy = syy, a.el = el, a.fn_max = fn_max;
+  if constexpr (Periodic && D == 3) std::copy(&s3p[0][0], &s3p[0][0] + 9, &a.s3[0][0]);
 }
 
 template <int D>
@@ -643,7 +691,8 @@ void DynamicSolverT<D>::step() {
   // half-step wall velocity (explicit)
   // (the first kick, the drift, the table check and the reset of the force accumulators to m g
   // share one pass over the particles)
-  const double lim = displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  double lim = displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  if (periodic_) lim -= 0.5 * (F_build_ - Eigen::Matrix<double, D, D>::Identity()).norm() * range_max_;
   const double lim2 = lim * lim;
   bool far = !(lim > 0.0);
   auto kick = [&](bool drift) {

@@ -69,6 +69,10 @@ void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33, dou
 
 template <int D>
 void DynamicSolverT<D>::set_affine_velocities() {
+  if (periodic_) {  // the velocities are the fluctuations about the affine field
+    for (auto* v : {&P_.vx, &P_.vy, &P_.vz, &P_.omega, &P_.wx, &P_.wy}) std::fill(v->begin(), v->end(), 0.0);
+    return;
+  }
   if constexpr (D == 3) {
     for (std::size_t i = 0; i < P_.size(); ++i) {
       const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
@@ -108,8 +112,10 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
     HistoryTable<PlasticHist>& t = table<PlasticHist>();
     for (std::size_t k = 0; k < pair_key_.size(); ++k) {
       const auto i = static_cast<std::size_t>(pair_key_[k] >> 32), j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
-      double L2 = (P_.x[j] - P_.x[i]) * (P_.x[j] - P_.x[i]) + (P_.y[j] - P_.y[i]) * (P_.y[j] - P_.y[i]);
-      if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+      double d[3];
+      branch(k, i, j, d);
+      double L2 = d[0] * d[0] + d[1] * d[1];
+      if constexpr (D == 3) L2 += d[2] * d[2];
       t.pair[k] = L::start_unloading_branch(t.pair[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
     }
     if (walls_active())
@@ -201,6 +207,7 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
     if (!shear3_) {  // diagonal: expm1 of each rate
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) F3m_[static_cast<std::size_t>(3 * a + b)] *= 1.0 + md[a];
+      if (periodic_) advect_periodic(Eigen::Matrix3d(Eigen::Vector3d(md[0], md[1], md[2]).asDiagonal()));
       for (std::uint32_t p : prescribed_) {
         P_.vx[p] = g[0] * (P_.x[p] - box_.x_min);
         P_.vy[p] = g[1] * (P_.y[p] - box_.y_min);
@@ -216,6 +223,12 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
           for (int k = 0; k < 3; ++k) v += eig_v3_[3 * a + k] * m[k] * eig_v3_[3 * b + k];
           G[a][b] = G[b][a] = v;
         }
+      if (periodic_) {
+        Eigen::Matrix3d Gm;
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) Gm(a, b) = G[a][b];
+        advect_periodic(Gm);
+      }
       const auto F = F3m_;  // F <- (I + G) F
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {
@@ -241,6 +254,9 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
   {  // the accumulated map
     auto M = edot_[2] != 0.0 ? expm1_sym2(edot_[0], edot_[1], edot_[2], dt)
                              : std::array<double, 4>{std::expm1(edot_[0] * dt), 0.0, 0.0, std::expm1(edot_[1] * dt)};
+    if constexpr (D == 2) {
+      if (periodic_) advect_periodic((Eigen::Matrix2d() << M[0], M[1], M[2], M[3]).finished());
+    }
     M[0] += 1.0;
     M[3] += 1.0;
     const auto F = F_;
@@ -272,6 +288,10 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
 template <int D>
 void DynamicSolverT<D>::affine_velocity3(std::size_t i, double* a) const {
   if constexpr (D == 3) {
+    if (periodic_) {  // the velocities are the fluctuations
+      a[0] = a[1] = a[2] = 0.0;
+      return;
+    }
     const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
     a[0] = edot3_[0] * d[0];
     a[1] = edot3_[1] * d[1];
@@ -332,7 +352,8 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
       continue;
     }
     const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
-    const double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
+    double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
+    if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
     const double fx = P_.fx[i] + c * P_.mass[i] * (P_.vx[i] - ax), fy = P_.fy[i] + c * P_.mass[i] * (P_.vy[i] - ay);
     const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i] : 0.0;
     sum += fx * fx + fy * fy + m * m;
@@ -373,6 +394,7 @@ void DynamicSolverT<D>::apply_affine_drag() {
       ax += edot_[2] * dy;
       ay += edot_[2] * dx;
     }
+    if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
     P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - ax);
     P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - ay);
     P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
@@ -429,6 +451,50 @@ auto DynamicSolverT<D>::boundary_stress() const -> Stress {
   return s;
   }
 }
+
+// The periodic cell over a step (issue 29): the affine part of the motion, x <- x + G (x - origin)
+// with G = exp(L dt) - I, for the particles and their positions at the last table build (so that the
+// table's check sees the fluctuations only), and the cell h <- (I + G) h. box() follows the
+// cell's bounding box.
+template <int D>
+void DynamicSolverT<D>::advect_periodic(const Eigen::Matrix<double, D, D>& G) {
+  const Eigen::Matrix<double, D, 1> o = cell_.origin;
+  auto move = [&](std::vector<double>& x, std::vector<double>& y, std::vector<double>& z) {
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double d[3] = {x[i] - o(0), y[i] - o(1), D == 3 ? z[i] - o(D - 1) : 0.0};
+      double g[3] = {0.0, 0.0, 0.0};
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < D; ++b) g[a] += G(a, b) * d[b];
+      x[i] += g[0];
+      y[i] += g[1];
+      if constexpr (D == 3) z[i] += g[2];
+    }
+  };
+  move(P_.x, P_.y, P_.z);
+  move(x_build_, y_build_, z_build_);
+  cell_.h += G * cell_.h;
+  F_build_ += G * F_build_;
+  set_box_to_cell();
+}
+
+template <int D>
+void DynamicSolverT<D>::set_box_to_cell() {
+  Eigen::Matrix<double, D, 1> lo = cell_.origin, hi = cell_.origin;
+  for (int corner = 1; corner < (1 << D); ++corner) {
+    Eigen::Matrix<double, D, 1> p = cell_.origin;
+    for (int a = 0; a < D; ++a)
+      if ((corner >> a) & 1) p += cell_.h.col(a);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  box_.x_min = lo(0), box_.x_max = hi(0), box_.y_min = lo(1), box_.y_max = hi(1);
+  if constexpr (D == 3) box_.z_min = lo(2), box_.z_max = hi(2);
+}
+
+template void DynamicSolverT<2>::advect_periodic(const Eigen::Matrix2d& G);
+template void DynamicSolverT<3>::advect_periodic(const Eigen::Matrix3d& G);
+template void DynamicSolverT<2>::set_box_to_cell();
+template void DynamicSolverT<3>::set_box_to_cell();
 
 template void DynamicSolverT<2>::set_strain_rate(double e11, double e22, double e12);
 template void DynamicSolverT<2>::set_strain_rate3(double e11, double e22, double e33, double e23, double e13, double e12);

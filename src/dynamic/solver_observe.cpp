@@ -122,11 +122,14 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
   }
   // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
   // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
-  for (std::uint64_t key : pair_key_) {
+  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+    const std::uint64_t key = pair_key_[k];
     const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
-    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i], s = P_.radius[i] + P_.radius[j];
-    double L2 = dx * dx + dy * dy;
-    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+    double dd[3];
+    branch(k, i, j, dd);
+    const double s = P_.radius[i] + P_.radius[j];
+    double L2 = dd[0] * dd[0] + dd[1] * dd[1];
+    if constexpr (D == 3) L2 += dd[2] * dd[2];
     if (!(L2 < s * s)) continue;
     const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
     if (!(d < lim))
@@ -162,6 +165,7 @@ void DynamicSolverT<D>::run(std::size_t n_steps) {
 // ---- observables --------------------------------------------------------------------------------
 template <int D>
 double DynamicSolverT<D>::box_measure() const {
+  if (periodic_) return cell_.measure();
   const double a = (box_.x_max - box_.x_min) * (box_.y_max - box_.y_min);
   if constexpr (D == 2) {
     return a;
@@ -207,11 +211,65 @@ double DynamicSolverT<D>::density() const {
   double a = 0.0;
   if constexpr (D == 2) {
     for (double r : P_.radius) a += std::numbers::pi * r * r;
+    if (periodic_) return a / cell_.measure();
     return a / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
   } else {
     for (double r : P_.radius) a += (4.0 / 3.0) * std::numbers::pi * r * r * r;
     return a / box_measure();
   }
+}
+
+template <int D>
+auto DynamicSolverT<D>::kinetic_stress() const -> Stress {
+  Stress s;
+  if (!box_.enabled) return s;
+  double k[3][3] = {};
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    const double u[3] = {P_.vx[i], P_.vy[i], D == 3 ? P_.vz[i] : 0.0}, m = P_.mass[i];
+    for (int a = 0; a < D; ++a)
+      for (int b = 0; b < D; ++b) k[a][b] += m * u[a] * u[b];
+  }
+  const double V = box_measure();
+  if constexpr (D == 2) {
+    s.xx = k[0][0] / V, s.xy = k[0][1] / V, s.yx = k[1][0] / V, s.yy = k[1][1] / V;
+  } else {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) s.s[a][b] = k[a][b] / V;
+  }
+  return s;
+}
+
+template <int D>
+packing::Packing DynamicSolverT<D>::periodic_packing() const {
+  if (!periodic_) fail("periodic_packing: the solver has no periodic cell");
+  packing::Packing pk;
+  pk.dim = D;
+  pk.periodic = true;
+  pk.r = P_.radius;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    Eigen::Matrix<double, D, 1> x;
+    x(0) = P_.x[i], x(1) = P_.y[i];
+    if constexpr (D == 3) x(2) = P_.z[i];
+    // wrapped into [0, 1) (the rounding of origin + h s can land on the upper face: s = 1 - ulp)
+    Eigen::Matrix<double, D, 1> f = cell_.fractional(x);
+    for (int a = 0; a < D; ++a) {
+      f(a) -= std::floor(f(a));
+      if (!(f(a) < 1.0)) f(a) = 0.0;
+    }
+    x = cell_.origin + cell_.h * f;
+    pk.x.push_back(x(0));
+    pk.y.push_back(x(1));
+    if constexpr (D == 3) pk.z.push_back(x(2));
+  }
+  pk.box.x_min = box_.x_min, pk.box.x_max = box_.x_max, pk.box.y_min = box_.y_min, pk.box.y_max = box_.y_max;
+  if constexpr (D == 3) pk.box.z_min = box_.z_min, pk.box.z_max = box_.z_max;
+  bool rectangle = true;
+  for (int a = 0; a < D; ++a)
+    for (int b = 0; b < D; ++b) rectangle = rectangle && (a == b || cell_.h(a, b) == 0.0);
+  if (!rectangle)
+    for (int a = 0; a < D; ++a)
+      for (int b = 0; b < D; ++b) pk.cell.push_back(cell_.h(b, a));  // vector a at [D a, D a + D)
+  return pk;
 }
 
 template <int D>
@@ -250,6 +308,8 @@ template auto DynamicSolverT<2>::wall_stress() const -> Stress;
 template auto DynamicSolverT<2>::contact_stress() const -> Stress;
 template double DynamicSolverT<2>::density() const;
 template Energies DynamicSolverT<2>::energies() const;
+template auto DynamicSolverT<2>::kinetic_stress() const -> Stress;
+template packing::Packing DynamicSolverT<2>::periodic_packing() const;
 
 template void DynamicSolverT<3>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
 template void DynamicSolverT<3>::check_health() const;
@@ -260,5 +320,7 @@ template auto DynamicSolverT<3>::wall_stress() const -> Stress;
 template auto DynamicSolverT<3>::contact_stress() const -> Stress;
 template double DynamicSolverT<3>::density() const;
 template Energies DynamicSolverT<3>::energies() const;
+template auto DynamicSolverT<3>::kinetic_stress() const -> Stress;
+template packing::Packing DynamicSolverT<3>::periodic_packing() const;
 
 }  // namespace netdem::dem

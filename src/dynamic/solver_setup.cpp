@@ -79,7 +79,32 @@ std::size_t Particles::add_sphere(double px, double py, double pz, double r, dou
   return add_sphere_with_mass(px, py, pz, r, rho * (4.0 / 3.0) * std::numbers::pi * r * r * r, v);
 }
 
+namespace {
+// The walled readers refuse a periodic packing (issue 29): its centres near a face touch the
+// particles at the opposite face, which a box would not see.
+void refuse_periodic(const packing::Packing& pk) {
+  if (pk.periodic)
+    fail("the packing is periodic (its '# periodic' line): a box with walls would cut the contacts across its faces; "
+         "run it in a periodic cell");
+}
+}  // namespace
+
+Particles periodic_particles_from(const packing::Packing& pk, double rho) {
+  if (!pk.periodic) fail("periodic_particles_from: the packing is not periodic (no '# periodic' line)");
+  if (!(rho > 0.0) || !std::isfinite(rho)) fail("periodic_particles_from: the density must be positive and finite");
+  Particles P;
+  P.dim = pk.dim;
+  for (std::size_t i = 0; i < pk.size(); ++i) {
+    if (pk.dim == 3)
+      P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], rho);
+    else
+      P.add_disk(pk.x[i], pk.y[i], pk.r[i], rho);
+  }
+  return P;
+}
+
 Particles spheres_from(const packing::Packing& pk, double rho) {
+  refuse_periodic(pk);
   if (pk.dim != 3) fail("spheres_from: the packing is 2D");
   if (!(rho > 0.0) || !std::isfinite(rho)) fail("spheres_from: the density must be positive and finite");
   Particles P;
@@ -89,6 +114,7 @@ Particles spheres_from(const packing::Packing& pk, double rho) {
 }
 
 Particles particles_from(const packing::Packing& pk, const LudingParams& params) {
+  refuse_periodic(pk);
   if (pk.dim != 2) throw std::invalid_argument("dem: the packing is 3D (dim 3); the DEM is 2D only");
   Particles P;
   for (std::size_t i = 0; i < pk.size(); ++i) P.add(pk.x[i], pk.y[i], pk.r[i], params);
@@ -96,6 +122,7 @@ Particles particles_from(const packing::Packing& pk, const LudingParams& params)
 }
 
 Particles particles_from(const packing::Packing& pk, double rho) {
+  refuse_periodic(pk);
   if (!(rho > 0.0) || !std::isfinite(rho)) fail("particles_from: the density must be positive and finite");
   Particles P;
   for (std::size_t i = 0; i < pk.size(); ++i) P.add_disk(pk.x[i], pk.y[i], pk.r[i], rho);
@@ -229,12 +256,47 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticInd
                                   const DynamicOptions& options)
     : DynamicSolverT(std::move(particles), LudingParams{}, box, plastic_options(options, law), Setup{}) {}
 
+namespace {
+// The box of a periodic run: the measurement domain only (no contact walls), fixed walls (the cell
+// moves with the strain rate).
+template <int D>
+Box periodic_box(const packing::PeriodicCellT<D>& cell) {
+  for (int a = 0; a < D; ++a)
+    for (int b = 0; b < D; ++b)
+      if (!std::isfinite(cell.h(a, b))) fail("DynamicSolver: the periodic cell's vectors must be finite");
+  if (!(cell.h.determinant() > 0.0))
+    fail("DynamicSolver: the periodic cell's vectors must span a positive area (volume), det h > 0");
+  Box b;
+  b.contact_walls = false;
+  b.x_min = b.x_max = cell.origin(0);
+  b.y_min = b.y_max = cell.origin(1);
+  if constexpr (D == 3) b.z_min = b.z_max = cell.origin(2);
+  return b;  // (its extents: set_box_to_cell())
+}
+}  // namespace
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params,
+                                  const packing::PeriodicCellT<D>& cell, const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), params, periodic_box(cell), luding_options(options), Setup{&cell}) {}
+
+template <int D>
+DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law,
+                                  const packing::PeriodicCellT<D>& cell, const DynamicOptions& options)
+    : DynamicSolverT(std::move(particles), LudingParams{}, periodic_box(cell), plastic_options(options, law),
+                     Setup{&cell}) {}
+
 template <int D>
 DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
-                                  const DynamicOptions& options, Setup)
+                                  const DynamicOptions& options, Setup setup)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
   opt_.validate();
+  if (setup.cell) {
+    periodic_ = true;
+    cell_ = *setup.cell;
+    set_box_to_cell();
+  }
   const std::size_t n = P_.size();
   if (n >= (std::size_t{1} << 32)) fail("DynamicSolver: too many particles");
   if (P_.dim != D) fail(fmt::format("DynamicSolver: the particles are {}D, the solver {}D", P_.dim, D));
@@ -273,6 +335,16 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   if constexpr (D == 3) centre0z_ = 0.5 * (box_.z_min + box_.z_max);
   make_tables(n);
   finish_setup();
+  if (periodic_) {
+    for (double x : P_.x)
+      if (!std::isfinite(x)) fail("DynamicSolver: a particle position is not finite");
+    double rmax = 0.0;
+    for (double r : P_.radius) rmax = std::max(rmax, r);
+    if (n >= 2 && !(cell_.min_width() >= 2.0 * (2.0 * rmax + skin_)))
+      fail(fmt::format("DynamicSolver: the periodic cell is {:.4g} wide across an axis, less than twice the largest "
+                       "interaction range 2 r_max + skin = {:.4g} (a pair would meet through two images)",
+                       cell_.min_width(), 2.0 * rmax + skin_));
+  }
   build_table();
   compute_forces_dispatch();
 }
@@ -314,6 +386,8 @@ void DynamicSolverT<D>::choose_friction() {
 template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
 template DynamicSolverT<2>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
 template DynamicSolverT<2>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
+template DynamicSolverT<2>::DynamicSolverT(Particles, const LudingParams&, const packing::PeriodicCellT<2>&, const DynamicOptions&);
+template DynamicSolverT<2>::DynamicSolverT(Particles, const contact::PlasticIndentationParams&, const packing::PeriodicCellT<2>&, const DynamicOptions&);
 template void DynamicSolverT<2>::finish_setup();
 template void DynamicSolverT<2>::choose_friction();
 template void DynamicSolverT<2>::choose_time_step_of_law(const DynamicOptions& o, double area);
@@ -321,6 +395,8 @@ template void DynamicSolverT<2>::choose_time_step_of_law(const DynamicOptions& o
 template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
 template DynamicSolverT<3>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
 template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
+template DynamicSolverT<3>::DynamicSolverT(Particles, const LudingParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
+template DynamicSolverT<3>::DynamicSolverT(Particles, const contact::PlasticIndentationParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
 template void DynamicSolverT<3>::finish_setup();
 template void DynamicSolverT<3>::choose_friction();
 template void DynamicSolverT<3>::choose_time_step_of_law(const DynamicOptions& o, double area);

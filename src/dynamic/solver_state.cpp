@@ -32,6 +32,8 @@ template <int D>
 DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& options)
     : P_(st.particles), params_(st.params), box_(st.box), opt_(restart_options(st, options)) {
   using S = StateOf<D>;
+  if (st.periodic)
+    fail("state: a state in a periodic cell cannot restart (the cell and the pairs' images are not in a state yet)");
   params_.validate();
   opt_.validate();
   const std::size_t n = P_.size();
@@ -127,6 +129,7 @@ SolverState DynamicSolverT<D>::state() const {
   st.elastic = elastic_;
   st.time = time_;
   st.dt = ts_.dt;
+  st.periodic = periodic_;
   st.thermal = thermal_;
   st.params = params_;
   if (plastic()) {
@@ -268,16 +271,33 @@ void set_tangential(ContactInfo& c, const Eigen::Vector3d& f_t) {
 // law evaluated on the committed histories with a zero slip increment and the current normal
 // rate. eval(history, kinematics, wall, info) fills the forces of `info` and returns whether the
 // contact is reported.
+// Periodic (issue 29): `frame` holds the branch offsets h n of the rows (D per row) and the strain
+// rate L (3 x 3, row-major): the velocities are the fluctuations, the relative one adds L l.
+struct PeriodicFrame {
+  std::vector<double> offset;
+  double L[9] = {};
+};
 template <int D, class H, class Eval>
 void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint64_t>& keys,
-                 const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval) {
+                 const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval,
+                 const PeriodicFrame* frame = nullptr) {
   out.clear();
   auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
   auto vzc = [&](std::size_t i) { return D == 3 ? P.vz[i] : 0.0; };
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
     const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
-    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
+    double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
+    double avx = 0.0, avy = 0.0, avz = 0.0;  // periodic: L l
+    if (frame) {
+      const double* o = &frame->offset[static_cast<std::size_t>(D) * k];
+      dx += o[0], dy += o[1];
+      if constexpr (D == 3) dz += o[2];
+      const double* L = frame->L;
+      avx = L[0] * dx + L[1] * dy + L[2] * dz;
+      avy = L[3] * dx + L[4] * dy + L[5] * dz;
+      avz = L[6] * dx + L[7] * dy + L[8] * dz;
+    }
     const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
     if (!(L2 < s * s)) continue;
@@ -285,10 +305,14 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
     const double q = (ri * ri - rj * rj) / (2.0 * L);
     contact::Kinematics<D> in;
     in.overlap = in.overlap_start = s - L;
-    if constexpr (D == 2)
+    if (frame) {
+      in.v_n = -((P.vx[j] - P.vx[i] + avx) * nx + (P.vy[j] - P.vy[i] + avy) * ny);
+      if constexpr (D == 3) in.v_n -= (vzc(j) - vzc(i) + avz) * nz;
+    } else if constexpr (D == 2) {
       in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
-    else
+    } else {
       in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny + (vzc(j) - vzc(i)) * nz);
+    }
     in.r_eff = ri * rj / s;
     in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
     ContactInfo c;
@@ -346,7 +370,8 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
 template <contact::LudingFeatures F, int D>
 void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
                      const std::vector<std::uint64_t>& keys, const std::vector<contact::LudingHistoryT<D>>& hist,
-                     const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+                     const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out,
+                     const PeriodicFrame* frame) {
   contacts_of<D>(P, box, keys, hist, whist, out,
                  [&](const contact::LudingHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall, ContactInfo& c) {
                    contact::LudingInputT<D> in;
@@ -361,7 +386,7 @@ void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp,
                    c.f_min = r.f_min;
                    c.mu = r.mu;
                    return true;
-                 });
+                 }, frame);
 }
 constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
 
@@ -370,7 +395,8 @@ template <int D>
 void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
                       const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
                       const std::vector<contact::PlasticIndentationHistoryT<D>>& hist,
-                      const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out) {
+                      const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out,
+                      const PeriodicFrame* frame) {
   const contact::PlasticIndentationLawT<D> lp(pp), lw(pw);
   contacts_of<D>(P, box, keys, hist, whist, out,
                  [&](const contact::PlasticIndentationHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall,
@@ -385,30 +411,45 @@ void plastic_contacts(const Particles& P, const Box& box, const contact::Plastic
                    set_tangential(c, r.f_t);
                    c.mu = (wall ? pw : pp).mu_eff();
                    return r.loaded;
-                 });
+                 }, frame);
 }
 }  // namespace
 
 template <int D>
 void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
   // (the output's own choice of law: the Luding law reports f_min and mu of its response)
+  PeriodicFrame frame_storage;
+  const PeriodicFrame* frame = nullptr;
+  if (periodic_) {  // the rows' branch offsets h n and the strain rate
+    frame_storage.offset.resize(static_cast<std::size_t>(D) * pair_key_.size());
+    for (std::size_t k = 0; k < pair_key_.size(); ++k)
+      for (int a = 0; a < D; ++a) {
+        double o = 0.0;
+        for (int b = 0; b < D; ++b) o += cell_.h(a, b) * pair_shift_[static_cast<std::size_t>(D) * k + b];
+        frame_storage.offset[static_cast<std::size_t>(D) * k + a] = o;
+      }
+    for (int a = 0; a < D; ++a)
+      for (int b = 0; b < D; ++b)
+        frame_storage.L[3 * a + b] = D == 2 ? (a == b ? edot_[a] : edot_[2]) : L3_[a][b];
+    frame = &frame_storage;
+  }
   if (const HistoryTable<PlasticHist>* t = table_if<PlasticHist>()) {
-    plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, t->pair, t->wall, out);
+    plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, t->pair, t->wall, out, frame);
     return;
   }
   const HistoryTable<LudingHist>& t = *table_if<LudingHist>();
   switch (opt_.model) {
     case ContactModel::Linear:
       luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
-                                                 t.wall, out);
+                                                 t.wall, out, frame);
       break;
     case ContactModel::Hysteretic:
       luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair, t.wall,
-                                         out);
+                                         out, frame);
       break;
     default:
       luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
-                                               t.wall, out);
+                                               t.wall, out, frame);
       break;
   }
 }

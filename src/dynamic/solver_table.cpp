@@ -55,8 +55,10 @@ void DynamicSolverT<D>::carry_histories(const Law& law, std::size_t n_new) {
 
 template <int D>
 bool DynamicSolverT<D>::needs_rebuild() const {
-  const double lim =
-      displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  double lim = displacement_limit(skin_, radius_ref_max_, radius_scale_, radius_scale_build_);
+  // periodic: the positions at the build are advected with the cell; a pair's branch stretches by
+  // at most |F_build - I| range_max besides
+  if (periodic_) lim -= 0.5 * (F_build_ - Eigen::Matrix<double, D, D>::Identity()).norm() * range_max_;
   if (!(lim > 0.0) || walls_moved()) return true;
   const double lim2 = lim * lim;
   for (std::size_t i = 0; i < P_.size(); ++i) {
@@ -119,6 +121,10 @@ bool DynamicSolverT<D>::walls_moved() const {
 
 template <int D>
 void DynamicSolverT<D>::build_table() {
+  if (periodic_) {
+    build_table_periodic();
+    return;
+  }
   const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
@@ -163,17 +169,82 @@ void DynamicSolverT<D>::build_table() {
   pair_key_.swap(new_key_);
 }
 
+// The periodic table (issue 29): the pairs within r_i + r_j + skin through the images of the
+// cell (packing::PeriodicPairsT, sorted by (i, j): a pair has one image within range, the cell
+// being at least two ranges wide), each with its image n; the histories are carried by (i, j), as
+// the image of a pair does not change while the positions stay unwrapped. The mean fluctuation
+// velocity (the rigid translation, conserved by the pair forces up to rounding) is removed here.
+template <int D>
+void DynamicSolverT<D>::build_table_periodic() {
+  const std::size_t n = P_.size();
+  ++rebuilds_;
+  radius_scale_build_ = radius_scale_;
+  x_build_ = P_.x;
+  y_build_ = P_.y;
+  if constexpr (D == 3) z_build_ = P_.z;
+  F_build_.setIdentity();
+  wall_list_.clear();
+  wall_list_valid_ = false;
+  double rmax = 0.0;
+  for (double r : P_.radius) rmax = std::max(rmax, r);
+  range_max_ = 2.0 * rmax + skin_;
+  pos_scratch_.resize(static_cast<std::size_t>(D) * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    pos_scratch_[D * i] = P_.x[i];
+    pos_scratch_[D * i + 1] = P_.y[i];
+    if constexpr (D == 3) pos_scratch_[D * i + 2] = P_.z[i];
+  }
+  new_key_.clear();
+  new_shift_.clear();
+  if (n >= 2) {
+    if (!(cell_.min_width() >= 2.0 * range_max_))
+      breach("cell",
+             fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "
+                         "range 2 r_max + skin = {:.4g}", cell_.min_width(), range_max_),
+             "the cell was compressed or sheared too far for its number of particles (a larger packing)");
+    const auto& found = periodic_pairs_.find(pos_scratch_, P_.radius, cell_, skin_);
+    for (const auto& pr : found) {
+      new_key_.push_back((static_cast<std::uint64_t>(pr.i) << 32) | static_cast<std::uint32_t>(pr.j));
+      for (int a = 0; a < D; ++a) new_shift_.push_back(pr.n[static_cast<std::size_t>(a)]);
+    }
+  }
+  pair_live_.assign(new_key_.size(), 0);
+  visit_law([&](const auto& law) { carry_histories(law, new_key_.size()); });
+  pair_key_.swap(new_key_);
+  pair_shift_.swap(new_shift_);
+  remove_mean_velocity();
+}
+
+template <int D>
+void DynamicSolverT<D>::remove_mean_velocity() {
+  double m = 0.0, p[3] = {0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    m += P_.mass[i];
+    p[0] += P_.mass[i] * P_.vx[i];
+    p[1] += P_.mass[i] * P_.vy[i];
+    if constexpr (D == 3) p[2] += P_.mass[i] * P_.vz[i];
+  }
+  if (!(m > 0.0)) return;
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    P_.vx[i] -= p[0] / m;
+    P_.vy[i] -= p[1] / m;
+    if constexpr (D == 3) P_.vz[i] -= p[2] / m;
+  }
+}
+
 template <int D>
 void DynamicSolverT<D>::touching_pairs(
     std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const {
   out.clear();
-  for (std::uint64_t key : pair_key_) {
+  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
+    const std::uint64_t key = pair_key_[k];
     const std::uint32_t i = static_cast<std::uint32_t>(key >> 32);
     const std::uint32_t j = static_cast<std::uint32_t>(key & 0xffffffffu);
-    const double dx = P_.x[j] - P_.x[i], dy = P_.y[j] - P_.y[i];
+    double d[3];
+    branch(k, i, j, d);
     const double s = P_.radius[i] + P_.radius[j];
-    double L2 = dx * dx + dy * dy;
-    if constexpr (D == 3) L2 += (P_.z[j] - P_.z[i]) * (P_.z[j] - P_.z[i]);
+    double L2 = d[0] * d[0] + d[1] * d[1];
+    if constexpr (D == 3) L2 += d[2] * d[2];
     if (L2 < s * s) out.emplace_back(i, j);
   }
 }
@@ -200,6 +271,8 @@ template bool DynamicSolverT<2>::needs_rebuild() const;
 template void DynamicSolverT<2>::build_wall_list();
 template bool DynamicSolverT<2>::walls_moved() const;
 template void DynamicSolverT<2>::build_table();
+template void DynamicSolverT<2>::build_table_periodic();
+template void DynamicSolverT<2>::remove_mean_velocity();
 template void DynamicSolverT<2>::touching_pairs( std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
 template auto DynamicSolverT<2>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist*;
 template auto DynamicSolverT<2>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist*;
@@ -208,6 +281,8 @@ template bool DynamicSolverT<3>::needs_rebuild() const;
 template void DynamicSolverT<3>::build_wall_list();
 template bool DynamicSolverT<3>::walls_moved() const;
 template void DynamicSolverT<3>::build_table();
+template void DynamicSolverT<3>::build_table_periodic();
+template void DynamicSolverT<3>::remove_mean_velocity();
 template void DynamicSolverT<3>::touching_pairs( std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const;
 template auto DynamicSolverT<3>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist*;
 template auto DynamicSolverT<3>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist*;

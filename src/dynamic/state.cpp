@@ -169,6 +169,9 @@ Json state_json(const SolverState& st) {
 }  // namespace
 
 std::string format_state(const SolverState& st) {
+  if (st.periodic)
+    throw std::invalid_argument("state: a state in a periodic cell has no state file yet (the cell and the pairs' images "
+                                "are not in the format)");
   return sys::dump_archive(st.dim() == 3 ? state_json<3>(st) : state_json<2>(st));
 }
 

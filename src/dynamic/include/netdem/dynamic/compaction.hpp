@@ -26,6 +26,9 @@ template <int D>
 struct CompactionSampleT {
   Voigt<D> S{};   ///< Eq 13: the boundary reactions (layer, affine) or the wall forces (walls)
   Voigt<D> Sc{};  ///< the contact (Love-Weber) stress
+  /// the kinetic stress of the fluctuations (DynamicSolverT::kinetic_stress, the same sign), apart
+  /// from S and Sc; in a periodic cell S is the contact stress (no boundary carries a reaction)
+  Voigt<D> Sk{};
   double Z = 0, contacts = 0, sliding = 0, mean_fn = 0;
   double dev_mean_ratio = 0, dev_ratio_of_means = 0, affine_ut = 0;  ///< Eq 16 (sys::AffineDeviation)
   double kinetic = 0;  ///< kinetic energy of the motion relative to the affine field, spins included

@@ -38,6 +38,7 @@
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
+#include "netdem/packing/periodic.hpp"
 
 namespace netdem::dem {
 
@@ -74,11 +75,17 @@ struct Particles {
 };
 
 /// The spheres of a 3D packing at rest, density rho (add_sphere()).
+/// The readers below are for walled (or open) packings: a periodic packing (Packing::periodic) is
+/// refused with one line (std::invalid_argument); periodic_particles_from() reads it.
 Particles spheres_from(const packing::Packing& p, double rho);
 /// The particles of a packing (x, y, r; SI units, m) at rest: add() of each disk in order.
 Particles particles_from(const packing::Packing& p, const LudingParams& params);
 /// The particles of a packing at rest as disks of areal density rho (add_disk(); any units).
 Particles particles_from(const packing::Packing& p, double rho);
+/// The particles of a periodic packing (issue 29) at rest, disks or spheres by its dimension, of
+/// density rho (add_disk(), add_sphere()): for the solver constructors that take a periodic cell
+/// (packing::periodic_cell()). Refuses a packing that is not periodic (one line).
+Particles periodic_particles_from(const packing::Packing& p, double rho);
 /// The geometric description of the particles (x, y, radius) in `box`; seed 0, no comments.
 packing::Packing to_packing(const Particles& P, const packing::Box& box);
 
@@ -241,6 +248,9 @@ struct SolverState {
   /// The plastic law: the largest contact width A_c of the last force evaluation (the tangential
   /// bound of the next step's time step, law.hpp StiffnessBound::k_t_area).
   double plastic_area_max = 0.0;
+  /// The state of a solver in a periodic cell (issue 29): kept in memory (DynamicSolverT::last_good());
+  /// the state file and the restart refuse it (the cell and the pairs' images are not in the format).
+  bool periodic = false;
   int dim() const { return particles.dim; }
   /// A state of the plastic-indentation law (its wall histories are filled, the Luding ones empty).
   bool plastic_law() const { return !plastic_wall_history.empty() || !plastic_wall_history3.empty(); }
@@ -317,6 +327,28 @@ class DynamicSolverT {
   /// set from it; the walls' friction is options.plastic_wall_mu). As above.
   DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
                  const DynamicOptions& options);
+  /// The same two laws in a periodic cell (issue 29; docs/dynamic.md "Periodic cell"): no walls;
+  /// the cell follows the strain rate of set_strain_rate() (h <- exp(L dt) h about cell.origin), the
+  /// positions are advected with it and the velocities are the fluctuations about the affine field
+  /// (the particles' vx, vy, vz); a pair interacts through the image n of j found at the table
+  /// build (branch x_j + h n - x_i; positions unwrapped, so a pair keeps its image and its history
+  /// when a particle crosses the boundary). box() is the cell's bounding box. The cell must stay
+  /// at least 2 (2 r_max + skin) wide across every axis (else InstabilityError at a table build).
+  DynamicSolverT(Particles particles, const LudingParams& params, const packing::PeriodicCellT<D>& cell,
+                 const DynamicOptions& options);
+  DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law,
+                 const packing::PeriodicCellT<D>& cell, const DynamicOptions& options);
+  /// A periodic cell (the constructors above).
+  bool periodic() const { return periodic_; }
+  /// The periodic cell now (periodic() only; its h the initial one deformed by the strain so far).
+  const packing::PeriodicCellT<D>& cell() const { return cell_; }
+  /// The periodic packing of the current state: every centre wrapped into the cell, the radii, the
+  /// '# periodic' flag and the cell ('# cell' when it is not a rectangle), seed 0 (periodic() only).
+  packing::Packing periodic_packing() const;
+  /// The kinetic part of the stress, (1/V) sum m u (x) u over the fluctuation velocities u
+  /// (compression positive, as contact_stress(); periodic(): the velocities are the fluctuations,
+  /// else the velocities themselves), reported apart from the contact stress.
+  Stress kinetic_stress() const;
 
   /// One velocity-Verlet step (Eq 2, Eq 1). Every options.check_every steps it runs
   /// check_health() (the closing kick of that step also takes max|v|); throws InstabilityError
@@ -472,7 +504,7 @@ class DynamicSolverT {
     double s3[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     double wf[6] = {0, 0, 0, 0, 0, 0};
   };
-  template <class L, bool InPlace>
+  template <class L, bool InPlace, bool Periodic>
   void pair_forces(const L& pair_law, ForceSums& a);
   void pair_stress_3d(ForceSums& a) const;
   template <class L, bool InPlace>
@@ -501,7 +533,10 @@ class DynamicSolverT {
     if (plastic()) return f(contact::PlasticIndentationLawT<D>(opt_.plastic));
     return f(contact::LudingLaw<contact::kLudingFull, D>(params_, thermal_.k1_Tt));
   }
-  struct Setup {};  ///< the constructors' common part: the law is in options.model
+  /// the constructors' common part: the law is in options.model; cell: a periodic cell or none
+  struct Setup {
+    const packing::PeriodicCellT<D>* cell = nullptr;
+  };
   DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options,
                  Setup);
   /// A new table of the law's history type, with fresh wall histories for n particles.
@@ -538,6 +573,31 @@ class DynamicSolverT {
   double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
   // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
   std::vector<std::uint64_t> pair_key_, new_key_;
+  // periodic cell (issue 29): the cell now, the image n of j of each row (D per row, with
+  // pair_key_), the map since the last table build (the table's affine stretch), the search
+  bool periodic_ = false;
+  packing::PeriodicCellT<D> cell_;
+  std::vector<int> pair_shift_, new_shift_;
+  Eigen::Matrix<double, D, D> F_build_ = Eigen::Matrix<double, D, D>::Identity();
+  double range_max_ = 0.0;  ///< 2 r_max + skin at the last build
+  packing::PeriodicPairsT<D> periodic_pairs_;
+  std::vector<double> pos_scratch_;
+  void build_table_periodic();
+  void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
+  void remove_mean_velocity();
+  void set_box_to_cell();  ///< box_ = the cell's bounding box
+  void hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const;  ///< h and L as 3 x 3 (the force loop)
+  /// The branch x_j (+ h n) - x_i of table row k (D components).
+  void branch(std::size_t k, std::size_t i, std::size_t j, double* d) const {
+    d[0] = P_.x[j] - P_.x[i];
+    d[1] = P_.y[j] - P_.y[i];
+    if constexpr (D == 3) d[2] = P_.z[j] - P_.z[i];
+    if (periodic_) {
+      const int* n = &pair_shift_[static_cast<std::size_t>(D) * k];
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < D; ++b) d[a] += cell_.h(a, b) * n[b];
+    }
+  }
   HistoryTables hist_;  ///< the law's histories of the pairs (one per pair_key_) and of the walls
   // ContactModel::PlasticIndentation: the walls' law
   contact::PlasticIndentationParams pl_wall_params_;

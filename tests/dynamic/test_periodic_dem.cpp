@@ -1,0 +1,301 @@
+// The explicit DEM in a periodic cell (issue 29): the closed forms of periodic lattices under
+// affine hydrostatic strain (no (n - 1)/n edge factor), the invariances a periodic cell must have
+// (a shift of every particle wrapped into the cell, a renumbering, a mirror), and the refusals of
+// the readers and solvers that cannot use a periodic packing.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <random>
+
+#include "netdem/dynamic/solver.hpp"
+#include "netdem/dynamic/state.hpp"
+#include "netdem/packing/packing.hpp"
+#include "netdem/packing/periodic.hpp"
+
+using namespace netdem::dem;
+namespace packing = netdem::packing;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A periodic triangular lattice of nc x nr touching disks of radius R (nr even), as the network
+// solver's test (tests/quasistatic/test_periodic_network.cpp).
+packing::Packing triangular_lattice(int nc, int nr, double R = 1.0) {
+  packing::Packing p;
+  const double h = std::sqrt(3.0) * R;
+  for (int r = 0; r < nr; ++r)
+    for (int c = 0; c < nc; ++c) {
+      p.x.push_back(R * (r % 2) + 2 * R * c + 0.5 * R);
+      p.y.push_back(h * r + 0.5 * h);
+      p.r.push_back(R);
+    }
+  p.box = {0.0, 0.0, 2 * R * nc, h * nr};
+  p.periodic = true;
+  return p;
+}
+
+packing::Packing cubic_lattice(int n, double R = 1.0) {
+  packing::Packing p;
+  p.dim = 3;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        p.x.push_back(R + 2 * R * i);
+        p.y.push_back(R + 2 * R * j);
+        p.z.push_back(R + 2 * R * k);
+        p.r.push_back(R);
+      }
+  p.box = {0.0, 0.0, 2 * R * n, 2 * R * n, 0.0, 2 * R * n};
+  p.periodic = true;
+  return p;
+}
+
+DynamicOptions plastic_options(double mu) {
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic.sigma_y = 2.0;
+  o.plastic.mu = mu;
+  o.plastic.damping_n = o.plastic.damping_t = 0.5;
+  return o;
+}
+
+template <int D>
+DynamicSolverT<D> periodic_solver(const packing::Packing& pk, const DynamicOptions& o) {
+  return DynamicSolverT<D>(periodic_particles_from(pk, 1.0), o.plastic, packing::periodic_cell<D>(pk), o);
+}
+
+// A disordered periodic packing of n x n disks: a square lattice of spacing 2.0 with jittered
+// centres and radii in [0.95, 1.1] (some pairs overlap from the start, some across the faces).
+packing::Packing jittered(int n, std::uint64_t seed, double a = 2.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  packing::Packing p;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      p.x.push_back(0.5 * a + a * i + 0.15 * U(rng));
+      p.y.push_back(0.5 * a + a * j + 0.15 * U(rng));
+      p.r.push_back(1.025 + 0.075 * U(rng));
+    }
+  p.box = {0.0, 0.0, a * n, a * n};
+  for (auto* v : {&p.x, &p.y})
+    for (double& x : *v) x = std::fmod(x + a * n, a * n);
+  p.periodic = true;
+  return p;
+}
+
+// Runs a compaction along (e11, e22, e12) for `steps` steps; returns the contact stress.
+Stress2 run_path(const packing::Packing& pk, double e11, double e22, double e12, int steps, double mu) {
+  DynamicOptions o = plastic_options(mu);
+  DynamicSolver s = periodic_solver<2>(pk, o);
+  s.set_strain_rate(e11, e22, e12);
+  s.set_affine_velocities();
+  s.run(static_cast<std::size_t>(steps));
+  return s.contact_stress();
+}
+
+}  // namespace
+
+// A periodic triangular lattice under hydrostatic strain, then held at rest: every contact of the
+// infinite lattice has L = 2 R e^E and F = 3 sigma_y sqrt(8 u R*) (Eq 2, R* = R/2; u above the
+// first-touch overlap) and Sigma_11 = Sigma_22 = (3/2) N F L / V (compression positive), with no
+// edge factor. Each disk is a centre of symmetry, so the free disks follow the affine motion; at
+// rest the dashpots carry nothing, so the DEM's contact stress is the closed form to rounding.
+// While the strain runs, the dashpot adds gamma_n |E'| L to each normal force: checked as well.
+TEST(PeriodicDem, TriangularLatticeMatchesInfiniteLattice) {
+  const int nc = 6, nr = 6;
+  const packing::Packing pk = triangular_lattice(nc, nr);
+  for (double mu : {0.0, kInf}) {
+    DynamicOptions o = plastic_options(mu);
+    DynamicSolver s = periodic_solver<2>(pk, o);
+    const double rate = -2e-2;
+    s.set_strain_rate(rate, rate, 0.0);
+    s.set_affine_velocities();
+    const double E_end = -0.5 * std::log(1.03);  // D = 1.03 D0
+    while (s.time() * -rate < -E_end) s.step();
+    const double E = rate * s.time(), R = 1.0, L = 2 * R * std::exp(E), u = 2 * R - L;
+    const double F = 3 * o.plastic.sigma_y * std::sqrt(8 * u * R / 2);
+    const double V = pk.box.area() * std::exp(2 * E), N = nc * nr;
+    // while straining: the spring and the dashpot gamma_n v_n, v_n = |E'| L, gamma_n = 2 damping_n sqrt(k_c m*)
+    const double m_eff = 0.5 * std::numbers::pi, gamma = 2 * 0.5 * std::sqrt(o.plastic.chord_stiffness() * m_eff);
+    const double moving = 1.5 * N * (F + gamma * -rate * L) * L / V;
+    EXPECT_NEAR(s.contact_stress().xx, moving, 1e-6 * moving) << "mu " << mu;
+    s.set_strain_rate(0.0, 0.0, 0.0);
+    s.run(20);
+    const double expect = 1.5 * N * F * L / V;
+    const Stress2 sc = s.contact_stress();
+    EXPECT_NEAR(sc.xx, expect, 1e-10 * expect) << "mu " << mu;
+    EXPECT_NEAR(sc.yy, expect, 1e-10 * expect) << "mu " << mu;
+    EXPECT_NEAR(sc.xy, 0.0, 1e-10 * expect) << "mu " << mu;
+    EXPECT_NEAR(s.density(), pk.density() * std::exp(-2 * E), 1e-12);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> touching;
+    s.touching_pairs(touching);
+    EXPECT_EQ(touching.size(), 3u * nc * nr) << "every disk keeps its six contacts";
+    const Stress2 k = s.kinetic_stress();
+    EXPECT_LT(std::fabs(k.xx) + std::fabs(k.yy), 1e-20 * expect) << "the fluctuations stay zero";
+  }
+}
+
+// The same for a periodic simple cubic lattice of spheres: F = 6 pi sigma_y R* u (R* = R/2),
+// Sigma_ii = (3 pi / 4) sigma_y (u / R) e^{-2E} (compression positive), no (n - 1)/n factor.
+TEST(PeriodicDem, CubicLatticeMatchesInfiniteLattice) {
+  const int n = 4;
+  const packing::Packing pk = cubic_lattice(n);
+  DynamicOptions o = plastic_options(0.0);
+  DynamicSolver3 s = periodic_solver<3>(pk, o);
+  const double rate = -5e-3;
+  s.set_strain_rate3(rate, rate, rate);
+  s.set_affine_velocities();
+  while (s.time() * -rate < 0.01) s.step();
+  const double E = rate * s.time(), R = 1.0, u = 2 * R * (1 - std::exp(E));
+  s.set_strain_rate3(0.0, 0.0, 0.0);
+  s.run(20);
+  const double expect = 0.75 * std::numbers::pi * o.plastic.sigma_y * (u / R) * std::exp(-2 * E);
+  const Stress3 sc = s.contact_stress();
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(sc.s[a][a], expect, 1e-10 * expect) << "axis " << a;
+  EXPECT_NEAR(sc.s[0][1], 0.0, 1e-10 * expect);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> touching;
+  s.touching_pairs(touching);
+  EXPECT_EQ(touching.size(), 3u * n * n * n);
+}
+
+// Invariance over 1000 steps of a disordered packing on a sheared compaction path (contacts form,
+// slide and cross the faces): every centre shifted by an arbitrary vector and wrapped into the
+// cell, and a renumbering, give the same contact stress to 1e-9 of its scale; a mirror x -> W - x
+// with E12 -> -E12 flips the sign of S12 only.
+TEST(PeriodicDem, ShiftRenumberAndMirrorInvariance) {
+  const int side = 8;
+  const packing::Packing pk = jittered(side, 11);
+  const double W = pk.box.width();
+  packing::Packing sh = pk;
+  for (std::size_t i = 0; i < sh.size(); ++i) {
+    sh.x[i] = std::fmod(pk.x[i] + 5.3, W);
+    sh.y[i] = std::fmod(pk.y[i] + W - 3.1, W);
+  }
+  std::vector<std::size_t> order(pk.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937_64(5));
+  packing::Packing perm = sh;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    perm.x[i] = sh.x[order[i]];
+    perm.y[i] = sh.y[order[i]];
+    perm.r[i] = sh.r[order[i]];
+  }
+  packing::Packing mir = pk;
+  for (auto& x : mir.x) x = std::fmod(W - x, W);
+  for (double mu : {0.3, kInf}) {
+    const double e11 = -0.02, e22 = -0.012, e12 = 0.006;
+    const int steps = 1000;
+    const Stress2 a = run_path(pk, e11, e22, e12, steps, mu);
+    const Stress2 b = run_path(sh, e11, e22, e12, steps, mu);
+    const Stress2 c = run_path(perm, e11, e22, e12, steps, mu);
+    const Stress2 m = run_path(mir, e11, e22, -e12, steps, mu);
+    const double scale = std::max(std::fabs(a.xx), std::fabs(a.yy));
+    ASSERT_GT(scale, 0.0);
+    ASSERT_GT(std::fabs(a.xy), 1e-3 * scale) << "the sheared path loads S12";
+    for (const Stress2* r : {&b, &c}) {
+      EXPECT_NEAR(r->xx, a.xx, 1e-9 * scale) << "mu " << mu;
+      EXPECT_NEAR(r->yy, a.yy, 1e-9 * scale) << "mu " << mu;
+      EXPECT_NEAR(r->xy, a.xy, 1e-9 * scale) << "mu " << mu;
+    }
+    EXPECT_NEAR(m.xx, a.xx, 1e-9 * scale) << "mu " << mu;
+    EXPECT_NEAR(m.yy, a.yy, 1e-9 * scale) << "mu " << mu;
+    EXPECT_NEAR(m.xy, -a.xy, 1e-9 * scale) << "mu " << mu;
+    EXPECT_NEAR(m.yx, -a.yx, 1e-9 * scale) << "mu " << mu;
+    double worst = 0.0;
+    for (const Stress2* r : {&b, &c})
+      worst = std::max({worst, std::fabs(r->xx - a.xx), std::fabs(r->yy - a.yy), std::fabs(r->xy - a.xy)});
+    worst = std::max({worst, std::fabs(m.xx - a.xx), std::fabs(m.yy - a.yy), std::fabs(m.xy + a.xy)});
+    std::printf("  mu %g: S = (%.6g, %.6g, %.6g), largest difference / scale %.3g\n", mu, a.xx, a.yy, a.xy,
+                worst / scale);
+  }
+}
+
+// The rigid translation does not drift: the pair forces conserve the momentum and the table
+// builds remove what rounding leaves, with particles that move across the faces.
+TEST(PeriodicDem, NoDrift) {
+  const packing::Packing pk = jittered(8, 3, 3.0);  // loose: the disks fly and collide
+  DynamicOptions o = plastic_options(0.3);
+  Particles P = periodic_particles_from(pk, 1.0);
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> G(0.0, 0.5);
+  for (std::size_t i = 0; i < P.size(); ++i) P.vx[i] = G(rng), P.vy[i] = G(rng);
+  DynamicSolver s(std::move(P), o.plastic, packing::periodic_cell<2>(pk), o);
+  s.set_strain_rate(-0.02, -0.02, 0.0);
+  s.run(60000);
+  const Particles& Q = s.particles();
+  double p[2] = {0, 0}, m = 0, vrms = 0;
+  int outside = 0;
+  for (std::size_t i = 0; i < Q.size(); ++i) {
+    p[0] += Q.mass[i] * Q.vx[i];
+    p[1] += Q.mass[i] * Q.vy[i];
+    m += Q.mass[i];
+    vrms += Q.vx[i] * Q.vx[i] + Q.vy[i] * Q.vy[i];
+    const auto f = s.cell().fractional(Eigen::Vector2d(Q.x[i], Q.y[i]));
+    outside += f.minCoeff() < 0.0 || f.maxCoeff() >= 1.0;
+  }
+  vrms = std::sqrt(vrms / static_cast<double>(Q.size()));
+  std::printf("  t = %g, dt = %g, rebuilds %zu, vrms %g, x0 %g\n", s.time(), s.dt(), s.rebuilds(), vrms, Q.x[0]);
+  EXPECT_GT(outside, 0) << "some centres crossed a face (the positions stay unwrapped)";
+  EXPECT_GT(vrms, 1e-3);
+  EXPECT_LT(std::hypot(p[0], p[1]) / m, 1e-13 * vrms) << "the mean fluctuation velocity";
+  EXPECT_GT(s.rebuilds(), 1u);
+  // the periodic packing of the state is valid and periodic, every centre wrapped into the cell
+  const packing::Packing out = s.periodic_packing();
+  EXPECT_TRUE(out.periodic);
+  EXPECT_NO_THROW(packing::validate(out));
+  EXPECT_NEAR(out.density(), s.density(), 1e-12);
+}
+
+// A contact across a face keeps its history while one of its particles crosses the face: two
+// pressed disks (plastic flattening u_max > 0) drift through the face x = W with a third disk
+// balancing their momentum; the pair's history is found and unchanged after the crossing.
+TEST(PeriodicDem, HistoryAcrossTheFaces) {
+  packing::Packing pk;
+  pk.periodic = true;
+  pk.box = {0.0, 0.0, 12.0, 12.0};
+  pk.x = {11.0, 0.9, 5.0};  // disks 0 and 1 overlap by 0.1 through the face x = 12
+  pk.y = {6.0, 6.0, 2.0};
+  pk.r = {1.0, 1.0, std::sqrt(2.0)};
+  DynamicOptions o = plastic_options(kInf);
+  o.plastic.damping_n = o.plastic.damping_t = 1.0;
+  Particles P = periodic_particles_from(pk, 1.0);
+  P.vx = {0.5, 0.5, -0.5};  // the third has the mass of the first two
+  DynamicSolver s(std::move(P), o.plastic, packing::periodic_cell<2>(pk), o);
+  s.run(5);
+  ASSERT_NE(s.plastic_history(0, 1), nullptr);
+  const double u_max = s.plastic_history(0, 1)->u_max;
+  EXPECT_GT(u_max, 0.05);
+  const std::size_t builds = s.rebuilds();
+  while (s.particles().x[0] < 12.5) s.step();
+  EXPECT_GT(s.rebuilds(), builds) << "the table was built again after the crossing";
+  ASSERT_NE(s.plastic_history(0, 1), nullptr);
+  EXPECT_EQ(s.plastic_history(0, 1)->u_max, u_max);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> touching;
+  s.touching_pairs(touching);
+  EXPECT_EQ(touching.size(), 1u) << "the pair still touches through the face";
+}
+
+// The readers and solvers that cannot use a periodic packing refuse it with one line.
+TEST(PeriodicDem, Refusals) {
+  const packing::Packing pk = triangular_lattice(6, 6);
+  EXPECT_THROW(particles_from(pk, 1.0), std::invalid_argument);
+  EXPECT_THROW(spheres_from(cubic_lattice(4), 1.0), std::invalid_argument);
+  packing::Packing walled = pk;
+  walled.periodic = false;
+  EXPECT_THROW(periodic_particles_from(walled, 1.0), std::invalid_argument);
+  // a cell narrower than two interaction ranges
+  const packing::Packing small = triangular_lattice(2, 2);
+  DynamicOptions o = plastic_options(0.0);
+  EXPECT_THROW(periodic_solver<2>(small, o), std::invalid_argument);
+  // no state file and no restart in a periodic cell yet
+  DynamicSolver s = periodic_solver<2>(pk, o);
+  const SolverState st = s.state();
+  EXPECT_TRUE(st.periodic);
+  EXPECT_THROW(format_state(st), std::invalid_argument);
+  EXPECT_THROW(DynamicSolver(st, o), std::invalid_argument);
+}
