@@ -131,8 +131,16 @@ inline packing::Packing make_packing_3d(const PackArgs& a) {
 
 /// The packing file if one is given, else a new deposition; `source` describes which. `command`
 /// names the (2D only) subcommand in the refusal of a 3D packing file.
+/// What input_packing does with a periodic packing file ('# periodic'): refuse it (the run has no
+/// periodic cell; `hint` names the option that has one), require it (a periodic run), or leave it
+/// to the caller.
+enum class PeriodicInput { Refuse, Require, Caller };
+
 inline packing::Packing input_packing(const std::string& packing_file, const PackArgs& a, std::string& source,
-                                      const char* command = "netsolve compact", bool periodic = false) {
+                                      const char* command = "netsolve compact",
+                                      PeriodicInput periodic_input = PeriodicInput::Refuse,
+                                      const char* hint = "--boundary periodic") {
+  const bool periodic = periodic_input == PeriodicInput::Require;
   if (!packing_file.empty()) {
     if (std::filesystem::is_directory(packing_file))
       throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes DIR/packing.csv)",
@@ -141,17 +149,18 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
     packing::Packing p = packing::read_packing_csv(packing_file);
     if (p.dim != 2)
       throw UsageError(fmt::format("--packing {} is a 3D packing; {} is 2D only", packing_file.substr(0, 200), command));
-    if (p.periodic && !periodic)
-      throw UsageError(fmt::format("--packing {} is a periodic packing (a '# periodic' line): {} uses it only with "
-                                   "--boundary periodic",
-                                   packing_file.substr(0, 200), command));
+    if (p.periodic && periodic_input == PeriodicInput::Refuse)
+      throw UsageError(fmt::format("--packing {} is a periodic packing (a '# periodic' line): {} needs a periodic cell, "
+                                   "run it with {}",
+                                   packing_file.substr(0, 200), command, hint));
     if (!p.periodic && periodic)
-      throw UsageError(fmt::format("--boundary periodic needs a periodic packing, and --packing {} has no '# periodic' line",
+      throw UsageError(fmt::format("{} needs a periodic packing, and --packing {} has no '# periodic' line", hint,
                                    packing_file.substr(0, 200)));
     return p;
   }
   if (periodic)
-    throw UsageError("--boundary periodic needs --packing FILE with a periodic packing (a '# periodic' line; docs/packing.md)");
+    throw UsageError(fmt::format("{} needs --packing FILE with a periodic packing (a '# periodic' line; netsolve pack "
+                                 "--periodic)", hint));
   source = fmt::format("ballistic deposition, W = {} R, r = R[{}, {}], seed {}", a.width, a.mono ? 1.0 : a.r_min,
                        a.mono ? 1.0 : a.r_max, a.seed);
   return make_packing(a);

@@ -57,7 +57,8 @@ template <int D>
 packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) {
   if constexpr (D == 2) {
     try {
-      return netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve compact");
+      return netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve compact",
+                                                  netdem::app::netsolve::PeriodicInput::Caller);
     } catch (const UsageError& e) {  // a 3D packing file: say how to run it
       if (std::string(e.what()).find("is a 3D packing") != std::string::npos)
         throw UsageError(std::string(e.what()) + " without --dim 3");

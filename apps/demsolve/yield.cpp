@@ -516,7 +516,8 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   const YieldDoor d = check_yield_args(a);
   const RunDirOptions rdo = check_scene_run_dir(out, a.overwrite, a.packing_file, a.pack);
   std::string source;
-  const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve yield");
+  const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve yield",
+                                                                   netdem::app::netsolve::PeriodicInput::Caller);
   if (pk.periodic)
     throw UsageError(fmt::format("--packing {} is periodic ('# periodic'): demsolve yield has no periodic cell yet (demsolve "
                                  "compact --boundary periodic has)", packing::quote_input(a.packing_file)));

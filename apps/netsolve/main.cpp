@@ -350,7 +350,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   activity() = input.empty() ? "building the ballistic deposition" : "reading " + input;
   const bool periodic = so.mode == qs::BoundaryMode::Periodic;
   packing::Packing pk =
-      jammed ? jammed->packing() : app::netsolve::input_packing(a.packing_file, pa, source, "netsolve compact", periodic);
+      jammed ? jammed->packing()
+             : app::netsolve::input_packing(a.packing_file, pa, source, "netsolve compact",
+                                            periodic ? app::netsolve::PeriodicInput::Require : app::netsolve::PeriodicInput::Refuse);
   if (jammed) source = "jammed state " + a.state_file;
   // the walls enclose every disk at the start (as demsolve compact --boundary walls); a state has its box
   if (so.mode == qs::BoundaryMode::Walls && !jammed) pk.box = app::netsolve::walls_box(pk);

@@ -307,7 +307,9 @@ void YieldRun::open_input() {
     if (a.packing_file.empty()) app::netsolve::check_deposition_size(a.pack, true);
     app::netsolve::activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
     pk_ = app::netsolve::input_packing(a.packing_file, a.pack, source_, "netsolve yield",
-                                       so_.mode == qs::BoundaryMode::Periodic);
+                                       so_.mode == qs::BoundaryMode::Periodic ? app::netsolve::PeriodicInput::Require
+                                                                              : app::netsolve::PeriodicInput::Refuse,
+                                       "--compact-bc periodic");
     co_.validate(pk_.density());
   } else {
     solver_ = restore_compacted(a, co_.path, so_);

@@ -51,7 +51,7 @@ check_bad periodic_no_packing "periodic packing" compact --boundary periodic
 check_bad periodic_walled_packing "no '# periodic'" compact --boundary periodic --packing "$tmp/walled.csv"
 check_bad periodic_packing_layer "--boundary periodic" compact --packing "$tmp/lat.csv"
 check_bad periodic_state "periodic cell" compact --boundary periodic --packing "$tmp/lat.csv" --state "$tmp/none.json"
-check_bad yield_periodic_die "--boundary periodic" yield --packing "$tmp/lat.csv" --jobs 1
+check_bad yield_periodic_die "--compact-bc periodic" yield --packing "$tmp/lat.csv" --jobs 1
 check_bad yield_periodic_probe_die "periodic" yield --packing "$tmp/lat.csv" --compact-bc periodic --probe-bc die --jobs 1
 # the state file carries the cell: compact --save-state, then yield --from-state probes the same lattice
 "$ns" compact --boundary periodic --packing "$tmp/lat.csv" --to-density 0.934 --increments 10 --tol 1e-10 \
