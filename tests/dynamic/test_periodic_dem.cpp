@@ -15,6 +15,7 @@
 #include "netdem/dynamic/state.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "periodic_lattices.hpp"
 
 using namespace netdem::dem;
 namespace packing = netdem::packing;
@@ -23,37 +24,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// A periodic triangular lattice of nc x nr touching disks of radius R (nr even), as the network
-// solver's test (tests/quasistatic/test_periodic_network.cpp).
-packing::Packing triangular_lattice(int nc, int nr, double R = 1.0) {
-  packing::Packing p;
-  const double h = std::sqrt(3.0) * R;
-  for (int r = 0; r < nr; ++r)
-    for (int c = 0; c < nc; ++c) {
-      p.x.push_back(R * (r % 2) + 2 * R * c + 0.5 * R);
-      p.y.push_back(h * r + 0.5 * h);
-      p.r.push_back(R);
-    }
-  p.box = {0.0, 0.0, 2 * R * nc, h * nr};
-  p.periodic = true;
-  return p;
-}
-
-packing::Packing cubic_lattice(int n, double R = 1.0) {
-  packing::Packing p;
-  p.dim = 3;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        p.x.push_back(R + 2 * R * i);
-        p.y.push_back(R + 2 * R * j);
-        p.z.push_back(R + 2 * R * k);
-        p.r.push_back(R);
-      }
-  p.box = {0.0, 0.0, 2 * R * n, 2 * R * n, 0.0, 2 * R * n};
-  p.periodic = true;
-  return p;
-}
+using netdem::test::cubic_lattice;
+using netdem::test::triangular_lattice;
 
 DynamicOptions plastic_options(double mu) {
   DynamicOptions o;

@@ -16,6 +16,7 @@
 
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "periodic_lattices.hpp"
 #include "network_test_util.hpp"
 
 namespace qs = netdem::qs;
@@ -25,38 +26,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// A periodic triangular lattice of nc x nr touching disks of radius R (nr even): rows sqrt(3) R
-// apart, odd rows offset by R; cell 2 R nc x sqrt(3) R nr. Every disk touches six.
-packing::Packing triangular_lattice(int nc, int nr, double R = 1.0) {
-  packing::Packing p;
-  const double h = std::sqrt(3.0) * R;
-  for (int r = 0; r < nr; ++r)
-    for (int c = 0; c < nc; ++c) {
-      p.x.push_back(R * (r % 2) + 2 * R * c + 0.5 * R);
-      p.y.push_back(h * r + 0.5 * h);
-      p.r.push_back(R);
-    }
-  p.box = {0.0, 0.0, 2 * R * nc, h * nr};
-  p.periodic = true;
-  return p;
-}
-
-// A periodic simple cubic lattice of n^3 touching spheres of radius R.
-packing::Packing cubic_lattice(int n, double R = 1.0) {
-  packing::Packing p;
-  p.dim = 3;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        p.x.push_back(R + 2 * R * i);
-        p.y.push_back(R + 2 * R * j);
-        p.z.push_back(R + 2 * R * k);
-        p.r.push_back(R);
-      }
-  p.box = {0.0, 0.0, 2 * R * n, 2 * R * n, 0.0, 2 * R * n};
-  p.periodic = true;
-  return p;
-}
+using netdem::test::cubic_lattice;
+using netdem::test::triangular_lattice;
 
 // The packing with every centre moved by (dx, dy) and wrapped into the cell.
 packing::Packing shifted(packing::Packing p, double dx, double dy) {
@@ -75,6 +46,16 @@ qs::SolverOptions periodic_options(double mu) {
   so.mode = qs::BoundaryMode::Periodic;
   so.law.mu = mu;
   so.law.sigma_y = 2.0;
+  return so;
+}
+
+// Pure Newton (no drag) to 1e-10: a lattice follows the affine motion, so it converges exactly.
+qs::SolverOptions exact_options(double mu) {
+  qs::SolverOptions so = periodic_options(mu);
+  so.residual_tol = 1e-10;
+  so.max_residual_tol = 1e-10;
+  so.max_newton = 50;
+  so.viscosity = 0.0;
   return so;
 }
 
@@ -170,11 +151,7 @@ TEST(PeriodicNetwork, TriangularLatticeMatchesInfiniteLattice) {
   const int nc = 6, nr = 6;
   const packing::Packing pk = triangular_lattice(nc, nr);
   for (double mu : {0.0, kInf}) {
-    qs::SolverOptions so = periodic_options(mu);
-    so.residual_tol = 1e-10;
-    so.max_residual_tol = 1e-10;
-    so.max_newton = 50;
-    so.viscosity = 0.0;
+    const qs::SolverOptions so = exact_options(mu);
     const auto rr = netdem::test::compact(pk, so, qs::StrainPath::hydrostatic(), pk.density() * 1.03, 10);
     const double E = rr.m.E11, R = 1.0, L = 2 * R * std::exp(E), u = 2 * R - L;
     const double F = 3 * so.law.sigma_y * std::sqrt(8 * u * R / 2);
@@ -193,11 +170,7 @@ TEST(PeriodicNetwork, TriangularLatticeMatchesInfiniteLattice) {
 TEST(PeriodicNetwork, CubicLatticeMatchesInfiniteLattice) {
   const int n = 4;
   const packing::Packing pk = cubic_lattice(n);
-  qs::SolverOptions so = periodic_options(0.0);
-  so.residual_tol = 1e-10;
-  so.max_residual_tol = 1e-10;
-  so.max_newton = 50;
-  so.viscosity = 0.0;
+  const qs::SolverOptions so = exact_options(0.0);
   qs::NetworkSolver3 s(pk, so);
   const double dE = -0.002;
   for (int k = 0; k < 5; ++k) {
@@ -233,11 +206,7 @@ TEST(PeriodicNetwork, ShiftRenumberAndMirrorInvariance) {
   packing::Packing mir = pk;
   for (auto& x : mir.x) x = std::fmod(pk.box.width() - x, pk.box.width());
   for (double mu : {0.0, kInf}) {
-    qs::SolverOptions so = periodic_options(mu);
-    so.residual_tol = 1e-10;
-    so.max_residual_tol = 1e-10;
-    so.max_newton = 50;
-    so.viscosity = 0.0;
+    const qs::SolverOptions so = exact_options(mu);
     const qs::StrainPath path = qs::StrainPath::parse("-1,-0.6,0.3"), mirrored = qs::StrainPath::parse("-1,-0.6,-0.3");
     const double D = pk.density() * 1.03;
     const auto a = netdem::test::compact(pk, so, path, D, 8);
@@ -262,9 +231,9 @@ TEST(PeriodicNetwork, ShiftRenumberAndMirrorInvariance) {
 // on a sheared path with friction. A state whose images do not match its rows is refused.
 TEST(PeriodicNetwork, StateFileContinuesBitIdentically) {
   const packing::Packing pk = shifted(triangular_lattice(6, 6), 1.3, 0.4);
-  qs::SolverOptions so = periodic_options(0.3);
-  so.residual_tol = 1e-10;
-  so.max_newton = 50;
+  qs::SolverOptions so = exact_options(0.3);
+  so.viscosity = qs::SolverOptions{}.viscosity;  // the legacy drag on the restored path too
+  so.max_residual_tol = qs::SolverOptions{}.max_residual_tol;
   qs::NetworkSolver a(pk, so);
   Eigen::Matrix2d dE;
   dE << -2e-3, 6e-4, 6e-4, -1e-3;
