@@ -28,6 +28,14 @@ constexpr LudingFeatures kHystereticFrictionless{true, false, false, false};
 constexpr LudingFeatures kFullFrictionless{true, true, true, false};
 }  // namespace
 
+// The force loops are flattened for speed (below). The sanitizer and fuzz builds define
+// NETDEM_NO_FLATTEN: instrumented and flattened, this file took GCC 400 s to compile instead of 46 s.
+#ifdef NETDEM_NO_FLATTEN
+#define NETDEM_FLATTEN
+#else
+#define NETDEM_FLATTEN [[gnu::flatten]]
+#endif
+
 // ---- forces ------------------------------------------------------------------------------------
 template <int D>
 template <LudingFeatures F>
@@ -87,7 +95,7 @@ Law make_law(const LudingParams& lp, double k1_Tt, const contact::PlasticIndenta
 // it, which halved the speed of the full law: docs/performance.md "Issue 12").
 template <int D>
 template <class Law, bool InPlace>
-[[gnu::flatten]] void DynamicSolverT<D>::compute_forces() {
+NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
   const std::size_t n = P_.size();
   const Law pair_law = make_law<Law>(params_, thermal_.k1_Tt, opt_.plastic);
   const Law wall_law = make_law<Law>(wall_params_, thermal_.k1_Tt, pl_wall_params_);
@@ -154,7 +162,7 @@ inline void add_image(const int* n, const double (&hc)[3][3], double& dx, double
 // fluctuations about the affine field, so that the relative velocity adds L times the branch.
 template <int D>
 template <class Law, bool InPlace, bool Periodic>
-[[gnu::flatten]] void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
+NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   using H = typename Law::History;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
@@ -338,7 +346,7 @@ void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
 // The particle-wall contacts, 2D: the pair (wall, particle), n from the wall into the box.
 template <int D>
 template <class Law, bool InPlace>
-[[gnu::flatten]] void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, ForceSums& a) {
+NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, ForceSums& a) {
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
@@ -417,7 +425,7 @@ template <class Law, bool InPlace>
 // The particle-wall contacts, 3D: six walls.
 template <int D>
 template <class Law, bool InPlace>
-[[gnu::flatten]] void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, ForceSums& a) {
+NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, ForceSums& a) {
   using H = typename Law::History;
   const std::size_t n = P_.size();
   const double dt = ts_.dt;
