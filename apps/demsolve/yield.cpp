@@ -73,7 +73,7 @@ std::vector<int> select_probes(const DemYieldArgs& a) {
 /// The values at the door: every option checked before anything is written.
 struct YieldDoor {
   std::string compact_bc, probe_bc;
-  bool affine = false;
+  bool affine = false, periodic = false;
   double mu = 0.0;
   std::vector<int> selection;
 };
@@ -83,9 +83,10 @@ YieldDoor check_yield_args(const DemYieldArgs& a) {
   if (a.precompact != "hydrostatic" && a.precompact != "closed-die")
     throw UsageError(fmt::format("--precompact '{}' is not 'hydrostatic' or 'closed-die'", packing::quote_input(a.precompact)));
   auto bc = [](const std::string& v, const char* opt) {
-    if (v == "affine") return std::string("affine");
+    if (v == "affine" || v == "periodic") return v;
     if (v == "die" || v == "layer") return std::string("die");
-    throw UsageError(fmt::format("{} '{}' is not 'affine' or 'die' (the peripheral layer)", opt, packing::quote_input(v)));
+    throw UsageError(fmt::format("{} '{}' is not 'affine', 'die' (the peripheral layer) or 'periodic'", opt,
+                                 packing::quote_input(v)));
   };
   d.compact_bc = bc(a.compact_bc, "--compact-bc");
   d.probe_bc = bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
@@ -93,6 +94,7 @@ YieldDoor check_yield_args(const DemYieldArgs& a) {
     throw UsageError("--probe-bc differs from --compact-bc: demsolve yield probes with the boundary mode of the "
                      "precompaction (netsolve's frictionless hand-over is not implemented in the explicit solver)");
   d.affine = d.compact_bc == "affine";
+  d.periodic = d.compact_bc == "periodic";
   for (const auto& [v, name, lo, hi] : {std::tuple{a.inertial_number, "--inertial-number", 0.0, 1.0},
                                          std::tuple{a.probe_inertial_number, "--probe-inertial-number", 0.0, 1.0}})
     if (!(std::isfinite(v) && v >= lo && v <= hi && (v > 0.0 || std::string(name) == "--probe-inertial-number")))
@@ -178,7 +180,7 @@ class YieldRun {
 };
 
 void YieldRun::setup() {
-  Particles P = particles_from(pk_, 1.0);
+  Particles P = d_.periodic ? periodic_particles_from(pk_, 1.0) : particles_from(pk_, 1.0);
   Box box(pk_.box);
   box.contact_walls = false;
   box.right.mode = box.top.mode = WallMode::Affine;
@@ -202,13 +204,17 @@ void YieldRun::setup() {
   T_ = std::log(D0_ / a_.to_density) / (e11 + e22);
 
   activity() = "setting up the explicit solver";
-  s_ = std::make_unique<DynamicSolver>(std::move(P), o_.plastic, box, o_);
+  // periodic: every particle free in a cell that follows the strain (docs/dynamic.md "Periodic cell")
+  s_ = d_.periodic ? std::make_unique<DynamicSolver>(std::move(P), o_.plastic, packing::periodic_cell<2>(pk_), o_)
+                   : std::make_unique<DynamicSolver>(std::move(P), o_.plastic, box, o_);
   s_->set_strain_rate(e11, e22);
   s_->set_affine_velocities();
-  s_->set_prescribed(prescribed_particles(pk_, d_.affine, false), !d_.affine);
-  // affine: every centre prescribed, the spins free except the peripheral layer's, as netsolve and Redanz &
-  // Fleck section 2.4 ("the rotation of particles in the peripheral layer is prevented")
-  if (d_.affine) s_->hold_spins(prescribed_particles(pk_, false, false));
+  if (!d_.periodic) {
+    s_->set_prescribed(prescribed_particles(pk_, d_.affine, false), !d_.affine);
+    // affine: every centre prescribed, the spins free except the peripheral layer's, as netsolve and Redanz &
+    // Fleck section 2.4 ("the rotation of particles in the peripheral layer is prevented")
+    if (d_.affine) s_->hold_spins(prescribed_particles(pk_, false, false));
+  }
   s_->set_rotations(!a_.no_rotation);
   dt_first_ = s_->dt();
   // the probes run on the elastic branch, whose stiffness bound sets a smaller step
@@ -273,8 +279,8 @@ bool YieldRun::precompact() {
   if (!stopped.empty()) hist += "# stopped: " + stopped + "\n";
   write_file_atomic(out_ / "history.csv", hist);
   t_compact_ = seconds_since(t0);
-  int outside = 0;
-  for (std::size_t p = 0; p < n; ++p) {
+  int outside = 0;  // (a periodic cell has no outside: its positions are unwrapped)
+  for (std::size_t p = 0; p < n && !d_.periodic; ++p) {
     const double x = s.particles().x[p], y = s.particles().y[p];
     outside += x < s.box().x_min || x > s.box().x_max || y < s.box().y_min || y > s.box().y_max;
   }
@@ -518,9 +524,11 @@ int run_dem_yield(const std::string& command, const DemYieldArgs& a, const fs::p
   std::string source;
   const packing::Packing pk = netdem::app::netsolve::input_packing(a.packing_file, a.pack, source, "demsolve yield",
                                                                    netdem::app::netsolve::PeriodicInput::Caller);
-  if (pk.periodic)
-    throw UsageError(fmt::format("--packing {} is periodic ('# periodic'): demsolve yield has no periodic cell yet (demsolve "
-                                 "compact --boundary periodic has)", packing::quote_input(a.packing_file)));
+  if (pk.periodic && !d.periodic)
+    throw UsageError(fmt::format("--packing {} is periodic ('# periodic'): run it with --compact-bc periodic",
+                                 packing::quote_input(a.packing_file)));
+  if (d.periodic && !pk.periodic)
+    throw UsageError("--compact-bc periodic needs a periodic packing ('# periodic'; netsolve pack --periodic) as --packing FILE");
   check_memory(pk.size());
   YieldRun run(command, a, out, d, pk, source);
   run.setup();

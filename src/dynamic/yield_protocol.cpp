@@ -82,7 +82,7 @@ double stress_norm(const YieldSample& m) {
 sys::YieldPoint fabric_affine_point(const DynamicSolver& s, const std::vector<ContactInfo>& cs, double theta) {
   const double e11 = std::cos(theta), e22 = std::sin(theta);
   const Box& b = s.box();
-  const double area = (b.x_max - b.x_min) * (b.y_max - b.y_min);
+  const double area = s.periodic() ? s.cell().measure() : (b.x_max - b.x_min) * (b.y_max - b.y_min);
   double s11 = 0.0, s22 = 0.0;
   for (const auto& c : cs) {
     if (c.wall >= 0 || !(c.f_n > 0.0)) continue;

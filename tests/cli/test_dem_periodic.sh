@@ -70,7 +70,7 @@ bad2 compact_no_packing "needs --packing" compact --boundary periodic
 bad2 compact_affine "exclude each other" compact --boundary periodic --affine --packing "$p"
 bad2 compact_save "--save-state" compact --boundary periodic --save-state --packing "$p"
 bad2 compact_boundary "is not 'layer', 'walls' or 'periodic'" compact --boundary torus --packing "$p"
-bad2 yield_periodic "demsolve yield has no periodic cell" yield --packing "$p"
+bad2 yield_periodic_needs_periodic_bc "run it with --compact-bc periodic" yield --packing "$p"
 bad2 prepare_periodic "periodic packing" prepare --packing "$p"
 tool="$ns"
 bad2 sinter_periodic "is periodic" sinter --packing "$tmp/p3/packing.csv"
