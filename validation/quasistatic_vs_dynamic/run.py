@@ -2,6 +2,7 @@
 """Validation of netsolve's quasi-static answers against the explicit DEM limit I -> 0 (issue 12 section 5).
 
 usage: /usr/bin/python3 validation/quasistatic_vs_dynamic/run.py
+           [--boundary periodic: runs validation/quasistatic_vs_dynamic_periodic/run.py instead]
            [--quick] [--netsolve PATH] [--demsolve PATH] [--jobs 2] [--out DIR] [--runs DIR] [--force]
            [--only-seeds 1,2,3] [--only PATTERN,...] [--report-only] [--timeout S]
 
@@ -701,6 +702,13 @@ def write_report(R, rows, yrows, figs, out, mode, runs, cmdline, total, netsolve
 
 
 def main():
+    if "--boundary" in sys.argv:  # the periodic mode is its own case (issue 29): one folder, one report
+        i = sys.argv.index("--boundary")
+        if sys.argv[i + 1:i + 2] != ["periodic"]:
+            sys.exit("error: --boundary: only 'periodic' (validation/quasistatic_vs_dynamic_periodic); "
+                     "without it this case runs the layer and walls modes")
+        script = os.path.join(REPO, "validation", "quasistatic_vs_dynamic_periodic", "run.py")
+        os.execv(sys.executable, [sys.executable, script] + sys.argv[1:i] + sys.argv[i + 2:])
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="W = 40R, seed 1 only")
