@@ -22,6 +22,24 @@
 
 namespace netdem::app {
 
+std::string shell_command(int argc, const char* const* argv) {
+  std::string out;
+  for (int k = 0; k < argc; ++k) {
+    const std::string a = argv[k];
+    const bool plain = !a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                                         "_-+=.,:/@%") == std::string::npos;
+    if (k) out += ' ';
+    if (plain) {
+      out += a;
+      continue;
+    }
+    out += '\'';
+    for (char c : a) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    out += '\'';
+  }
+  return out;
+}
+
 void write_file_atomic(const std::filesystem::path& path, const std::string& text) {
   namespace fs = std::filesystem;
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");

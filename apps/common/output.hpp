@@ -28,6 +28,10 @@ class UsageError : public std::invalid_argument {
 /// Writes `text` to `path` through a temporary file in the same folder and a rename, so that a
 /// reader never sees a half-written file. Throws std::runtime_error (one line) on failure.
 void write_file_atomic(const std::filesystem::path& path, const std::string& text);
+/// The command line as a shell would rerun it (command.txt, summary.json "command"): the arguments
+/// joined by spaces, an argument that is empty or holds a character the shell treats specially in
+/// single quotes (so that `--snapshots ''` survives the round trip).
+std::string shell_command(int argc, const char* const* argv);
 
 /// Creates the output folder (and parents). Throws std::runtime_error (one line) on failure.
 void make_output_dir(const std::filesystem::path& dir);

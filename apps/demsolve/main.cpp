@@ -187,7 +187,7 @@ CLI::App* add_dem_yield(CLI::App& app, DemYieldArgs& dy, std::string& out_dyield
 
 int main(int argc, char** argv) {
   std::string command;
-  for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
+  command = netdem::app::shell_command(argc, argv);
   CLI::App app{"demsolve: explicit 2D DEM with Luding's sintering contact law (Luding et al. 2005)"};
   app.require_subcommand(1);
   netdem::dem::SampleSpec sample;

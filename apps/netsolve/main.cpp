@@ -539,7 +539,7 @@ int run_pack_periodic_cli(CLI::App* pack, const std::vector<CLI::Option*>& green
 }
 
 int main(int argc, char** argv) {
-  for (int k = 0; k < argc; ++k) g_command += (k ? " " : "") + std::string(argv[k]);
+  g_command = netdem::app::shell_command(argc, argv);
   if (argc > 1 && (std::string(argv[1]) == "yield" || std::string(argv[1]) == "yield-merge")) return run_yield_command(argc, argv);
   if (argc > 1 && std::string(argv[1]) == "sinter-pair") return run_sinter_pair_command(argc, argv);
   if (argc > 1 && std::string(argv[1]) == "sinter") return run_sinter_command(argc, argv);

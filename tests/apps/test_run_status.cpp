@@ -236,3 +236,29 @@ TEST(RunDir, LiveRunRefusedEvenWithOverwriteStaleMarkerCleared) {
   o.overwrite = false;
   EXPECT_THROW(netdem::app::check_run_dir(d, o), netdem::app::UsageError);
 }
+
+// command.txt is a command a shell reruns: an empty argument, spaces and quotes survive the round
+// trip through `sh -c` (each argument comes back as it was given), plain arguments stay unquoted.
+TEST(ShellCommand, RoundTripsThroughTheShell) {
+  const std::vector<std::string> args = {"netsolve", "compact", "--snapshots", "", "--out", "a b/it's", "--x=1,2", "$HOME", "*"};
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  const std::string cmd = netdem::app::shell_command(static_cast<int>(argv.size()), argv.data());
+  EXPECT_EQ(cmd.rfind("netsolve compact --snapshots '' --out ", 0), 0u) << cmd;
+  // the shell prints each argument on its own line, in brackets
+  const fs::path d = fs::temp_directory_path() / fmt::format("netdem_shell_{}", ::getpid());
+  fs::create_directories(d);
+  {
+    std::ofstream f(d / "run.sh");
+    f << "show() { for a in \"$@\"; do printf '[%s]\\n' \"$a\"; done; }\nshow " << cmd.substr(cmd.find(' ') + 1) << "\n";
+  }
+  const std::string got_path = (d / "got.txt").string();
+  ASSERT_EQ(std::system(fmt::format("sh {} > {}", (d / "run.sh").string(), got_path).c_str()), 0);
+  std::ifstream in(got_path);
+  std::stringstream got;
+  got << in.rdbuf();
+  std::string want;
+  for (std::size_t k = 1; k < args.size(); ++k) want += "[" + args[k] + "]\n";
+  EXPECT_EQ(got.str(), want);
+  fs::remove_all(d);
+}
