@@ -129,7 +129,7 @@ class RowsOf : public CompactionObserverT<D> {
 // (PeriodicNetwork.PrecompactionThenPureShearMatchesLattice; tests/periodic_lattices.hpp) to 1e-10:
 // the bonds along x unload (Eq 2 retraced by the reversible law, opened by the elastic line), and
 // with sticking the slanted bonds slide at the shear cap against their slip. No tangential dashpot
-// here: at this rate gamma_t v_t is 3 x the cap of a slanted bond, and the sliding rule (spring +
+// here: at this rate gamma_t v_t is 1.9 x the cap of a slanted bond, and the sliding rule (spring +
 // dashpot on the limit, LMM05 Eq 21) leaves the spring at cap - gamma_t v_t, past the cap the
 // other way; held at rest, those bonds then slide back against the shear (S11 - S22 0.13 instead
 // of 1.24 with damping_t = 0.5: a rate artefact, docs/dynamic.md "Periodic cell").
