@@ -138,11 +138,11 @@ template <int D>
 class CompactFiles : public CompactionObserverT<D> {
  public:
   CompactFiles(const DynamicSolverT<D>& s, const fs::path& out, std::vector<double> snaps, bool walls, double t_end,
-               bool quiet)
-      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), periodic_(s.periodic()),
+               bool quiet, bool legs)
+      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), periodic_(s.periodic()), legs_(legs),
         progress_("compact", t_end, quiet) {
     const auto& lab = sys::voigt_labels<D>();
-    csv_ = "increment";
+    csv_ = legs_ ? "increment,leg" : "increment";
     for (const char* l : lab) csv_ += fmt::format(",E{}", l);
     csv_ += ",D";
     for (const char* l : lab) csv_ += fmt::format(",S{}", l);
@@ -157,6 +157,7 @@ class CompactFiles : public CompactionObserverT<D> {
   void row(const CompactionRowT<D>& r) override {
     const auto& m = r.mean;
     csv_ += fmt::format("{}", r.increment);
+    if (legs_) csv_ += fmt::format(",{}", r.leg);
     for (double e : r.E) csv_ += fmt::format(",{:.9g}", e);
     csv_ += fmt::format(",{:.9g}", r.density);
     for (double v : m.S) csv_ += fmt::format(",{:.9g}", v);
@@ -170,6 +171,8 @@ class CompactFiles : public CompactionObserverT<D> {
     if (periodic_)
       for (double v : m.Sk) csv_ += fmt::format(",{:.6g}", v);
     csv_ += "\n";
+    if (leg_end_.size() <= static_cast<std::size_t>(r.leg)) leg_end_.resize(static_cast<std::size_t>(r.leg) + 1);
+    leg_end_[static_cast<std::size_t>(r.leg)] = r;
     if (r.increment == 0) return;
     while (next_snap_ < snaps_.size() && s_.density() >= snaps_[next_snap_] - 1e-9) {
       write_compact_snapshot(s_, out_, fmt::format("D{:.3f}", snaps_[next_snap_]), cs_);
@@ -184,16 +187,19 @@ class CompactFiles : public CompactionObserverT<D> {
     write_file_atomic(out_ / "history.csv", csv_);
   }
   std::vector<ContactInfo>& contacts_buffer() { return cs_; }
+  /// The last row of each leg reached.
+  const std::vector<CompactionRowT<D>>& leg_ends() const { return leg_end_; }
 
  private:
   const DynamicSolverT<D>& s_;
   fs::path out_;
   std::vector<double> snaps_;
-  bool walls_, periodic_;
+  bool walls_, periodic_, legs_;
   Progress progress_;
   std::string csv_;
   std::size_t next_snap_ = 0;
   std::vector<ContactInfo> cs_;
+  std::vector<CompactionRowT<D>> leg_end_;
 };
 
 /// summary.json: what the run was asked.
@@ -222,7 +228,8 @@ nlohmann::json compact_summary(const std::string& command, const DemCompactArgs&
     j["strain_rate"][std::string("E") + lab[k]] = rate.rate[k];
   }
   j["increments"] = a.increments;
-  j["to_density"] = a.to_density;
+  j["to_density"] = a.to_strain > 0.0 ? nlohmann::json(nullptr) : nlohmann::json(a.to_density);
+  if (a.to_strain > 0.0) j["to_strain"] = a.to_strain;
   j["k_t"] = a.k_t;
   j["first_touch"] = a.first_touch;
   j["normal_unloading"] = a.normal_unloading;
@@ -268,12 +275,57 @@ void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const Dynami
   j["neighbour_rebuilds"] = s.rebuilds();
 }
 
+/// summary.json "legs" of a run that precompacts: each leg's path, target, windows, strain rate and
+/// duration, and its last row (null if the run stopped before it); the path's equivalent strain
+/// |E| = sqrt(dE:dE) from the end of the precompaction.
+template <int D>
+nlohmann::json legs_summary(const std::vector<CompactionLegT<D>>& legs, const std::string& path,
+                            const std::vector<CompactionRowT<D>>& ends) {
+  const auto& lab = sys::voigt_labels<D>();
+  nlohmann::json out = nlohmann::json::array();
+  int last_row = 0;  // the row that ends leg l
+  for (std::size_t l = 0; l < legs.size(); ++l) {
+    const CompactionLegT<D>& leg = legs[l];
+    last_row += leg.increments;
+    nlohmann::json j = {{"leg", l},
+                        {"name", l == 0 ? "precompaction" : "path"},
+                        {"path", l == 0 ? std::string("hydrostatic") : path},
+                        {"increments", leg.increments},
+                        {"duration", leg.rate.t_end},
+                        {"strain_rate", {{"gamma_dot", leg.rate.gamma_dot}}}};
+    for (std::size_t k = 0; k < lab.size(); ++k) j["strain_rate"][std::string("E") + lab[k]] = leg.rate.rate[k];
+    if (leg.target_strain > 0.0) {
+      j["to_strain"] = leg.target_strain;
+    } else {
+      j["to_density"] = leg.target_density;
+    }
+    if (!(l < ends.size() && ends[l].increment == last_row)) {  // the run stopped before the leg's end
+      j["end"] = nullptr;
+      out.push_back(j);
+      continue;
+    }
+    const CompactionRowT<D>& e = ends[l];
+    nlohmann::json end = {{"increment", e.increment}, {"D", e.density}, {"time", e.time}, {"Z", e.mean.Z}};
+    double e2 = 0.0;
+    for (std::size_t k = 0; k < lab.size(); ++k) {
+      end[std::string("S") + lab[k]] = e.mean.S[k];
+      end[std::string("E") + lab[k]] = e.E[k];
+      const double d = l == 0 ? e.E[k] : e.E[k] - ends[l - 1].E[k];
+      e2 += (k < static_cast<std::size_t>(D) ? 1.0 : 2.0) * d * d;
+    }
+    end["strain"] = std::sqrt(e2);
+    j["end"] = end;
+    out.push_back(j);
+  }
+  return out;
+}
+
 /// jammed.json: the final state at rest, its strain the state's (if it started from one) plus the run's.
 template <int D>
-void save_jammed(const DynamicSolverT<D>& s, const CompactionRateT<D>& rate, Eigen::Matrix<double, D, D> E,
+void save_jammed(const DynamicSolverT<D>& s, const Voigt<D>& run_strain, Eigen::Matrix<double, D, D> E,
                  std::uint64_t seed, const fs::path& out) {
   for (int k = 0; k < kVoigt<D>; ++k) {
-    const double e = rate.rate[static_cast<std::size_t>(k)] * s.time();
+    const double e = run_strain[static_cast<std::size_t>(k)];
     const int r = sys::voigt_row<D>(k), c = sys::voigt_col<D>(k);
     E(r, c) += e;
     if (r != c) E(c, r) += e;
@@ -302,17 +354,88 @@ int stop_untrustworthy(CompactFiles<D>& files, nlohmann::json& summary, const fs
   return exit_code::untrustworthy;
 }
 
+/// The prescribed particles of the boundary mode, set on the solver: layer: the peripheral layer,
+/// its spins held; affine: every centre, the spins free but the layer's (2D); walls and a periodic
+/// cell: none.
 template <int D>
-int run_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
-  // ---- the door: every value before anything is written ----------------------------------------
-  const auto path = sys::StrainPathT<D>::parse(a.path);
+std::vector<std::uint32_t> prescribe(DynamicSolverT<D>& s, const packing::Packing& pk, const DemCompactArgs& a, bool walls,
+                                     bool periodic) {
+  std::vector<std::uint32_t> pre;
+  if (periodic) {  // every particle free, the cell follows the strain
+  } else if constexpr (D == 2) {
+    // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free
+    // except the peripheral layer's, as netsolve and Redanz & Fleck section 2.4 ("the rotation of
+    // particles in the peripheral layer is prevented")
+    pre = prescribed_particles(pk, a.affine, walls);
+    s.set_prescribed(pre, !a.affine);
+    if (a.affine) s.hold_spins(prescribed_particles(pk, false, false));
+  } else {
+    // affine: every centre prescribed, every spin free (3D has no peripheral layer); walls: none
+    if (a.affine)
+      for (std::uint32_t p = 0; p < pk.size(); ++p) pre.push_back(p);
+    s.set_prescribed(pre, false);
+  }
+  return pre;
+}
+
+/// The compaction options of the command line (the door checks them against the packing).
+CompactionOptions compaction_options(const DemCompactArgs& a) {
   CompactionOptions co;
   co.target_density = a.to_density;
+  co.target_strain = a.to_strain;
+  co.precompact_density = a.precompact_density;
+  co.precompact_increments = a.precompact_increments;
   co.inertial_number = a.inertial_number;
   co.increments = a.increments;
   co.max_steps = a.max_steps;
   co.walls = a.boundary == "walls";
   co.check_numbers();
+  return co;
+}
+
+/// The end of a run that finished: the final snapshot, jammed.json, summary.json, the line on
+/// stdout; the exit status.
+template <int D>
+int finish_run(CompactFiles<D>& files, nlohmann::json& summary, const CompactionSummaryT<D>& r, const DynamicSolverT<D>& s,
+               const DemCompactArgs& a, const std::optional<sys::JammedStateT<D>>& jammed, std::uint64_t seed,
+               double wall, const fs::path& out) {
+  write_compact_snapshot(s, out, "final", files.contacts_buffer());
+  if (a.save_state) save_jammed<D>(s, r.last.E, jammed ? jammed->strain : Eigen::Matrix<double, D, D>::Zero(), seed, out);
+  if (a.save_state || jammed) summary["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
+  summary["status"] = r.status;
+  std::string reason = r.ok() ? "every instability check passed" : r.reason;
+  for (const auto& w : r.warnings) reason += "; warning: " + w;
+  summary["status_reason"] = reason;
+  summary["warnings"] = r.warnings;
+  summary["increments_done"] = r.increments_done;
+  summary["centres_outside_box"] = r.outside;
+  add_results(summary, r, s, a.boundary == "walls");
+  const std::size_t n = s.particles().size();
+  summary["timing_s"] = {{"wall", wall}, {"particle_steps_per_s", static_cast<double>(r.steps) * n / std::max(wall, 1e-9)}};
+  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
+  close_run_dir(out);
+  const auto& m = r.last.mean;
+  std::string diag = fmt::format("S11/sy = {:.4f}, S22/sy = {:.4f}", m.S[0], m.S[1]);
+  std::string diag_c = fmt::format("{:.4f}, {:.4f}", m.Sc[0], m.Sc[1]);
+  if constexpr (D == 3) {
+    diag += fmt::format(", S33/sy = {:.4f}", m.S[2]);
+    diag_c += fmt::format(", {:.4f}", m.Sc[2]);
+  }
+  std::printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
+              diag_c.c_str(), m.Z, r.last.I, static_cast<long long>(r.steps), wall, out.c_str());
+  for (const auto& w : r.warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+  if (!r.ok()) {
+    std::fprintf(stderr, "demsolve: error: %s: %s\n", r.status.c_str(), r.reason.c_str());
+    return exit_code::untrustworthy;
+  }
+  return exit_code::ok;
+}
+
+template <int D>
+int run_compact(const std::string& command, const DemCompactArgs& a, const fs::path& out) {
+  // ---- the door: every value before anything is written ----------------------------------------
+  const auto path = sys::StrainPathT<D>::parse(a.path);
+  const CompactionOptions co = compaction_options(a);
   check_compact_numbers(a);
   if (a.boundary != "layer" && a.boundary != "walls" && a.boundary != "periodic")
     throw UsageError(fmt::format("--boundary '{}' is not 'layer', 'walls' or 'periodic'", packing::quote_input(a.boundary)));
@@ -353,32 +476,22 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   if (periodic) box_measure = packing::periodic_cell<D>(pk).measure();
   const double D0 = solid / box_measure;
   co.validate(path, D0);
-  const CompactionRateT<D> rate = compaction_rate(path, a.inertial_number, D0, a.to_density);
+  // the legs: the precompaction (if any), then the path; the rate of the path is the summary's
+  const std::vector<CompactionLegT<D>> legs = compaction_legs(path, co, D0);
+  const CompactionRateT<D>& rate = legs.back().rate;
+  double t_end = 0.0;
+  for (const auto& leg : legs) t_end += leg.rate.t_end;
 
   activity() = "setting up the explicit solver";
   DynamicSolverT<D> s = jammed      ? solver_from_jammed(*jammed, 1.0, box, o)
                         : periodic  ? DynamicSolverT<D>(std::move(P), o.plastic, packing::periodic_cell<D>(pk), o)
                                     : DynamicSolverT<D>(std::move(P), o.plastic, box, o);
-  set_strain_rate(s, rate.rate);
+  set_strain_rate(s, legs.front().rate.rate);
   s.set_affine_velocities();
-  std::vector<std::uint32_t> pre;
-  if (periodic) {  // every particle free, the cell follows the strain
-  } else if constexpr (D == 2) {
-    // layer: the layer prescribed, its spins held; affine: every centre prescribed, the spins free
-    // except the peripheral layer's, as netsolve and Redanz & Fleck section 2.4 ("the rotation of
-    // particles in the peripheral layer is prevented")
-    pre = prescribed_particles(pk, a.affine, walls);
-    s.set_prescribed(pre, !a.affine);
-    if (a.affine) s.hold_spins(prescribed_particles(pk, false, false));
-  } else {
-    // affine: every centre prescribed, every spin free (3D has no peripheral layer); walls: none
-    if (a.affine)
-      for (std::uint32_t p = 0; p < n; ++p) pre.push_back(p);
-    s.set_prescribed(pre, false);
-  }
+  const std::vector<std::uint32_t> pre = prescribe(s, pk, a, walls, periodic);
   s.set_rotations(!a.no_rotation);
   const double dt_first = s.dt();
-  const double steps_est = rate.t_end / dt_first;
+  const double steps_est = t_end / dt_first;
   if (!(steps_est <= a.max_steps))  // the library refuses it too; here before the folder opens
     throw UsageError(fmt::format("the run needs at least {:.3g} time steps of {:.3g} t* (I = {:g}), more than --max-steps "
                                  "= {:.3g}: raise --inertial-number or --max-steps", steps_est, dt_first,
@@ -389,15 +502,17 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   if (!a.quiet)
     std::fprintf(stderr, "demsolve compact%s: %zu %s, D0 = %.4f, seed %llu (%s); I = %g, gamma' = %.4g, t_end = %.4g, "
                  "dt = %.3g, about %.3g steps\n", D == 3 ? " --dim 3" : "", n, D == 2 ? "particles" : "spheres", D0,
-                 static_cast<unsigned long long>(pk.seed), source.c_str(), a.inertial_number, rate.gamma_dot, rate.t_end,
+                 static_cast<unsigned long long>(pk.seed), source.c_str(), a.inertial_number, rate.gamma_dot, t_end,
                  dt_first, steps_est);
-  CompactFiles<D> files(s, out, snaps, walls, rate.t_end, a.quiet);
+  CompactFiles<D> files(s, out, snaps, walls, t_end, a.quiet, legs.size() > 1);
   write_compact_snapshot(s, out, "initial", files.contacts_buffer());
   nlohmann::json summary = compact_summary<D>(command, a, path, rate, source, pk.seed, n, pre.size());
+  if (legs.size() > 1) summary["t_end"] = t_end;
 
   const auto t0 = std::chrono::steady_clock::now();
   activity() = "compacting";
-  const CompactionSummaryT<D> r = run_compaction(s, rate, co, files);
+  const CompactionSummaryT<D> r = run_compaction(s, legs, co, files);
+  if (legs.size() > 1) summary["legs"] = legs_summary<D>(legs, path.name, files.leg_ends());
   if (r.instability) {
     // as report_unstable(), without state_last_good.txt (compact writes no state file)
     summary["unstable_quantity"] = r.instability_quantity;
@@ -410,35 +525,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
     return stop_untrustworthy(files, summary, out, r, {r.status, r.reason, r.reason, "incomplete: " + r.reason});
   files.finish("");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_compact_snapshot(s, out, "final", files.contacts_buffer());
-  if (a.save_state) save_jammed<D>(s, rate, jammed ? jammed->strain : Eigen::Matrix<double, D, D>::Zero(), pk.seed, out);
-  if (a.save_state || jammed) summary["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
-  summary["status"] = r.status;
-  std::string reason = r.ok() ? "every instability check passed" : r.reason;
-  for (const auto& w : r.warnings) reason += "; warning: " + w;
-  summary["status_reason"] = reason;
-  summary["warnings"] = r.warnings;
-  summary["increments_done"] = r.increments_done;
-  summary["centres_outside_box"] = r.outside;
-  add_results(summary, r, s, walls);
-  summary["timing_s"] = {{"wall", wall}, {"particle_steps_per_s", static_cast<double>(r.steps) * n / std::max(wall, 1e-9)}};
-  write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
-  close_run_dir(out);
-  const auto& m = r.last.mean;
-  std::string diag = fmt::format("S11/sy = {:.4f}, S22/sy = {:.4f}", m.S[0], m.S[1]);
-  std::string diag_c = fmt::format("{:.4f}, {:.4f}", m.Sc[0], m.Sc[1]);
-  if constexpr (D == 3) {
-    diag += fmt::format(", S33/sy = {:.4f}", m.S[2]);
-    diag_c += fmt::format(", {:.4f}", m.Sc[2]);
-  }
-  std::printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
-              diag_c.c_str(), m.Z, r.last.I, static_cast<long long>(r.steps), wall, out.c_str());
-  for (const auto& w : r.warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
-  if (!r.ok()) {
-    std::fprintf(stderr, "demsolve: error: %s: %s\n", r.status.c_str(), r.reason.c_str());
-    return exit_code::untrustworthy;
-  }
-  return exit_code::ok;
+  return finish_run(files, summary, r, s, a, jammed, pk.seed, wall, out);
 }
 
 }  // namespace

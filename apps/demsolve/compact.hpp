@@ -21,6 +21,10 @@ struct DemCompactArgs {
   std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   bool affine = false, no_rotation = false, quiet = false, overwrite = false;
   double to_density = 0.85;
+  double to_strain = 0.0;  ///< > 0: run --path to the equivalent strain |E| = to_strain instead
+  /// > 0: a hydrostatic precompaction to this density first (history.csv column `leg`)
+  double precompact_density = 0.0;
+  int precompact_increments = 20;
   double first_touch = netdem::app::netsolve::LawArgs{}.first_touch;
   double k_t = netdem::app::netsolve::LawArgs{}.k_t;
   /// I = gamma' d sqrt(rho / P_ref), d = 2R, P_ref = sigma_y (docs/dynamic.md "demsolve compact")

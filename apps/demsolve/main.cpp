@@ -6,7 +6,8 @@
 //   demsolve compress --state FILE [--strain-rate 1] [--max-strain 0.1] [--out DIR]
 //   demsolve vibrate  --state FILE [--frequency 100] [--amplitude 2e-4] [--time 0.1] [--out DIR]
 //   demsolve compact  [--packing FILE | netsolve's pack options] [--affine] [--path hydrostatic|closed-die|E11,E22,0]
-//                     [--friction MU|inf] [--no-rotation] [--to-density 0.85] [--boundary layer|walls]
+//                     [--friction MU|inf] [--no-rotation] [--to-density 0.85 | --to-strain S]
+//                     [--precompact-density D1 [--precompact-increments 20]] [--boundary layer|walls|periodic]
 //                     [--inertial-number I] [--increments 100] [--out DIR]
 //   demsolve compact --dim 3 [--packing FILE | netsolve pack --dim 3's options] --affine | --boundary walls
 //                     [--path hydrostatic|closed-die|E11,E22,E33|E11,E22,E33,E23,E13,E12 (shear: --affine only)]
@@ -38,6 +39,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "netdem/dynamic/compaction.hpp"
 #include "netdem/dynamic/state.hpp"
 #include "compact.hpp"
 #include "protocol.hpp"
@@ -84,6 +86,10 @@ struct DemCompactCli {
   CLI::App* app;
   CLI::Option* lid;
   CLI::Option* lateral;
+  CLI::Option* density;
+  CLI::Option* strain;
+  CLI::Option* precompact_density;
+  CLI::Option* precompact_increments;
 };
 
 DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& out_dcompact) {
@@ -114,7 +120,18 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
                                        "--dim 3: E11,E22,E33[,E23,E13,E12] (closed-die along z)")->capture_default_str();
   dcomp->add_option("--friction", dc.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
   dcomp->add_flag("--no-rotation", dc.no_rotation, "hold every spin at zero");
-  dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
+  auto* dcomp_density = dcomp->add_option("--to-density", dc.to_density, "target relative density D")->capture_default_str();
+  auto* dcomp_strain = dcomp->add_option("--to-strain", dc.to_strain,
+                                         "run to this equivalent strain |E| = sqrt(E11^2 + E22^2 + 2 E12^2) along --path "
+                                         "instead of to a density, in [1e-9, 1] (pure shear: --path 1,-1,0)");
+  dcomp_strain->excludes(dcomp_density);
+  auto* dcomp_pre = dcomp->add_option("--precompact-density", dc.precompact_density,
+                                      "first compact hydrostatically from the start density to this density (leg 0), "
+                                      "then run --path to --to-density or --to-strain (leg 1); history.csv gets the "
+                                      "column 'leg'");
+  auto* dcomp_pre_n = dcomp->add_option("--precompact-increments", dc.precompact_increments,
+                                        "output windows of the precompaction (with --precompact-density)")
+                          ->capture_default_str();
   dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
                                                "frictionless walls driven along the path; periodic: a periodic cell "
                                                "following the path (--packing of netsolve pack --periodic)")->capture_default_str();
@@ -134,7 +151,23 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
   dcomp->add_flag("--quiet", dc.quiet, "no progress on stderr");
   dcomp->add_flag("--overwrite", dc.overwrite, "clear an output folder that holds another run's files first");
   dcomp->add_option("--out", out_dcompact, "output folder")->default_val("results/dem_compact");
-  return {dcomp, dcomp_lid, dcomp_lateral};
+  return {dcomp, dcomp_lid, dcomp_lateral, dcomp_density, dcomp_strain, dcomp_pre, dcomp_pre_n};
+}
+
+/// The targets of demsolve compact: --to-strain's range, the precompaction's options together.
+void check_compact_targets(const DemCompactCli& c, const DemCompactArgs& dc) {
+  using CO = netdem::dem::CompactionOptions;
+  if (c.strain->count() > 0 && !(dc.to_strain >= CO::kMinTargetStrain && dc.to_strain <= CO::kMaxTargetStrain))
+    throw netdem::app::UsageError(fmt::format("--to-strain must be in [{:g}, {:g}], got {}", CO::kMinTargetStrain,
+                                              CO::kMaxTargetStrain, dc.to_strain));
+  if (c.precompact_increments->count() > 0 && c.precompact_density->count() == 0)
+    throw netdem::app::UsageError("--precompact-increments is an option of --precompact-density");
+  if (c.precompact_density->count() == 0) return;
+  if (c.density->count() == 0 && c.strain->count() == 0)
+    throw netdem::app::UsageError("--precompact-density: give the path's target after it, --to-density or --to-strain");
+  if (!(dc.precompact_density > 0.0 && dc.precompact_density < 1.0))
+    throw netdem::app::UsageError(fmt::format("--precompact-density must be in (0, 1) (a relative density), got {}",
+                                              dc.precompact_density));
 }
 
 /// demsolve yield's options (docs/dynamic.md).
@@ -303,6 +336,7 @@ int main(int argc, char** argv) {
       if (dc.pack.dim == 3 && dcli.lid->count() > 0 && dc.pack.lid != "inside")
         throw netdem::app::UsageError("--lid '" + quote_input(dc.pack.lid) +
                                       "': the 3D deposition implements only --lid inside (whole spheres below the lid)");
+      check_compact_targets(dcli, dc);
       return run_dem_compact(command, dc, out_dcompact);
     }
     if (dyield->parsed()) {

@@ -69,14 +69,40 @@ def plot_packing(run, png):
 
 
 def plot_compaction(h, summary, png):
+    # a run with --precompact-density (column 'leg'): against the increment, the legs apart, since
+    # a constant-volume path does not move the density
+    legs = "leg" in h
+    x = h["increment"] if legs else h["D"]
+    xlabel = "increment (leg 0: precompaction, leg 1: path)" if legs else "relative density D"
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
-    a1.plot(h["D"], [-v for v in h["S22"]], label=r"$-\Sigma_{22}/\sigma_y$")
-    a1.plot(h["D"], [-v for v in h["S11"]], "--", label=r"$-\Sigma_{11}/\sigma_y$")
-    a1.set_xlabel("relative density D"); a1.set_ylabel("normalised stress"); a1.legend(); a1.grid(alpha=0.3)
+    a1.plot(x, [-v for v in h["S22"]], label=r"$-\Sigma_{22}/\sigma_y$")
+    a1.plot(x, [-v for v in h["S11"]], "--", label=r"$-\Sigma_{11}/\sigma_y$")
+    if legs:
+        a1.plot(x, [-v for v in h["S12"]], ":", label=r"$-\Sigma_{12}/\sigma_y$")
+    a1.set_xlabel(xlabel); a1.set_ylabel("normalised stress"); a1.legend(); a1.grid(alpha=0.3)
     a1.set_title(f"{summary['path']['name']}, {summary['mode']}, friction {summary['friction']}")
-    a2.plot(h["D"], h["Z"])
-    a2.set_xlabel("relative density D"); a2.set_ylabel("coordination Z (load-bearing)"); a2.grid(alpha=0.3)
+    a2.plot(x, h["Z"])
+    a2.set_xlabel(xlabel); a2.set_ylabel("coordination Z (load-bearing)"); a2.grid(alpha=0.3)
+    if legs:
+        end0 = max(k for k, leg in zip(h["increment"], h["leg"]) if leg == 0)
+        for a in (a1, a2):
+            a.axvline(end0, color="0.5", lw=0.8, ls="--")
     fig.tight_layout(); fig.savefig(png, dpi=130); plt.close(fig)
+
+
+def leg_lines(summary):
+    """Report rows of a run with --precompact-density: each leg's target and end."""
+    out = []
+    for leg in summary.get("legs", []):
+        target = f"D = {leg['to_density']}" if "to_density" in leg else f"‖E‖ = {leg['to_strain']}"
+        end = leg["end"]
+        if end is None:
+            out.append(f"| leg {leg['leg']} ({leg['name']}, {leg['path']} to {target}) | not reached |")
+            continue
+        out.append(f"| leg {leg['leg']} ({leg['name']}, {leg['path']} to {target}, {leg['increments']} increments) | "
+                   f"D = {end['D']:.4f}, Σ11 = {end['S11']:.4f}, Σ22 = {end['S22']:.4f}, Σ12 = {end['S12']:.4f}"
+                   + (f", ‖E‖ = {end['strain']:.6g}" if "strain" in end else "") + " |")
+    return out
 
 
 def main():
@@ -106,6 +132,7 @@ def main():
         f"| increments (unconverged) | {s['increments']} ({s['solver']['unconverged_increments']}) |",
         f"| max residual / mean contact force | {s['solver']['max_residual']:.2e} |",
         f"| wall time | {t['wall']:.2f} s (factorise {t['factorise']:.2f} s, solve {t['solve']:.2f} s, assemble {t['assemble']:.2f} s) |",
+        *leg_lines(s),
         "", "![compaction curve](compaction.png)", "", "![initial packing](packing.png)", "",
     ]
     with open(os.path.join(run, "report.md.tmp"), "w") as f:

@@ -226,6 +226,34 @@ CompactionRateT<D> compaction_rate(const sys::StrainPathT<D>& path, double inert
 }
 
 template <int D>
+CompactionRateT<D> compaction_rate_to_strain(const sys::StrainPathT<D>& path, double inertial_number,
+                                             double initial_density, double target_strain) {
+  CompactionRateT<D> r = compaction_rate(path, inertial_number, initial_density, initial_density);
+  r.t_end = target_strain / r.gamma_dot;  // |E'| = gamma' along any direction
+  return r;
+}
+
+template <int D>
+std::vector<CompactionLegT<D>> compaction_legs(const sys::StrainPathT<D>& path, const CompactionOptions& o, double D0) {
+  std::vector<CompactionLegT<D>> legs;
+  double start = D0;
+  const bool precompacts = o.precompacts();
+  if (precompacts) {
+    const auto hydrostatic = sys::StrainPathT<D>::parse("hydrostatic");
+    legs.push_back({compaction_rate(hydrostatic, o.inertial_number, D0, o.precompact_density), o.precompact_increments,
+                    o.precompact_density, 0.0, true});
+    start = o.precompact_density;
+  }
+  if (o.target_strain != 0.0)
+    legs.push_back({compaction_rate_to_strain(path, o.inertial_number, start, o.target_strain), o.increments, 0.0,
+                    o.target_strain, true});
+  else
+    legs.push_back({compaction_rate(path, o.inertial_number, start, o.target_density), o.increments, o.target_density,
+                    0.0, precompacts});
+  return legs;
+}
+
+template <int D>
 void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& e) {
   if constexpr (D == 2) {
     s.set_strain_rate(e[0], e[1], e[2]);
@@ -246,14 +274,39 @@ void CompactionOptions::check_numbers() const {
 template <int D>
 void CompactionOptions::validate(const sys::StrainPathT<D>& path, double initial_density) const {
   check_numbers();
-  if (!(std::isfinite(target_density) && target_density > 0.0 && target_density < 1.0))
-    throw FieldError("to_density", fmt::format("the target density must be in (0, 1), got {}", target_density));
-  if (!(target_density > initial_density))
-    throw FieldError("to_density", fmt::format("impossible target: density {} is not above the current density {:.4f}",
-                                               target_density, initial_density));
-  if (!(path.trace() < 0.0))
-    throw FieldError("path", fmt::format("impossible target: strain path {} (trace {}) does not compact, so density {} "
-                                         "is never reached", path.name, path.trace(), target_density));
+  double start = initial_density;
+  const char* from = "current density";
+  if (precompacts()) {
+    if (precompact_increments < 1 || precompact_increments > 1000000)
+      throw FieldError("precompact_increments", fmt::format("the number of precompaction increments must be in [1, 1e6], "
+                                                            "got {}", precompact_increments));
+    if (!(std::isfinite(precompact_density) && precompact_density < 1.0))
+      throw FieldError("precompact_density", fmt::format("the precompaction density must be below 1, got {}",
+                                                         precompact_density));
+    if (!(precompact_density > initial_density))
+      throw FieldError("precompact_density", fmt::format("impossible precompaction: density {} is not above the start "
+                                                         "density {:.4f}", precompact_density, initial_density));
+    start = precompact_density;
+    from = "precompaction density";
+  }
+  if (target_strain != 0.0) {
+    if (!(target_strain >= kMinTargetStrain && target_strain <= kMaxTargetStrain))
+      throw FieldError("to_strain", fmt::format("the target strain |E| must be in [{:g}, {:g}], got {}", kMinTargetStrain,
+                                                kMaxTargetStrain, target_strain));
+    const double end = start * std::exp(-target_strain * path.trace() / path.norm());
+    if (!(end < 1.0))
+      throw FieldError("to_strain", fmt::format("impossible target: strain |E| = {} along {} ends at density {:.4g} >= 1",
+                                                target_strain, path.name, end));
+  } else {
+    if (!(std::isfinite(target_density) && target_density > 0.0 && target_density < 1.0))
+      throw FieldError("to_density", fmt::format("the target density must be in (0, 1), got {}", target_density));
+    if (!(target_density > start))
+      throw FieldError("to_density", fmt::format("impossible target: density {} is not above the {} {:.4f}",
+                                                 target_density, from, start));
+    if (!(path.trace() < 0.0))
+      throw FieldError("path", fmt::format("impossible target: strain path {} (trace {}) does not compact, so density {} "
+                                           "is never reached", path.name, path.trace(), target_density));
+  }
   if (walls && path.shear()) {
     std::string zero;
     for (int k = D; k < kVoigt<D>; ++k) zero += fmt::format("E{} = ", sys::voigt_labels<D>()[static_cast<std::size_t>(k)]);
@@ -262,10 +315,159 @@ void CompactionOptions::validate(const sys::StrainPathT<D>& path, double initial
   }
 }
 
+namespace {
+
+/// One run of run_compaction: the legs one after the other, the windows of each, the rows.
 template <int D>
-CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT<D>& rate, const CompactionOptions& o,
-                                     CompactionObserverT<D>& obs) {
-  const double T = rate.t_end, D0 = rate.initial_density;
+class LegRunner {
+ public:
+  LegRunner(DynamicSolverT<D>& s, const std::vector<CompactionLegT<D>>& legs, const CompactionOptions& o,
+            CompactionObserverT<D>& obs, CompactionSummaryT<D>& sum, double r_mean, bool shear, double T)
+      : s_(s), legs_(legs), o_(o), obs_(obs), sum_(sum), meter_(o.walls, r_mean), outside_box_(s, shear), T_(T),
+        t_start_(s.time()) {}
+
+  /// The strain: the leg's rate times its time so far, after the strain at the end of the last leg.
+  Voigt<D> strain() const {
+    const auto& rate = legs_[leg_].rate.rate;
+    Voigt<D> E{};
+    for (std::size_t k = 0; k < E.size(); ++k)
+      E[k] = leg_ == 0 ? rate[k] * (s_.time() - t_start_) : E_start_[k] + rate[k] * (s_.time() - t_start_);
+    return E;
+  }
+  CompactionSampleT<D> measure() { return meter_.measure(s_, strain()); }
+  bool outside(std::size_t p) const { return outside_box_(p); }
+
+  void report(int k, const CompactionSampleT<D>& m, int samples) {
+    const CompactionLegT<D>& leg = legs_[leg_];
+    CompactionRowT<D> r;
+    r.increment = k;
+    r.leg = static_cast<int>(leg_);
+    r.time = s_.time();
+    r.E = strain();
+    r.density = s_.density();
+    r.mean = m;
+    double pc = 0.0;
+    for (int a = 0; a < D; ++a) pc += m.Sc[static_cast<std::size_t>(a)];
+    const double Pc = -pc / D;
+    // the actual inertial number (rho = sigma_y = 1, d = 2); undefined where P = 0
+    r.I = Pc > 0.0 ? leg.rate.gamma_dot * 2.0 * std::sqrt(1.0 / Pc) : std::numeric_limits<double>::quiet_NaN();
+    r.kinetic_ratio = m.work > 0.0 ? m.kinetic / m.work : 0.0;
+    r.steps = sum_.steps;
+    r.samples = samples;
+    r.dt = s_.dt();
+    double in = 0.0;
+    for (std::size_t p = 0; p < s_.particles().size(); ++p) {
+      const bool out = outside_box_(p);
+      r.outside += out;
+      if (!out) in += particle_measure<D>(s_.particles().radius[p]);
+    }
+    r.density_in_box = s_.periodic() ? s_.density() : in / box_measure<D>(s_.box());
+    if (o_.walls) {
+      r.wall_gap = wall_gap<D>(m);
+      if (k > 0) {
+        sum_.last_wall_gap = r.wall_gap;
+        // the second half of the last leg: of its densification, or of its time (a strain target)
+        const double D0 = leg.rate.initial_density;
+        const bool second_half = leg.target_density > 0.0
+                                     ? s_.density() >= D0 + 0.5 * (leg.target_density - D0)
+                                     : s_.time() - t_start_ >= 0.5 * leg.rate.t_end;
+        if (leg_ + 1 == legs_.size() && second_half) sum_.max_wall_gap = std::max(sum_.max_wall_gap, r.wall_gap);
+      }
+    }
+    sum_.last = r;
+    obs_.row(r);
+  }
+
+  /// The next leg: its strain rate from now on (the free velocities follow the affine field).
+  void next_leg() {
+    E_start_ = strain();
+    const auto& from = legs_[leg_].rate.rate;
+    ++leg_;
+    const auto& to = legs_[leg_].rate.rate;
+    Eigen::Matrix<double, D, D> dL;
+    for (int k = 0; k < kVoigt<D>; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      dL(sys::voigt_row<D>(k), sys::voigt_col<D>(k)) = dL(sys::voigt_col<D>(k), sys::voigt_row<D>(k)) = to[kk] - from[kk];
+    }
+    set_strain_rate(s_, to);
+    s_.shift_affine_velocities(dL);
+    t_start_ = s_.time();
+  }
+
+  /// The windows of the current leg, rows numbered from k0 + 1; false if the step limit stopped it.
+  bool run_leg(int k0) {
+    const CompactionLegT<D>& leg = legs_[leg_];
+    const double T = leg.rate.t_end, t0 = t_start_;
+    // samples per window: about every 20 steps, at least 10 per window
+    const auto every = static_cast<std::int64_t>(std::clamp(T / leg.increments / s_.dt() / 10.0, 1.0, 20.0));
+    for (int k = 1; k <= leg.increments; ++k) {
+      const double t_end = t0 + T * k / leg.increments;
+      const bool exact = leg.exact_end && k == leg.increments;
+      CompactionSampleT<D> acc;
+      int samples = 0;
+      std::int64_t since = 0;
+      while (s_.time() < t_end - 1e-12 * T) {
+        if (!(static_cast<double>(sum_.steps) < o_.max_steps)) {  // the time step fell below the door's estimate
+          const std::string target =
+              leg.target_density > 0.0 ? fmt::format("{}", leg.target_density) : fmt::format("|E| = {}", leg.target_strain);
+          sum_.status = "incomplete";
+          sum_.reason = fmt::format("stopped at the step limit of {:.3g} time steps at t = {:.4g} of {:.4g} (density {:.4f}, "
+                                    "target {}; the time step fell from {:.3g} to {:.3g})", o_.max_steps, s_.time(), T_,
+                                    s_.density(), target, sum_.dt_first, s_.dt());
+          return false;
+        }
+        if (exact) {
+          s_.step_to(t_end);
+        } else {
+          s_.step();
+        }
+        ++sum_.steps;
+        if (++since % every == 0 || !(s_.time() < t_end - 1e-12 * T)) {
+          acc.add(measure(), 1.0);
+          ++samples;
+          obs_.progress(s_.time());
+        }
+      }
+      if (samples == 0) {
+        acc.add(measure(), 1.0);
+        samples = 1;
+      }
+      CompactionSampleT<D> mean;
+      mean.add(acc, 1.0 / samples);
+      s_.check_health();  // nothing unchecked reaches a file
+      report(k0 + k, mean, samples);
+      sum_.increments_done = k0 + k;
+      if ((k0 + k) % 20 == 0) obs_.checkpoint(k0 + k);
+    }
+    return true;
+  }
+
+ private:
+  DynamicSolverT<D>& s_;
+  const std::vector<CompactionLegT<D>>& legs_;
+  const CompactionOptions& o_;
+  CompactionObserverT<D>& obs_;
+  CompactionSummaryT<D>& sum_;
+  CompactionMeterT<D> meter_;
+  OutsideTest<D> outside_box_;
+  double T_;                ///< the duration of all legs
+  std::size_t leg_ = 0;
+  double t_start_;          ///< the time at the start of the leg
+  Voigt<D> E_start_{};      ///< the strain at the start of the leg
+};
+
+}  // namespace
+
+template <int D>
+CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const std::vector<CompactionLegT<D>>& legs,
+                                     const CompactionOptions& o, CompactionObserverT<D>& obs) {
+  if (legs.empty()) throw FieldError("increments", "a compaction needs at least one leg");
+  double T = 0.0;
+  bool shear = false;
+  for (const auto& leg : legs) {
+    T += leg.rate.t_end;
+    for (int k = D; k < kVoigt<D>; ++k) shear = shear || leg.rate.rate[static_cast<std::size_t>(k)] != 0.0;
+  }
   CompactionSummaryT<D> sum;
   sum.dt_first = s.dt();
   const double steps_est = T / sum.dt_first;
@@ -276,83 +478,14 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
   double r_mean = 0.0;
   for (double r : s.particles().radius) r_mean += r;
   r_mean /= static_cast<double>(s.particles().size());
-  CompactionMeterT<D> meter(o.walls, r_mean);
-  bool shear = false;
-  for (int k = D; k < kVoigt<D>; ++k) shear = shear || rate.rate[static_cast<std::size_t>(k)] != 0.0;
-  const OutsideTest<D> outside_box(s, shear);
-  auto strain = [&] {
-    Voigt<D> E{};
-    for (std::size_t k = 0; k < E.size(); ++k) E[k] = rate.rate[k] * s.time();
-    return E;
-  };
-  auto report = [&](int k, const CompactionSampleT<D>& m, int samples) {
-    CompactionRowT<D> r;
-    r.increment = k;
-    r.time = s.time();
-    r.E = strain();
-    r.density = s.density();
-    r.mean = m;
-    double pc = 0.0;
-    for (int a = 0; a < D; ++a) pc += m.Sc[static_cast<std::size_t>(a)];
-    const double Pc = -pc / D;
-    // the actual inertial number (rho = sigma_y = 1, d = 2); undefined where P = 0
-    r.I = Pc > 0.0 ? rate.gamma_dot * 2.0 * std::sqrt(1.0 / Pc) : std::numeric_limits<double>::quiet_NaN();
-    r.kinetic_ratio = m.work > 0.0 ? m.kinetic / m.work : 0.0;
-    r.steps = sum.steps;
-    r.samples = samples;
-    r.dt = s.dt();
-    double in = 0.0;
-    for (std::size_t p = 0; p < s.particles().size(); ++p) {
-      const bool out = outside_box(p);
-      r.outside += out;
-      if (!out) in += particle_measure<D>(s.particles().radius[p]);
-    }
-    r.density_in_box = s.periodic() ? s.density() : in / box_measure<D>(s.box());
-    if (o.walls) {
-      r.wall_gap = wall_gap<D>(m);
-      if (k > 0) {
-        sum.last_wall_gap = r.wall_gap;
-        if (s.density() >= D0 + 0.5 * (o.target_density - D0)) sum.max_wall_gap = std::max(sum.max_wall_gap, r.wall_gap);
-      }
-    }
-    sum.last = r;
-    obs.row(r);
-  };
-  report(0, meter.measure(s, strain()), 1);
-  // samples per window: about every 20 steps, at least 10 per window
-  const auto every = static_cast<std::int64_t>(std::clamp(T / o.increments / sum.dt_first / 10.0, 1.0, 20.0));
+  LegRunner<D> run(s, legs, o, obs, sum, r_mean, shear, T);
+  run.report(0, run.measure(), 1);
   try {
-    for (int k = 1; k <= o.increments; ++k) {
-      const double t_end = T * k / o.increments;
-      CompactionSampleT<D> acc;
-      int samples = 0;
-      std::int64_t since = 0;
-      while (s.time() < t_end - 1e-12 * T) {
-        if (!(static_cast<double>(sum.steps) < o.max_steps)) {  // the time step fell below the door's estimate
-          sum.status = "incomplete";
-          sum.reason = fmt::format("stopped at the step limit of {:.3g} time steps at t = {:.4g} of {:.4g} (density {:.4f}, "
-                                   "target {}; the time step fell from {:.3g} to {:.3g})", o.max_steps, s.time(), T,
-                                   s.density(), o.target_density, sum.dt_first, s.dt());
-          return sum;
-        }
-        s.step();
-        ++sum.steps;
-        if (++since % every == 0 || !(s.time() < t_end - 1e-12 * T)) {
-          acc.add(meter.measure(s, strain()), 1.0);
-          ++samples;
-          obs.progress(s.time());
-        }
-      }
-      if (samples == 0) {
-        acc.add(meter.measure(s, strain()), 1.0);
-        samples = 1;
-      }
-      CompactionSampleT<D> mean;
-      mean.add(acc, 1.0 / samples);
-      s.check_health();  // nothing unchecked reaches a file
-      report(k, mean, samples);
-      sum.increments_done = k;
-      if (k % 20 == 0) obs.checkpoint(k);
+    int k0 = 0;
+    for (std::size_t l = 0; l < legs.size(); ++l) {
+      if (l > 0) run.next_leg();
+      if (!run.run_leg(k0)) return sum;
+      k0 += legs[l].increments;
     }
   } catch (const InstabilityError& e) {
     sum.status = "unstable";
@@ -364,7 +497,7 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
     sum.instability_time = e.time();
     return sum;
   }
-  for (std::size_t p = 0; p < s.particles().size(); ++p) sum.outside += outside_box(p);
+  for (std::size_t p = 0; p < s.particles().size(); ++p) sum.outside += run.outside(p);
   std::vector<std::string> reasons;
   if (sum.outside > 0)
     reasons.push_back(D == 2 ? fmt::format("{} disk centres left the box between the peripheral disks", sum.outside)
@@ -381,13 +514,25 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
   return sum;
 }
 
+template <int D>
+CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT<D>& rate, const CompactionOptions& o,
+                                     CompactionObserverT<D>& obs) {
+  const std::vector<CompactionLegT<D>> legs{{rate, o.increments, o.target_density, 0.0, false}};
+  return run_compaction(s, legs, o, obs);
+}
+
 #define NETDEM_COMPACTION(D)                                                                                           \
   template struct CompactionSampleT<D>;                                                                                \
   template class CompactionMeterT<D>;                                                                                  \
   template CompactionRateT<D> compaction_rate<D>(const sys::StrainPathT<D>&, double, double, double);                  \
+  template CompactionRateT<D> compaction_rate_to_strain<D>(const sys::StrainPathT<D>&, double, double, double);        \
+  template std::vector<CompactionLegT<D>> compaction_legs<D>(const sys::StrainPathT<D>&, const CompactionOptions&,     \
+                                                             double);                                                  \
   template void set_strain_rate<D>(DynamicSolverT<D>&, const Voigt<D>&);                                               \
   template void CompactionOptions::validate<D>(const sys::StrainPathT<D>&, double) const;                              \
   template CompactionSummaryT<D> run_compaction<D>(DynamicSolverT<D>&, const CompactionRateT<D>&,                      \
+                                                   const CompactionOptions&, CompactionObserverT<D>&);                \
+  template CompactionSummaryT<D> run_compaction<D>(DynamicSolverT<D>&, const std::vector<CompactionLegT<D>>&,          \
                                                    const CompactionOptions&, CompactionObserverT<D>&);
 NETDEM_COMPACTION(2)
 NETDEM_COMPACTION(3)

@@ -656,11 +656,36 @@ void DynamicSolverT<D>::update_time_step() {
 
 template <int D>
 void DynamicSolverT<D>::step() {
-  const std::size_t n = P_.size();
   if (bound_.k_t_area > 0.0) update_time_step();
+  advance(true);
+}
+
+template <int D>
+void DynamicSolverT<D>::step_to(double t) {
+  if (!(t > time_)) fail(fmt::format("step_to: the time {} is not after the current time {}", t, time_));
+  if (bound_.k_t_area > 0.0) update_time_step();
+  const double left = t - time_;
+  if (!(left < ts_.dt)) {
+    advance(true);
+    return;
+  }
+  const double rule = ts_.dt;  // the shortened step, then the rule's again
+  ts_.dt = left;
+  try {
+    advance(false);
+  } catch (...) {
+    ts_.dt = rule;
+    throw;
+  }
+  ts_.dt = rule;
+}
+
+template <int D>
+void DynamicSolverT<D>::advance(bool full) {
+  const std::size_t n = P_.size();
   impose_affine_motion(ts_.dt);
   const bool checking = opt_.check_every > 0;
-  if (checking && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
+  if (checking && full && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
   const bool check = checking && ++since_check_ >= opt_.check_every;
   ++since_good_;
   double vmax2 = 0.0;
@@ -758,7 +783,7 @@ void DynamicSolverT<D>::step() {
   if (check) {
     since_check_ = 0;
     check_health_with(vmax2);
-    if (since_good_ >= HealthLimits::kLastGoodEvery) {
+    if (full && since_good_ >= HealthLimits::kLastGoodEvery) {
       last_good_ = std::make_shared<const SolverState>(state());
       since_good_ = 0;
     }

@@ -102,6 +102,22 @@ void DynamicSolverT<D>::set_affine_velocities() {
 }
 
 template <int D>
+void DynamicSolverT<D>::shift_affine_velocities(const Eigen::Matrix<double, D, D>& dL) {
+  if (periodic_) return;  // the velocities are the fluctuations about the affine field
+  for (std::size_t i = 0; i < P_.size(); ++i) {
+    if (!is_prescribed_.empty() && is_prescribed_[i]) continue;  // imposed at the next step
+    Eigen::Matrix<double, D, 1> d;
+    d(0) = P_.x[i] - box_.x_min;
+    d(1) = P_.y[i] - box_.y_min;
+    if constexpr (D == 3) d(2) = P_.z[i] - box_.z_min;
+    const Eigen::Matrix<double, D, 1> dv = dL * d;
+    P_.vx[i] += dv(0);
+    P_.vy[i] += dv(1);
+    if constexpr (D == 3) P_.vz[i] += dv(2);
+  }
+}
+
+template <int D>
 void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams& law) {
   if (!plastic()) fail("set_plastic_law: the solver runs the Luding law, not the plastic-indentation law");
   law.validate();
@@ -499,6 +515,7 @@ template void DynamicSolverT<3>::set_box_to_cell();
 template void DynamicSolverT<2>::set_strain_rate(double e11, double e22, double e12);
 template void DynamicSolverT<2>::set_strain_rate3(double e11, double e22, double e33, double e23, double e13, double e12);
 template void DynamicSolverT<2>::set_affine_velocities();
+template void DynamicSolverT<2>::shift_affine_velocities(const Eigen::Matrix2d&);
 template void DynamicSolverT<2>::set_plastic_law(const contact::PlasticIndentationParams& law);
 template void DynamicSolverT<2>::set_rotations(bool free);
 template void DynamicSolverT<2>::hold_spins(const std::vector<std::uint32_t>& particles);
@@ -513,6 +530,7 @@ template auto DynamicSolverT<2>::boundary_stress() const -> Stress;
 template void DynamicSolverT<3>::set_strain_rate(double e11, double e22, double e12);
 template void DynamicSolverT<3>::set_strain_rate3(double e11, double e22, double e33, double e23, double e13, double e12);
 template void DynamicSolverT<3>::set_affine_velocities();
+template void DynamicSolverT<3>::shift_affine_velocities(const Eigen::Matrix3d&);
 template void DynamicSolverT<3>::set_plastic_law(const contact::PlasticIndentationParams& law);
 template void DynamicSolverT<3>::set_rotations(bool free);
 template void DynamicSolverT<3>::hold_spins(const std::vector<std::uint32_t>& particles);

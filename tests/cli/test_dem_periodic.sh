@@ -2,7 +2,8 @@
 # Periodic cells (issue 29): netsolve pack --periodic writes a periodic packing ('# periodic',
 # its seed, summary.json with density, coordination, psi6 and overlaps), deterministically;
 # demsolve compact --boundary periodic runs it (history.csv with the kinetic stress apart, the
-# cell drawn in cell_*.vtp); the options' bad values and the commands that cannot use a periodic
+# cell drawn in cell_*.vtp); both tools run it with --precompact-density and --to-strain (issue 29's
+# pure-shear path: the legs in history.csv, |E| of the shear leg = the target to 1e-9); the options' bad values and the commands that cannot use a periodic
 # packing are refused with one line and exit 2, nothing written.
 # usage: test_dem_periodic.sh PATH/TO/netsolve PATH/TO/demsolve
 set -u
@@ -52,6 +53,67 @@ ok compact_density grep -q '"D": 0\.85' "$tmp/c/summary.json"
 "$ds" compact --dim 3 --boundary periodic --packing "$tmp/p3/packing.csv" --to-density 0.7 --inertial-number 1e-2 \
   --increments 5 --quiet --out "$tmp/c3" >/dev/null 2>&1
 ok compact3d_exit [ $? -eq 0 ]
+# issue 29's cross-check path in one run, both tools: hydrostatic precompaction to D1 = 0.86, then pure
+# shear (1,-1,0) to |E| = 0.02; history.csv with the column 'leg', |E| of leg 1 from the end of leg 0
+"$ns" compact --boundary periodic --packing "$p" --precompact-density 0.86 --precompact-increments 6 --path 1,-1,0 \
+  --to-strain 0.02 --increments 5 --iteration pseudo-transient --friction inf --quiet --out "$tmp/ns_shear" >/dev/null 2>&1
+ok ns_shear_exit [ $? -eq 0 ]
+"$ds" compact --boundary periodic --packing "$p" --precompact-density 0.86 --precompact-increments 6 --path 1,-1,0 \
+  --to-strain 0.02 --increments 5 --inertial-number 1e-2 --friction inf --quiet --out "$tmp/ds_shear" >/dev/null 2>&1
+ok ds_shear_exit [ $? -eq 0 ]
+for run in ns_shear ds_shear; do
+  ok "${run}_legs" /usr/bin/python3 - "$tmp/$run" <<'PY'
+import csv, json, math, sys
+d = sys.argv[1]
+lines = [l for l in open(d + "/history.csv") if not l.startswith("#")]
+ok = lines[0].startswith("increment,leg,E11,E22,E12,D,S11,S22,S12,")
+rows = list(csv.DictReader(lines))
+legs = [int(r["leg"]) for r in rows]
+ok = ok and legs == [0] * 7 + [1] * 5 and [int(r["increment"]) for r in rows] == list(range(12))
+end0, end1 = rows[6], rows[-1]
+dE = [float(end1[k]) - float(end0[k]) for k in ("E11", "E22", "E12")]
+strain = math.sqrt(dE[0] ** 2 + dE[1] ** 2 + 2 * dE[2] ** 2)
+s = json.load(open(d + "/summary.json"))
+j = s["legs"]
+ok = ok and abs(strain - 0.02) < 1e-9 and abs(float(end0["D"]) - 0.86) < 1e-8 and abs(float(end1["D"]) - 0.86) < 1e-8
+ok = ok and abs(dE[0] - 0.02 / math.sqrt(2)) < 1e-9 and dE[2] == 0
+ok = ok and len(j) == 2 and j[0]["to_density"] == 0.86 and j[1]["to_strain"] == 0.02 and j[1]["path"] == "1,-1,0"
+ok = ok and abs(j[1]["end"]["strain"] - 0.02) < 1e-12 and j[0]["end"]["increment"] == 6 and s["status"] == "ok"
+print(f"{d.split('/')[-1]}: |E| of leg 1 = {strain!r} (summary {j[1]['end']['strain']!r}), D {end0['D']} -> {end1['D']}, "
+      f"S11 - S22 = {float(end1['S11']) - float(end1['S22']):.4f}, S12 = {float(end1['S12']):.4f}")
+sys.exit(0 if ok else 1)
+PY
+done
+ok ds_shear_to_strain grep -q '"to_strain": 0.02' "$tmp/ds_shear/summary.json"
+ok default_no_leg_column /usr/bin/python3 -c "import sys; sys.exit(',leg,' in open(sys.argv[1]).readline())" "$tmp/c/history.csv"
+# a to-strain run without a precompaction: no 'leg' column, |E| from the start
+"$ds" compact --boundary periodic --packing "$p" --path 1,-1,0 --to-strain 0.01 --increments 4 --inertial-number 1e-2 \
+  --quiet --out "$tmp/ds_strain" >/dev/null 2>&1
+ok ds_strain_exit [ $? -eq 0 ]
+ok ds_strain_end /usr/bin/python3 - "$tmp/ds_strain/history.csv" <<'PY'
+import csv, math, sys
+lines = open(sys.argv[1]).readlines()
+last = list(csv.DictReader(lines))[-1]
+e = math.sqrt(float(last["E11"]) ** 2 + float(last["E22"]) ** 2 + 2 * float(last["E12"]) ** 2)
+sys.exit(0 if lines[0].startswith("increment,E11,") and abs(e - 0.01) < 1e-9 else 1)
+PY
+# refusals of the legs' options, both tools: one line, exit 2, nothing written
+for t in "$ns" "$ds"; do
+  tool="$t"
+  name=$(basename "$t")
+  bad2 "${name}_pre_below" "not above the start density" compact --boundary periodic --packing "$p" --precompact-density 0.8 --to-strain 0.02
+  bad2 "${name}_pre_above1" "--precompact-density" compact --boundary periodic --packing "$p" --precompact-density 1.2 --to-strain 0.02
+  bad2 "${name}_pre_target" "not above the precompaction density" compact --boundary periodic --packing "$p" --precompact-density 0.86 --to-density 0.855
+  bad2 "${name}_pre_shear_density" "does not compact" compact --boundary periodic --packing "$p" --precompact-density 0.86 --path 1,-1,0 --to-density 0.87
+  bad2 "${name}_pre_no_target" "--to-density or --to-strain" compact --boundary periodic --packing "$p" --precompact-density 0.86
+  bad2 "${name}_pre_n_alone" "is an option of --precompact-density" compact --boundary periodic --packing "$p" --precompact-increments 5
+  bad2 "${name}_pre_n_zero" "increments" compact --boundary periodic --packing "$p" --precompact-density 0.86 --precompact-increments 0 --to-strain 0.02
+  bad2 "${name}_strain_zero" "--to-strain" compact --boundary periodic --packing "$p" --to-strain 0
+  bad2 "${name}_strain_big" "--to-strain" compact --boundary periodic --packing "$p" --to-strain 2
+  bad2 "${name}_strain_density" "excludes" compact --boundary periodic --packing "$p" --to-strain 0.02 --to-density 0.86
+  bad2 "${name}_strain_dense" "impossible target" compact --boundary periodic --packing "$p" --precompact-density 0.95 --to-strain 0.1
+done
+tool="$ns"
 # refusals: pack
 bad2 pack_width "--width is an option of the deposition" pack --periodic --width 10
 bad2 pack_green "exclude each other" pack --periodic --dim 3 --route green-body

@@ -200,6 +200,87 @@ TEST(DemCompaction, OptionsNameTheirField) {
   } catch (const netdem::FieldError& e) {
     EXPECT_EQ(e.field(), "path");
   }
+  // a strain target: any direction (pure shear keeps the volume), in [1e-9, 1], ending below D = 1
+  const auto shear = sys::StrainPathT<2>::parse("1,-1,0");
+  auto field_along = [&](const CompactionOptions& q, const sys::StrainPathT<2>& p, double D0) {
+    try {
+      q.validate(p, D0);
+    } catch (const netdem::FieldError& e) {
+      return e.field();
+    }
+    return std::string("accepted");
+  };
+  CompactionOptions st = o;
+  st.target_strain = 0.02;
+  EXPECT_EQ(field_along(st, shear, 0.8), "accepted");
+  EXPECT_EQ(field_along(st, path, 0.98), "to_strain");  // hydrostatic |E| = 0.02 from 0.98 passes D = 1
+  st.target_strain = 2.0;
+  EXPECT_EQ(field_along(st, shear, 0.8), "to_strain");
+  // the precompaction: above the start, below 1; the path's target from the precompaction density
+  CompactionOptions pre = o;
+  pre.precompact_density = 0.83;
+  EXPECT_EQ(field_along(pre, path, 0.8), "accepted");                  // to 0.85 after 0.83
+  EXPECT_EQ(field_along(pre, path, 0.83), "precompact_density");       // not above the start
+  pre.precompact_density = 0.86;
+  EXPECT_EQ(field_along(pre, path, 0.8), "to_density");                // 0.85 is below 0.86
+  pre.precompact_density = 1.0;
+  EXPECT_EQ(field_along(pre, path, 0.8), "precompact_density");
+  pre.precompact_density = 0.83;
+  pre.precompact_increments = 0;
+  EXPECT_EQ(field_along(pre, path, 0.8), "precompact_increments");
+  pre.precompact_increments = 20;
+  pre.target_strain = 0.02;
+  EXPECT_EQ(field_along(pre, shear, 0.8), "accepted");
+  const auto legs = compaction_legs(shear, pre, 0.8);
+  ASSERT_EQ(legs.size(), 2u);
+  EXPECT_EQ(legs[0].target_density, 0.83);
+  EXPECT_EQ(legs[0].increments, 20);
+  EXPECT_EQ(legs[1].target_strain, 0.02);
+  EXPECT_NEAR(legs[1].rate.t_end * legs[1].rate.gamma_dot, 0.02, 1e-15) << "|E'| = gamma' along pure shear too";
+  EXPECT_NEAR(legs[1].rate.rate[0], legs[1].rate.gamma_dot / std::sqrt(2.0), 1e-15);
+  EXPECT_TRUE(legs[0].exact_end && legs[1].exact_end);
+  const auto one = compaction_legs(path, o, 0.8);  // the default: one leg to the density, as before
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_FALSE(one[0].exact_end);
+  EXPECT_EQ(one[0].rate.t_end, compaction_rate(path, o.inertial_number, 0.8, o.target_density).t_end);
+}
+
+// A change of the strain rate between steps: shift_affine_velocities keeps the motion relative to
+// the affine field (walled box: the velocities are absolute), and step_to ends a step at a given
+// time without changing the rule's time step.
+TEST(DemCompaction, RateChangeKeepsTheFluctuationsAndStepToEndsOnTime) {
+  const auto pk = lattice<2>(3, 1e-3);
+  Box box(pk.box);
+  box.contact_walls = false;
+  box.right.mode = box.top.mode = WallMode::Affine;
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  o.plastic.damping_n = o.plastic.damping_t = 0.5;
+  DynamicSolver s(particles_from(pk, 1.0), o.plastic, box, o);
+  s.set_strain_rate(-0.01, -0.01, 0.0);
+  s.set_affine_velocities();
+  s.run(3);
+  std::vector<double> wx, wy;  // the velocities relative to the affine field
+  for (std::size_t i = 0; i < s.particles().size(); ++i) {
+    wx.push_back(s.particles().vx[i] + 0.01 * (s.particles().x[i] - s.box().x_min));
+    wy.push_back(s.particles().vy[i] + 0.01 * (s.particles().y[i] - s.box().y_min));
+  }
+  s.set_strain_rate(0.02, -0.03, 0.005);
+  Eigen::Matrix2d dL;
+  dL << 0.03, 0.005, 0.005, -0.02;
+  s.shift_affine_velocities(dL);
+  for (std::size_t i = 0; i < s.particles().size(); ++i) {
+    const double dx = s.particles().x[i] - s.box().x_min, dy = s.particles().y[i] - s.box().y_min;
+    EXPECT_NEAR(s.particles().vx[i] - 0.02 * dx - 0.005 * dy, wx[i], 1e-15);
+    EXPECT_NEAR(s.particles().vy[i] + 0.03 * dy - 0.005 * dx, wy[i], 1e-15);
+  }
+  const double dt = s.dt(), t = s.time() + 0.4 * dt;
+  s.step_to(t);
+  EXPECT_NEAR(s.time(), t, 1e-15);
+  EXPECT_EQ(s.dt(), dt) << "the rule's time step stays";
+  s.step_to(t + 3 * dt);  // a full step when the time is further than one
+  EXPECT_NEAR(s.time(), t + dt, 1e-15);
+  EXPECT_THROW(s.step_to(s.time()), std::invalid_argument);
 }
 
 }  // namespace

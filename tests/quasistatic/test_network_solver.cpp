@@ -237,6 +237,27 @@ TEST(NetworkSolver, RejectsImpossibleTargetsAndBadOptions) {
   EXPECT_THROW(qs::run_compaction(s, co, [](const qs::CompactionRow&) {}), std::invalid_argument);
   EXPECT_THROW(qs::StrainPath::parse("foo"), std::invalid_argument);
   EXPECT_THROW(qs::StrainPath::parse("1,nan,0"), std::invalid_argument);
+  // the precompaction (issue 29): above the start density, below 1; the path's target after it
+  const double D0 = pk.density();
+  qs::CompactionOptions pre;
+  pre.precompact_density = D0 + 0.01;
+  pre.target_density = D0 + 0.02;
+  EXPECT_NO_THROW(pre.validate(D0));
+  pre.target_density = D0 + 0.005;  // reachable from D0, not after the precompaction
+  EXPECT_THROW(pre.validate(D0), std::invalid_argument);
+  pre.target_density = D0 + 0.02;
+  for (double bad : {D0, D0 - 0.01, 1.0, std::nan("")}) {
+    pre.precompact_density = bad;
+    EXPECT_THROW(pre.validate(D0), std::invalid_argument) << bad;
+  }
+  pre.precompact_density = D0 + 0.01;
+  pre.precompact_increments = 0;
+  EXPECT_THROW(pre.validate(D0), std::invalid_argument);
+  pre.precompact_increments = 20;
+  pre.path = qs::StrainPath::parse("1,-1,0");  // pure shear never reaches a density ...
+  EXPECT_THROW(pre.validate(D0), std::invalid_argument);
+  pre.target_strain = 0.02;  // ... but a strain
+  EXPECT_NO_THROW(pre.validate(D0));
   so.skin = -1;
   EXPECT_THROW(qs::NetworkSolver(pk, so), std::invalid_argument);
   so = {};

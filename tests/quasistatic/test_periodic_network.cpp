@@ -14,6 +14,8 @@
 #include <sstream>
 #include <tuple>
 
+#include <fmt/format.h>
+
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/periodic.hpp"
 #include "periodic_lattices.hpp"
@@ -162,6 +164,82 @@ TEST(PeriodicNetwork, TriangularLatticeMatchesInfiniteLattice) {
     EXPECT_NEAR(rr.m.S12, 0.0, 1e-10 * std::fabs(expect)) << "mu " << mu;
     EXPECT_EQ(rr.m.contacts, 3 * nc * nr) << "every disk keeps its six contacts";
     EXPECT_EQ(rr.unconverged, 0);
+  }
+}
+
+// Issue 29's cross-check path in one run: a hydrostatic precompaction to D1 = 1.05 D0 (leg 0), then
+// pure shear (1, -1, 0) to |E| = 0.02 (leg 1). Each disk is a centre of symmetry and the torques of
+// the bonds cancel in pairs (opposite bonds; the 60 and 120 degree bonds have equal lengths and
+// opposite tangential motion), so the lattice follows the affine motion and its stress is the
+// closed form at E = diag(Eh + s, Eh - s), s = 0.02 / sqrt 2 (tests/periodic_lattices.hpp). The
+// shear stretches the bonds along x and compresses the others, so S11 - S22 > 0. The law decides
+// the bonds along x: the reversible law retraces Eq 2; the elastic unloading line (10^3 x the
+// tangent at u_max) opens them. Sticking: the slanted bonds slide at the shear cap F_N / (3 sqrt 3)
+// against their slip, which carries no mean stress (t . l = 0) and resists the shear (S11 - S22
+// grows). Every component to 1e-10, S12 = 0 by the mirror symmetry.
+TEST(PeriodicNetwork, PrecompactionThenPureShearMatchesLattice) {
+  const int nc = 6, nr = 6;
+  const packing::Packing pk = triangular_lattice(nc, nr);
+  const double D1 = pk.density() * 1.05, S = 0.02, R = 1.0;
+  for (bool reversible : {true, false}) {
+    double frictionless_dev = 0.0;
+    for (double mu : {0.0, kInf}) {
+      qs::SolverOptions so = exact_options(mu);
+      so.law.reversible = reversible;
+      qs::NetworkSolver s(pk, so);
+      qs::CompactionOptions co;
+      co.precompact_density = D1;
+      co.precompact_increments = 5;
+      co.path = qs::StrainPath::parse("1,-1,0");
+      co.target_strain = S;
+      co.increments = 8;
+      std::vector<qs::CompactionRow> rows;
+      qs::run_compaction(s, co, [&](const qs::CompactionRow& r) { rows.push_back(r); });
+      const std::string what = fmt::format("reversible {}, mu {}", reversible, mu);
+      ASSERT_EQ(rows.size(), 14u) << what;
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        EXPECT_EQ(rows[k].increment, static_cast<int>(k));
+        EXPECT_EQ(rows[k].leg, k <= 5 ? 0 : 1) << k;
+        EXPECT_TRUE(k == 0 || rows[k].report.converged) << what << ", increment " << k;
+      }
+      const qs::StateMeasures& pre = rows[5].state;  // the end of the precompaction
+      EXPECT_NEAR(pre.density, D1, 1e-12);
+      EXPECT_NEAR(pre.E11, -0.5 * std::log(1.05), 1e-14);
+      const qs::StateMeasures& m = rows.back().state;
+      const double d11 = m.E11 - pre.E11, d22 = m.E22 - pre.E22, d12 = m.E12 - pre.E12;
+      EXPECT_NEAR(std::sqrt(d11 * d11 + d22 * d22 + 2 * d12 * d12), S, 1e-14) << "|E| of the shear leg";
+      EXPECT_NEAR(d11, S / std::sqrt(2.0), 1e-14);
+      EXPECT_NEAR(m.density, D1, 1e-12) << "pure shear keeps the volume";
+      // the closed form: F = 3 sigma_y sqrt(8 u R*), R* = R/2; the bonds along x unload from u_h;
+      // sticking: the slanted bonds slide at the cap
+      const double sy = so.law.sigma_y, uh = 2 * R - 2 * R * std::exp(pre.E11);
+      auto eq2 = [&](double u) { return 3 * sy * std::sqrt(8 * u * R / 2); };
+      auto tangent = [&](double u) { return 3 * sy * std::sqrt(2 * (R / 2) / u); };
+      auto normal = [&](int k, double u) {
+        if (reversible || k != 0) return eq2(u);
+        return std::max(0.0, eq2(uh) - so.law.unload_ratio * tangent(uh) * (uh - u));
+      };
+      auto tangential = [&](int k, double Fn) { return mu == 0.0 ? 0.0 : netdem::test::sheared_lattice_cap(k, Fn); };
+      const auto cf = netdem::test::triangular_lattice_stress(nc, nr, R, m.E11, m.E22, normal, tangential);
+      const double scale = cf.xx + cf.yy;
+      EXPECT_LT(cf.xx, cf.yy) << "the closed form: S11 - S22 > 0";
+      EXPECT_EQ(cf.loaded, reversible ? 3 * nc * nr : 2 * nc * nr) << "the elastic line opens the bonds along x";
+      EXPECT_NEAR(m.S11, -cf.xx, 1e-10 * scale) << what;
+      EXPECT_NEAR(m.S22, -cf.yy, 1e-10 * scale) << what;
+      EXPECT_NEAR(m.S12, 0.0, 1e-10 * scale) << what;
+      EXPECT_NEAR(cf.xy, 0.0, 1e-12 * scale);  // the 60 and 120 degree bonds mirror each other
+      EXPECT_NEAR(cf.yx, 0.0, 1e-12 * scale);
+      EXPECT_EQ(m.contacts, cf.loaded) << what;
+      EXPECT_EQ(m.sliding, mu == 0.0 ? 0 : 2 * nc * nr) << what << ": every slanted bond slides";
+      if (mu == 0.0) {
+        frictionless_dev = m.S11 - m.S22;
+      } else {  // no mean stress from the tangential forces (t . l = 0); they resist the shear
+        const auto cf0 = netdem::test::triangular_lattice_stress(nc, nr, R, m.E11, m.E22, normal,
+                                                                 [](int, double) { return 0.0; });
+        EXPECT_NEAR(m.S11 + m.S22, -(cf0.xx + cf0.yy), 1e-10 * scale) << what << ": the mean stress";
+        EXPECT_GT(m.S11 - m.S22, frictionless_dev + 0.1 * scale) << what << ": the tangential forces resist the shear";
+      }
+    }
   }
 }
 

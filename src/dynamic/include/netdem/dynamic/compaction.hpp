@@ -73,6 +73,11 @@ struct CompactionRateT {
 template <int D>
 CompactionRateT<D> compaction_rate(const sys::StrainPathT<D>& path, double inertial_number, double initial_density,
                                    double target_density);
+/// The same rate along `path`, for a run to the equivalent strain |E| = target_strain: t_end =
+/// target_strain / gamma' (|E'| = gamma' whatever the direction, also a constant-volume one).
+template <int D>
+CompactionRateT<D> compaction_rate_to_strain(const sys::StrainPathT<D>& path, double inertial_number,
+                                             double initial_density, double target_strain);
 
 /// Sets the solver's affine strain rate (Voigt).
 template <int D>
@@ -86,18 +91,49 @@ struct CompactionOptions {
   /// refuse a run estimated to need more time steps; a run that reaches it stops ("incomplete")
   double max_steps = 1e10;
   bool walls = false;       ///< the stress from the wall forces; the wall-vs-contact gap is recorded
+  /// If > 0: run the path to this equivalent strain |E| = sqrt(E:E) (off-diagonal components
+  /// counted twice) instead of to target_density (then not read); in [kMinTargetStrain,
+  /// kMaxTargetStrain], as netsolve's (qs::CompactionOptions::target_strain).
+  double target_strain = 0.0;
+  static constexpr double kMinTargetStrain = 1e-9, kMaxTargetStrain = 1.0;
+  /// If > 0: a hydrostatic precompaction from the initial density to this density first (leg 0,
+  /// precompact_increments windows, at the same inertial number), then the path (leg 1).
+  double precompact_density = 0.0;
+  int precompact_increments = 20;
+  bool precompacts() const { return precompact_density != 0.0; }
   /// The numbers alone (inertial number, increments, step limit), before any packing is built.
   void check_numbers() const;
-  /// Validates every field; the density checks against the initial density and the path.
-  /// Throws netdem::FieldError (field: inertial_number, increments, to_density, max_steps, path).
+  /// Validates every field; the density checks against the initial density (the precompaction
+  /// density for the path of a run that precompacts) and the path. Throws netdem::FieldError
+  /// (field: inertial_number, increments, to_density, to_strain, precompact_density,
+  /// precompact_increments, max_steps, path).
   template <int D>
   void validate(const sys::StrainPathT<D>& path, double initial_density) const;
 };
 
+/// One leg of a run: a constant strain rate for a duration, in windows of equal time.
+template <int D>
+struct CompactionLegT {
+  CompactionRateT<D> rate;        ///< the leg's strain rate, start density and duration t_end
+  int increments = 0;             ///< its history rows
+  double target_density = 0.0;    ///< its target density, or 0 for a strain target
+  double target_strain = 0.0;     ///< its target |E|, or 0
+  /// The leg's last step is shortened so that it ends at its duration exactly (step_to): its
+  /// strain is then the target's to rounding. Set for every leg of a run that precompacts and for
+  /// a strain target; a single leg to a density ends, as always, within one step past it.
+  bool exact_end = false;
+};
+
+/// The legs of a run of `o` from density D0 along `path`: the precompaction (if any), then the
+/// path to o.target_density or o.target_strain. Call o.validate first.
+template <int D>
+std::vector<CompactionLegT<D>> compaction_legs(const sys::StrainPathT<D>& path, const CompactionOptions& o, double D0);
+
 /// One history row: the window means of the increment just completed.
 template <int D>
 struct CompactionRowT {
-  int increment = 0;
+  int increment = 0;  ///< counted through the legs
+  int leg = 0;        ///< the leg's index (0 for the initial row)
   Voigt<D> E{};  ///< the macroscopic strain
   double density = 0, time = 0;
   CompactionSampleT<D> mean;
@@ -138,8 +174,19 @@ class CompactionObserverT {
   virtual void checkpoint(int /*increment*/) {}       ///< every 20 increments
 };
 
+/// Runs the legs one after the other (the solver set up by the caller, with the strain rate of
+/// the first leg and its velocities; legs from compaction_legs()). At the start of each further leg
+/// the strain rate becomes the leg's, and outside a periodic cell the free particles' velocities
+/// follow the change of the affine field (shift_affine_velocities). The strain of a row is the
+/// strain at the end of the last leg plus the leg's rate times its time so far; the rows are
+/// numbered through the legs. o's inertial number, step limit and walls are read, not its targets.
+template <int D>
+CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const std::vector<CompactionLegT<D>>& legs,
+                                     const CompactionOptions& o, CompactionObserverT<D>& obs);
+
 /// Runs the compaction of `s` (its particles, box, law, prescribed set and strain rate set up by
-/// the caller, rate from compaction_rate()) to rate.t_end in o.increments windows of equal time.
+/// the caller, rate from compaction_rate()) to rate.t_end in o.increments windows of equal time
+/// (one leg to o.target_density).
 /// Each window is measured about every 20 steps (at least 10 samples) and averaged. An
 /// InstabilityError stops the run: the summary says so (status unstable) and the row of the
 /// last completed increment stays the last one reported. So does o.max_steps time steps (status

@@ -354,6 +354,10 @@ class DynamicSolverT {
   /// check_health() (the closing kick of that step also takes max|v|); throws InstabilityError
   /// on a breach, leaving the state of that step.
   void step();
+  /// One step that does not pass the time t (> time()): of min(dt(), t - time()); dt() stays the
+  /// rule's. A protocol that must end at t exactly (a strain to reach) takes its last step with it;
+  /// the last good state is not refreshed by a shortened step (a state's dt is its time step).
+  void step_to(double t);
   /// The instability checks on the current state: finite, box extents positive, centres inside
   /// the box, every overlap < 0.5 min(a_i, a_j) (>= 0.5 r_min), nu <= 1.25, max|v| dt < 0.1 r_min. Throws
   /// InstabilityError (one line: quantity, step, likely cause). O(N + pairs).
@@ -433,6 +437,11 @@ class DynamicSolverT {
   double strain_rate_12() const { return edot_[2]; }
   /// The accumulated affine map F (row-major f11, f12, f21, f22) since construction: x_0 + F (X - x_0).
   const std::array<double, 4>& box_deformation() const { return F_; }
+  /// Adds dL (x - x_0) to the velocity of every particle that is not prescribed (x_0 the box's
+  /// lower corner; dL symmetric): after a change dL of the strain rate between steps the motion
+  /// relative to the new affine field is the motion relative to the old one. Nothing in a periodic
+  /// cell, whose velocities are the fluctuations already.
+  void shift_affine_velocities(const Eigen::Matrix<double, D, D>& dL);
   /// Changes DynamicOptions::affine_drag between steps (e.g. a drag that relaxes a held state).
   void set_affine_drag(double drag);
   double affine_drag() const { return opt_.affine_drag; }
@@ -547,6 +556,8 @@ class DynamicSolverT {
   /// A law whose tangential bound grows with the contact area: the time step follows the largest
   /// area of the last force evaluation (StiffnessBound::k_t_area, with 10 % margin).
   void update_time_step();
+  /// The step after the time step's update (step, step_to); `full`: a step of the rule's length.
+  void advance(bool full);
   /// bound_, mean_pair_ and ts_ from the law's a-priori bound (choose_time_step) with options o.
   void choose_time_step_of_law(const DynamicOptions& o, double area);
   void compute_forces_dispatch();

@@ -31,18 +31,34 @@ struct CompactionOptions {
   double target_strain = 0.0;
   static constexpr double kMinTargetStrain = 1e-9, kMaxTargetStrain = 1.0;
   int increments = 100;  ///< increments from the initial state to the target (equal strain steps)
-  void validate(double initial_density) const;  ///< throws std::invalid_argument (one line)
-  /// The strain of each increment from a state of density `initial_density`.
+  /// If > 0: a hydrostatic precompaction first (leg 0), from the initial density to this density
+  /// in precompact_increments equal increments; then `path` (leg 1) from there to target_density
+  /// or target_strain in `increments` increments. Must lie in (initial density, 1).
+  double precompact_density = 0.0;
+  int precompact_increments = 20;
+  bool precompacts() const { return precompact_density != 0.0; }
+  /// Throws std::invalid_argument (one line). With a precompaction, the path's target is checked
+  /// from the precompaction density.
+  void validate(double initial_density) const;
+  /// The strain of each increment of the path (leg 1) from a state of density `initial_density`.
   Eigen::Matrix2d increment_strain(double initial_density) const;
+  /// The hydrostatic precompaction leg alone (to precompact_density in precompact_increments).
+  CompactionOptions precompaction() const;
+
+ private:
+  /// The checks of the path's target from `density`, a start called `from` in the messages.
+  void validate_path(double density, const char* from) const;
 };
 
 struct CompactionRow {
-  int increment = 0;
+  int increment = 0;  ///< counted through both legs
+  int leg = 1;        ///< 0: the precompaction (and the initial row of a run that precompacts), 1: the path
   StateMeasures state;
   IncrementReport report;
 };
 
-/// Runs the compaction; calls on_row for the initial state (increment 0) and after each increment.
+/// Runs the compaction (the precompaction first, if any); calls on_row for the initial state
+/// (increment 0) and after each increment, numbered through both legs.
 void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
                     const std::function<void(const CompactionRow&)>& on_row);
 

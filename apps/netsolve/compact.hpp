@@ -1,0 +1,62 @@
+#pragma once
+// netsolve compact: the network solver's compaction of a packing or a jammed state along a strain
+// path to a density or an equivalent strain, optionally after a hydrostatic precompaction
+// (--precompact-density; issue 29), with its files (README.md "netsolve", docs/quasistatic.md).
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "netdem/quasistatic/solver_options.hpp"
+#include "output.hpp"
+#include "setup.hpp"
+
+namespace netdem::app::netsolve {
+
+/// Options of every run that writes a folder.
+struct RunArgs {
+  bool overwrite = false, allow_unconverged = false;
+};
+
+inline RunDirOptions run_dir_options(const RunArgs& r, const std::string& input = "") {
+  RunDirOptions o;
+  o.overwrite = r.overwrite;
+  if (!input.empty()) o.inputs.emplace_back(input);
+  return o;
+}
+
+// The defaults of `compact` are the library preset qs::SolverOptions::compact()
+// (solver_options.hpp; why each value: docs/quasistatic.md "Presets").
+struct CompactArgs {
+  bool affine = false, no_rotation = false, quiet = false, verbose = false, save_state = false;
+  std::string path = "hydrostatic", packing_file, boundary = "layer";
+  std::string state_file;  ///< a jammed state to start from (netdem/system/jammed_state.hpp)
+  std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
+  double to_density = 0.85, to_strain = 0.0;  // to_strain > 0: run to |E| = to_strain instead
+  int increments = 100;
+  /// > 0: a hydrostatic precompaction to this density first (history.csv column `leg`)
+  double precompact_density = 0.0;
+  int precompact_increments = 20;
+  qs::SolverOptions solver = qs::SolverOptions::compact();  // bound directly by the command line
+  LawArgs law = law_args(solver);
+};
+
+/// The options of `compact` that its checks after parsing look at.
+struct CompactCli {
+  CLI::Option* packing = nullptr;
+  CLI::Option* density = nullptr;
+  CLI::Option* strain = nullptr;
+  CLI::Option* precompact_density = nullptr;
+  CLI::Option* precompact_increments = nullptr;
+};
+
+/// Binds the options of `compact` but the deposition's (--width, --seed, ..., --overwrite, which
+/// main shares with `pack`) to `ca`, `ra` and `out`.
+CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std::string& out);
+
+/// The checks of the parsed options (UsageError, one line), then the run; its exit status.
+int run_compact_cli(const CompactCli& cli, const PackArgs& pa, const CompactArgs& ca, const RunArgs& ra,
+                    const std::string& command, const std::filesystem::path& out);
+
+}  // namespace netdem::app::netsolve
