@@ -76,8 +76,9 @@ packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) 
                                      "'# dim 3', netsolve pack --dim 3)", packing::quote_input(a.packing_file)));
       for (const auto& c : p.comments)
         if (!p.periodic && c.find("lateral periodic") != std::string::npos)
-          throw UsageError(fmt::format("--packing {} is a periodic deposition; the explicit DEM has no periodic "
-                                       "boundaries (use --lateral walls)", packing::quote_input(a.packing_file)));
+          throw UsageError(fmt::format("--packing {} is a lateral-periodic deposition (periodic sides, a floor): "
+                                       "the explicit DEM has no such boundary (use --lateral walls, or a fully periodic "
+                                       "packing with --boundary periodic)", packing::quote_input(a.packing_file)));
       return p;
     }
     source = fmt::format("3D ballistic deposition, W = {} R, r = R[{}, {}], seed {}, lateral walls", a.pack.width,
@@ -126,8 +127,8 @@ void check_boundary(const DemCompactArgs& a, bool walls) {
       throw UsageError("--dim 3 takes --boundary walls or --affine, or --boundary periodic with a periodic packing "
                        "(--boundary layer, netsolve's peripheral layer, is 2D only)");
     if (a.pack.lateral != "walls")
-      throw UsageError(fmt::format("--lateral '{}': the explicit DEM has no periodic boundaries (demsolve compact --dim 3 "
-                                   "takes --lateral walls)", packing::quote_input(a.pack.lateral)));
+      throw UsageError(fmt::format("--lateral '{}': the explicit DEM has no lateral-periodic boundary (demsolve compact "
+                                   "--dim 3 takes --lateral walls; a fully periodic packing runs with --boundary periodic)", packing::quote_input(a.pack.lateral)));
     if (a.pack.lid != "centre" && a.pack.lid != "inside")
       throw UsageError(fmt::format("--lid '{}' is not 'centre' or 'inside'", packing::quote_input(a.pack.lid)));
   }

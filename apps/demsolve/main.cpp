@@ -108,7 +108,7 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
       ->check(CLI::IsMember({2, 3}))
       ->capture_default_str();
   auto* dcomp_lateral = dcomp->add_option("--lateral", dc.pack.lateral, "3D only: side boundary of the deposition (walls; "
-                                                                        "the explicit DEM has no periodic boundaries)")
+                                                                        "the explicit DEM has no lateral-periodic one)")
                             ->capture_default_str();
   dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
   dcomp->add_option("--state", dc.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) "

@@ -34,7 +34,7 @@ check_bad dim3_layer "--boundary walls or --affine" compact --dim 3 --packing "$
 check_bad dim3_walls_shear "E23 = E13 = E12 = 0" compact --dim 3 --boundary walls --packing "$p3" --path=-1,-1,-1,0,0,0.5
 check_bad dim3_bad_path "3 or 6 finite numbers" compact --dim 3 --affine --packing "$p3" --path=-1,-1
 check_bad dim3_no_compaction "does not compact" compact --dim 3 --affine --packing "$p3" --path 1,1,-1
-check_bad dim3_periodic "no periodic boundaries" compact --dim 3 --affine --width 6 --lateral periodic
+check_bad dim3_periodic "no lateral-periodic boundary" compact --dim 3 --affine --width 6 --lateral periodic
 check_bad dim2_lateral "--lateral is for --dim 3 only" compact --width 6 --lateral walls
 check_bad dim4 "--dim" compact --dim 4
 check_bad dim3_target "not above the current density" compact --dim 3 --affine --packing "$p3" --to-density 0.3
