@@ -105,10 +105,8 @@ const std::vector<typename PeriodicPairsT<D>::Pair>& PeriodicPairsT<D>::find(std
   for (std::size_t p = 0; p < n; ++p) ++start_[cell_of_[p] + 1];
   for (long c = 0; c < cells; ++c) start_[static_cast<std::size_t>(c) + 1] += start_[static_cast<std::size_t>(c)];
   ids_.resize(n);
-  {
-    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t p = 0; p < n; ++p) ids_[fill[cell_of_[p]]++] = static_cast<std::uint32_t>(p);
-  }
+  fill_.assign(start_.begin(), start_.end() - 1);  // (a member: no allocation once the cell count settles)
+  for (std::size_t p = 0; p < n; ++p) ids_[fill_[cell_of_[p]]++] = static_cast<std::uint32_t>(p);
   constexpr int kOffsets = D == 2 ? 9 : 27;
   for (std::size_t p = 0; p < n; ++p) {
     std::array<long, D> c{};

@@ -103,7 +103,7 @@ class PeriodicPairsT {
   std::vector<Pair> pairs_;
   std::vector<double> s_;            ///< wrapped fractional coordinates, D per particle
   std::vector<int> wrap_;            ///< the whole images that wrapped them, D per particle
-  std::vector<std::uint32_t> start_, ids_, cell_of_;
+  std::vector<std::uint32_t> start_, ids_, cell_of_, fill_;
 };
 
 using PeriodicCell = PeriodicCellT<2>;
