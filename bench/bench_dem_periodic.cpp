@@ -69,20 +69,10 @@ Args parse(int argc, char** argv) {
 }
 
 template <int D>
-LudingParams law(const packing::Packing& pk) {
+LudingParams law(const packing::Packing& pk) {  // the periodic route's law, with friction 0.5
   double r_mean = 0.0;
   for (double r : pk.r) r_mean += r;
-  r_mean /= static_cast<double>(pk.size());
-  LudingParams lp;
-  lp.k2 = 1.0;
-  lp.a0 = r_mean;
-  lp.w0 = 0.0;
-  lp.mu = 0.5;
-  lp.mu_wall = 0.0;
-  const double m_mean = D == 2 ? 3.141592653589793 * r_mean * r_mean : 4.18879020478639 * r_mean * r_mean * r_mean;
-  lp.gamma_n = 2.0 * 0.3 * std::sqrt(lp.k2 * 0.5 * m_mean);
-  lp.gamma_t = 0.5 * lp.gamma_n;
-  return lp;
+  return periodic_packing_law(D, r_mean / static_cast<double>(pk.size()), 0.5);
 }
 
 template <int D>

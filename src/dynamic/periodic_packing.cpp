@@ -249,16 +249,8 @@ packing::Packing make(const PeriodicPackOptions& o, PeriodicPackSummary& m, cons
   double r_mean = 0.0;
   for (double r : gas.r) r_mean += r;
   r_mean /= static_cast<double>(gas.size());
-  // the law: linear, k_n = 1, 0.3 of the critical damping of the mean pair, tangential alpha = 0.2
-  LudingParams lp;
-  lp.k2 = 1.0;
-  lp.a0 = r_mean;
-  lp.w0 = 0.0;
-  lp.mu = o.friction;
-  lp.mu_wall = 0.0;
+  const LudingParams lp = periodic_packing_law(D, r_mean, o.friction);
   const double m_mean = measure_of<D>(r_mean);  // rho = 1
-  lp.gamma_n = 2.0 * 0.3 * std::sqrt(lp.k2 * 0.5 * m_mean);
-  lp.gamma_t = 0.5 * lp.gamma_n;
   DynamicOptions opt;
   opt.model = ContactModel::Linear;
   opt.steps_per_contact = 25.0;
@@ -301,6 +293,19 @@ packing::Packing make(const PeriodicPackOptions& o, PeriodicPackSummary& m, cons
 }
 
 }  // namespace
+
+LudingParams periodic_packing_law(int dim, double r_mean, double friction) {
+  LudingParams lp;
+  lp.k2 = 1.0;
+  lp.a0 = r_mean;
+  lp.w0 = 0.0;
+  lp.mu = friction;
+  lp.mu_wall = 0.0;
+  const double m_mean = dim == 3 ? measure_of<3>(r_mean) : measure_of<2>(r_mean);  // rho = 1
+  lp.gamma_n = 2.0 * 0.3 * std::sqrt(lp.k2 * 0.5 * m_mean);
+  lp.gamma_t = 0.5 * lp.gamma_n;
+  return lp;
+}
 
 packing::Packing make_periodic_packing(int dim, const PeriodicPackOptions& o, PeriodicPackSummary& summary,
                                        const std::function<void(double)>& progress) {

@@ -109,11 +109,17 @@ def pack_args(mode, seed):
     return ["pack", "--periodic", "--n", str(mode["n"]), "--seed", str(seed), "--quiet"]
 
 
-def path_args(c, d0, inc_scale=1):
+def target(d0):
+    """The end density of the hydrostatic and die runs (and the yield precompaction) as the commands get
+    it: D0 + DD to 6 decimals; the last comparison point is this density."""
+    return float(f"{d0 + DD:.6f}")
+
+
+def path_args(c, d0):
     if c["pk"] == "shear":
         return ["--path", c["path"], "--precompact-density", f"{d0 + PRE_DD:.6f}", "--precompact-increments",
                 str(PRE_INC), "--to-strain", f"{SHEAR_E:g}", "--increments", str(SHEAR_INC)]
-    return ["--path", c["path"], "--to-density", f"{d0 + DD:.6f}", "--increments", str(INC)]
+    return ["--path", c["path"], "--to-density", f"{target(d0):.6f}", "--increments", str(INC)]
 
 
 def dem_args(c, pack, d0, I):
@@ -130,7 +136,7 @@ def net_args(c, pack, d0, scale):
 def yield_args(tool, pack, d0):
     """Yield after periodic hydrostatic precompaction to D0 + DD, sticking, seed 1; netsolve probes with
     its pseudo-transient iteration (the periodic probing of the issue)."""
-    a = ["yield", "--packing", pack, "--compact-bc", "periodic", "--to-density", f"{d0 + DD:.6f}",
+    a = ["yield", "--packing", pack, "--compact-bc", "periodic", "--to-density", f"{target(d0):.6f}",
          "--directions", str(YIELD_DIRECTIONS), "--probes", ",".join(map(str, YIELD_PROBES)), "--quiet",
          "--allow-unconverged"]
     return a + (["--jobs", "1"] if tool == "demsolve" else ["--iteration", "pseudo-transient"])
@@ -205,13 +211,12 @@ def prepare(r, pk):
 
 
 def value(r, col, x, pk, d0):
-    """The value at the point x (D - D0, or |E_dev| in shear); the last point is the target as the
-    commands were given it (6 decimals)."""
+    """The value at the point x (D - D0, or |E_dev| in shear), at most at target(d0)."""
     if not r.ok:
         return float("nan")
     if pk == "shear":
         return r.at(col, x, by="Es")
-    return r.at(col, min(d0 + x, float(f"{d0 + DD:.6f}")), by="D")
+    return r.at(col, min(d0 + x, target(d0)), by="D")
 
 
 def unaccepted(r):

@@ -17,6 +17,7 @@
 #include <functional>
 #include <string>
 
+#include "netdem/contact/luding.hpp"
 #include "netdem/packing/packing.hpp"
 
 namespace netdem::dem {
@@ -54,6 +55,11 @@ struct PeriodicPackSummary {
   std::int64_t steps = 0, steps_to_first_contact_pressure = 0;
   double dt = 0.0;
 };
+
+/// The contact law of the periodic route (dimension dim, 2 or 3; rho = 1): linear, k_n = 1, normal
+/// damping 0.3 of critical for the pair of two particles of radius r_mean, tangential half of it,
+/// Coulomb coefficient `friction`, frictionless walls.
+contact::LudingParams periodic_packing_law(int dim, double r_mean, double friction);
 
 /// The periodic packing of `o` (dimension dim, 2 or 3) and its summary. `progress` (may be empty)
 /// gets the fraction of the step limit used, every few hundred steps.
