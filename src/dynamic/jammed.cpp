@@ -3,8 +3,6 @@
 
 #include <stdexcept>
 
-#include "state_of.hpp"
-
 namespace netdem::dem {
 
 namespace {
@@ -12,8 +10,8 @@ namespace {
 /// The jammed state of a solver's state as it stands (histories as committed).
 template <int D>
 sys::JammedStateT<D> raw_jammed(const SolverState& st, const Eigen::Matrix<double, D, D>& strain, std::uint64_t seed) {
-  using S = StateOf<D>;
-  if (!st.plastic_law()) throw std::invalid_argument("jammed state: the DEM run is not of the plastic-indentation law");
+  using H = contact::PlasticIndentationHistoryT<D>;
+  if (!st.holds<H>()) throw std::invalid_argument("jammed state: the DEM run is not of the plastic-indentation law");
   sys::JammedStateT<D> j;
   const Particles& P = st.particles;
   const std::size_t n = P.size();
@@ -34,13 +32,13 @@ sys::JammedStateT<D> raw_jammed(const SolverState& st, const Eigen::Matrix<doubl
   j.law.damping_n = j.law.damping_t = 0.0;  // the dashpots are the solver's, not the state's
   j.wall_mu = st.plastic_wall_mu;
   const contact::PlasticIndentationLawT<D> law(st.plastic);
-  const auto& ph = S::pl_pair(st);
+  const auto& ph = st.histories_of<H>().pair;
   for (std::size_t k = 0; k < st.pair_key.size(); ++k) {  // (state(): the live histories only)
     j.pair_i.push_back(static_cast<int>(st.pair_key[k] >> 32));
     j.pair_j.push_back(static_cast<int>(st.pair_key[k] & 0xffffffffu));
     j.pair_history.push_back(ph[k]);
   }
-  const auto& wh = S::pl_wall(st);
+  const auto& wh = st.histories_of<H>().wall;
   constexpr std::size_t W = 2 * D;
   if (j.walls)
     for (std::size_t s = 0; s < wh.size(); ++s)
@@ -71,7 +69,7 @@ void settle(DynamicSolverT<D>& s) {
 
 template <int D>
 DynamicSolverT<D> solver_from_jammed(const sys::JammedStateT<D>& j, double rho, const Box& control, DynamicOptions o) {
-  using S = StateOf<D>;
+  using H = contact::PlasticIndentationHistoryT<D>;
   j.validate();
   const packing::Packing pk = j.packing();
   Particles P = D == 2 ? particles_from(pk, rho) : spheres_from(pk, rho);
@@ -91,13 +89,13 @@ DynamicSolverT<D> solver_from_jammed(const sys::JammedStateT<D>& j, double rho, 
   SolverState st = DynamicSolverT<D>(std::move(P), o.plastic, box, o).state();
   st.plastic.damping_n = st.plastic.damping_t = 0.0;
   st.pair_key.clear();
-  auto& ph = S::pl_pair(st);
+  auto& ph = st.histories_of<H>().pair;
   ph.clear();
   for (std::size_t k = 0; k < j.pair_i.size(); ++k) {
     st.pair_key.push_back((std::uint64_t(j.pair_i[k]) << 32) | std::uint64_t(j.pair_j[k]));
     ph.push_back(j.pair_history[k]);
   }
-  auto& wh = S::pl_wall(st);
+  auto& wh = st.histories_of<H>().wall;
   wh.assign(wh.size(), {});
   for (std::size_t k = 0; k < j.wall_particle.size(); ++k)
     wh[static_cast<std::size_t>(2 * D * j.wall_particle[k] + j.wall_side[k])] = j.wall_history[k];

@@ -39,8 +39,6 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   const std::size_t n = P_.size();
   if (P_.dim != D) fail(fmt::format("state: the particles are {}D, the solver {}D", P_.dim, D));
   auto same = [n](std::size_t m) { return m == n; };
-  const auto& wh = S::wall(st);
-  const auto& pwh = S::pl_wall(st);
   const std::size_t nw = static_cast<std::size_t>(kWalls);
   bool sizes = same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
                same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
@@ -49,13 +47,14 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   if constexpr (D == 3)
     sizes = sizes && same(P_.z.size()) && same(P_.vz.size()) && same(P_.fz.size()) && same(P_.wx.size()) &&
             same(P_.wy.size()) && same(P_.tx.size()) && same(P_.ty.size());
-  const bool luding_h = wh.size() == nw * n && st.pair_key.size() == S::pair(st).size();
-  const bool plastic_h = options.model == ContactModel::PlasticIndentation && pwh.size() == nw * n &&
-                         S::pl_pair(st).size() == st.pair_key.size() && wh.empty() && S::pair(st).empty();
+  // the histories of the state's law (whichever it is): of dimension D, one per pair, 2 D per particle
+  const bool hist_sizes = std::visit([&](const auto& h) {
+    return h.kDim == D && h.wall.size() == nw * n && h.pair.size() == st.pair_key.size();
+  }, st.histories);
   if (st.plastic_law() != (options.model == ContactModel::PlasticIndentation))
     fail(st.plastic_law() ? "state: a state of the plastic-indentation law needs ContactModel::PlasticIndentation"
                           : "state: a state of the Luding law cannot restart with ContactModel::PlasticIndentation");
-  if (!sizes || !(luding_h || plastic_h)) fail("state: inconsistent array sizes");
+  if (!sizes || !hist_sizes) fail("state: inconsistent array sizes");
   if (n == 0) fail("state: no particles");
   for (std::size_t i = 0; i < n; ++i)
     if (!(st.radius_ref[i] > 0.0 && P_.radius[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
@@ -100,9 +99,10 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   pair_key_ = st.pair_key;
   visit_law([&](const auto& law) {
     using H = typename std::decay_t<decltype(law)>::History;
+    if (!st.holds<H>()) fail("state: the state's histories are not of the solver's law (options.model)");
     hist_.template emplace<HistoryTable<H>>();
-    table<H>().pair = S::template pairs<H>(st);
-    table<H>().wall = S::template walls<H>(st);
+    table<H>().pair = st.histories_of<H>().pair;
+    table<H>().wall = st.histories_of<H>().wall;
   });
   build_table();
   rebuilds_ = 0;
@@ -141,13 +141,13 @@ SolverState DynamicSolverT<D>::state() const {
   visit_law([&](const auto& law) {
     using H = typename std::decay_t<decltype(law)>::History;
     const HistoryTable<H>& t = *table_if<H>();
-    auto& pairs = S::template pairs<H>(st);
+    LawHistories<H>& h = st.histories.template emplace<LawHistories<H>>();
     for (std::size_t k = 0; k < pair_key_.size(); ++k)
       if (law.has_history(t.pair[k])) {
         st.pair_key.push_back(pair_key_[k]);
-        pairs.push_back(t.pair[k]);
+        h.pair.push_back(t.pair[k]);
       }
-    S::template walls<H>(st) = t.wall;
+    h.wall = t.wall;
   });
   return st;
 }

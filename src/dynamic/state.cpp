@@ -143,9 +143,7 @@ Json state_json(const SolverState& st) {
   j["elastic"] = real_json(st.elastic, "elastic energy");
   j["thermal"] = Json{{"T", real_json(st.thermal.T, "T")}, {"k1_Tt", real_json(st.thermal.k1_Tt, "k1_Tt")}};
   j["luding"] = st.params;
-  const bool plastic = st.plastic_law();
-  j["law"] = plastic ? "plastic_indentation" : "luding";
-  if (plastic) {
+  if (st.plastic_law()) {
     j["plastic_indentation"] = st.plastic;
     j["plastic_wall_mu"] = real_json(st.plastic_wall_mu, "plastic_wall_mu");
     j["plastic_area_max"] = real_json(st.plastic_area_max, "plastic_area_max");
@@ -156,13 +154,15 @@ Json state_json(const SolverState& st) {
     cols[c.name] = reals(v.data(), v.size(), c.name);
   }
   j["particles"] = cols;
-  if (plastic) {
-    j["pairs"] = pairs_json<D>(st, S::pl_pair(st));
-    j["wall_contacts"] = wall_contacts_json<D>(S::pl_wall(st));
-  } else {
-    j["pairs"] = pairs_json<D>(st, S::pair(st));
-    j["wall_contacts"] = wall_contacts_json<D>(S::wall(st));
-  }
+  // the state's law by its name, and its histories through their JSON (law_json.hpp)
+  std::visit([&](const auto& h) {
+    using H = typename std::decay_t<decltype(h)>::History;
+    if constexpr (HistoryDim<H>::value == D) {
+      j["law"] = sys::LawName<H>::value;
+      j["pairs"] = pairs_json<D>(st, h.pair);
+      j["wall_contacts"] = wall_contacts_json<D>(h.wall);
+    }
+  }, st.histories);
   return j;
 }
 
@@ -172,18 +172,33 @@ std::string format_state(const SolverState& st) {
   if (st.periodic)
     throw std::invalid_argument("state: a state in a periodic cell has no state file yet (the cell and the pairs' images "
                                 "are not in the format)");
+  if (st.histories_dim() != st.dim())
+    throw std::invalid_argument(fmt::format("state: the histories are {}D, the particles {}D", st.histories_dim(), st.dim()));
   return sys::dump_archive(st.dim() == 3 ? state_json<3>(st) : state_json<2>(st));
 }
 
 // ---- reader ------------------------------------------------------------------------------------
 namespace {
 
-// The length scale of the limits: a0 (Luding), the mean radius_ref (the plastic law).
-double length_scale(const SolverState& st, bool plastic) {
-  if (!plastic) return st.params.a0;
+// The length scale of the limits: a0 (Luding), the mean radius_ref (another law).
+double length_scale(const SolverState& st, bool luding) {
+  if (luding) return st.params.a0;
   double s = 0.0;
   for (double a : st.radius_ref) s += a;
   return s / static_cast<double>(st.radius_ref.size());
+}
+
+// The state's law by its name ("law", sys::LawName): the alternative of SolverState::histories of
+// that law and dimension D (empty).
+template <int D>
+void choose_law(const Field& f, SolverState& st) {
+  std::vector<std::string_view> names;
+  DemLaws::for_each<D>([&](auto h) { names.push_back(sys::LawName<typename decltype(h)::type>::value); });
+  const std::size_t k = f.choice(names);
+  std::size_t i = 0;
+  DemLaws::for_each<D>([&](auto h) {
+    if (i++ == k) st.histories.emplace<LawHistories<typename decltype(h)::type>>();
+  });
 }
 
 // time, dt, box, moving walls, wall forces, stress sum, thermal state, the laws' parameters
@@ -231,7 +246,8 @@ void read_globals(const Field& r, SolverState& st) {
   st.thermal.T = th["T"].real();
   st.thermal.k1_Tt = th["k1_Tt"].real();
   st.params = r["luding"].get<LudingParams>();
-  if (r["law"].choice({"luding", "plastic_indentation"}) == 1) {
+  choose_law<D>(r["law"], st);
+  if (st.plastic_law()) {
     st.plastic = r["plastic_indentation"].get<contact::PlasticIndentationParams>();
     st.plastic_wall_mu = r["plastic_wall_mu"].extended_real(0.0, HUGE_VAL);
     st.plastic_area_max = r["plastic_area_max"].real(0.0, std::numeric_limits<double>::max());
@@ -242,7 +258,7 @@ void read_globals(const Field& r, SolverState& st) {
 
 // What needs the parameters: the box, the walls' loading ratio (Luding), the temperature.
 template <int D>
-void check_globals(const Field& r, const SolverState& st, bool plastic) {
+void check_globals(const Field& r, const SolverState& st, bool luding) {
   const LudingParams& lp = st.params;
   if (st.box.enabled) {
     if (!(st.box.x_max > st.box.x_min && st.box.y_max > st.box.y_min))
@@ -253,11 +269,11 @@ void check_globals(const Field& r, const SolverState& st, bool plastic) {
   const MovingWall* w[3] = {&st.box.right, D == 3 ? &st.box.back : &st.box.top, &st.box.top};
   for (std::size_t k = 0; k < D; ++k) {
     const double ratio = D == 2 ? 2.0 * w[k]->pressure / lp.k2 : 4.0 * w[k]->pressure * lp.a0 / lp.k2;
-    if (!plastic && w[k]->mode == WallMode::Stress && !(ratio <= StateLimits::kMaxLoading))
+    if (luding && w[k]->mode == WallMode::Stress && !(ratio <= StateLimits::kMaxLoading))
       r["moving_walls"][k]["pressure"].fail(fmt::format("loading ratio {} = {:.3g} is above {} (Luding section 4)",
                                                         D == 2 ? "2p/k2" : "4 p a0/k2", ratio, StateLimits::kMaxLoading));
     // a pressure that cannot hold the sample, and the stresses over p overflow (4.9e-324: inf in timeseries.csv)
-    if (!plastic && w[k]->mode == WallMode::Stress && !(ratio >= StateLimits::kMinLoading))
+    if (luding && w[k]->mode == WallMode::Stress && !(ratio >= StateLimits::kMinLoading))
       r["moving_walls"][k]["pressure"].fail(fmt::format("pressure {:g} gives the loading ratio {} = {:.3g}, below {}: the "
                                                         "wall would not hold the sample", w[k]->pressure,
                                                         D == 2 ? "2p/k2" : "4 p a0/k2", ratio, StateLimits::kMinLoading));
@@ -274,7 +290,7 @@ void check_globals(const Field& r, const SolverState& st, bool plastic) {
 
 // The particle columns, with the ranges of radius, mass and inertia.
 template <int D>
-void read_particles(const Field& r, SolverState& st, bool plastic) {
+void read_particles(const Field& r, SolverState& st, bool luding) {
   const Field pc = r["particles"];
   std::vector<std::string_view> names;
   for (const Column& c : columns<D>()) names.push_back(c.name);
@@ -296,12 +312,12 @@ void read_particles(const Field& r, SolverState& st, bool plastic) {
   } else {
     P.theta.assign(n, 0.0);
   }
-  const double L = length_scale(st, plastic);
+  const double L = length_scale(st, luding);
   const double rlo = L / StateLimits::kRadiusRange, rhi = L * StateLimits::kRadiusRange;
   constexpr double kI = contact::Dim<D>::kInertia;
   auto volume = [](double a) { return D == 2 ? std::numbers::pi * a * a : 4.0 / 3.0 * std::numbers::pi * a * a * a; };
-  double rho = 0.0;  // the plastic law: the mean density of the state
-  if (plastic)
+  double rho = 0.0;  // a law other than Luding's: the mean density of the state
+  if (!luding)
     for (std::size_t i = 0; i < n; ++i) rho += P.mass[i] / volume(st.radius_ref[i]) / static_cast<double>(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double a = P.radius[i], a_ref = st.radius_ref[i], m = P.mass[i], I = P.inertia[i];
@@ -309,12 +325,12 @@ void read_particles(const Field& r, SolverState& st, bool plastic) {
     if (!(a_ref >= rlo && a_ref <= rhi))
       pc["radius_ref"][i].fail(fmt::format("radius_ref must be within [L / 100, 100 L] = [{:g}, {:g}]", rlo, rhi));
     const LudingParams& lp = st.params;
-    const double m_ref = plastic ? rho * volume(a_ref)
+    const double m_ref = !luding ? rho * volume(a_ref)
                          : D == 2         ? contact::luding_mass(lp, a_ref)
                                           : lp.rho_p * volume(a_ref);
     if (!(m >= 1e-3 * m_ref && m <= 1e3 * m_ref))
       pc["mass"][i].fail(fmt::format("mass must be within a factor 1000 of {}",
-                                     plastic ? "the state's mean density times the volume"
+                                     !luding ? "the state's mean density times the volume"
                                      : D == 2         ? "rho_p pi a^2 h"
                                                       : "rho_p 4/3 pi a^3"));
     if (!(I >= 1e-3 * kI * m * a * a && I <= 1e3 * kI * m * a * a))
@@ -324,12 +340,12 @@ void read_particles(const Field& r, SolverState& st, bool plastic) {
 
 // Geometry and speeds (docs/dynamic.md "State file limits"), then pairs closer than the larger radius.
 template <int D>
-void check_particles(const Field& r, const SolverState& st, bool plastic) {
+void check_particles(const Field& r, const SolverState& st, bool luding) {
   using S = StateOf<D>;
   const Particles& P = st.particles;
   const Field pc = r["particles"];
   const std::size_t n = P.size();
-  const double L = length_scale(st, plastic);
+  const double L = length_scale(st, luding);
   if (st.box.enabled) {
     const double b[6] = {st.box.x_min, st.box.y_min, st.box.z_min, st.box.x_max, st.box.y_max, st.box.z_max};
     for (int k = 0; k < 6; ++k)
@@ -454,19 +470,20 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
 
 template <int D>
 SolverState read_body(const Field& r) {
-  using S = StateOf<D>;
   r.object({"format", "kind", "version", "dim", "time", "dt", "box", "moving_walls", "wall_force", "stress_sum",
             "elastic", "thermal", "luding", "law", "plastic_indentation", "plastic_wall_mu", "plastic_area_max",
             "particles", "pairs",
             "wall_contacts"});
   SolverState st;
   read_globals<D>(r, st);
-  const bool plastic = r["law"].string() == "plastic_indentation";
-  check_globals<D>(r, st, plastic);
-  read_particles<D>(r, st, plastic);
-  check_particles<D>(r, st, plastic);
-  if (plastic) read_contacts<D>(r, st, S::pl_pair(st), S::pl_wall(st));
-  else read_contacts<D>(r, st, S::pair(st), S::wall(st));
+  // the limits of the Luding law's material (LMM05's units and loading), else the state's own scales
+  const bool luding = st.holds<contact::LudingHistoryT<D>>();
+  check_globals<D>(r, st, luding);
+  read_particles<D>(r, st, luding);
+  check_particles<D>(r, st, luding);
+  std::visit([&](auto& h) {
+    if constexpr (std::decay_t<decltype(h)>::kDim == D) read_contacts<D>(r, st, h.pair, h.wall);
+  }, st.histories);
   return st;
 }
 

@@ -140,6 +140,10 @@ std::string Field::string() const {
 }
 
 std::size_t Field::choice(std::initializer_list<std::string_view> choices) const {
+  return choice(std::span<const std::string_view>(choices.begin(), choices.size()));
+}
+
+std::size_t Field::choice(std::span<const std::string_view> choices) const {
   const std::string s = string();
   std::size_t k = 0;
   std::string list;

@@ -580,17 +580,18 @@ TEST(Dynamic, InPlaceUpdateIsBitIdentical) {
       EXPECT_EQ(std::memcmp(&a.vy[i], &b.vy[i], sizeof(double)), 0);
       EXPECT_EQ(std::memcmp(&a.omega[i], &b.omega[i], sizeof(double)), 0);
     }
-    ASSERT_EQ(out[0].pair_history.size(), out[1].pair_history.size());
-    for (std::size_t k = 0; k < out[0].pair_history.size(); ++k) {
-      const auto &h0 = out[0].pair_history[k], &h1 = out[1].pair_history[k];
+    const auto &s0 = out[0].histories_of<LudingHistory>(), &s1 = out[1].histories_of<LudingHistory>();
+    ASSERT_EQ(s0.pair.size(), s1.pair.size());
+    for (std::size_t k = 0; k < s0.pair.size(); ++k) {
+      const auto &h0 = s0.pair[k], &h1 = s1.pair[k];
       touching += h0.fresh() ? 0 : 1;
       EXPECT_EQ(std::memcmp(&h0.xi, &h1.xi, sizeof(double)), 0);
       EXPECT_EQ(std::memcmp(&h0.delta_max, &h1.delta_max, sizeof(double)), 0);
       EXPECT_EQ(std::memcmp(&h0.delta0, &h1.delta0, sizeof(double)), 0);
       EXPECT_EQ(h0.sliding, h1.sliding);
     }
-    for (std::size_t k = 0; k < out[0].wall_history.size(); ++k)
-      EXPECT_EQ(std::memcmp(&out[0].wall_history[k].xi, &out[1].wall_history[k].xi, sizeof(double)), 0);
+    for (std::size_t k = 0; k < s0.wall.size(); ++k)
+      EXPECT_EQ(std::memcmp(&s0.wall[k].xi, &s1.wall[k].xi, sizeof(double)), 0);
     std::printf("  model %d: %zu particles, %zu contacts with a history\n", static_cast<int>(model), a.size(),
                 touching);
     EXPECT_GT(touching, 0u);  // contacts were tested (1 for the linear model at the small scale, 7 at full)

@@ -339,10 +339,12 @@ TEST(Dynamic3D, InPlaceUpdateIsBitIdentical) {
       EXPECT_EQ(std::memcmp(&a.wx[i], &b.wx[i], sizeof(double)), 0);
       EXPECT_EQ(std::memcmp(&a.omega[i], &b.omega[i], sizeof(double)), 0);
     }
-    ASSERT_EQ(out[0].pair_history3.size(), out[1].pair_history3.size());
+    using H3 = netdem::contact::LudingHistoryT<3>;
+    const auto &p0 = out[0].histories_of<H3>().pair, &p1 = out[1].histories_of<H3>().pair;
+    ASSERT_EQ(p0.size(), p1.size());
     std::size_t loaded = 0;
-    for (std::size_t k = 0; k < out[0].pair_history3.size(); ++k) {
-      const auto &h0 = out[0].pair_history3[k], &h1 = out[1].pair_history3[k];
+    for (std::size_t k = 0; k < p0.size(); ++k) {
+      const auto &h0 = p0[k], &h1 = p1[k];
       loaded += h0.xi.squaredNorm() > 0.0 ? 1 : 0;
       EXPECT_EQ(std::memcmp(h0.xi.data(), h1.xi.data(), 3 * sizeof(double)), 0);
       EXPECT_EQ(std::memcmp(&h0.delta_max, &h1.delta_max, sizeof(double)), 0);

@@ -235,18 +235,20 @@ TEST(DynamicState3D, BadStateFilesGiveOneLineErrors) {
      // was accepted and gave f_min = -inf in contacts_*.csv)
     std::istringstream in(good);
     const SolverState st0 = parse_state(in, "s3");
-    ASSERT_FALSE(st0.pair_history3.empty());
+    using H3 = netdem::contact::LudingHistoryT<3>;
+    ASSERT_FALSE(st0.histories_of<H3>().pair.empty());
     SolverState st = st0;
-    st.pair_history3[0].delta0 = 1e300;
+    st.histories_of<H3>().pair[0].delta0 = 1e300;
     refuse(format_state(st), "/pairs/history/0/delta0: the force-free overlap 1e+300 m is outside [0, ");
     st = st0;
-    st.pair_history3.back().delta0 = -1e-9;
+    st.histories_of<H3>().pair.back().delta0 = -1e-9;
     refuse(format_state(st), "/delta0: the force-free overlap -1e-09 m is outside");
     st = st0;
     std::size_t w = 0;
-    while (w < st.wall_history3.size() && st.wall_history3[w].fresh()) ++w;
-    ASSERT_LT(w, st.wall_history3.size());
-    st.wall_history3[w].delta0 = 1e300;
+    auto& wh = st.histories_of<H3>().wall;
+    while (w < wh.size() && wh[w].fresh()) ++w;
+    ASSERT_LT(w, wh.size());
+    wh[w].delta0 = 1e300;
     refuse(format_state(st), "/wall_contacts/history/0/delta0: the force-free overlap 1e+300 m");
   }
   {  // a stress-controlled wall's pressure is held to --pressure's range (campaign of issue 27: 4.9e-324

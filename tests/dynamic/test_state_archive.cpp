@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <variant>
 
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/dynamic/state.hpp"
@@ -87,13 +88,9 @@ void plastic_restart(double mu) {
       sheared += !ct::tan_is_zero(h.f_t);
     }
   };
-  if constexpr (D == 2) {
-    count(st.plastic_pair_history, pair_loaded, pair_sheared);
-    count(st.plastic_wall_history, wall_loaded, wall_sheared);
-  } else {
-    count(st.plastic_pair_history3, pair_loaded, pair_sheared);
-    count(st.plastic_wall_history3, wall_loaded, wall_sheared);
-  }
+  const auto& hs = st.template histories_of<ct::PlasticIndentationHistoryT<D>>();
+  count(hs.pair, pair_loaded, pair_sheared);
+  count(hs.wall, wall_loaded, wall_sheared);
   std::printf("  %dD: %zu particles, %zu pair histories (%zu sheared), %zu wall histories (%zu sheared), %zu bytes\n",
               D, a.particles().size(), pair_loaded, pair_sheared, wall_loaded, wall_sheared, text.size());
   EXPECT_GT(pair_loaded, 10u);
@@ -122,6 +119,39 @@ TEST(StateArchive, PlasticLawRestartsBitExactlyFromItsStateFile2D) { plastic_res
 // 3D with the sticking law (mu = inf): the infinity goes through the file as "inf"
 TEST(StateArchive, PlasticLawRestartsBitExactlyFromItsStateFile3D) {
   plastic_restart<3>(std::numeric_limits<double>::infinity());
+}
+
+// The state's histories are one variant over the laws of DemLaws and both dimensions: a state
+// holds its law's alternative (state()), and histories of another law or dimension are refused with
+// one line by the restart and by the writer.
+TEST(StateArchive, HistoriesAreTheLawsAlternative) {
+  static_assert(std::variant_size_v<decltype(SolverState::histories)> == 4, "two laws, two dimensions");
+  const SolverState st = plastic_box<2>(0.3).state();
+  ASSERT_TRUE(st.plastic_law());
+  ASSERT_TRUE(st.holds<ct::PlasticIndentationHistoryT<2>>());
+  EXPECT_EQ(st.histories_dim(), 2);
+  EXPECT_EQ(st.histories_of<ct::PlasticIndentationHistoryT<2>>().wall.size(), 4 * st.particles.size());
+  DynamicOptions o;
+  o.model = ContactModel::PlasticIndentation;
+  SolverState other = st;  // the same sizes, of the other dimension
+  auto& h3 = other.histories.emplace<LawHistories<ct::PlasticIndentationHistoryT<3>>>();
+  h3.pair.resize(st.pair_key.size());
+  h3.wall.resize(st.histories_of<ct::PlasticIndentationHistoryT<2>>().wall.size());
+  EXPECT_TRUE(other.plastic_law());
+  try {
+    DynamicSolver s(other, o);
+    ADD_FAILURE() << "a state with 3D histories of 2D particles was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "state: inconsistent array sizes");
+  }
+  try {
+    (void)format_state(other);
+    ADD_FAILURE() << "a state with 3D histories of 2D particles was written";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "state: the histories are 3D, the particles 2D");
+  }
+  // the file's "law" names the alternative (sys::LawName), and the reader takes it back
+  EXPECT_EQ(parse_state(format_state(st), "mem").histories.index(), st.histories.index());
 }
 
 // Every double goes through the archive to the same bits: random bit patterns (subnormals, -0,

@@ -73,17 +73,19 @@ std::size_t differing(const std::string& old_text, const SolverState& st) {
     for (std::size_t c = 1; c < head.size(); ++c) cmp(f[c], (*col.at(head[c]))[i]);
   }
   k += 1 + st.particles.size();
-  const auto& ph = D == 2 ? st.pair_history.size() : st.pair_history3.size();
+  const std::size_t ph = st.pair_key.size();
   for (std::size_t p = 0; p < ph; ++p) {
     const auto w = split(lines[k + 2 + p], ' ');  // after "pairs M" and its comment
     if (D == 2) {
-      cmp(w[2], st.pair_history[p].delta_max);
-      cmp(w[3], st.pair_history[p].delta0);
-      cmp(w[5], st.pair_history[p].k1_seen);
+      const auto& h = st.histories_of<netdem::contact::LudingHistoryT<2>>().pair[p];
+      cmp(w[2], h.delta_max);
+      cmp(w[3], h.delta0);
+      cmp(w[5], h.k1_seen);
     } else {
-      cmp(w[2], st.pair_history3[p].delta_max);
-      cmp(w[3], st.pair_history3[p].delta0);
-      cmp(w[4], st.pair_history3[p].k2_line);
+      const auto& h = st.histories_of<netdem::contact::LudingHistoryT<3>>().pair[p];
+      cmp(w[2], h.delta_max);
+      cmp(w[3], h.delta0);
+      cmp(w[4], h.k2_line);
     }
   }
   EXPECT_GT(compared, 100u);

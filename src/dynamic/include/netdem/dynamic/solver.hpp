@@ -100,6 +100,43 @@ enum class ContactModel : std::uint8_t {
   PlasticIndentation
 };
 
+/// The DEM's laws, one entry each: the template of the law's contact history (Law::History of
+/// dimension D, law.hpp). The solver's history tables (DynamicSolverT::HistoryTables) and the
+/// histories of a SolverState are made from this one list: a new law is one entry here.
+template <template <int> class... H>
+struct HistoryList {
+  /// std::variant<Wrap<H<D>>...>: one alternative per law, of dimension D
+  template <template <class> class Wrap, int D>
+  using OfDim = std::variant<Wrap<H<D>>...>;
+  /// the same for both dimensions: the 2D alternatives, then the 3D ones
+  template <template <class> class Wrap>
+  using Of2And3 = std::variant<Wrap<H<2>>..., Wrap<H<3>>...>;
+  /// f(std::type_identity<H<D>>{}) for each law, in the list's order
+  template <int D, class F>
+  static void for_each(F&& f) {
+    (f(std::type_identity<H<D>>{}), ...);
+  }
+};
+using DemLaws = HistoryList<contact::LudingHistoryT, contact::PlasticIndentationHistoryT>;
+
+/// The dimension D of a history type H<D>.
+template <class H>
+struct HistoryDim;
+template <template <int> class H, int D>
+struct HistoryDim<H<D>> {
+  static constexpr int value = D;
+};
+
+/// The committed contact histories of one law in a SolverState (H: the law's history type, of the
+/// state's dimension).
+template <class H>
+struct LawHistories {
+  using History = H;
+  static constexpr int kDim = HistoryDim<H>::value;
+  std::vector<H> pair;  ///< one per SolverState::pair_key
+  std::vector<H> wall;  ///< 2 D per particle: x_min, x_max, y_min, y_max (, z_min, z_max)
+};
+
 /// Fixed; Strain: a prescribed velocity; Stress: Eq 1; Affine: the wall follows the macroscopic
 /// strain rate of set_strain_rate() about the fixed lower-left corner (x_max' = E11' (x_max -
 /// x_min), exactly exponential over a step).
@@ -229,18 +266,14 @@ struct SolverState {
   contact::LudingThermalState thermal;
   LudingParams params;
   std::vector<std::uint64_t> pair_key;      ///< (i << 32 | j), i < j, sorted
-  std::vector<LudingHistory> pair_history;  ///< one per pair_key
-  std::vector<LudingHistory> wall_history;  ///< 4 per particle: left, right, bottom, top
-  /// ContactModel::PlasticIndentation: the histories (pair_history and wall_history stay empty)
-  std::vector<contact::PlasticIndentationHistory> plastic_pair_history, plastic_wall_history;
+  /// The histories of the state's law and dimension: one alternative per law of DemLaws and
+  /// dimension (the default: the Luding law's in 2D, empty).
+  DemLaws::Of2And3<LawHistories> histories;
   // 3D (particles.dim == 3) instead of the 2D arrays above: the moving walls right (x_max), back
   // (y_max), top (z_max); the six walls x_min, x_max, y_min, y_max, z_min, z_max; sum f (x) l row-major.
   double wall_velocity3[3] = {0, 0, 0};
   double wall_force3[6] = {0, 0, 0, 0, 0, 0};
   double stress_sum3[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  std::vector<contact::LudingHistoryT<3>> pair_history3;  ///< one per pair_key
-  std::vector<contact::LudingHistoryT<3>> wall_history3;  ///< 6 per particle
-  std::vector<contact::PlasticIndentationHistoryT<3>> plastic_pair_history3, plastic_wall_history3;
   /// ContactModel::PlasticIndentation: the law and the wall friction of the solver that wrote the
   /// state (DynamicOptions::plastic, plastic_wall_mu); a restart continues with them.
   contact::PlasticIndentationParams plastic;
@@ -252,8 +285,28 @@ struct SolverState {
   /// the state file and the restart refuse it (the cell and the pairs' images are not in the format).
   bool periodic = false;
   int dim() const { return particles.dim; }
-  /// A state of the plastic-indentation law (its wall histories are filled, the Luding ones empty).
-  bool plastic_law() const { return !plastic_wall_history.empty() || !plastic_wall_history3.empty(); }
+  /// The histories hold law history H (its law and dimension).
+  template <class H>
+  bool holds() const {
+    return std::holds_alternative<LawHistories<H>>(histories);
+  }
+  /// The histories of law history H (std::bad_variant_access if the state holds another's).
+  template <class H>
+  LawHistories<H>& histories_of() {
+    return std::get<LawHistories<H>>(histories);
+  }
+  template <class H>
+  const LawHistories<H>& histories_of() const {
+    return std::get<LawHistories<H>>(histories);
+  }
+  /// The dimension of the histories (dim() for a consistent state).
+  int histories_dim() const {
+    return std::visit([](const auto& h) { return std::decay_t<decltype(h)>::kDim; }, histories);
+  }
+  /// A state of the plastic-indentation law.
+  bool plastic_law() const {
+    return holds<contact::PlasticIndentationHistoryT<2>>() || holds<contact::PlasticIndentationHistoryT<3>>();
+  }
 };
 
 /// One touching contact at the current state, for output (distributions, snapshots).
@@ -527,8 +580,8 @@ class DynamicSolverT {
     std::vector<H> pair, next, wall;
   };
   /// One history table per law, chosen at construction (the law's history type); a force
-  /// evaluation takes its table once (std::get), not per contact. A new law adds its entry here.
-  using HistoryTables = std::variant<HistoryTable<LudingHist>, HistoryTable<PlasticHist>>;
+  /// evaluation takes its table once (std::get), not per contact. One alternative per law of DemLaws.
+  using HistoryTables = DemLaws::OfDim<HistoryTable, D>;
   template <class H>
   HistoryTable<H>& table() { return *std::get_if<HistoryTable<H>>(&hist_); }  ///< (the law's: by construction)
   template <class H>

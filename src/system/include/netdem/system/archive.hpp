@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -83,6 +84,7 @@ class Field {
   std::string string() const;
   /// A string equal to one of `choices`; returns its index.
   std::size_t choice(std::initializer_list<std::string_view> choices) const;
+  std::size_t choice(std::span<const std::string_view> choices) const;
 
   /// T from this value through its from_json (ADL); a FieldError inside gets this place in front,
   /// any other std::exception becomes a FieldError at this place.

@@ -4,6 +4,7 @@
 // field (type, range: each Params also through its validate()) and throws sys::FieldError with
 // the JSON pointer of the field. The laws themselves (netdem/contact) know nothing of it.
 #include <span>
+#include <string_view>
 
 #include "netdem/contact/luding.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
@@ -18,6 +19,19 @@ struct LudingField {
 };
 /// Every LudingParams field (Table 1, then the switches).
 std::span<const LudingField> luding_fields();
+
+/// The name of a law in the state archives (the DEM state's "law"), by the law's history type H
+/// (of either dimension): one specialisation per law (its History's JSON: below).
+template <class H>
+struct LawName;
+template <int D>
+struct LawName<contact::LudingHistoryT<D>> {
+  static constexpr std::string_view value = "luding";
+};
+template <int D>
+struct LawName<contact::PlasticIndentationHistoryT<D>> {
+  static constexpr std::string_view value = "plastic_indentation";
+};
 }  // namespace netdem::sys
 
 namespace netdem::contact {
