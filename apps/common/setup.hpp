@@ -180,6 +180,7 @@ struct LawArgs {
   std::string iteration = "legacy-drag";
   double regularisation_scale = 1.0;
   int max_cuts = qs::SolverOptions{}.max_cuts;
+  std::string merit = "residual";
 };
 
 /// Newton iterations per increment of the pseudo-transient iteration when --max-newton is not given.
@@ -198,6 +199,7 @@ inline LawArgs law_args(const qs::SolverOptions& o) {
   a.iteration = o.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
   a.regularisation_scale = o.regularisation_scale;
   a.max_cuts = o.max_cuts;
+  a.merit = o.energy_merit ? "energy" : "residual";
   return a;
 }
 
@@ -231,6 +233,11 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
   app.add_option("--max-cuts", a.max_cuts,
                  "pseudo-transient: an increment not accepted within --max-newton iterations is redone as two halves, "
                  "down to 2^-N of it")
+      ->capture_default_str();
+  app.add_option("--merit", a.merit,
+                 "pseudo-transient without friction: energy (a trust region on the contact energy, whose minimum "
+                 "the frictionless equilibrium is) or residual (the residual line search used with friction)")
+      ->check(CLI::IsMember({"energy", "residual"}))
       ->capture_default_str();
   app.add_option("--normal-unloading", a.normal_unloading, unloading_help)
       ->check(CLI::IsMember({"reversible", "elastic"}))
@@ -272,6 +279,7 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   so.viscosity = a.viscosity;
   so.regularisation_scale = a.regularisation_scale;
   so.max_cuts = a.max_cuts;
+  so.energy_merit = a.merit == "energy";
 }
 
 }  // namespace netdem::app::netsolve

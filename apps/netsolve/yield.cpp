@@ -148,6 +148,7 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   probe.iteration = pre.iteration;  // the iteration and its regularisation knob cover the probes too
   probe.regularisation_scale = pre.regularisation_scale;
   probe.max_cuts = pre.max_cuts;
+  probe.energy_merit = pre.energy_merit;
   if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
   if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
@@ -594,6 +595,7 @@ int YieldRun::finish() {
                  {"iteration", so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag"},
                  {"regularisation_scale", so_.regularisation_scale},
                  {"max_cuts", so_.max_cuts}};
+  if (so_.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = so_.energy_merit ? "energy" : "residual";
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact_},
                    {"unloading", t_unload_},

@@ -27,6 +27,7 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
   std::fill(f.begin(), f.end(), 0.0);
   pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
+  pw.resize(pi.size(), 0.0);
   std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
   std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
   any_nonsymmetric = false;
@@ -43,6 +44,7 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
     }
     apart[k] = 0;
     ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, &topt);
+    if (energy_mode()) pw[k] = pair_work(k, g1.overlap);
     trial[k] = e.law;
     trial_slip[k] = e.dslip;
     for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);
@@ -133,6 +135,7 @@ void NetworkSolverT<D>::Impl::set_apart(std::size_t k) {
   trial[k] = Response{};
   trial_slip[k] = ct::tan_zero<Tan>();
   std::fill_n(&pf[kP * k], kP, 0.0);
+  pw[k] = 0.0;
   apart[k] = 1;
 }
 
@@ -157,6 +160,7 @@ void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
     return;
   }
   ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, nullptr);
+  if (energy_mode()) pw[k] = pair_work(k, g1.overlap);
   trial[k] = e.law;
   trial_slip[k] = e.dslip;
   for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);
@@ -169,6 +173,7 @@ template <int D>
 void NetworkSolverT<D>::Impl::evaluate_forces() {
   pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
+  pw.resize(pi.size(), 0.0);
   const auto np = static_cast<std::ptrdiff_t>(pi.size());
   const int levels = omp_get_max_active_levels();
   omp_set_max_active_levels(1);  // LinearSolver sets 0 to keep CHOLMOD serial

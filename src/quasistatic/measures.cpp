@@ -240,7 +240,7 @@ template <int D>
 void NetworkSolverT<D>::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
   const std::size_t np = pi.size();
   int tr[3][3] = {}, ss = 0;
-  if (it == 0) diag_branch.assign(np, 0);
+  if (it == 0 || diag_branch.size() != np) diag_branch.assign(np, 0);  // new rows after a rebuild: no transitions
   for (std::size_t k = 0; k < np; ++k) {
     const int b = static_cast<int>(trial[k].branch), sl = trial[k].sliding ? 1 : 0;
     const int ob = diag_branch[k] & 3, osl = diag_branch[k] >> 2;

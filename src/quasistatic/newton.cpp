@@ -15,7 +15,6 @@ namespace netdem::qs {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
 template <int D>
@@ -30,11 +29,12 @@ IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
 // included) and the drag work of the path kept; a cut increment is an instability event.
 template <int D>
 IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
-  if (!impl_->pseudo_transient() || depth >= impl_->opt.max_cuts) return impl_->attempt(dE);
+  auto attempt = [this](const Mat& d) { return impl_->energy_mode() ? impl_->attempt_energy(d) : impl_->attempt(d); };
+  if (!impl_->pseudo_transient() || depth >= impl_->opt.max_cuts) return attempt(dE);
   const State saved = state();
   IncrementReport first;
   try {
-    first = impl_->attempt(dE);
+    first = attempt(dE);
     if (first.converged) return first;
   } catch (const DivergedError&) {
   }
@@ -66,11 +66,7 @@ template <int D>
 IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
-  if (this->needs_rebuild(ps, Fbox, opt.skin * r_mean, r_max)) {
-    build_neighbours();
-    rep.reanalysed = true;
-  }
-  begin_increment(dE);
+  start_attempt(dE, rep);
   double fbar = 1.0;
   bool f_valid = false;  // f, pf and the trial state belong to the current du
   for (int it = 0;; ++it) {
@@ -110,13 +106,31 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
     rep.drag_work += drag_work(pseudo_transient() ? du_ref : du_before);
     ++rep.newton_iterations;
   }
+  finish_attempt(dE, fbar, t_start, rep);
+  return rep;
+}
+
+// The start of an attempt at an increment: the neighbour table rebuilt if the committed state has
+// moved past its skin, the predictor and the per-pair data.
+template <int D>
+void NetworkSolverT<D>::Impl::start_attempt(const Mat& dE, IncrementReport& rep) {
+  if (this->needs_rebuild(ps, Fbox, opt.skin * r_mean, r_max)) {
+    build_neighbours();
+    rep.reanalysed = true;
+  }
+  begin_increment(dE);
+}
+
+// The end of an attempt: the undragged residual, the contact work, the commit and the timers.
+template <int D>
+void NetworkSolverT<D>::Impl::finish_attempt(const Mat& dE, double fbar, Clock::time_point t_start,
+                                             IncrementReport& rep) {
   rep.residual = nfree > 0 ? unbalance(fbar, &rep.residual_rms) : 0.0;
   if (opt.verbose && nfree > 0) print_worst(fbar);
   rep.contact_work = contact_work();
   commit(dE, rep);
   tim.newton_iterations += rep.newton_iterations;
   tim.total += seconds_since(t_start);
-  return rep;
 }
 
 /// Whether an iterate with this residual (RMS and max over the free DOFs, relative to the mean
@@ -185,6 +199,21 @@ double NetworkSolverT<D>::Impl::contact_work() const {
 // the flip counters of the iteration matrix, and the drag (computed at the first assembly).
 template <int D>
 void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
+  prescribe(dE);
+  begin_pairs();
+  rhs.resize(nfree);
+  sol.resize(nfree);
+  eta = -1.0;
+  res_fresh = -1.0;
+  last_alpha = 1.0;
+  rises = 0;
+  du_ref = du_aff;
+}
+
+// The per-pair data of an increment (also after a rebuild within it): the committed geometry of
+// every row and the flip counters of the iteration matrix.
+template <int D>
+void NetworkSolverT<D>::Impl::begin_pairs() {
   const std::size_t np = pi.size();
   g0.resize(np);
   trial.resize(np);
@@ -193,7 +222,6 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
     const int i = pi[k], j = pj[k];
     g0[k] = ct::pair_geometry(at(i), at_j(k), ps.r[i], ps.r[j]);
   }
-  prescribe(dE);
   last_sliding.assign(np, 0);
   flips.assign(np, 0);
   last_open.assign(np, 0);
@@ -203,13 +231,6 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
     last_sliding[k] = slide_c[k];
     last_open[k] = fn_c[k] > 0.0 ? 0 : 1;
   }
-  rhs.resize(nfree);
-  sol.resize(nfree);
-  eta = -1.0;
-  res_fresh = -1.0;
-  last_alpha = 1.0;
-  rises = 0;
-  du_ref = du_aff;
 }
 
 // Viscous regularisation (pseudo-time): the free DOFs feel a drag eta (du - du_ref), so mechanisms

@@ -8,6 +8,7 @@
 //                      scheme)
 //   assembly.cpp       trial forces, iteration matrix (through the slots), drag and regularisation
 //   newton.cpp         the Newton driver of one increment (predictor, iterations, line search, commit)
+//   energy_iteration.cpp  the frictionless increment as a trust region on the contact energy
 //   relaxation.cpp     the local nonlinear Gauss-Seidel sweep over the worst particles
 //   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
 //   network_solver.cpp construction, the public accessors, the copyable state
@@ -18,6 +19,7 @@
 // DOFs (D translations, then Dim<D>::kRotDofs rotations; DOF c of particle p at kN p + c), a pair
 // element kP = 2 kN. Each .cpp file defines its members for any D and instantiates them for D = 2
 // (the tools) and D = 3 (walls.cpp: D = 2 only; its callers reach it under `if constexpr`).
+#include <chrono>
 #include <cstdint>
 #include <type_traits>
 #include <utility>
@@ -84,6 +86,7 @@ struct WallTableT {
   std::vector<typename LawT<D>::History> whist;  ///< committed history
   std::vector<double> wfn_c;                     ///< committed normal force
   std::vector<typename LawT<D>::Response> wtrial;  ///< trial state of the current du
+  std::vector<double> wwork;   ///< the normal force's potential per slot (energy mode only)
   std::vector<double> wf, wk;  ///< trial force on p along its wall axis (signed), iteration stiffness
   Eigen::Matrix<double, D, D> Fbox_trial = Eigen::Matrix<double, D, D>::Identity();  ///< the box at the end of the increment
 };
@@ -121,6 +124,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   using WallTableT<D>::wtrial;
   using WallTableT<D>::wf;
   using WallTableT<D>::wk;
+  using WallTableT<D>::wwork;
   using WallTableT<D>::Fbox_trial;
 
   SolverOptions opt;
@@ -151,6 +155,8 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
 
   // trial buffers of the current increment
   std::vector<double> du, f;
+  std::vector<double> pw;  // per pair: the normal force's potential in the trial state (energy mode only)
+  std::vector<double> mdiag;  // energy mode: M's assembled diagonal (free DOFs), before the shift
   std::vector<double> pf;  // kP per pair: the pair's force on (i, j) in the trial state (summed into f)
   std::vector<std::uint8_t> apart;      // per pair: never touched, apart, trial state and pf already zero
   std::vector<std::uint8_t> refreshed;  // per pair, scratch of refresh_particles
@@ -237,6 +243,11 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   double iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt, Element& e, double& k_t);
   void scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt, double kn_sym, double k_t);
   void set_apart(std::size_t k);
+  /// The normal force's potential of pair k at overlap u (its committed history, R* of its radii).
+  double pair_work(std::size_t k, double u) const {
+    const double ri = ps.r[pi[k]], rj = ps.r[pj[k]];
+    return law.normal_work(hist[k], ri * rj / (ri + rj), u);
+  }
   void pair_forces(std::size_t k, Element& e);
   void evaluate_forces();
   void open_contact_stiffness(std::size_t k, const Geometry& g1);
@@ -245,10 +256,25 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   void regularise();
   // newton.cpp
   IncrementReport attempt(const Mat& dE);
+  void start_attempt(const Mat& dE, IncrementReport& rep);
+  void finish_attempt(const Mat& dE, double fbar, std::chrono::steady_clock::time_point t_start, IncrementReport& rep);
   void begin_increment(const Mat& dE);
+  void begin_pairs();
   void start_drag(const Mat& dE);
   bool pseudo_transient() const { return opt.iteration == Iteration::PseudoTransient; }
   bool accepted(double rms, double max) const;
+  /// Pseudo-transient with a frictionless law and energy_merit: the trust region on the energy.
+  bool energy_mode() const { return pseudo_transient() && opt.energy_merit && !opt.law.frictional(); }
+  // energy_iteration.cpp
+  IncrementReport attempt_energy(const Mat& dE);
+  double energy() const;
+  void keep_diagonal();
+  void shift_matrix(double shift);
+  double step_scale() const;
+  void add_step(double a);
+  bool trial_needs_rebuild();
+  void rebuild_at_trial();
+  sys::ParticleSet<D> ps_trial;  // scratch of trial_needs_rebuild
   void adapt_drag(double res, IncrementReport& rep);
   double drag_work(const std::vector<double>& before) const;
   double contact_work() const;
@@ -264,6 +290,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   struct WallEval {
     Response r;
     double force = 0.0, k = 0.0;  ///< on p along the wall's axis (signed), iteration stiffness
+    double work = 0.0;            ///< the normal force's potential (energy mode only)
   };
   WallEval wall_eval(int p, int w) const;  ///< at x + du against the trial box
   void wall_particle(int p, double sign);  ///< evaluates p's walls and adds sign x forces to f
@@ -279,6 +306,11 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   void print_iteration(int it, double newton_res, double newton_max, double fbar);
   void print_worst(double fbar) const;
 };
+
+/// Seconds since t0 (the solver's timers).
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 /// exp(A) for a small symmetric D x D matrix (series; |A| << 1 per increment).
 template <int D>

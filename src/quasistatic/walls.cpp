@@ -41,6 +41,7 @@ typename NetworkSolverT<D>::Impl::WallEval NetworkSolverT<D>::Impl::wall_eval(in
   k.r_eff = ps.r[p];
   ct::ContactTangent t;
   e.r = wall_law.evaluate(whist[s], k, &t);
+  if (energy_mode()) e.work = wall_law.normal_work(whist[s], k.r_eff, k.overlap);
   if (!e.r.loaded) return e;
   const double sign = (w == 0 || w == 2) ? 1.0 : -1.0;  // the inward normal along the wall's axis
   e.force = sign * e.r.f_n;
@@ -61,6 +62,7 @@ void NetworkSolverT<D>::Impl::wall_particle(int p, double sign) {
     wtrial[s] = e.r;
     wf[s] = e.force;
     wk[s] = e.k;
+    wwork[s] = e.work;
     f[3 * p + axis] += e.force;
   }
 }
@@ -76,6 +78,7 @@ void NetworkSolverT<D>::Impl::wall_forces() {
   wtrial.resize(slots);
   wf.resize(slots);
   wk.resize(slots);
+  wwork.resize(slots, 0.0);
   for (int p = 0; p < n; ++p) wall_particle(p, 1.0);
 }
 

@@ -1,6 +1,7 @@
 // Tests of the plastic-indentation contact law (Redanz & Fleck 2001, Eqs 2-9, section 3.4).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -481,4 +482,60 @@ TEST(PlasticIndentation3D, SphereNormalAndTangentialLawsAreFlecks) {
   const auto r3 = law.evaluate(r0.history, k, nullptr);
   EXPECT_EQ(r3.branch, int(NormalBranch::Elastic));
   EXPECT_NEAR(r3.f_n, r0.f_n - p.unload_ratio * 6.0 * pi * p.sigma_y * g.r_eff * 1e-4, 1e-11 * r0.f_n);
+}
+
+// The normal force's potential at fixed history (normal_work, the merit of the quasi-static
+// solver's frictionless iteration): W(b) - W(a) equals the integral of normal_force from a to b
+// (composite Simpson on each smooth piece, independent of the closed form), on the chord, Eq 2,
+// the elastic un/reloading line and across separation, 2D and 3D; W = 0 below separation;
+// first_touch = 0 in 2D gives Eq 2's 2 sigma_y sqrt(8 R*) u^{3/2} exactly.
+template <int D>
+static void check_normal_work(PlasticIndentationParams p, double reff, double u_max) {
+  auto force = [&](double u) {
+    double f, k;
+    NormalBranch b;
+    normal_force<D>(p, reff, u_max, u, f, k, b);
+    return f;
+  };
+  const double uc = first_touch_overlap(p, reff);
+  const double u_sep = separation_overlap<D>(p, reff, u_max);
+  std::vector<double> knots = {-1e-3 * reff, 0.0, uc, u_sep, u_max, 3e-3 * reff};
+  std::sort(knots.begin(), knots.end());
+  const double scale = normal_work<D>(p, reff, u_max, knots.back());  // rounding near separation is absolute
+  double integral = 0.0;
+  for (std::size_t s = 0; s + 1 < knots.size(); ++s) {  // Simpson on each smooth piece
+    const double a = knots[s], b = knots[s + 1];
+    if (b <= a) continue;
+    const int m = 2000;
+    const double h = (b - a) / m;
+    double sum = force(a) + force(b);
+    for (int q = 1; q < m; ++q) sum += (q % 2 ? 4.0 : 2.0) * force(a + q * h);
+    integral += sum * h / 3.0;
+    const double w = normal_work<D>(p, reff, u_max, b) - normal_work<D>(p, reff, u_max, knots[0]);
+    EXPECT_NEAR(w, integral, 1e-7 * std::max(std::fabs(integral), 1e-6 * scale))
+        << "D " << D << " R* " << reff << " u_max " << u_max << " up to " << b;
+  }
+  EXPECT_EQ(normal_work<D>(p, reff, u_max, std::min(u_sep, 0.0) - 1e-6 * reff), 0.0);
+}
+
+TEST(PlasticIndentation, NormalWorkIsThePotentialOfTheNormalForce) {
+  for (double reff : {0.05, 0.5, 3.0})
+    for (bool reversible : {true, false})
+      for (double f_umax : {0.0, 0.5e-5, 1e-3, 2e-3}) {
+        PlasticIndentationParams p;
+        p.sigma_y = 2.0;
+        p.first_touch = 1e-5;
+        p.reversible = reversible;
+        check_normal_work<2>(p, reff, f_umax * 2.0 * reff);
+        check_normal_work<3>(p, reff, f_umax * 2.0 * reff);
+      }
+  PlasticIndentationParams p;
+  p.sigma_y = 1.5;
+  p.first_touch = 0.0;
+  const double reff = 0.7, u = 1e-3;
+  EXPECT_NEAR(normal_work<2>(p, reff, 0.0, u), 2.0 * p.sigma_y * std::sqrt(8.0 * reff) * std::pow(u, 1.5),
+              1e-14 * normal_work<2>(p, reff, 0.0, u));
+  const PlasticIndentationLawT<2> law(p);
+  PlasticIndentationHistoryT<2> h;
+  EXPECT_EQ(law.normal_work(h, reff, u), normal_work<2>(p, reff, 0.0, u));
 }

@@ -66,6 +66,29 @@ WallCase run_walls(const qs::SolverOptions& so, double E11, int n, const qs::Sol
   return c;
 }
 
+// The closed form of the two disks between walls compressed by E11 (sigma_y = 1, Eq 2 from u = 0):
+// the common force F and the two centres (the comment below derives it).
+struct ClosedForm {
+  double F, x1, x2;
+};
+ClosedForm two_disks_closed_form(double E11) {
+  const double r1 = 1.0, r2 = 0.6, L0 = 2 * r1 + 2 * r2;
+  const double delta = L0 * (1.0 - std::exp(E11));
+  const double rs = r1 * r2 / (r1 + r2);
+  const double c = delta / (1.0 / r1 + 1.0 / rs + 1.0 / r2);
+  return {std::sqrt(72.0 * c), r1 - c / r1, L0 * std::exp(E11) - (r2 - c / r2)};
+}
+
+// Three unit disks on a line, the middle one 0.01 R off it (the buckling chain).
+packing::Packing buckling_chain() {
+  packing::Packing pk;
+  pk.x = {0.0, 2.0, 4.0};
+  pk.y = {0.0, 0.01, 0.0};
+  pk.r = {1.0, 1.0, 1.0};
+  pk.box = {-1.0, -1.0, 5.0, 1.0};
+  return pk;
+}
+
 }  // namespace
 
 // The two disks between walls: along x the three contacts (wall-disk 1, disk 1-disk 2, disk 2-wall)
@@ -75,12 +98,8 @@ WallCase run_walls(const qs::SolverOptions& so, double E11, int n, const qs::Sol
 // drag holds the disks near the affine motion, away from it; the pseudo-transient iteration ends
 // on it for drags 0.1, 1 and 10 times the default.
 TEST(Equilibrium, TwoDisksBetweenWallsMatchClosedFormForEveryDrag) {
-  const double r1 = 1.0, r2 = 0.6, L0 = 2 * r1 + 2 * r2, E11 = -0.02;
-  const double delta = L0 * (1.0 - std::exp(E11));
-  const double rs = r1 * r2 / (r1 + r2);
-  const double c = delta / (1.0 / r1 + 1.0 / rs + 1.0 / r2);
-  const double F = std::sqrt(72.0 * c);  // sigma_y = 1
-  const double x1 = r1 - c / r1, x2 = L0 * std::exp(E11) - (r2 - c / r2);
+  const double E11 = -0.02;
+  const auto [F, x1, x2] = two_disks_closed_form(E11);
   qs::SolverOptions base;
   base.mode = qs::BoundaryMode::Walls;
   base.law.mu = kInf;
@@ -191,11 +210,7 @@ TEST(Equilibrium, RattlerDoesNotStallTheIteration) {
 // contact keeps the affine predictor) for every drag; the legacy drag holds it near its affine
 // motion, still pressed between its neighbours.
 TEST(Equilibrium, BucklingChainEndsAtTheTouchingHeight) {
-  packing::Packing pk;
-  pk.x = {0.0, 2.0, 4.0};
-  pk.y = {0.0, 0.01, 0.0};
-  pk.r = {1.0, 1.0, 1.0};
-  pk.box = {-1.0, -1.0, 5.0, 1.0};
+  const packing::Packing pk = buckling_chain();
   qs::SolverOptions so;
   so.law.mu = 0.0;
   so.viscosity = 0.1;
@@ -229,4 +244,57 @@ TEST(Equilibrium, BucklingChainEndsAtTheTouchingHeight) {
   std::printf("legacy drag: middle disk at height %.6f, force %.3e\n", legacy.y(), force);
   EXPECT_LT(legacy.y(), h - 0.05);
   EXPECT_GT(force, 1e-3);
+}
+
+// The trust region on the energy (energy_merit, frictionless): the two disks between walls without
+// friction carry the same closed-form force (the contacts lie along x: no tangential load), so the
+// energy iteration, over the pair and the two wall contacts' potentials, must end on it for every
+// drag; and the buckling chain's middle disk must end free (zero force) and not overlapping, i.e.
+// at or above the touching height. (Above it every height is an equilibrium of zero force: the
+// energy iteration's Newton step may carry the disk past touch, where the residual iteration,
+// which holds a disk without a loaded contact at its affine predictor, stops at it.)
+TEST(Equilibrium, EnergyTrustRegionEndsOnTheFrictionlessEquilibria) {
+  const double E11 = -0.02;
+  const auto [F, x1, x2] = two_disks_closed_form(E11);
+  qs::SolverOptions base;
+  base.mode = qs::BoundaryMode::Walls;
+  base.law.mu = 0.0;
+  base.law.first_touch = 0.0;
+  base.viscosity = 0.1;
+  base.residual_tol = 1e-9;
+  base.energy_merit = true;
+  for (double scale : {0.1, 1.0, 10.0}) {
+    const WallCase w = run_walls(pseudo_transient(base, scale), E11, 4);
+    std::printf("energy trust region, drag x %g: F = %.12f (closed form %.12f), x1 %.3e, x2 %.3e off\n", scale,
+                w.force, F, w.x1 - x1, w.x2 - x2);
+    EXPECT_TRUE(w.converged);
+    EXPECT_NEAR(w.force, F, 1e-7 * F);
+    EXPECT_NEAR(w.x1, x1, 1e-9);
+    EXPECT_NEAR(w.x2, x2, 1e-9);
+  }
+  const packing::Packing pk = buckling_chain();
+  qs::SolverOptions so;
+  so.law.mu = 0.0;
+  so.viscosity = 0.1;
+  so.energy_merit = true;
+  const double d = 4.0 * std::exp(-0.02), h = std::sqrt(4.0 - d * d / 4.0);
+  for (double scale : {0.1, 1.0, 10.0}) {
+    const qs::SolverOptions o = pseudo_transient(so, scale);
+    auto st = qs::NetworkSolver(pk, o).state();
+    st.peripheral = {1, 0, 1};
+    qs::NetworkSolver s(st, o);
+    Eigen::Matrix2d dE = Eigen::Matrix2d::Zero();
+    dE(0, 0) = -0.002;
+    int unconverged = 0;
+    for (int k = 0; k < 10; ++k) unconverged += !s.increment(dE).converged;
+    double force = 0.0;
+    for (const auto& ct : s.contacts()) force = std::max(force, ct.f_n);
+    std::printf("energy trust region, drag x %g: middle disk at (%.9f, %.9f), touching height %.9f, force %.2e\n",
+                scale, s.x()[1], s.y()[1], h, force);
+    EXPECT_EQ(unconverged, 0);
+    EXPECT_NEAR(s.x()[1], d / 2.0, 1e-9);
+    EXPECT_GE(s.y()[1], h - 1e-9);
+    EXPECT_LT(s.y()[1], h + 0.05);  // one Newton step past touch at most
+    EXPECT_LT(force, 1e-6);
+  }
 }

@@ -172,6 +172,36 @@ inline double separation_overlap(const PlasticIndentationParams& p, double r_eff
   return u_max - loading_force<D>(p, r_eff, u_max) / (p.unload_ratio * loading_tangent<D>(p, r_eff, u_max));
 }
 
+/// The work of the loading branch (Eq 2 with the first-touch chord) from u = 0 to u: the
+/// integral of loading_force (2D: 2 sigma_y sqrt(8 R*) u^{3/2} above u_c; 3D: k_c u^2 / 2).
+template <int D = 2>
+inline double loading_work(const PlasticIndentationParams& p, double r_eff, double u) {
+  if (u <= 0.0) return 0.0;
+  const double uc = first_touch_overlap(p, r_eff);
+  const double fc = plastic_force<D>(p, r_eff, uc);
+  if (u < uc) return 0.5 * fc * u * u / uc;
+  const double w_chord = 0.5 * fc * uc;
+  if constexpr (D == 2) {
+    return w_chord + 2.0 * p.sigma_y * std::sqrt(8.0 * r_eff) * (u * std::sqrt(u) - uc * std::sqrt(uc));
+  } else {
+    return w_chord + 0.5 * p.chord_stiffness_3d(r_eff) * (u * u - uc * uc);
+  }
+}
+
+/// The normal force's potential at fixed history: the integral of normal_force (the branch the
+/// committed u_max selects, no history change) from the force-free overlap up to u. Its
+/// derivative in u is the force normal_force returns, on every branch, so a frictionless step of
+/// the quasi-static solver is the minimisation of the sum of these over the contacts.
+template <int D = 2>
+inline double normal_work(const PlasticIndentationParams& p, double r_eff, double u_max, double u) {
+  if (p.reversible || u_max <= 0.0) return loading_work<D>(p, r_eff, u);
+  const double ku = p.unload_ratio * loading_tangent<D>(p, r_eff, u_max);
+  const double fm = loading_force<D>(p, r_eff, u_max);
+  if (u >= u_max) return 0.5 * fm * fm / ku + loading_work<D>(p, r_eff, u) - loading_work<D>(p, r_eff, u_max);
+  const double fe = fm - ku * (u_max - u);
+  return fe > 0.0 ? 0.5 * fe * fe / ku : 0.0;
+}
+
 /// Secant normal stiffness over a predicted overlap change u0 -> u1 (exact integral of Eq 2 over
 /// the increment). Used instead of the tangent for young contacts, whose tangent is singular at
 /// u_N = 0. Returns the tangent at u0 when |u1 - u0| is negligible.
@@ -319,6 +349,11 @@ class PlasticIndentationLawT {
       : p_(p), damped_(p.damped()), k_chord_(p.damped() && D == 2 ? p.chord_stiffness() : 0.0) {}
   const Params& params() const { return p_; }
   bool has_history(const History& h) const { return h.u_max > 0.0; }
+  /// The potential of the normal force at fixed history h (normal_work): d/du of it is the
+  /// normal force of evaluate() at overlap u.
+  double normal_work(const History& h, double r_eff, double u) const {
+    return contact::normal_work<D>(p_, r_eff, h.u_max, u);
+  }
   /// The contact area (2D: width per unit depth) of a normal force at the mean contact pressure
   /// 3 sigma_y (Eq 2); it scales the tangential spring k_t sigma_y A_c.
   double contact_area(double f_n) const { return f_n / (3.0 * p_.sigma_y); }

@@ -63,6 +63,14 @@ struct SolverOptions {
   double max_residual_factor = 10.0;
   /// PseudoTransient: the drag stays within [eta_0 x drag_floor, eta_0 x drag_ceiling].
   double drag_floor = 1e-2, drag_ceiling = 1e4;
+  /// PseudoTransient with a frictionless law (mu = 0, whose increment is the minimisation of the
+  /// contact energy at fixed histories): true takes Levenberg-Marquardt steps (K + eta I) delta = f
+  /// on the energy, each kept only when the energy fell, with eta from the ratio of the actual to
+  /// the predicted decrease (a trust region; docs/quasistatic.md "Frictionless: a trust region on
+  /// the energy"). false (the default): the residual line search, as with friction. Measured on
+  /// frictionless periodic packings it accepts about as many increments as the residual iteration
+  /// (59 against 58 of 90), so it is an option, not the default.
+  bool energy_merit = false;
   /// PseudoTransient: an increment that is not accepted within max_newton iterations is undone
   /// and done again as two halves, down to 2^-max_cuts of it (0: never cut).
   int max_cuts = 4;
