@@ -18,9 +18,8 @@
 // walls moving (strain- or stress-controlled, Eq 1 with the wall's current area), the laws through
 // the interface in 3D (law.hpp: the tangential history carried into the current plane every step
 // by contact::step_transport), the affine field with the full symmetric 3 x 3 strain rate
-// (set_strain_rate3: prescribed particles, Affine walls, the affine drag, boundary_stress). Not yet
-// in 3D (they throw std::logic_error with one line): state files and restarts (so no last_good()
-// snapshot), contacts().
+// (set_strain_rate3: prescribed particles, Affine walls, the affine drag, boundary_stress), state
+// files and restarts, contacts(). The 2D set_strain_rate throws std::logic_error in 3D (one line).
 #include <cstddef>
 #include <array>
 #include <cstdint>
