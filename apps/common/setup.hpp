@@ -176,15 +176,19 @@ struct LawArgs {
   double k_t = contact::PlasticIndentationParams{}.k_t, sigma_y = contact::PlasticIndentationParams{}.sigma_y;
   double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
   double first_touch = contact::PlasticIndentationParams{}.first_touch;
-  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50)
+  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit, frictionless: 200)
   std::string iteration = "legacy-drag";
   double regularisation_scale = 1.0;
   int max_cuts = qs::SolverOptions{}.max_cuts;
-  std::string merit = "residual";
+  std::string merit = "energy";
 };
 
 /// Newton iterations per increment of the pseudo-transient iteration when --max-newton is not given.
 inline constexpr int kPseudoTransientMaxNewton = 50;
+/// The trust region on the energy (pseudo-transient, frictionless): its rejected steps cost a
+/// factorisation each, and frictionless increments that rearrange need more of them (measured:
+/// docs/quasistatic.md "Frictionless: a trust region on the energy").
+inline constexpr int kEnergyMaxNewton = 200;
 
 /// The LawArgs of a library preset (the command's defaults).
 inline LawArgs law_args(const qs::SolverOptions& o) {
@@ -214,7 +218,8 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
       ->capture_default_str();
   app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
   app.add_option("--max-newton", a.max_newton,
-                 "Newton iterations per increment (0: the iteration's own, legacy-drag 10, pseudo-transient 50)")
+                 "Newton iterations per increment (0: the iteration's own, legacy-drag 10, pseudo-transient 50, "
+                 "pseudo-transient frictionless with --merit energy 200)")
       ->capture_default_str();
   app.add_option("--viscosity", a.viscosity,
                  "drag / mean contact stiffness: legacy-drag: on the non-affine motion of the increment (0: pure "
@@ -271,15 +276,15 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
   so.iteration = a.iteration == "pseudo-transient" ? qs::Iteration::PseudoTransient : qs::Iteration::LegacyDrag;
+  so.energy_merit = a.merit == "energy";
   if (a.max_newton > 0) {
     so.max_newton = a.max_newton;
   } else if (so.iteration == qs::Iteration::PseudoTransient) {
-    so.max_newton = kPseudoTransientMaxNewton;
+    so.max_newton = so.energy_merit && !so.law.frictional() ? kEnergyMaxNewton : kPseudoTransientMaxNewton;
   }
   so.viscosity = a.viscosity;
   so.regularisation_scale = a.regularisation_scale;
   so.max_cuts = a.max_cuts;
-  so.energy_merit = a.merit == "energy";
 }
 
 }  // namespace netdem::app::netsolve

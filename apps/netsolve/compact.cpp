@@ -153,6 +153,7 @@ struct CompactRecord {
   netdem::app::netsolve::EquilibriumRecord equilibrium;
   std::string stopped;
   int instabilities = 0, cut_increments = 0;  ///< increments with an instability event, cut increments
+  int unjammed = 0;  ///< increments accepted as unjammed (energy merit)
   double drag_work = 0.0, contact_work = 0.0;  ///< summed over the increments
   std::array<LegEnd, 2> legs;  ///< the last row of each leg (a run that precompacts)
 };
@@ -200,7 +201,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   const double sy = so.law.sigma_y;
   const auto& tm = solver.timings();
   const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped, instabilities,
-               cut_increments, drag_work, contact_work, legs] = r;
+               cut_increments, unjammed, drag_work, contact_work, legs] = r;
   nlohmann::json j;
   j["command"] = command;
   status.write(j);
@@ -243,6 +244,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["solver"]["regularisation_scale"] = so.regularisation_scale;
   j["solver"]["max_cuts"] = so.max_cuts;
   if (so.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = so.energy_merit ? "energy" : "residual";
+  if (so.iteration == qs::Iteration::PseudoTransient && so.energy_merit) j["solver"]["unjammed_increments"] = unjammed;
   j["solver"]["instability_events"] = instabilities;
   j["solver"]["cut_increments"] = cut_increments;
   j["solver"]["drag_work_fraction"] = contact_work > 0.0 ? drag_work / contact_work : 0.0;
@@ -293,6 +295,7 @@ struct CompactRows {
                        qs::drag_work_fraction(row.report));
     if (row.increment > 0) {
       instabilities += row.report.instability;
+      unjammed += row.report.unjammed;
       cut_increments += row.report.substeps > 1;
       drag_work += row.report.drag_work;
       contact_work += row.report.contact_work;
@@ -324,7 +327,7 @@ struct CompactRows {
   Progress progress;
   std::string csv;
   std::size_t next_snap = 0;
-  int unconverged = 0, instabilities = 0, cut_increments = 0, done = 0;
+  int unconverged = 0, instabilities = 0, cut_increments = 0, unjammed = 0, done = 0;
   double max_residual = 0.0, drag_work = 0.0, contact_work = 0.0;
   qs::StateMeasures last;
   ConvergenceRecord conv;
@@ -398,7 +401,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const nlohmann::json j =
       compact_summary(command, a, ra, so, co, pk, solver, status,
                       {source, rows.done, rows.unconverged, outside, rows.max_residual, wall, last, rows.conv,
-                       rows.equilibrium, stopped, rows.instabilities, rows.cut_increments, rows.drag_work,
+                       rows.equilibrium, stopped, rows.instabilities, rows.cut_increments, rows.unjammed, rows.drag_work,
                        rows.contact_work, rows.leg_end});
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);

@@ -136,6 +136,11 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
     evaluate_forces();
   };
   double fbar = 1.0, shift = 0.0, growth = 2.0, energy_now = 0.0;
+  // the force of a contact at the law's first-touch overlap (mean radii): below it a packing has
+  // no load-bearing network the law resolves, and the residual is measured against it instead of
+  // a mean contact force that tends to zero (an unjammed state's equilibrium is force-free)
+  const double r_star = 0.5 * r_mean;
+  const double f_touch = ct::loading_force<D>(opt.law, r_star, ct::first_touch_overlap(opt.law, r_star));
   for (int it = 0;; ++it) {
     if (!assembled) {
       const auto ta = Clock::now();
@@ -152,6 +157,8 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
     du_ref = du;  // the step's drag is zero at the iterate: the residual is the undragged one
     fbar = mean_normal_force();
     if (fbar <= 0.0) fbar = opt.law.sigma_y * r_mean * 1e-6;
+    const bool below_touch = fbar < f_touch;
+    fbar = std::max(fbar, f_touch);
     double res_max = 0.0;
     const double res = nfree > 0 ? residual(fbar, true, &res_max) : 0.0;
     rep.newton_residual = res;
@@ -159,6 +166,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
     if (opt.verbose) print_iteration(it, res, res_max, fbar);
     if (accepted(res, res_max) || nfree == 0) {
       rep.converged = true;
+      rep.unjammed = below_touch;
       break;
     }
     if (it >= opt.max_newton) break;

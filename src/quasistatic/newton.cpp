@@ -57,6 +57,7 @@ IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
   rep.sliding = second.sliding;
   rep.substeps += second.substeps;
   rep.instability = true;
+  rep.unjammed = second.unjammed;  // the state the increment ends in
   rep.drag_work += second.drag_work;
   rep.contact_work += second.contact_work;
   return rep;

@@ -333,3 +333,48 @@ TEST(PeriodicNetwork, StateFileContinuesBitIdentically) {
   die.mode = qs::BoundaryMode::Die;
   EXPECT_THROW(qs::NetworkSolver(a.state(), die), std::invalid_argument);
 }
+
+// The frictionless pseudo-transient iteration (the trust region on the energy, its default without
+// friction): (a) the triangular lattice follows the affine motion to the closed form of Eq 2, as
+// pure Newton does; (b) two disks that overlap by 1e-3 R in a loose periodic cell have no
+// load-bearing equilibrium: the increment ends force-free and is reported unjammed, every increment
+// accepted, for drags x 0.1, 1 and 10.
+TEST(PeriodicNetwork, EnergyIterationLatticeAndUnjammedPair) {
+  const packing::Packing lat = triangular_lattice(6, 6);
+  qs::SolverOptions so = periodic_options(0.0);
+  so.iteration = qs::Iteration::PseudoTransient;
+  so.residual_tol = 1e-9;
+  so.max_newton = 200;
+  ASSERT_TRUE(so.energy_merit);
+  const auto rr = netdem::test::compact(lat, so, qs::StrainPath::hydrostatic(), lat.density() * 1.03, 10);
+  const double E = rr.m.E11, R = 1.0, L = 2 * R * std::exp(E), u = 2 * R - L;
+  const double F = 3 * so.law.sigma_y * std::sqrt(8 * u * R / 2);
+  const double expect = -1.5 * 36 * F * L / (lat.box.area() * std::exp(2 * E));
+  EXPECT_NEAR(rr.m.S11, expect, 1e-8 * std::fabs(expect));
+  EXPECT_NEAR(rr.m.S22, expect, 1e-8 * std::fabs(expect));
+  EXPECT_EQ(rr.unconverged, 0);
+
+  packing::Packing pair;
+  pair.x = {5.0, 7.0 - 1e-3};
+  pair.y = {5.0, 5.3};
+  pair.r = {1.0, 1.0};
+  pair.x[1] = 5.0 + std::sqrt(std::pow(2.0 - 1e-3, 2) - 0.09);  // centres 2 R - 1e-3 apart
+  pair.box = {0.0, 0.0, 12.0, 10.0};
+  pair.periodic = true;
+  for (double scale : {0.1, 1.0, 10.0}) {
+    so.regularisation_scale = scale;
+    qs::NetworkSolver s(pair, so);
+    Eigen::Matrix2d dE = -1e-4 * Eigen::Matrix2d::Identity();
+    int unjammed = 0, unconverged = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto rep = s.increment(dE);
+      unjammed += rep.unjammed;
+      unconverged += !rep.converged;
+    }
+    double force = 0.0;
+    for (const auto& c : s.contacts()) force = std::max(force, c.f_n);
+    EXPECT_EQ(unconverged, 0) << scale;
+    EXPECT_EQ(unjammed, 3) << scale;
+    EXPECT_LT(force, 1e-9) << scale;
+  }
+}

@@ -79,6 +79,10 @@ struct IncrementReport {
   /// Instability event (pseudo-transient iteration): the undragged residual rose between two
   /// fresh iterations, so the pseudo-time step had to damp the path (drag above its start value).
   bool instability = false;
+  /// Energy merit: accepted as unjammed, i.e. with a mean contact force below the force of a contact
+  /// at the law's first-touch overlap (R* = r_mean/2), against which the residual was then measured:
+  /// no load-bearing network (docs/quasistatic.md "Frictionless: a trust region on the energy").
+  bool unjammed = false;
   /// Work of the regularising drag along the iteration path (its dissipation) and the work of
   /// the contact forces over the increment (trapezoidal in the start and end forces): the path's
   /// dissipated energy is reported as drag_work / contact_work.
