@@ -94,6 +94,7 @@ fi
 # equilibrium allows (docs/quasistatic.md); --allow-unconverged keeps its exit at 0.
 check_bad bad_regularisation_scale "regularisation scale" compact --regularisation-scale 0
 check_bad bad_iteration "--iteration" compact --iteration newton
+check_bad bad_merit "--merit" compact --merit gradient
 pt="$tmp/pt"
 pt_ok=1
 for sc in 0.1 1 10; do
@@ -112,6 +113,7 @@ for sc in ("0.1", "1", "10"):
     assert j["solver"]["iteration"] == "pseudo-transient" and j["solver"]["unconverged_increments"] == 0, j["solver"]
     assert j["status"] == "ok" or j["status_reason"] == "1 disk centres left the box between the peripheral disks", j
     assert j["solver"]["regularisation_scale"] == float(sc), j["solver"]
+    assert j["solver"]["merit"] == "residual" and "unjammed_increments" not in j["solver"], j["solver"]  # sticking
     runs[sc] = {k: float(rows[-1][k]) for k in ("S11", "S22", "Z")}
 print("pseudo-transient closed die, drag x 0.1 / 1 / 10:", runs)
 for k in ("S11", "S22"):
