@@ -280,7 +280,7 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   if (a.max_newton > 0) {
     so.max_newton = a.max_newton;
   } else if (so.iteration == qs::Iteration::PseudoTransient) {
-    so.max_newton = so.energy_merit && !so.law.frictional() ? kEnergyMaxNewton : kPseudoTransientMaxNewton;
+    so.max_newton = so.uses_energy_merit() ? kEnergyMaxNewton : kPseudoTransientMaxNewton;
   }
   so.viscosity = a.viscosity;
   so.regularisation_scale = a.regularisation_scale;

@@ -244,9 +244,8 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["solver"]["regularisation_scale"] = so.regularisation_scale;
   j["solver"]["max_cuts"] = so.max_cuts;
   // the merit the iteration used: the energy only without friction
-  const bool energy = so.energy_merit && !so.law.frictional();
-  if (so.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = energy ? "energy" : "residual";
-  if (so.iteration == qs::Iteration::PseudoTransient && energy) j["solver"]["unjammed_increments"] = unjammed;
+  if (so.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = so.uses_energy_merit() ? "energy" : "residual";
+  if (so.uses_energy_merit()) j["solver"]["unjammed_increments"] = unjammed;
   j["solver"]["instability_events"] = instabilities;
   j["solver"]["cut_increments"] = cut_increments;
   j["solver"]["drag_work_fraction"] = contact_work > 0.0 ? drag_work / contact_work : 0.0;

@@ -596,7 +596,7 @@ int YieldRun::finish() {
                  {"regularisation_scale", so_.regularisation_scale},
                  {"max_cuts", so_.max_cuts}};
   if (so_.iteration == qs::Iteration::PseudoTransient)  // the merit used: the energy only without friction
-    j["solver"]["merit"] = so_.energy_merit && !so_.law.frictional() ? "energy" : "residual";
+    j["solver"]["merit"] = so_.uses_energy_merit() ? "energy" : "residual";
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact_},
                    {"unloading", t_unload_},

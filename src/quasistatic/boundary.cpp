@@ -41,7 +41,9 @@ void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
                      (dE.array() * dE_prev.array()).sum() / (dn * dpn) > 0.999;
   const double scale = reuse ? dn / dpn : 0.0;
   for (int q = 0; q < kN * n; ++q) du[q] = du_aff[q];
-  if (!reuse) return;
+  // the energy iteration keeps the affine predictor: a rearrangement of the last increment is not
+  // a trend (docs/quasistatic.md "Frictionless: a trust region on the energy")
+  if (!reuse || energy_mode()) return;
   // the previous increment's affine part, A_prev x_prev, at its start positions x_prev = x - du_prev
   const Mat A_prev = small_expm<D>(dE_prev) - Mat::Identity();
   // pseudo-transient: a particle without a loaded contact has no equilibrium position of its own

@@ -92,7 +92,7 @@ void NetworkSolverT<D>::Impl::add_step(double a) {
 template <int D>
 bool NetworkSolverT<D>::Impl::trial_needs_rebuild() {
   ps_trial.pos = ps.pos;
-  ps_trial.r = ps.r;
+  if (ps_trial.r.size() != ps.r.size()) ps_trial.r = ps.r;  // the radii do not change
   for (int p = 0; p < n; ++p)
     for (int a = 0; a < D; ++a) ps_trial.pos[D * p + a] += du[kN * p + a];
   return this->needs_rebuild(ps_trial, Fbox_trial, opt.skin * r_mean, r_max);
@@ -116,8 +116,7 @@ template <int D>
 IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
-  start_attempt(dE, rep);
-  du = du_aff;  // the affine predictor: a rearrangement of the last increment is not a trend
+  start_attempt(dE, rep);  // the affine predictor (prescribe)
   if (trial_needs_rebuild()) {  // the predictor went past the skin
     rebuild_at_trial();
     rep.reanalysed = true;

@@ -264,7 +264,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   bool pseudo_transient() const { return opt.iteration == Iteration::PseudoTransient; }
   bool accepted(double rms, double max) const;
   /// Pseudo-transient with a frictionless law and energy_merit: the trust region on the energy.
-  bool energy_mode() const { return pseudo_transient() && opt.energy_merit && !opt.law.frictional(); }
+  bool energy_mode() const { return opt.uses_energy_merit(); }
   // energy_iteration.cpp
   IncrementReport attempt_energy(const Mat& dE);
   double energy() const;

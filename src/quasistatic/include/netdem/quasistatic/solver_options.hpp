@@ -105,6 +105,11 @@ struct SolverOptions {
   bool verbose = false;  ///< print every Newton iteration on stderr
 
   void validate() const;  ///< throws std::invalid_argument (one line)
+  /// Whether an increment runs the trust region on the energy: the pseudo-transient iteration with
+  /// energy_merit and a frictionless law.
+  bool uses_energy_merit() const {
+    return iteration == Iteration::PseudoTransient && energy_merit && !law.frictional();
+  }
 
   /// `netsolve compact`: sticking, reversible Eq 2, drag per unit strain (viscosity 0.01 at
   /// |dE| = 3.57e-4, the increment of the 100-increment default run), tolerance 3e-3, three
