@@ -188,7 +188,7 @@ inline constexpr int kPseudoTransientMaxNewton = 50;
 /// The trust region on the energy (pseudo-transient, frictionless): its rejected steps cost a
 /// factorisation each, and frictionless increments that rearrange need more of them (measured:
 /// docs/quasistatic.md "Frictionless: a trust region on the energy").
-inline constexpr int kEnergyMaxNewton = 200;
+inline constexpr int kEnergyMaxNewton = 500;
 
 /// The LawArgs of a library preset (the command's defaults).
 inline LawArgs law_args(const qs::SolverOptions& o) {
