@@ -176,7 +176,7 @@ struct LawArgs {
   double k_t = contact::PlasticIndentationParams{}.k_t, sigma_y = contact::PlasticIndentationParams{}.sigma_y;
   double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
   double first_touch = contact::PlasticIndentationParams{}.first_touch;
-  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit, frictionless: 200)
+  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit, frictionless: 500)
   std::string iteration = "legacy-drag";
   double regularisation_scale = 1.0;
   int max_cuts = qs::SolverOptions{}.max_cuts;
@@ -203,7 +203,7 @@ inline LawArgs law_args(const qs::SolverOptions& o) {
   a.iteration = o.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
   a.regularisation_scale = o.regularisation_scale;
   a.max_cuts = o.max_cuts;
-  a.merit = o.energy_merit ? "energy" : "residual";
+  a.merit = o.energy_merit ? (o.friction_energy_merit ? "energy-friction" : "energy") : "residual";
   return a;
 }
 
@@ -241,8 +241,10 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
       ->capture_default_str();
   app.add_option("--merit", a.merit,
                  "pseudo-transient without friction: energy (a trust region on the contact energy, whose minimum "
-                 "the frictionless equilibrium is) or residual (the residual line search used with friction)")
-      ->check(CLI::IsMember({"energy", "residual"}))
+                 "the frictionless equilibrium is) or residual (the residual line search used with friction); "
+                 "energy-friction: the trust region also with friction (2D), on the energy with each tangential "
+                 "spring's stiffness and limit frozen at the iterate")
+      ->check(CLI::IsMember({"energy", "residual", "energy-friction"}))
       ->capture_default_str();
   app.add_option("--normal-unloading", a.normal_unloading, unloading_help)
       ->check(CLI::IsMember({"reversible", "elastic"}))
@@ -276,7 +278,8 @@ inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
   so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
   so.iteration = a.iteration == "pseudo-transient" ? qs::Iteration::PseudoTransient : qs::Iteration::LegacyDrag;
-  so.energy_merit = a.merit == "energy";
+  so.energy_merit = a.merit == "energy" || a.merit == "energy-friction";
+  so.friction_energy_merit = a.merit == "energy-friction";
   if (a.max_newton > 0) {
     so.max_newton = a.max_newton;
   } else if (so.iteration == qs::Iteration::PseudoTransient) {

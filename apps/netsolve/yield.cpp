@@ -149,6 +149,7 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   probe.regularisation_scale = pre.regularisation_scale;
   probe.max_cuts = pre.max_cuts;
   probe.energy_merit = pre.energy_merit;
+  probe.friction_energy_merit = pre.friction_energy_merit;
   if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
   if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
@@ -596,7 +597,7 @@ int YieldRun::finish() {
                  {"regularisation_scale", so_.regularisation_scale},
                  {"max_cuts", so_.max_cuts}};
   if (so_.iteration == qs::Iteration::PseudoTransient)  // the merit used: the energy only without friction
-    j["solver"]["merit"] = so_.uses_energy_merit() ? "energy" : "residual";
+    j["solver"]["merit"] = so_.merit_name();
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact_},
                    {"unloading", t_unload_},

@@ -28,6 +28,10 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
   pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
   pw.resize(pi.size(), 0.0);
+  if (friction_energy()) {
+    t_kt.assign(pi.size(), 0.0);
+    t_limit.assign(pi.size(), 0.0);
+  }
   std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
   std::fill(M.valuePtr(), M.valuePtr() + M.nonZeros(), 0.0);
   any_nonsymmetric = false;
@@ -44,7 +48,8 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
     }
     apart[k] = 0;
     ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, &topt);
-    if (energy_mode()) pw[k] = pair_work(k, g1.overlap);
+    if (friction_energy()) freeze_tangential(k, e.law.f_n);  // assemble() runs at the iterate
+    if (energy_mode()) pw[k] = pair_work(k, g1.overlap, e.dslip);
     trial[k] = e.law;
     trial_slip[k] = e.dslip;
     for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);
@@ -160,7 +165,7 @@ void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
     return;
   }
   ct::pair_element(law, hist[k], g0[k], g1, rotation(i), rotation(j), e, nullptr);
-  if (energy_mode()) pw[k] = pair_work(k, g1.overlap);
+  if (energy_mode()) pw[k] = pair_work(k, g1.overlap, e.dslip);
   trial[k] = e.law;
   trial_slip[k] = e.dslip;
   for (int a = 0; a < kP; ++a) pf[kP * k + a] = e.force(a);

@@ -40,6 +40,31 @@ double NetworkSolverT<D>::Impl::energy() const {
   return w;
 }
 
+/// Pair k's tangential spring stiffness and limit frozen at the normal force f_n of the iterate.
+template <int D>
+void NetworkSolverT<D>::Impl::freeze_tangential(std::size_t k, double f_n) {
+  const auto [kt, limit] = law.tangential_frozen(f_n);
+  t_kt[k] = kt;
+  t_limit[k] = limit;
+}
+
+/// After a rebuild within a step (friction): the frozen stiffness and limit of the new rows, from
+/// the normal forces at the iterate (du_ref); returns the energy there (the trial state is left to
+/// the caller's evaluation).
+template <int D>
+double NetworkSolverT<D>::Impl::refreeze_at_iterate() {
+  std::swap(du, du_ref);
+  t_kt.assign(pi.size(), 0.0);
+  t_limit.assign(pi.size(), 0.0);
+  evaluate_forces();
+  for (std::size_t k = 0; k < pi.size(); ++k)
+    if (!apart[k]) freeze_tangential(k, trial[k].f_n);
+  evaluate_forces();
+  const double e = energy();
+  std::swap(du, du_ref);
+  return e;
+}
+
 /// Keeps the assembled diagonal of M (with the tiny regularisation) so that shifts can be changed
 /// without assembling again.
 template <int D>
@@ -123,6 +148,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
   }
   bool nonsym = false;
   bool assembled = false;  // M and its kept diagonal belong to the current du
+  double energy_now = 0.0;  // the energy at the iterate
   // the forces and the energy at du, with the table rebuilt first where du has gone farther than
   // the table's skin allows (a rebuild keeps every touching pair: the energy of a state does not
   // change with it; the matrix must be assembled again on the new pattern)
@@ -131,10 +157,11 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
       rebuild_at_trial();
       rep.reanalysed = true;
       assembled = false;
+      if (friction_energy()) energy_now = refreeze_at_iterate();
     }
     evaluate_forces();
   };
-  double fbar = 1.0, shift = 0.0, growth = 2.0, energy_now = 0.0;
+  double fbar = 1.0, shift = 0.0, growth = 2.0;
   // the force of a contact at the law's first-touch overlap (mean radii): below it a packing has
   // no load-bearing network the law resolves, and the residual is measured against it instead of
   // a mean contact force that tends to zero (an unjammed state's equilibrium is force-free)
@@ -201,11 +228,21 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
     double rho = predicted > 0.0 ? (energy_now - energy_trial) / predicted : -1.0;
     // a decrease at the round-off of the energy cannot be judged by it: the step is judged by the
     // residual there (kept as a good model step when the residual fell)
-    if (!(predicted > 1e-12 * std::fabs(energy_now))) {
+    auto residual_fell = [&](double factor) {  // the undragged residual at du below factor x the iterate's
       const double fb = std::max(mean_normal_force(), 1e-300);
-      eta = 0.0;  // the undragged residual
-      rho = residual(fb, false) < res * fbar / fb ? 1.0 : -1.0;
+      eta = 0.0;
+      const bool fell = residual(fb, false) < factor * res * fbar / fb;
       eta = shift;
+      return fell;
+    };
+    if (!(predicted > 1e-12 * std::fabs(energy_now))) {
+      rho = residual_fell(1.0) ? 1.0 : -1.0;
+    } else if (friction_energy() && rho <= 1e-4 && residual_fell(0.5)) {
+      // with friction the frozen potential's gradient is the law's force at the iterate only: its
+      // change over a step is the law's work to first order in the step (the slip's lever arms and
+      // the normal's turn move with it), which near an equilibrium is the size of the decrease
+      // itself; there a step that halves the residual is kept (a Newton step in its quadratic range)
+      rho = 1.0;
     }
     // the model was too stiff along delta (the energy fell more than predicted, about twice as much
     // where the energy is nearly linear: a soft mode the iteration matrix stiffens): go on along

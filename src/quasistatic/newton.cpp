@@ -228,6 +228,10 @@ void NetworkSolverT<D>::Impl::begin_pairs() {
   last_open.assign(np, 0);
   open_flips.assign(np, 0);
   last_kn.assign(np, 0.0);
+  if (friction_energy()) {  // (assemble() freezes them at the iterate)
+    t_kt.assign(np, 0.0);
+    t_limit.assign(np, 0.0);
+  }
   for (std::size_t k = 0; k < np; ++k) {
     last_sliding[k] = slide_c[k];
     last_open[k] = fn_c[k] > 0.0 ? 0 : 1;

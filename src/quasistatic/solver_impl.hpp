@@ -155,7 +155,10 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
 
   // trial buffers of the current increment
   std::vector<double> du, f;
-  std::vector<double> pw;  // per pair: the normal force's potential in the trial state (energy mode only)
+  std::vector<double> pw;  // per pair: the contact's potential in the trial state (energy mode only)
+  // per pair, energy mode with friction (2D): the tangential spring's stiffness and limit frozen
+  // at the iterate (tangential_work), set by assemble() and kept while the step is judged
+  std::vector<double> t_kt, t_limit;
   std::vector<double> mdiag;  // energy mode: M's assembled diagonal (free DOFs), before the shift
   std::vector<double> pf;  // kP per pair: the pair's force on (i, j) in the trial state (summed into f)
   std::vector<std::uint8_t> apart;      // per pair: never touched, apart, trial state and pf already zero
@@ -243,11 +246,19 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   double iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt, Element& e, double& k_t);
   void scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt, double kn_sym, double k_t);
   void set_apart(std::size_t k);
-  /// The normal force's potential of pair k at overlap u (its committed history, R* of its radii).
-  double pair_work(std::size_t k, double u) const {
+  /// The potential of pair k at overlap u and slip increment dslip: the normal force's (its
+  /// committed history, R* of its radii) plus, with friction, the tangential spring's at the
+  /// stiffness and limit frozen at the iterate (t_kt, t_limit).
+  double pair_work(std::size_t k, double u, const Tan& dslip) const {
     const double ri = ps.r[pi[k]], rj = ps.r[pj[k]];
-    return law.normal_work(hist[k], ri * rj / (ri + rj), u);
+    const double w = law.normal_work(hist[k], ri * rj / (ri + rj), u);
+    if (!friction_energy() || k >= t_kt.size()) return w;  // (no frozen values before the first step)
+    return w + law.tangential_work(hist[k], t_kt[k], t_limit[k], dslip);
   }
+  /// Energy mode with a frictional law (2D): the merit adds the tangential springs' potential.
+  bool friction_energy() const { return D == 2 && opt.law.frictional() && energy_mode(); }
+  void freeze_tangential(std::size_t k, double f_n);
+  double refreeze_at_iterate();
   void pair_forces(std::size_t k, Element& e);
   void evaluate_forces();
   void open_contact_stiffness(std::size_t k, const Geometry& g1);
@@ -263,8 +274,9 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   void start_drag(const Mat& dE);
   bool pseudo_transient() const { return opt.iteration == Iteration::PseudoTransient; }
   bool accepted(double rms, double max) const;
-  /// Pseudo-transient with a frictionless law and energy_merit: the trust region on the energy.
-  bool energy_mode() const { return opt.uses_energy_merit(); }
+  /// Pseudo-transient with energy_merit (frictionless, or friction_energy_merit in 2D): the trust
+  /// region on the energy.
+  bool energy_mode() const { return opt.uses_energy_merit() && (D == 2 || !opt.law.frictional()); }
   // energy_iteration.cpp
   IncrementReport attempt_energy(const Mat& dE);
   double energy() const;

@@ -539,3 +539,83 @@ TEST(PlasticIndentation, NormalWorkIsThePotentialOfTheNormalForce) {
   PlasticIndentationHistoryT<2> h;
   EXPECT_EQ(law.normal_work(h, reff, u), normal_work<2>(p, reff, 0.0, u));
 }
+
+// The tangential spring's potential at the stiffness and limit frozen at a normal force: minus its
+// derivative in the slip increment is the tangential force evaluate() gives at that normal force,
+// sticking and sliding, 2D and 3D (the frictional merit of the quasi-static energy iteration).
+template <int D>
+void check_tangential_work(double mu, double ft_c_over_limit) {
+  using Tan = typename Dim<D>::Tan;
+  PlasticIndentationParams p;
+  p.sigma_y = 1.3;
+  p.mu = mu;
+  p.k_t = 800.0;
+  const PlasticIndentationLawT<D> law(p);
+  const double reff = 0.45, u_n = 2e-3 * reff;
+  PlasticIndentationHistoryT<D> h;
+  h.u_max = u_n;
+  const auto r0 = evaluate<D>(p, h, reff, u_n, tan_zero<Tan>());
+  ASSERT_GT(r0.f_n, 0.0);
+  const auto [kt, limit] = law.tangential_frozen(r0.f_n);
+  ASSERT_GT(kt, 0.0);
+  ASSERT_NEAR(limit, p.mu_eff() * r0.f_n, 1e-15 * limit);
+  Tan dir = tan_zero<Tan>();
+  if constexpr (D == 2) {
+    dir = 1.0;
+  } else {
+    dir = Eigen::Vector3d(0.6, -0.8, 0.0);
+  }
+  h.f_t = (ft_c_over_limit * limit) * dir;
+  const double s_scale = limit / kt;  // the slip that takes the spring from 0 to the limit
+  for (double s : {-3.0, -1.2, -0.4, 0.1, 0.7, 1.6, 4.0}) {
+    Tan ds = tan_zero<Tan>();
+    if constexpr (D == 2) {
+      ds = s * s_scale;
+    } else {
+      ds = s * s_scale * Eigen::Vector3d(0.3, 0.5, 0.2).normalized();
+    }
+    const auto r = evaluate<D>(p, h, reff, u_n, ds);
+    const double hstep = 1e-6 * s_scale;
+    for (int c = 0; c < (D == 2 ? 1 : 3); ++c) {
+      Tan e = tan_zero<Tan>();
+      if constexpr (D == 2) {
+        e = hstep;
+      } else {
+        e[c] = hstep;
+      }
+      const double dW = (law.tangential_work(h, kt, limit, ds + e) - law.tangential_work(h, kt, limit, ds - e)) / (2.0 * hstep);
+      double ft_c = 0.0;
+      if constexpr (D == 2) {
+        ft_c = r.f_t;
+      } else {
+        ft_c = r.f_t[c];
+      }
+      EXPECT_NEAR(-dW, ft_c, 1e-6 * limit) << "D " << D << " mu " << mu << " s " << s << " component " << c
+                                            << (r.sliding ? " (sliding)" : " (sticking)");
+    }
+  }
+  // sticking: W(s) - W(0) = -f_t,c . s + kt s^2 / 2 exactly
+  Tan ds = tan_zero<Tan>();
+  if constexpr (D == 2) {
+    ds = 0.05 * s_scale;
+  } else {
+    ds = 0.05 * s_scale * dir;
+  }
+  if (std::fabs(ft_c_over_limit) < 0.9) {
+    const double w = law.tangential_work(h, kt, limit, ds) - law.tangential_work(h, kt, limit, tan_zero<Tan>());
+    const double expect = -tan_dot(h.f_t, ds) + 0.5 * kt * tan_dot(ds, ds);
+    EXPECT_NEAR(w, expect, 1e-12 * limit * s_scale);
+  }
+}
+
+TEST(PlasticIndentation, TangentialWorkIsThePotentialOfTheTangentialForceAtAFrozenNormalForce) {
+  for (double mu : {0.1, 0.5, std::numeric_limits<double>::infinity()})
+    for (double ftc : {0.0, 0.6, -0.95}) {
+      check_tangential_work<2>(mu, ftc);
+      check_tangential_work<3>(mu, ftc);
+    }
+  PlasticIndentationParams p0;
+  p0.mu = 0.0;
+  const PlasticIndentationLawT<2> frictionless(p0);
+  EXPECT_EQ(frictionless.tangential_frozen(1.0).second, 0.0);
+}

@@ -299,3 +299,32 @@ TEST(Equilibrium, EnergyTrustRegionEndsOnTheFrictionlessEquilibria) {
     EXPECT_LT(force, 1e-6);
   }
 }
+
+// The trust region on the incremental potential with friction (the tangential springs' stiffness
+// and limit frozen at each iterate): on the small random packing with sticking friction its answer
+// is pure Newton's (no drag) for every drag scale, as the residual iteration's is.
+TEST(Equilibrium, FrictionalEnergyMeritEndsOnPureNewtonsEquilibrium) {
+  auto [pk, so, D] = test::sticking_newton_case();
+  const auto pure = test::compact(pk, so, qs::StrainPath::hydrostatic(), D, 40);
+  ASSERT_EQ(pure.unconverged, 0);
+  so.viscosity = 0.1;
+  so.max_residual_tol = kInf;
+  so.energy_merit = true;
+  so.friction_energy_merit = true;
+  so.residual_tol = 1e-4;
+  so.max_residual_tol = 1e-3;
+  for (double scale : {0.1, 1.0, 10.0}) {
+    qs::SolverOptions o = pseudo_transient(so, scale);
+    o.max_newton = 300;
+    ASSERT_TRUE(o.uses_energy_merit());
+    ASSERT_STREQ(o.merit_name(), "energy-friction");
+    const auto r = test::compact(pk, o, qs::StrainPath::hydrostatic(), D, 40);
+    const double d11 = std::fabs(r.m.S11 / pure.m.S11 - 1.0), d22 = std::fabs(r.m.S22 / pure.m.S22 - 1.0);
+    std::printf("energy merit with friction, drag x %g: S11 %.3e, S22 %.3e from pure Newton, Z %.4f against %.4f\n",
+                scale, d11, d22, r.m.Z, pure.m.Z);
+    EXPECT_EQ(r.unconverged, 0);
+    EXPECT_LT(d11, 1e-4);
+    EXPECT_LT(d22, 1e-4);
+    EXPECT_NEAR(r.m.Z, pure.m.Z, 1e-9);
+  }
+}

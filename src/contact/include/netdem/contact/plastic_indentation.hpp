@@ -37,6 +37,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "netdem/contact/kinematics.hpp"
 #include "netdem/contact/law.hpp"
@@ -202,6 +203,28 @@ inline double normal_work(const PlasticIndentationParams& p, double r_eff, doubl
   return fe > 0.0 ? 0.5 * fe * fe / ku : 0.0;
 }
 
+/// The tangential force's potential over a slip increment dslip at a frozen spring stiffness
+/// kt_force (force per unit slip, k_t sigma_y A_c) and a frozen limit (mu_eff F_N): the spring
+/// starts at the committed f_t and caps at the limit, so -d/d dslip of this is the tangential
+/// force evaluate() returns when its area and limit are those. With them frozen at a state (the
+/// normal force of that state), a frictional step of the quasi-static solver is the minimisation
+/// of an incremental potential whose gradient at that state is the law's force (an elastic-
+/// perfectly-plastic spring: quadratic in the trial force inside the limit, linear outside).
+template <int D = 2>
+inline double tangential_work(const typename Dim<D>::Tan& f_t_committed, double kt_force, double limit,
+                              const typename Dim<D>::Tan& dslip) {
+  if (!(limit > 0.0)) return 0.0;
+  if (!(kt_force > 0.0)) {  // no spring: the committed force (within the limit) does the work
+    const double m = tan_norm(f_t_committed);
+    if (!(m > 0.0)) return 0.0;
+    return -tan_dot(f_t_committed, dslip) * std::fmin(1.0, limit / m);
+  }
+  const typename Dim<D>::Tan y = f_t_committed - kt_force * dslip;
+  const double m = tan_norm(y);
+  const double w = m <= limit ? 0.5 * m * m : limit * m - 0.5 * limit * limit;
+  return w / kt_force;
+}
+
 /// Secant normal stiffness over a predicted overlap change u0 -> u1 (exact integral of Eq 2 over
 /// the increment). Used instead of the tangent for young contacts, whose tangent is singular at
 /// u_N = 0. Returns the tangent at u0 when |u1 - u0| is negligible.
@@ -353,6 +376,18 @@ class PlasticIndentationLawT {
   /// normal force of evaluate() at overlap u.
   double normal_work(const History& h, double r_eff, double u) const {
     return contact::normal_work<D>(p_, r_eff, h.u_max, u);
+  }
+  /// The tangential spring's force stiffness k_t sigma_y A_c and limit mu_eff F_N at the normal
+  /// force f_n (0 and 0 without friction), the two that tangential_work freezes.
+  std::pair<double, double> tangential_frozen(double f_n) const {
+    if (!p_.frictional() || !(f_n > 0.0)) return {0.0, 0.0};
+    return {p_.shear_stiffness() * contact_area(f_n), p_.mu_eff() * f_n};
+  }
+  /// The potential of the tangential force over the slip increment dslip from the committed
+  /// history h (its f_t in the current tangent plane) at a frozen stiffness and limit
+  /// (tangential_work): -d/d dslip of it is the force of evaluate() with that area and limit.
+  double tangential_work(const History& h, double kt_force, double limit, const Tan& dslip) const {
+    return contact::tangential_work<D>(h.f_t, kt_force, limit, dslip);
   }
   /// The contact area (2D: width per unit depth) of a normal force at the mean contact pressure
   /// 3 sigma_y (Eq 2); it scales the tangential spring k_t sigma_y A_c.

@@ -71,6 +71,13 @@ struct SolverOptions {
   /// frictionless periodic packings (with 200 iterations and the first-touch force floor: 101
   /// against 66 of 120 increments accepted; the residual iteration with 200 lost its network).
   bool energy_merit = true;
+  /// With energy_merit and a frictional law (2D): the trust region on an incremental potential,
+  /// the contact energy with each tangential spring's stiffness k_t sigma_y A_c and limit mu_eff
+  /// F_N frozen at the iterate (contact::tangential_work), refrozen at every kept step. Its
+  /// gradient at the iterate is the undragged residual, so the trust region judges each step by
+  /// the law's forces there; the accepted state meets the law's residual. false (the default):
+  /// the residual line search with friction.
+  bool friction_energy_merit = false;
   /// PseudoTransient: an increment that is not accepted within max_newton iterations is undone
   /// and done again as two halves, down to 2^-max_cuts of it (0: never cut).
   int max_cuts = 4;
@@ -108,7 +115,11 @@ struct SolverOptions {
   /// Whether an increment runs the trust region on the energy: the pseudo-transient iteration with
   /// energy_merit and a frictionless law.
   bool uses_energy_merit() const {
-    return iteration == Iteration::PseudoTransient && energy_merit && !law.frictional();
+    return iteration == Iteration::PseudoTransient && energy_merit && (!law.frictional() || friction_energy_merit);
+  }
+  /// The merit the pseudo-transient iteration uses: "energy", "energy-friction" or "residual".
+  const char* merit_name() const {
+    return uses_energy_merit() ? (law.frictional() ? "energy-friction" : "energy") : "residual";
   }
 
   /// `netsolve compact`: sticking, reversible Eq 2, drag per unit strain (viscosity 0.01 at
