@@ -77,6 +77,7 @@ def _up_to_date(d, args):
 _qvd.up_to_date = _up_to_date  # (run_one looks it up in its module)
 
 CASE = "quasistatic_vs_dynamic_periodic"
+BOUNDARY = "periodic"           # the compactions' --boundary
 FULL = {"name": "full", "n": 1600, "seeds": (1, 2, 3), "dd": (0.006, 0.012, 0.018, 0.024, 0.03),
         "es": (0.004, 0.008, 0.012, 0.016, 0.02)}
 QUICK = {"name": "quick", "n": 400, "seeds": (1,), "dd": (0.015, 0.03), "es": (0.01, 0.02)}
@@ -122,13 +123,13 @@ def path_args(c, d0):
     return ["--path", c["path"], "--to-density", f"{target(d0):.6f}", "--increments", str(INC)]
 
 
-def dem_args(c, pack, d0, I):
-    return (["compact", "--boundary", "periodic", "--packing", pack, "--friction", c["friction"]]
+def dem_args(c, start, d0, I):
+    return (["compact", "--boundary", BOUNDARY] + start + ["--friction", c["friction"]]
             + path_args(c, d0) + ["--inertial-number", f"{I:g}", "--snapshots", "", "--quiet"])
 
 
-def net_args(c, pack, d0, scale):
-    return (["compact", "--boundary", "periodic", "--packing", pack, "--friction", c["friction"]]
+def net_args(c, start, d0, scale):
+    return (["compact", "--boundary", BOUNDARY] + start + ["--friction", c["friction"]]
             + path_args(c, d0) + ["--iteration", "pseudo-transient", "--regularisation-scale", f"{scale:g}",
                                   "--snapshots", "", "--allow-unconverged", "--quiet"])
 
@@ -164,14 +165,42 @@ def read_d0(runs, seed):
         return None
 
 
+def start_of(runs, c):
+    """(D0, the arguments that start a compaction of combination c from its prepared packing), or
+    (None, None) while the packing is not there."""
+    d0 = read_d0(runs, c["seed"])
+    return (None, None) if d0 is None else (d0, ["--packing", os.path.join(pack_dir(runs, c["seed"]), "packing.csv")])
+
+
+def points(mode, c):
+    """The comparison points of combination c: D - D0, or |E_dev| in shear."""
+    return mode["es"] if c["pk"] == "shear" else mode["dd"]
+
+
+def prep_runs(mode):
+    """The runs that prepare the starts: one periodic packing per seed."""
+    return [(f"pack/s{s}", "netsolve", pack_args(mode, s), (s,)) for s in mode["seeds"]]
+
+
+def read_preps(mode, runs):
+    """The summaries of the preparations, for the report's first table."""
+    packs = {}
+    for s in mode["seeds"]:
+        try:
+            with open(os.path.join(pack_dir(runs, s), "summary.json")) as f:
+                packs[s] = json.load(f)
+        except (OSError, ValueError):
+            packs[s] = None
+    return packs
+
+
 def compact_runs(mode, runs, scales=SCALES):
     """(name, tool, args, priority) of every compaction run whose packing exists."""
     out = []
     for name, c in combos(mode):
-        d0 = read_d0(runs, c["seed"])
+        d0, pack = start_of(runs, c)
         if d0 is None:
             continue
-        pack = os.path.join(pack_dir(runs, c["seed"]), "packing.csv")
         pr = (c["seed"], [p for p, _ in PATHS].index(c["pk"]), [f for f, _ in FRICTIONS].index(c["fk"]))
         for I in INERTIAL:
             out.append((f"dem/{name}/I{I:g}", "demsolve", dem_args(c, pack, d0, I), pr + (1, I)))
@@ -230,9 +259,9 @@ def unaccepted(r):
 def evaluate(R, mode, runs):
     rows, drag_rows = [], []
     for name, c in combos(mode):
-        d0 = read_d0(runs, c["seed"])
+        d0, _ = start_of(runs, c)
         pk = c["pk"]
-        pts = mode["es"] if pk == "shear" else mode["dd"]
+        pts = points(mode, c)
         dem = [(I, R.get(f"dem/{name}/I{I:g}")) for I in INERTIAL]
         dem = [(I, r) for I, r in dem if r is not None and r.ok]
         nets = {s: R.get(f"net/{name}/x{s:g}") for s in SCALES}
@@ -326,15 +355,17 @@ def evaluate_yield(R, mode):
 def make_figures(R, mode, runs, out):
     figs = []
     seed = mode["seeds"][0]
-    d0 = read_d0(runs, seed)
-    if d0 is None:
-        return figs
     for pk, col, ylab, xl in (("hydro", "S22", "Σ22", "D − D0"), ("die", "S22", "Σ22", "D − D0"),
                               ("shear", "Sdev", "Σ11 − Σ22", "|E_dev| of the shear leg")):
+        if pk not in [p for p, _ in PATHS]:
+            continue
         fig, axs = plt.subplots(1, 3, figsize=(13, 3.8), sharey=False)
         drawn = False
         for ax, (fk, fv) in zip(axs, FRICTIONS):
             name = f"s{seed}_{pk}_{fk}"
+            d0, _ = start_of(runs, dict(seed=seed, pk=pk, fk=fk))
+            if d0 is None:
+                continue
             for k, I in enumerate(INERTIAL):
                 r = R.get(f"dem/{name}/I{I:g}")
                 if r is not None and r.ok and col in r.h:
@@ -347,7 +378,7 @@ def make_figures(R, mode, runs, out):
                     xs = r.hw["Es"] if pk == "shear" else r.hw["D"] - d0
                     ax.plot(xs, r.hw[col], st, lw=1.2, label=f"netsolve ×{s:g} (window means)")
                     drawn = True
-            pts = mode["es"] if pk == "shear" else mode["dd"]
+            pts = points(mode, dict(pk=pk, fk=fk))
             dem = [(I, R.get(f"dem/{name}/I{I:g}")) for I in INERTIAL]
             dem = [(I, r) for I, r in dem if r is not None and r.ok]
             if len(dem) >= 2:
@@ -378,9 +409,27 @@ def run_table(R, names):
     return lines
 
 
-def write_report(R, mode, runs, out, binaries, packs):
-    rows, drag_rows = evaluate(R, mode, runs)
-    figs = make_figures(R, mode, runs, out)
+def yield_section(R, mode):
+    """The yield table's lines and verdicts."""
+    yrows = evaluate_yield(R, mode)
+    L = ["", "## Yield in the periodic cell", "",
+          f"Seed {mode['seeds'][0]}, sticking, hydrostatic precompaction to D0 + {DD:g}, probes "
+          f"{', '.join(map(str, YIELD_PROBES))} of {YIELD_DIRECTIONS}: `demsolve yield --compact-bc periodic` (its "
+          "defaults) and `netsolve yield --compact-bc periodic --iteration pseudo-transient`. Band: the distance of "
+          f"the two points ≤ {100 * YIELD_BAND:g} % of netsolve's loading stress |Σ|.", "",
+          "| probe | θ [°] | probing | definition | DEM (Σ11, Σ22) | netsolve (Σ11, Σ22) | distance | status DEM / net | result |",
+          "|---|---|---|---|---|---|---|---|---|"]
+    for y in yrows:
+        dist = "—" if not np.isfinite(y["dist"]) else f"{100 * y['dist']:.2f} %"
+        L.append(f"| {y['probe']} | {y['theta']:g} | {y['probing']} | {y['kind']} | ({fmt(y['dem'][0])}, {fmt(y['dem'][1])}) | "
+                 f"({fmt(y['net'][0])}, {fmt(y['net'][1])}) | "
+                 f"{dist} | "
+                 f"{y['st'][0]} / {y['st'][1]} | {y['verdict']} |")
+    return L, [y["verdict"] for y in yrows]
+
+
+def report_head(mode, packs):
+    """The report's title, its introduction and the table of the prepared packings."""
     L = [f"# Validation: the cross-check in a periodic cell ({mode['name']} mode)", "",
          "Generated by `validation/quasistatic_vs_dynamic_periodic/run.py" + (" --quick" if mode["name"] == "quick" else "")
          + "`; what it measures and why: README.md of this folder. netsolve (`compact --boundary periodic "
@@ -396,6 +445,13 @@ def write_report(R, mode, runs, out, binaries, packs):
                  f"{fmt(p.get('coordination_without_rattlers'), 3)} | {fmt(p.get('rattler_fraction'), 3)} | "
                  f"{fmt((p.get('psi6') or {}).get('global'), 2)} | {fmt((p.get('overlap_over_R') or {}).get('max'), 5)} | "
                  f"{p.get('status', 'missing')} |")
+    return L
+
+
+def write_report(R, mode, runs, out, binaries, packs):
+    rows, drag_rows = evaluate(R, mode, runs)
+    figs = make_figures(R, mode, runs, out)
+    L = report_head(mode, packs)
     L += ["", "## netsolve against the DEM limit", "",
           "| case | point | quantity | netsolve | DEM σ₀ ± se | scale | result | note |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -409,21 +465,9 @@ def write_report(R, mode, runs, out, binaries, packs):
     for d in drag_rows:
         L.append(f"| {d['case']} | {d['x']:g} | {d['col']} | {' / '.join(fmt(v) for v in d['vals'])} | "
                  f"{d['verdict']} | {d['note']} |")
-    yrows = evaluate_yield(R, mode)
-    L += ["", "## Yield in the periodic cell", "",
-          f"Seed {mode['seeds'][0]}, sticking, hydrostatic precompaction to D0 + {DD:g}, probes "
-          f"{', '.join(map(str, YIELD_PROBES))} of {YIELD_DIRECTIONS}: `demsolve yield --compact-bc periodic` (its "
-          "defaults) and `netsolve yield --compact-bc periodic --iteration pseudo-transient`. Band: the distance of "
-          f"the two points ≤ {100 * YIELD_BAND:g} % of netsolve's loading stress |Σ|.", "",
-          "| probe | θ [°] | probing | definition | DEM (Σ11, Σ22) | netsolve (Σ11, Σ22) | distance | status DEM / net | result |",
-          "|---|---|---|---|---|---|---|---|---|"]
-    for y in yrows:
-        dist = "—" if not np.isfinite(y["dist"]) else f"{100 * y['dist']:.2f} %"
-        L.append(f"| {y['probe']} | {y['theta']:g} | {y['probing']} | {y['kind']} | ({fmt(y['dem'][0])}, {fmt(y['dem'][1])}) | "
-                 f"({fmt(y['net'][0])}, {fmt(y['net'][1])}) | "
-                 f"{dist} | "
-                 f"{y['st'][0]} / {y['st'][1]} | {y['verdict']} |")
-    c = tally([r["verdict"] for r in rows] + [d["verdict"] for d in drag_rows] + [y["verdict"] for y in yrows])
+    ylines, yverdicts = yield_section(R, mode)
+    L += ylines
+    c = tally([r["verdict"] for r in rows] + [d["verdict"] for d in drag_rows] + yverdicts)
     L += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figs]
     L += ["", "## Runs", ""] + run_table(R, sorted(R))
     notes = os.path.join(HERE, "notes.md")
@@ -471,7 +515,7 @@ def main():
         for b in bins.values():
             if not os.access(b, os.X_OK):
                 sys.exit(f"error: binary not found: {b} (build first: cmake --build build)")
-        packs = [(f"pack/s{s}", "netsolve", pack_args(mode, s), (s,)) for s in mode["seeds"]]
+        packs = prep_runs(mode)
         run_all(a.jobs, bins, runs, a.force, a.timeout, [p for p in packs if selected(p[0], only)])
         rs = [r for r in yield_runs(mode, runs) + compact_runs(mode, runs) if selected(r[0], only)]
         run_all(a.jobs, bins, runs, a.force, a.timeout, rs)
@@ -481,13 +525,7 @@ def main():
     for name, tool, _, _ in compact_runs(mode, runs):
         pk = name.split("/")[1].split("_")[1]
         R[name] = prepare(Run(os.path.join(runs, name), tool), pk)
-    packs = {}
-    for s in mode["seeds"]:
-        try:
-            with open(os.path.join(pack_dir(runs, s), "summary.json")) as f:
-                packs[s] = json.load(f)
-        except (OSError, ValueError):
-            packs[s] = None
+    packs = read_preps(mode, runs)
     write_report(R, mode, runs, out, [a.netsolve, a.demsolve], packs)
 
 
