@@ -129,4 +129,23 @@ else
   fail=$((fail + 1))
   echo "FAIL pseudo_transient_scale: $(cat "$tmp/stderr")"
 fi
+
+# --merit energy-friction: the trust region also with friction; summary.json names it, the run
+# ends on accepted increments with finite files
+ef="$tmp/energy_friction"
+if "$ns" compact --width 20 --friction 0.1 --increments 20 --iteration pseudo-transient --merit energy-friction \
+    --quiet --allow-unconverged --snapshots '' --out "$ef" >/dev/null 2>"$tmp/stderr" && /usr/bin/python3 - "$ef" <<'PY'
+import csv, json, math, sys
+rows = list(csv.DictReader(open(sys.argv[1] + "/history.csv")))
+assert all(math.isfinite(float(v)) for r in rows for v in r.values())
+j = json.load(open(sys.argv[1] + "/summary.json"))
+assert j["solver"]["merit"] == "energy-friction" and "unjammed_increments" in j["solver"], j["solver"]
+assert j["solver"]["max_newton"] == 500, j["solver"]
+PY
+then
+  pass=$((pass + 1))
+else
+  fail=$((fail + 1))
+  echo "FAIL energy_friction: $(cat "$tmp/stderr")"
+fi
 finish
