@@ -149,6 +149,20 @@ TEST(Equilibrium, CutIncrementsEndOnTheSameEquilibrium) {
   EXPECT_FALSE(run_walls(so, -0.05, 2, &few, 4.0).converged);
 }
 
+// The answer of options o on the sticking case (40 hydrostatic increments) against pure Newton's:
+// every increment accepted, S11 and S22 within 1e-4, the same Z.
+static void expect_pure_newtons_answer(const char* what, const packing::Packing& pk, const qs::SolverOptions& o, double D,
+                                       const test::RunResult& pure) {
+  const auto r = test::compact(pk, o, qs::StrainPath::hydrostatic(), D, 40);
+  const double d11 = std::fabs(r.m.S11 / pure.m.S11 - 1.0), d22 = std::fabs(r.m.S22 / pure.m.S22 - 1.0);
+  std::printf("%s, drag x %g: S11 %.3e, S22 %.3e from pure Newton, Z %.4f against %.4f\n", what,
+              o.regularisation_scale, d11, d22, r.m.Z, pure.m.Z);
+  EXPECT_EQ(r.unconverged, 0);
+  EXPECT_LT(d11, 1e-4);
+  EXPECT_LT(d22, 1e-4);
+  EXPECT_NEAR(r.m.Z, pure.m.Z, 1e-9);
+}
+
 // Sticking friction on the small random packing, die mode: the pseudo-transient answer equals pure
 // Newton (no drag at all) for drags 0.1, 1 and 10 times 0.1 of the mean stiffness, while the
 // legacy drag at that size moves S22.
@@ -158,16 +172,7 @@ TEST(Equilibrium, RandomPackingAnswerIsIndependentOfTheDrag) {
   ASSERT_EQ(pure.unconverged, 0);
   so.viscosity = 0.1;
   so.max_residual_tol = kInf;
-  for (double scale : {0.1, 1.0, 10.0}) {
-    const auto r = test::compact(pk, pseudo_transient(so, scale), qs::StrainPath::hydrostatic(), D, 40);
-    const double d11 = std::fabs(r.m.S11 / pure.m.S11 - 1.0), d22 = std::fabs(r.m.S22 / pure.m.S22 - 1.0);
-    std::printf("pseudo-transient, drag x %g: S11 %.3e, S22 %.3e from pure Newton, Z %.4f against %.4f\n", scale, d11,
-                d22, r.m.Z, pure.m.Z);
-    EXPECT_EQ(r.unconverged, 0);
-    EXPECT_LT(d11, 1e-4);
-    EXPECT_LT(d22, 1e-4);
-    EXPECT_NEAR(r.m.Z, pure.m.Z, 1e-9);
-  }
+  for (double scale : {0.1, 1.0, 10.0}) expect_pure_newtons_answer("pseudo-transient", pk, pseudo_transient(so, scale), D, pure);
   so.regularisation_scale = 10.0;
   const auto legacy = test::compact(pk, so, qs::StrainPath::hydrostatic(), D, 40);
   const double dl = std::fabs(legacy.m.S22 / pure.m.S22 - 1.0);
@@ -318,13 +323,6 @@ TEST(Equilibrium, FrictionalEnergyMeritEndsOnPureNewtonsEquilibrium) {
     o.max_newton = 300;
     ASSERT_TRUE(o.uses_energy_merit());
     ASSERT_STREQ(o.merit_name(), "energy-friction");
-    const auto r = test::compact(pk, o, qs::StrainPath::hydrostatic(), D, 40);
-    const double d11 = std::fabs(r.m.S11 / pure.m.S11 - 1.0), d22 = std::fabs(r.m.S22 / pure.m.S22 - 1.0);
-    std::printf("energy merit with friction, drag x %g: S11 %.3e, S22 %.3e from pure Newton, Z %.4f against %.4f\n",
-                scale, d11, d22, r.m.Z, pure.m.Z);
-    EXPECT_EQ(r.unconverged, 0);
-    EXPECT_LT(d11, 1e-4);
-    EXPECT_LT(d22, 1e-4);
-    EXPECT_NEAR(r.m.Z, pure.m.Z, 1e-9);
+    expect_pure_newtons_answer("energy merit with friction", pk, o, D, pure);
   }
 }
