@@ -167,10 +167,9 @@ Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
   DynamicSolver s(std::move(P), lp, box, o);
   s.run(steps);
   const Particles& q = s.particles();
-  pk.x = q.x;
-  pk.y = q.y;
-  vx = q.vx;
-  vy = q.vy;
+  pk.x = q.axis(0);
+  pk.y = q.axis(1);
+  for (std::size_t i = 0; i < q.size(); ++i) vx[i] = q.vel[2 * i], vy[i] = q.vel[2 * i + 1];
   pk.box = s.box();
   const Stress2 ws = s.wall_stress(), cs = s.contact_stress();
   Stage st;
@@ -238,8 +237,8 @@ Packing compress(const Packing& start, const LudingParams& lp) {
     if (done) break;
   }
   const Particles& q = s.particles();
-  pk.x = q.x;
-  pk.y = q.y;
+  pk.x = q.axis(0);
+  pk.y = q.axis(1);
   pk.box = s.box();
   return pk;
 }
@@ -490,10 +489,10 @@ Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   s.run(kSettleFreeSteps3);
   steps += kSettleFreeSteps3;
   report("settled (walls fixed, no drag)");
-  const Particles& q = s.particles();
-  pk.x = q.x;
-  pk.y = q.y;
-  pk.z = q.z;
+  const Particles3& q = s.particles();
+  pk.x = q.axis(0);
+  pk.y = q.axis(1);
+  pk.z = q.axis(2);
   pk.box = s.box();
   return pk;
 }

@@ -80,14 +80,14 @@ DynamicSolverT<D> make_solver(const packing::Packing& pk, bool periodic) {
   DynamicOptions opt;
   opt.model = ContactModel::Linear;
   opt.steps_per_contact = 25.0;
-  if (periodic) return DynamicSolverT<D>(periodic_particles_from(pk, 1.0), law<D>(pk), packing::periodic_cell<D>(pk), opt);
+  if (periodic) return DynamicSolverT<D>(periodic_particles_from<D>(pk, 1.0), law<D>(pk), packing::periodic_cell<D>(pk), opt);
   packing::Packing w = pk;  // the same particles, not periodic, in a box r_max wider on every side
   w.periodic = false;
   w.cell.clear();
   const double rm = *std::max_element(pk.r.begin(), pk.r.end());
   w.box.x_min -= rm, w.box.y_min -= rm, w.box.x_max += rm, w.box.y_max += rm;
   if constexpr (D == 3) w.box.z_min -= rm, w.box.z_max += rm;
-  Particles P = D == 2 ? particles_from(w, 1.0) : spheres_from(w, 1.0);
+  ParticlesT<D> P = particles_at_rest<D>(w, 1.0);
   Box box(w.box);
   box.contact_walls = true;
   box.right.mode = box.top.mode = WallMode::Affine;

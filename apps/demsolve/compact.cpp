@@ -463,7 +463,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
                                  "--packing {} is not", packing::quote_input(a.packing_file)));
 
   // rho = 1
-  Particles P = periodic ? periodic_particles_from(pk, 1.0) : D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);
+  ParticlesT<D> P = periodic ? periodic_particles_from<D>(pk, 1.0) : particles_at_rest<D>(pk, 1.0);
   // the walls enclose every particle at the start (the deposition's top particles stick out of its
   // box); a jammed state brings its own box
   Box box(jammed ? jammed->box : walls ? netdem::app::netsolve::walls_box(pk) : pk.box);
@@ -471,7 +471,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   box.right.mode = box.top.mode = WallMode::Affine;
   if constexpr (D == 3) box.back.mode = WallMode::Affine;
   double solid = 0.0;
-  for (double r : P.radius) solid += D == 2 ? std::numbers::pi * r * r : 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  for (double r : P.r) solid += D == 2 ? std::numbers::pi * r * r : 4.0 / 3.0 * std::numbers::pi * r * r * r;
   double box_measure = (box.x_max - box.x_min) * (box.y_max - box.y_min);
   if constexpr (D == 3) box_measure *= box.z_max - box.z_min;
   if (periodic) box_measure = packing::periodic_cell<D>(pk).measure();

@@ -31,7 +31,7 @@ void write_common(const std::string& command, const SolverState& st, const fs::p
   nlohmann::json params;
   for (const auto& name : luding_param_names()) params[name] = get_luding_param(st.params, name);
   extra["command"] = command;
-  extra["particles"] = st.particles.size();
+  extra["particles"] = st.particle_count();
   extra["dt_s"] = st.dt;
   extra["start_time_s"] = st.time;
   extra["temperature_C"] = st.thermal.T;
@@ -67,15 +67,15 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   if (!(p > 0.0)) throw std::invalid_argument("the state has no wall pressure: give --pressure");
   const std::string warning = check_loading(p, st.params, a.pressure > 0.0 ? "--pressure" : "the state's wall pressure", D);
   check_temperature(st.thermal.T, st.params, "the state's temperature");
-  check_memory(st.particles.size());
+  check_memory(st.particle_count());
   DynamicOptions opt;
   opt.model = ContactModel::Full;
   DynamicSolverT<D> s(st, opt);
   const double z0 = D == 2 ? s.box().y_max - s.box().y_min : s.box().z_max - s.box().z_min, t_start = s.time();
   check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps, a.allow_long);
   {  // the top wall's travel per contact duration (Eq 6, mean pair) below 0.1 r_min
-    double rmin = s.particles().radius[0];
-    for (double r : s.particles().radius) rmin = std::min(rmin, r);
+    double rmin = s.particles().r[0];
+    for (double r : s.particles().r) rmin = std::min(rmin, r);
     const double v = a.strain_rate * z0, tc = s.time_step().tc_mean, vmax = 0.1 * rmin / tc;
     if (!(v <= vmax))
       throw UsageError(fmt::format("--strain-rate {:g} 1/s moves the top wall at {:.3g} m/s, {:.3g} m per contact "
@@ -190,7 +190,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
     throw UsageError(fmt::format("{} is a 3D state: demsolve vibrate is 2D only (prepare, sinter and compress take 3D)",
                                  quote_input(a.state_file)));
   check_temperature(st.thermal.T, st.params, "the state's temperature");
-  check_memory(st.particles.size());
+  check_memory(st.particle_count());
   open_box_for_vibration(st);
   DynamicOptions opt;
   opt.model = ContactModel::Full;
@@ -198,8 +198,8 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   const double w = 2.0 * std::numbers::pi * a.frequency, t_start = s.time();
   check_run_limits(s, a.time / s.dt(), a.max_steps, a.allow_long);
   {  // the floor's period resolved (>= 20 steps) and its peak speed A w below 0.1 r_min per step
-    double rmin = s.particles().radius[0];
-    for (double r : s.particles().radius) rmin = std::min(rmin, r);
+    double rmin = s.particles().r[0];
+    for (double r : s.particles().r) rmin = std::min(rmin, r);
     if (!(a.frequency * s.dt() <= 0.05))
       throw UsageError(fmt::format("--frequency {:g} Hz gives {:.3g} time steps of {:.3g} s per period, fewer than 20 "
                                    "(peak floor acceleration {:.3g} g)",
@@ -233,7 +233,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
       }
       clusters.update(s);
       double yc = 0.0;
-      for (double y : s.particles().y) yc += y;
+      for (std::size_t p = 0; p < s.particles().size(); ++p) yc += s.particles().coord(p, 1);
       const double tt = s.time() - t_start;
       csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{},{}\n", tt, amplitude * std::sin(w * tt), s.energies().kinetic,
                          yc / static_cast<double>(s.particles().size()), clusters.largest(), clusters.single_grains());

@@ -28,21 +28,29 @@ namespace netdem::app::dem {
 
 namespace {
 
-std::string particles_vtp(const Particles& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
+template <int D>
+std::string particles_vtp(const ParticlesT<D>& P, const std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
   std::vector<double> ps, z;
   particle_stress(P, cs, ps, z);
-  const bool d3 = P.dim == 3;
-  Field rad{"radius", 1, P.radius}, vel{"velocity", 3, {}}, om{"omega", d3 ? 3 : 1, d3 ? std::vector<double>{} : P.omega};
+  constexpr bool d3 = D == 3;
+  // (the spins: omega about e3 in 2D, (wx, wy, wz) in 3D: kRot per particle either way)
+  Field rad{"radius", 1, P.r}, vel{"velocity", 3, {}}, om{"omega", ParticlesT<D>::kRot, P.spin};
   Field st{"particle_pressure", 1, ps}, co{"contacts", 1, z};
-  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], d3 ? P.vz[i] : 0.0});
-  if (d3)
-    for (std::size_t i = 0; i < P.size(); ++i) om.values.insert(om.values.end(), {P.wx[i], P.wy[i], P.omega[i]});
+  for (std::size_t i = 0; i < P.size(); ++i)
+    vel.values.insert(vel.values.end(), {P.vel[D * i], P.vel[D * i + 1], d3 ? P.vel[D * i + D - 1] : 0.0});
   std::vector<Field> f{rad, vel, om, st, co};
   f.insert(f.end(), extra.begin(), extra.end());
-  return d3 ? vtp_particles_3d(P.x, P.y, &P.z, f) : vtp_particles(P.x, P.y, f);
+  const std::vector<double> x = P.axis(0), y = P.axis(1);
+  if constexpr (d3) {
+    const std::vector<double> zc = P.axis(2);
+    return vtp_particles_3d(x, y, &zc, f);
+  } else {
+    return vtp_particles(x, y, f);
+  }
 }
 
-std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs) {
+template <int D>
+std::string contacts_vtp(const ParticlesT<D>& P, const std::vector<ContactInfo>& cs) {
   std::vector<int> ii, jj;
   Field fn{"f_n", 1, {}}, ft{"f_t", 1, {}}, att{"attractive", 1, {}}, sl{"sliding", 1, {}};
   for (const auto& c : cs) {
@@ -54,21 +62,27 @@ std::string contacts_vtp(const Particles& P, const std::vector<ContactInfo>& cs)
     att.values.push_back(c.f_n < 0.0 ? 1.0 : 0.0);
     sl.values.push_back(c.sliding ? 1.0 : 0.0);
   }
-  if (P.dim == 3) return vtp_network_3d(P.x, P.y, &P.z, ii, jj, {fn, ft, att, sl});
-  return vtp_network(P.x, P.y, ii, jj, {fn, ft, att, sl});
+  const std::vector<double> x = P.axis(0), y = P.axis(1);
+  if constexpr (D == 3) {
+    const std::vector<double> z = P.axis(2);
+    return vtp_network_3d(x, y, &z, ii, jj, {fn, ft, att, sl});
+  } else {
+    return vtp_network(x, y, ii, jj, {fn, ft, att, sl});
+  }
 }
 
 /// Particle-particle contacts for the distributions of LMM05 Figs 11-19: overlap over a_i + a_j,
 /// normal and tangential force, f_min and the activated friction mu_t = |f_t| / (f_n - f_min);
 /// mu_t = 0 where f_n <= f_min (no friction capacity, f_t = 0; docs/sintering.md).
-std::string contacts_csv(const Particles& P, const std::vector<ContactInfo>& cs) {
+template <int D>
+std::string contacts_csv(const ParticlesT<D>& P, const std::vector<ContactInfo>& cs) {
   std::string s = "i,j,overlap_rel,f_n,f_t,f_min,mu,mu_t,sliding\n";
   for (const auto& c : cs) {
     if (c.wall >= 0) continue;
     const double den = c.f_n - c.f_min;
     const double mut = den > 0.0 ? std::fabs(c.f_t) / den : 0.0;
     s += fmt::format("{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.9g},{}\n", c.i, c.j,
-                     c.overlap / (P.radius[c.i] + P.radius[c.j]), c.f_n, c.f_t, c.f_min, c.mu, mut,
+                     c.overlap / (P.r[c.i] + P.r[c.j]), c.f_n, c.f_t, c.f_min, c.mu, mut,
                      c.sliding ? 1 : 0);
   }
   return s;
@@ -88,9 +102,10 @@ void write_snapshot(const DynamicSolverT<D>& s, const fs::path& out, const std::
 
 namespace {
 
-double mean_radius(const Particles& P) {
+template <int D>
+double mean_radius(const ParticlesT<D>& P) {
   double r = 0.0;
-  for (double v : P.radius) r += v;
+  for (double v : P.r) r += v;
   return r / static_cast<double>(P.size());
 }
 
@@ -196,7 +211,7 @@ template <int D>
 void check_run_limits(const DynamicSolverT<D>& s, double steps, double max_steps, bool allow_long) {
   const double dt = s.dt();
   check_work(s.particles().size(), steps, dt, max_steps, allow_long, "about");
-  const Particles& P = s.particles();
+  const ParticlesT<D>& P = s.particles();
   const LudingParams& lp = s.params();
   double m_lo = std::numeric_limits<double>::infinity();
   for (double m : P.mass) m_lo = std::min(m_lo, m);
@@ -433,7 +448,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
         (D == 3 && st.box.back.mode == WallMode::Stress))
       warning = check_loading(std::max({st.box.right.pressure, st.box.top.pressure, D == 3 ? st.box.back.pressure : 0.0}),
                               st.params, args.pressure_given ? "--pressure" : "the state's wall pressure", D);
-    check_memory(st.particles.size());
+    check_memory(st.particle_count());
     s = std::make_unique<DynamicSolverT<D>>(st, opt);
     summary["state_file"] = args.state_file;
     if (s->time() >= phase_end(phases, phases.size() - 1) - 0.5 * s->dt())
@@ -453,7 +468,9 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
     }
     Box box;
     double length_unit = 0.0;
-    Particles P = D == 2 ? make_sample(sample, lp, box, &length_unit) : make_sample3(sample, lp, box, &length_unit);
+    ParticlesT<D> P;
+    if constexpr (D == 2) P = make_sample(sample, lp, box, &length_unit);
+    else P = make_sample3(sample, lp, box, &length_unit);
     check_memory(P.size());
     set_stress_walls(box, pressure, lp, D);
     s = std::make_unique<DynamicSolverT<D>>(std::move(P), lp, box, opt);

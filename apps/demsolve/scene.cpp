@@ -19,21 +19,21 @@ namespace netdem::app::dem {
 template <int D>
 void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, const std::string& tag,
                             std::vector<ContactInfo>& cs) {
-  const Particles& P = s.particles();
+  const ParticlesT<D>& P = s.particles();
+  const std::vector<double> x = P.axis(0), y = P.axis(1), z = D == 3 ? P.axis(D - 1) : std::vector<double>{};
   std::vector<double> pre(P.size(), 0.0);
   for (auto p : s.prescribed()) pre[p] = 1.0;
   Field vel{"velocity", 3, {}};
-  for (std::size_t i = 0; i < P.size(); ++i) vel.values.insert(vel.values.end(), {P.vx[i], P.vy[i], D == 3 ? P.vz[i] : 0.0});
+  for (std::size_t i = 0; i < P.size(); ++i)
+    vel.values.insert(vel.values.end(), {P.vel[D * i], P.vel[D * i + 1], D == 3 ? P.vel[D * i + D - 1] : 0.0});
   if constexpr (D == 2) {
     write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
-                      vtp_particles(P.x, P.y,
-                                    {{"radius", 1, P.radius}, {"theta", 1, P.theta}, {"peripheral", 1, pre}, vel,
-                                     {"omega", 1, P.omega}}));
+                      vtp_particles(x, y,
+                                    {{"radius", 1, P.r}, {"theta", 1, P.rot}, {"peripheral", 1, pre}, vel,
+                                     {"omega", 1, P.spin}}));
   } else {
-    Field spin{"spin", 3, {}};
-    for (std::size_t i = 0; i < P.size(); ++i) spin.values.insert(spin.values.end(), {P.wx[i], P.wy[i], P.omega[i]});
     write_file_atomic(out / fmt::format("particles_{}.vtp", tag),
-                      vtp_particles_3d(P.x, P.y, &P.z, {{"radius", 1, P.radius}, {"prescribed", 1, pre}, vel, spin}));
+                      vtp_particles_3d(x, y, &z, {{"radius", 1, P.r}, {"prescribed", 1, pre}, vel, {"spin", 3, P.spin}}));
   }
   s.contacts(cs);
   std::vector<int> ci, cj;
@@ -41,7 +41,7 @@ void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, con
   for (const auto& c : cs) {
     if (c.wall >= 0 || !(c.f_spring > 0.0)) continue;  // the meter's loaded contacts (compaction.hpp)
     if (s.periodic()) {  // a contact through an image is not drawn (a line across the cell)
-      const double dx = P.x[c.j] - P.x[c.i], dy = P.y[c.j] - P.y[c.i], dz = D == 3 ? P.z[c.j] - P.z[c.i] : 0.0;
+      const double dx = x[c.j] - x[c.i], dy = y[c.j] - y[c.i], dz = D == 3 ? z[c.j] - z[c.i] : 0.0;
       if (std::sqrt(dx * dx + dy * dy + dz * dz) > c.d_i + c.d_j + 1e-9 * (c.d_i + c.d_j)) continue;
     }
     ci.push_back(static_cast<int>(c.i));
@@ -70,9 +70,9 @@ void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, con
   }
   const auto file = out / fmt::format("contacts_{}.vtp", tag);
   if constexpr (D == 2) {
-    write_file_atomic(file, vtp_network(P.x, P.y, ci, cj, {fn, ft, ov, sl}));
+    write_file_atomic(file, vtp_network(x, y, ci, cj, {fn, ft, ov, sl}));
   } else {
-    write_file_atomic(file, vtp_network_3d(P.x, P.y, &P.z, ci, cj, {fn, ft, ov, sl}));
+    write_file_atomic(file, vtp_network_3d(x, y, &z, ci, cj, {fn, ft, ov, sl}));
   }
 }
 

@@ -180,7 +180,7 @@ class YieldRun {
 };
 
 void YieldRun::setup() {
-  Particles P = d_.periodic ? periodic_particles_from(pk_, 1.0) : particles_from(pk_, 1.0);
+  Particles P = d_.periodic ? periodic_particles_from<2>(pk_, 1.0) : particles_from(pk_, 1.0);
   Box box(pk_.box);
   box.contact_walls = false;
   box.right.mode = box.top.mode = WallMode::Affine;
@@ -240,7 +240,7 @@ bool YieldRun::precompact() {
                  a_.precompact.c_str(), d_.compact_bc.c_str(), a_.friction.c_str(), a_.inertial_number, 2.0 * gdot_p_,
                  d_.selection.size(), a_.directions, jobs_);
   double r_mean = 0.0;
-  for (double r : s_->particles().radius) r_mean += r;
+  for (double r : s_->particles().r) r_mean += r;
   r_mean /= static_cast<double>(n);
   meter_ = std::make_unique<Meter>(false, r_mean);
   win_ = std::make_unique<WindowRunner>(*s_, *meter_);
@@ -281,7 +281,7 @@ bool YieldRun::precompact() {
   t_compact_ = seconds_since(t0);
   int outside = 0;  // (a periodic cell has no outside: its positions are unwrapped)
   for (std::size_t p = 0; p < n && !d_.periodic; ++p) {
-    const double x = s.particles().x[p], y = s.particles().y[p];
+    const double x = s.particles().coord(p, 0), y = s.particles().coord(p, 1);
     outside += x < s.box().x_min || x > s.box().x_max || y < s.box().y_min || y > s.box().y_max;
   }
   j_["command"] = command_;

@@ -49,27 +49,28 @@ Eigen::Matrix<double, D, D> tensor_of_difference(const Voigt<D>& a, const Voigt<
 /// the spins.
 template <int D>
 double fluctuating_kinetic(const DynamicSolverT<D>& s, const std::vector<std::uint8_t>& is_pre) {
-  const Particles& P = s.particles();
+  const ParticlesT<D>& P = s.particles();
   const Box& bx = s.box();
   double e = 0.0;
   if (s.periodic()) return s.energies().kinetic;  // the velocities are the fluctuations
   for (std::size_t i = 0; i < P.size(); ++i) {
     if constexpr (D == 2) {
-      e += 0.5 * P.inertia[i] * P.omega[i] * P.omega[i];
+      e += 0.5 * P.inertia[i] * P.spin[i] * P.spin[i];
       if (is_pre[i]) continue;
-      const double dx = P.x[i] - bx.x_min, dy = P.y[i] - bx.y_min;
-      double wx = P.vx[i] - s.strain_rate_11() * dx;
-      double wy = P.vy[i] - s.strain_rate_22() * dy;
+      const double dx = P.pos[2 * i] - bx.x_min, dy = P.pos[2 * i + 1] - bx.y_min;
+      double wx = P.vel[2 * i] - s.strain_rate_11() * dx;
+      double wy = P.vel[2 * i + 1] - s.strain_rate_22() * dy;
       if (s.strain_rate_12() != 0.0) {
         wx -= s.strain_rate_12() * dy;
         wy -= s.strain_rate_12() * dx;
       }
       e += 0.5 * P.mass[i] * (wx * wx + wy * wy);
     } else {
-      e += 0.5 * P.inertia[i] * (P.wx[i] * P.wx[i] + P.wy[i] * P.wy[i] + P.omega[i] * P.omega[i]);
+      const double* const om = &P.spin[3 * i];
+      e += 0.5 * P.inertia[i] * (om[0] * om[0] + om[1] * om[1] + om[2] * om[2]);
       if (is_pre[i]) continue;
-      const double x[3] = {P.x[i] - bx.x_min, P.y[i] - bx.y_min, P.z[i] - bx.z_min};
-      const double v[3] = {P.vx[i], P.vy[i], P.vz[i]};
+      const double x[3] = {P.pos[3 * i] - bx.x_min, P.pos[3 * i + 1] - bx.y_min, P.pos[3 * i + 2] - bx.z_min};
+      const double* const v = &P.vel[3 * i];
       for (int a = 0; a < 3; ++a) {
         double w = v[a];
         for (int q = 0; q < 3; ++q) w -= s.strain_rate3(a, q) * x[q];
@@ -106,17 +107,17 @@ class OutsideTest {
   OutsideTest(const DynamicSolverT<D>& s, bool shear) : s_(s), box0_(s.box()), shear_(shear) {}
   bool operator()(std::size_t p) const {
     if (s_.periodic()) return false;  // a periodic cell has no outside
-    const Particles& Q = s_.particles();
+    const ParticlesT<D>& Q = s_.particles();
     const Box& b = s_.box();
     if constexpr (D == 2) {
-      const double x = Q.x[p], y = Q.y[p];
+      const double x = Q.pos[2 * p], y = Q.pos[2 * p + 1];
       if (!shear_) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max;
       const auto& F = s_.box_deformation();
       const double det = F[0] * F[3] - F[1] * F[2], dx = x - box0_.x_min, dy = y - box0_.y_min;
       const double X = (F[3] * dx - F[1] * dy) / det, Y = (-F[2] * dx + F[0] * dy) / det;
       return X < 0.0 || X > box0_.x_max - box0_.x_min || Y < 0.0 || Y > box0_.y_max - box0_.y_min;
     } else {
-      const double x = Q.x[p], y = Q.y[p], z = Q.z[p];
+      const double x = Q.pos[3 * p], y = Q.pos[3 * p + 1], z = Q.pos[3 * p + 2];
       if (!shear_) return x < b.x_min || x > b.x_max || y < b.y_min || y > b.y_max || z < b.z_min || z > b.z_max;
       const auto& Fm = s_.affine_map3();
       Eigen::Matrix3d F;
@@ -167,7 +168,7 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
   m.S = s.periodic() ? m.Sc : voigt_of<D>(walls_ ? s.wall_stress() : s.boundary_stress());
   m.Sk = voigt_of<D>(s.kinetic_stress());
   s.contacts(cs_);
-  const Particles& P = s.particles();
+  const ParticlesT<D>& P = s.particles();
   auto& formed = formed_;  // (a member: its buckets are reused from sample to sample)
   formed.clear();
   formed.reserve(cs_.size());
@@ -191,7 +192,7 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
       n << ct.nx, ct.ny, ct.nz;
     }
     // Eq 16 with the strain accumulated since the contact formed
-    dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.radius[ct.i] + P.radius[ct.j]));
+    dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.r[ct.i] + P.r[ct.j]));
   }
   form_.swap(formed);
   prev_ = E;
@@ -359,7 +360,7 @@ class LegRunner {
     for (std::size_t p = 0; p < s_.particles().size(); ++p) {
       const bool out = outside_box_(p);
       r.outside += out;
-      if (!out) in += particle_measure<D>(s_.particles().radius[p]);
+      if (!out) in += particle_measure<D>(s_.particles().r[p]);
     }
     r.density_in_box = s_.periodic() ? s_.density() : in / box_measure<D>(s_.box());
     if (o_.walls) {
@@ -476,7 +477,7 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const std::vector<Com
                                               "{:g}), more than the step limit {:.3g}: raise the inertial number or the "
                                               "step limit", steps_est, sum.dt_first, o.inertial_number, o.max_steps));
   double r_mean = 0.0;
-  for (double r : s.particles().radius) r_mean += r;
+  for (double r : s.particles().r) r_mean += r;
   r_mean /= static_cast<double>(s.particles().size());
   LegRunner<D> run(s, legs, o, obs, sum, r_mean, shear, T);
   run.report(0, run.measure(), 1);

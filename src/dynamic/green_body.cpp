@@ -25,14 +25,7 @@ void need(bool ok, const char* name, const char* rule, double v) {
 }
 
 packing::Packing packing_of(const DynamicSolver3& s, std::uint64_t seed) {
-  const Particles& P = s.particles();
-  packing::Packing p;
-  p.dim = 3;
-  p.x = P.x;
-  p.y = P.y;
-  p.z = P.z;
-  p.r = P.radius;
-  p.box = static_cast<const packing::Box&>(s.box());
+  packing::Packing p = to_packing(s.particles(), s.box());
   p.seed = seed;
   return p;
 }
@@ -201,8 +194,7 @@ class GreenBodyRoute {
     res_.cloud_box = fo.box;
     const packing::Packing cloud = packing::random_fill_3d(fo);
     vs_ = cloud.solid_volume();
-    Particles P;
-    P.dim = 3;
+    Particles3 P;
     for (std::size_t i = 0; i < cloud.size(); ++i)
       P.add_sphere(cloud.x[i], cloud.y[i], cloud.z[i], cloud.r[i], o_.solid_density);
     Box box(fo.box);
@@ -219,9 +211,12 @@ class GreenBodyRoute {
   // translational kinetic energy per sphere / (m g r): a sphere spinning in place (e.g. touching
   // frictionless walls only, which cannot stop its spin) does not move the packing
   double kinetic() const {
-    const Particles& Q = s_->particles();
+    const Particles3& Q = s_->particles();
     double e = 0.0;
-    for (std::size_t i = 0; i < Q.size(); ++i) e += Q.mass[i] * (Q.vx[i] * Q.vx[i] + Q.vy[i] * Q.vy[i] + Q.vz[i] * Q.vz[i]);
+    for (std::size_t i = 0; i < Q.size(); ++i) {
+      const double* const v = &Q.vel[3 * i];
+      e += Q.mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    }
     return 0.5 * e / static_cast<double>(o_.n) / mgr_;
   }
 
@@ -298,11 +293,11 @@ class GreenBodyRoute {
     ph.name = "lid";
     const auto w0 = clock::now();
     const double t0 = s.time();
-    const Particles& Q = s.particles();
-    double top = 0.0, rmin = Q.radius[0];
+    const Particles3& Q = s.particles();
+    double top = 0.0, rmin = Q.r[0];
     for (std::size_t i = 0; i < Q.size(); ++i) {
-      top = std::max(top, Q.z[i] + Q.radius[i]);
-      rmin = std::min(rmin, Q.radius[i]);
+      top = std::max(top, Q.coord(i, 2) + Q.r[i]);
+      rmin = std::min(rmin, Q.r[i]);
     }
     const double travel = s.box().z_max - top;
     if (travel > 0.0) {

@@ -13,17 +13,7 @@ sys::JammedStateT<D> raw_jammed(const SolverState& st, const Eigen::Matrix<doubl
   using H = contact::PlasticIndentationHistoryT<D>;
   if (!st.holds<H>()) throw std::invalid_argument("jammed state: the DEM run is not of the plastic-indentation law");
   sys::JammedStateT<D> j;
-  const Particles& P = st.particles;
-  const std::size_t n = P.size();
-  j.particles.pos.resize(D * n);
-  for (std::size_t p = 0; p < n; ++p) {
-    j.particles.pos[D * p] = P.x[p];
-    j.particles.pos[D * p + 1] = P.y[p];
-    if constexpr (D == 3) j.particles.pos[D * p + 2] = P.z[p];
-  }
-  if constexpr (D == 2) j.particles.rot = P.theta;
-  else j.particles.rot.assign(3 * n, 0.0);
-  j.particles.r = P.radius;
+  j.particles = st.particles_of<D>();  // the centres, rotations (3D: zero) and radii
   j.box = st.box;
   j.walls = st.box.enabled && st.box.contact_walls;
   j.strain = strain;
@@ -72,8 +62,8 @@ DynamicSolverT<D> solver_from_jammed(const sys::JammedStateT<D>& j, double rho, 
   using H = contact::PlasticIndentationHistoryT<D>;
   j.validate();
   const packing::Packing pk = j.packing();
-  Particles P = D == 2 ? particles_from(pk, rho) : spheres_from(pk, rho);
-  if constexpr (D == 2) P.theta = j.particles.rot;
+  ParticlesT<D> P = particles_at_rest<D>(pk, rho);
+  if constexpr (D == 2) P.rot = j.particles.rot;
   Box box = control;
   static_cast<packing::Box&>(box) = j.box;
   box.contact_walls = j.walls;
@@ -113,8 +103,8 @@ sys::JammedStateT<D> jammed_state(const DynamicSolverT<D>& s, const Eigen::Matri
                                   std::uint64_t seed) {
   SolverState st = s.state();
   // at rest: the same positions, zero velocities, the forces evaluated again (no slip increment)
-  Particles& P = st.particles;
-  for (auto* v : {&P.vx, &P.vy, &P.omega, &P.vz, &P.wx, &P.wy}) std::fill(v->begin(), v->end(), 0.0);
+  ParticlesT<D>& P = st.particles_of<D>();
+  for (auto* v : {&P.vel, &P.spin}) std::fill(v->begin(), v->end(), 0.0);
   std::fill(std::begin(st.wall_velocity), std::end(st.wall_velocity), 0.0);
   std::fill(std::begin(st.wall_velocity3), std::end(st.wall_velocity3), 0.0);
   st.plastic.damping_n = st.plastic.damping_t = 0.0;

@@ -255,7 +255,7 @@ packing::Packing make(const PeriodicPackOptions& o, PeriodicPackSummary& m, cons
   opt.model = ContactModel::Linear;
   opt.steps_per_contact = 25.0;
   opt.affine_drag = 0.0;
-  Particles P = periodic_particles_from(gas, 1.0);
+  ParticlesT<D> P = periodic_particles_from<D>(gas, 1.0);
   DynamicSolverT<D> s(std::move(P), lp, packing::periodic_cell<D>(gas), opt);
   m.dt = s.dt();
   // the drag on the fluctuations: 0.3 / t_c of the mean pair

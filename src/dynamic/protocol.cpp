@@ -63,8 +63,8 @@ Particles place_sample(const SampleSpec& a, const LudingParams& lp, Box& box) {
   for (std::size_t i = 0; i < r.size(); ++i) P.add(placed.x[i], placed.y[i], r[i], lp);
   const double v0 = 0.01;  // [m/s]
   for (std::size_t i = 0; i < r.size(); ++i) {
-    P.vx[i] = v0 * (2.0 * uniform01(rng) - 1.0);
-    P.vy[i] = v0 * (2.0 * uniform01(rng) - 1.0);
+    P.vel[2 * i] = v0 * (2.0 * uniform01(rng) - 1.0);
+    P.vel[2 * i + 1] = v0 * (2.0 * uniform01(rng) - 1.0);
   }
   return P;
 }
@@ -111,7 +111,7 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
   return particles_from(q, lp);
 }
 
-Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
+Particles3 place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
   if (a.n < 1 || a.n > 1000000) throw FieldError("n", fmt::format("the number of particles n must be in [1, 1e6], got {}", a.n));
   if (a.arrangement != "random")
     throw FieldError("arrangement", "the triangle and line arrangements are the 2D three-disk control of LMM05 4.1.3 (disks, not spheres)");
@@ -130,7 +130,7 @@ Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
   const packing::Packing placed = packing::random_fill_3d(o);
   box.x_min = box.y_min = box.z_min = 0.0;
   box.x_max = box.y_max = box.z_max = L;
-  Particles P;
+  Particles3 P;
   std::mt19937_64 rng(a.seed + 1);
   const double v0 = 0.01;  // [m/s]
   for (std::size_t i = 0; i < placed.size(); ++i) {
@@ -141,7 +141,7 @@ Particles place_sample3(const SampleSpec& a, const LudingParams& lp, Box& box) {
   return P;
 }
 
-Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
+Particles3 make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit) {
   if (spec.packing_file.empty()) return place_sample3(spec, lp, box);
   const packing::Packing p = packing::read_packing_csv(spec.packing_file);
   if (p.dim != 3) throw std::invalid_argument(fmt::format("{} is a 2D packing; a sample of spheres needs a 3D one (# dim 3)", spec.packing_file));
@@ -158,7 +158,7 @@ Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box,
   box.y_max = s * p.box.y_max;
   box.z_max = s * p.box.z_max;
   for (std::size_t i = 0; i < p.size(); ++i) box.z_max = std::max(box.z_max, s * (p.z[i] + p.r[i]));
-  Particles P;
+  Particles3 P;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const double x = s * p.x[i], y = s * p.y[i], z = s * p.z[i], r = s * p.r[i], tol = 1e-9 * r;
     if (!(r >= 0.01 * lp.a0 && r <= 100.0 * lp.a0))
@@ -205,7 +205,8 @@ ContactCounts count_contacts(const DynamicSolverT<D>& s, std::vector<std::pair<s
   return {buffer.size(), s.wall_contacts()};
 }
 
-void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
+template <int D>
+void particle_stress(const ParticlesT<D>& P, const std::vector<ContactInfo>& cs, std::vector<double>& p,
                      std::vector<double>& z) {
   p.assign(P.size(), 0.0);
   z.assign(P.size(), 0.0);
@@ -217,11 +218,15 @@ void particle_stress(const Particles& P, const std::vector<ContactInfo>& cs, std
       z[c.j] += 1.0;
     }
   }
-  if (P.dim == 3)
-    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 4.0 * std::numbers::pi * P.radius[i] * P.radius[i] * P.radius[i];
+  if (D == 3)
+    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 4.0 * std::numbers::pi * P.r[i] * P.r[i] * P.r[i];
   else
-    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.radius[i] * P.radius[i];
+    for (std::size_t i = 0; i < P.size(); ++i) p[i] /= 2.0 * std::numbers::pi * P.r[i] * P.r[i];
 }
+template void particle_stress(const Particles&, const std::vector<ContactInfo>&, std::vector<double>&,
+                              std::vector<double>&);
+template void particle_stress(const Particles3&, const std::vector<ContactInfo>&, std::vector<double>&,
+                              std::vector<double>&);
 
 namespace {
 /// The step at whose end time t lies (t / dt rounded up, 1e-6 steps of slack for rounding).

@@ -101,15 +101,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
   const Law wall_law = make_law<Law>(wall_params_, thermal_.k1_Tt, pl_wall_params_);
   ForceSums a;
   if (!forces_initialised_) {  // (step() does this in its first pass over the particles)
-    for (std::size_t i = 0; i < n; ++i) {
-      P_.fx[i] = P_.mass[i] * opt_.gravity_x;
-      P_.fy[i] = P_.mass[i] * opt_.gravity_y;
-      P_.torque[i] = 0.0;
-      if constexpr (D == 3) {
-        P_.fz[i] = P_.mass[i] * opt_.gravity_z;
-        P_.tx[i] = P_.ty[i] = 0.0;
-      }
-    }
+    const double g[3] = {opt_.gravity_x, opt_.gravity_y, opt_.gravity_z};
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < D; ++c) P_.force[D * i + c] = P_.mass[i] * g[c];
+    std::fill(P_.torque.begin(), P_.torque.end(), 0.0);
   }
   forces_initialised_ = false;
   if (periodic_) {  // (the 3D stress sums per contact, through the images)
@@ -171,22 +166,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
   const std::size_t n_pairs = pair_key_.size();
   if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
-  const double* const p_x = P_.x.data();
-  const double* const p_y = P_.y.data();
-  const double* const p_z = P_.z.data();
-  const double* const p_vx = P_.vx.data();
-  const double* const p_vy = P_.vy.data();
-  const double* const p_vz = P_.vz.data();
-  const double* const p_wx = P_.wx.data();
-  const double* const p_wy = P_.wy.data();
-  const double* const p_omega = P_.omega.data();
-  const double* const p_radius = P_.radius.data();
-  double* const p_fx = P_.fx.data();
-  double* const p_fy = P_.fy.data();
-  double* const p_fz = P_.fz.data();
-  double* const p_tx = P_.tx.data();
-  double* const p_ty = P_.ty.data();
-  double* const p_torque = P_.torque.data();
+  // (positions, velocities and forces D per particle; spins and torques kRot: 2D omega, 3D (x, y, z))
+  const double* const p_x = P_.pos.data();
+  const double* const p_v = P_.vel.data();
+  const double* const p_w = P_.spin.data();
+  const double* const p_radius = P_.r.data();
+  double* const p_f = P_.force.data();
+  double* const p_t = P_.torque.data();
   // the cell and the strain rate (Periodic), hoisted: 3 x 3 with zeros beyond D
   double hc[3][3] = {}, Lr[3][3] = {};
   const int* const shift = pair_shift_.data();
@@ -195,10 +181,12 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
     const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
-    double dx = p_x[j] - p_x[i], dy = p_y[j] - p_y[i];
+    const double* const xi = p_x + D * i;  // the centres of i and j
+    const double* const xj = p_x + D * j;
+    double dx = xj[0] - xi[0], dy = xj[1] - xi[1];
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
-    if constexpr (D == 3) dz = p_z[j] - p_z[i];
+    if constexpr (D == 3) dz = xj[2] - xi[2];
     if constexpr (Periodic) add_image<D>(shift + D * k, hc, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
@@ -219,13 +207,14 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
-      double rvx = p_vx[j] - p_vx[i], rvy = p_vy[j] - p_vy[i];
+      const double *const vi = p_v + D * i, *const vj = p_v + D * j;
+      double rvx = vj[0] - vi[0], rvy = vj[1] - vi[1];
       if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
         rvx += Lr[0][0] * dx + Lr[0][1] * dy;
         rvy += Lr[1][0] * dx + Lr[1][1] * dy;
       }
       const double vn = rvx * nx + rvy * ny;
-      const double vt = rvx * tx + rvy * ty - p_omega[i] * di - p_omega[j] * dj;
+      const double vt = rvx * tx + rvy * ty - p_w[i] * di - p_w[j] * dj;
       contact::ContactKinematics in;
       in.overlap = s - L;
       in.v_n = -vn;
@@ -235,19 +224,20 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       if constexpr (contact::kReadsPairProperties<Law>) {  // (the Luding law reads neither)
         in.overlap_start = in.overlap - in.v_n * dt;
         in.r_eff = ri * rj / s;
-        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);  // (not hoisted: one register less)
       }
       double f_n, f_t;
       contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-      p_fx[j] += fx;
-      p_fy[j] += fy;
-      p_fx[i] -= fx;
-      p_fy[i] -= fy;
-      p_torque[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-      p_torque[j] -= dj * f_t;
+      double *const fi = p_f + D * i, *const fj = p_f + D * j;
+      fj[0] += fx;
+      fj[1] += fy;
+      fi[0] -= fx;
+      fi[1] -= fy;
+      p_t[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
+      p_t[j] -= dj * f_t;
       sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
       sxy += fx * dy;
       syx += fy * dx;
@@ -258,12 +248,14 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
-      Eigen::Vector3d vrel(p_vx[j] - p_vx[i], p_vy[j] - p_vy[i], p_vz[j] - p_vz[i]);
+      const double *const vi = p_v + D * i, *const vj = p_v + D * j;
+      Eigen::Vector3d vrel(vj[0] - vi[0], vj[1] - vi[1], vj[2] - vi[2]);
       if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
         const double br[3] = {dx, dy, dz};
         for (int r = 0; r < 3; ++r) vrel(r) += Lr[r][0] * br[0] + Lr[r][1] * br[1] + Lr[r][2] * br[2];
       }
-      const Eigen::Vector3d wi(p_wx[i], p_wy[i], p_omega[i]), wj(p_wx[j], p_wy[j], p_omega[j]);
+      const double *const oi = p_w + D * i, *const oj = p_w + D * j;  // (kRot = D)
+      const Eigen::Vector3d wi(oi[0], oi[1], oi[2]), wj(oj[0], oj[1], oj[2]);
       const Eigen::Vector3d W = di * wi + dj * wj;  // L x the pair's rotation rate (kinematics.hpp)
       // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
       const double vn = vrel.dot(n);
@@ -279,7 +271,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       if constexpr (contact::kReadsPairProperties<Law>) {
         in.overlap_start = in.overlap - in.v_n * dt;
         in.r_eff = ri * rj / s;
-        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);
+        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);  // (not hoisted: one register less)
       }
       double f_n;
       Eigen::Vector3d f_t;
@@ -287,19 +279,21 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const Eigen::Vector3d f = f_n * n + f_t;  // on j
-      p_fx[j] += f.x();
-      p_fy[j] += f.y();
-      p_fz[j] += f.z();
-      p_fx[i] -= f.x();
-      p_fy[i] -= f.y();
-      p_fz[i] -= f.z();
+      double *const fi = p_f + D * i, *const fj = p_f + D * j;
+      fj[0] += f.x();
+      fj[1] += f.y();
+      fj[2] += f.z();
+      fi[0] -= f.x();
+      fi[1] -= f.y();
+      fi[2] -= f.z();
       const Eigen::Vector3d m = n.cross(f_t);  // M_i = -d_i n x f_t, M_j = -d_j n x f_t
-      p_tx[i] -= di * m.x();
-      p_ty[i] -= di * m.y();
-      p_torque[i] -= di * m.z();
-      p_tx[j] -= dj * m.x();
-      p_ty[j] -= dj * m.y();
-      p_torque[j] -= dj * m.z();
+      double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
+      ti[0] -= di * m.x();
+      ti[1] -= di * m.y();
+      ti[2] -= di * m.z();
+      tj[0] -= dj * m.x();
+      tj[1] -= dj * m.y();
+      tj[2] -= dj * m.z();
       if constexpr (Periodic) {  // Sigma V = sum f (x) l, l the branch to the image
         const double br[3] = {dx, dy, dz};
         for (int r = 0; r < 3; ++r)
@@ -315,12 +309,8 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
 template <int D>
 void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
   const std::size_t n = P_.size();
-  const double* const p_x = P_.x.data();
-  const double* const p_y = P_.y.data();
-  const double* const p_z = P_.z.data();
-  const double* const p_fx = P_.fx.data();
-  const double* const p_fy = P_.fy.data();
-  const double* const p_fz = P_.fz.data();
+  const double* const p_x = P_.pos.data();
+  const double* const p_f = P_.force.data();
   double (&s3)[3][3] = a.s3;
   // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
   // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
@@ -329,11 +319,13 @@ void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
   // coordinates).
   const double* const p_mass = P_.mass.data();
   const double gx = opt_.gravity_x, gy = opt_.gravity_y, gz = opt_.gravity_z;
-  const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_y[0] : 0.0, z0 = n > 0 ? p_z[0] : 0.0;
+  const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_x[1] : 0.0, z0 = n > 0 ? p_x[D - 1] : 0.0;
   double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double Fx = p_fx[i] - p_mass[i] * gx, Fy = p_fy[i] - p_mass[i] * gy, Fz = p_fz[i] - p_mass[i] * gz;
-    const double X = p_x[i] - x0, Y = p_y[i] - y0, Z = p_z[i] - z0;
+    const double* const f = p_f + D * i;
+    const double* const x = p_x + D * i;
+    const double Fx = f[0] - p_mass[i] * gx, Fy = f[1] - p_mass[i] * gy, Fz = f[D - 1] - p_mass[i] * gz;
+    const double X = x[0] - x0, Y = x[1] - y0, Z = x[D - 1] - z0;
     s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
     s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
     s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
@@ -367,7 +359,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, Force
       const std::size_t i = use_list ? wall_list_[c] : c;
       // distances to the four walls (= wn . (x - wall), exactly); skip the particle when it
       // overlaps no wall and touched none at the last evaluation (histories already fresh)
-      const double xi = P_.x[i], yi = P_.y[i], ai = P_.radius[i];
+      const double xi = P_.pos[D * i], yi = P_.pos[D * i + 1], ai = P_.r[i];
       const double d4[4] = {xi - box_.x_min, box_.x_max - xi, yi - box_.y_min, box_.y_max - yi};
       const unsigned touch = (ai - d4[0] > 0.0 ? 1u : 0u) | (ai - d4[1] > 0.0 ? 2u : 0u) |
                              (ai - d4[2] > 0.0 ? 4u : 0u) | (ai - d4[3] > 0.0 ? 8u : 0u);
@@ -388,9 +380,9 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, Force
           }
         }
         const double nx = wnx[w], ny = wny[w], tx = -ny, ty = nx;
-        const double rvx = P_.vx[i] - wvx[w], rvy = P_.vy[i] - wvy[w];
+        const double rvx = P_.vel[D * i] - wvx[w], rvy = P_.vel[D * i + 1] - wvy[w];
         const double vn = rvx * nx + rvy * ny;
-        const double vt = rvx * tx + rvy * ty - P_.omega[i] * dist;
+        const double vt = rvx * tx + rvy * ty - P_.spin[i] * dist;
         contact::ContactKinematics in;
         in.overlap = delta;
         in.v_n = -vn;
@@ -406,8 +398,8 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_2d(const Law& wall_law, Force
         contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
         if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
         const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // on particle
-        P_.fx[i] += fx;
-        P_.fy[i] += fy;
+        P_.force[D * i] += fx;
+        P_.force[D * i + 1] += fy;
         P_.torque[i] -= dist * f_t;
         wf[w] -= w < 2 ? fx : fy;  // force of the contacts on the wall along x (y)
         const double lx = dist * nx, ly = dist * ny;  // contact point -> particle centre
@@ -444,7 +436,8 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, Force
       const double lo[3] = {box_.x_min, box_.y_min, box_.z_min}, hi[3] = {box_.x_max, box_.y_max, box_.z_max};
       for (std::size_t c = 0; c < n_visit; ++c) {
         const std::size_t i = use_list ? wall_list_[c] : c;
-        const double pos[3] = {P_.x[i], P_.y[i], P_.z[i]}, ai = P_.radius[i];
+        const double* const pos = &P_.pos[D * i];
+        const double ai = P_.r[i];
         double d6[6];
         unsigned touch = 0;
         for (int w = 0; w < 6; ++w) {
@@ -454,7 +447,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, Force
         const unsigned todo = touch | wall_touch_[i];
         wall_touch_[i] = static_cast<std::uint8_t>(touch);
         if (todo == 0) continue;
-        const Eigen::Vector3d wi(P_.wx[i], P_.wy[i], P_.omega[i]);
+        const Eigen::Vector3d wi(P_.spin[D * i], P_.spin[D * i + 1], P_.spin[D * i + 2]);  // (kRot = D)
         for (int w = 0; w < 6; ++w) {
           if (!((todo >> w) & 1u)) continue;
           H& h = wall_hist[kWalls * i + static_cast<std::size_t>(w)];
@@ -471,7 +464,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, Force
           const int ax = w / 2;
           Eigen::Vector3d nw = Eigen::Vector3d::Zero();
           nw(ax) = (w & 1) ? -1.0 : 1.0;
-          Eigen::Vector3d vrel(P_.vx[i], P_.vy[i], P_.vz[i]);
+          Eigen::Vector3d vrel(P_.vel[D * i], P_.vel[D * i + 1], P_.vel[D * i + 2]);
           if (w & 1) vrel(ax) -= wall_v_[ax];
           const double vn = vrel.dot(nw);
           const Eigen::Vector3d vc = vrel - dist * wi.cross(nw);  // the particle's contact point
@@ -493,13 +486,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, Force
           contact::update_contact<InPlace>(wall_law, h, in, f_n, f_t);
           if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
           const Eigen::Vector3d f = f_n * nw + f_t;  // on the particle
-          P_.fx[i] += f.x();
-          P_.fy[i] += f.y();
-          P_.fz[i] += f.z();
+          P_.force[D * i] += f.x();
+          P_.force[D * i + 1] += f.y();
+          P_.force[D * i + 2] += f.z();
           const Eigen::Vector3d m = nw.cross(f_t);  // -dist n x f_t
-          P_.tx[i] -= dist * m.x();
-          P_.ty[i] -= dist * m.y();
-          P_.torque[i] -= dist * m.z();
+          P_.torque[D * i] -= dist * m.x();
+          P_.torque[D * i + 1] -= dist * m.y();
+          P_.torque[D * i + 2] -= dist * m.z();
           wf[w] -= f(ax);  // the force of the contacts on the wall along its axis
           const Eigen::Vector3d l = dist * nw;  // contact point -> particle centre
           for (int r = 0; r < 3; ++r)
@@ -513,118 +506,76 @@ NETDEM_FLATTEN void DynamicSolverT<D>::wall_forces_3d(const Law& wall_law, Force
 
 // ---- integration: velocity Verlet, LMM05 Eq 2 and Eq 1 ------------------------------------------
 namespace {
-// Half kick v += h f / m, omega += h tau / I (with the inverses), on distinct arrays (restrict:
-// the loops vectorise without alias checks).
-// Track (the steps of an instability check only): also returns max vx^2 + vy^2 after the kick
-// (NaN if a velocity is NaN), so that the check needs no pass of its own over the velocities.
-template <bool Track>
-double kick_pass(std::size_t n, double h, double* __restrict vx, double* __restrict vy,
-                 double* __restrict om, const double* __restrict fx, const double* __restrict fy,
-                 const double* __restrict tq, const double* __restrict im,
-                 const double* __restrict iI) {
+// The passes run over flat arrays: the translational ones over D n entries (velocities, forces,
+// positions and the inverse masses, D per particle), the rotational ones over kRot n, so that
+// every stream advances at the same stride and the loops vectorise without shuffles; the arrays
+// are restrict parameters (GCC keeps restrict for a function's parameters, not for local
+// pointers).
+// Half kick v += h f / m, w += h tau / I (spheres have an isotropic inertia, so the spin kick is
+// h tau / I per component). Track (the steps of an instability check only): also returns max
+// |v|^2 after the kick (NaN if a velocity is NaN), so that the check needs no pass of its own
+// over the velocities.
+template <int D, bool Track>
+double kick_pass_impl(std::size_t n, double h, double* __restrict v, double* __restrict w,
+                      const double* __restrict f, const double* __restrict t, const double* __restrict im,
+                      const double* __restrict iI) {
+  constexpr std::size_t R = ParticlesT<D>::kRot;
+  for (std::size_t k = 0; k < D * n; ++k) v[k] += h * f[k] * im[k];
+  for (std::size_t k = 0; k < R * n; ++k) w[k] += h * t[k] * iI[k];
   double vmax2 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    vx[i] += h * fx[i] * im[i];
-    vy[i] += h * fy[i] * im[i];
-    om[i] += h * tq[i] * iI[i];
-    if constexpr (Track) {
-      const double v2 = vx[i] * vx[i] + vy[i] * vy[i];
+  if constexpr (Track) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double* const u = v + D * i;
+      double v2 = u[0] * u[0] + u[1] * u[1];
+      if constexpr (D == 3) v2 += u[2] * u[2];
       vmax2 = v2 <= vmax2 ? vmax2 : v2;  // a NaN replaces the maximum and stays
     }
   }
   return vmax2;
 }
-// First half kick and drift in one pass; also the table check (displacement since the build
-// beyond sqrt(lim2): returns 1) and the reset of the force accumulators to m g for the coming
-// force evaluation.
-template <bool Gravity>
-int kick_drift_pass_impl(std::size_t n, double h, double dt, double lim2, double* __restrict vx,
-                         double* __restrict vy, double* __restrict om, double* __restrict x,
-                         double* __restrict y, double* __restrict th, double* __restrict fx,
-                         double* __restrict fy, double* __restrict tq,
-                         const double* __restrict im, const double* __restrict iI,
-                         const double* __restrict xb, const double* __restrict yb,
-                         const double* __restrict m, double gx, double gy) {
+// The kicks' inverse masses: D per particle (im) and kRot per particle (iI).
+template <int D, bool Track>
+double kick_pass(std::size_t n, double h, ParticlesT<D>& P, const double* im, const double* iI) {
+  return kick_pass_impl<D, Track>(n, h, P.vel.data(), P.spin.data(), P.force.data(), P.torque.data(), im, iI);
+}
+// First half kick and drift (2D: the angle too); also the table check (displacement since the
+// build xb beyond sqrt(lim2): returns 1) and the reset of the force accumulators to m g for the
+// coming force evaluation.
+template <int D, bool Gravity>
+int kick_drift_pass_impl(std::size_t n, double h, double dt, double lim2, double* __restrict x, double* __restrict th,
+                         double* __restrict v, double* __restrict w, double* __restrict f, double* __restrict t,
+                         const double* __restrict m, const double* __restrict im, const double* __restrict iI,
+                         const double* __restrict xb, const double (&g)[3]) {
+  constexpr std::size_t R = ParticlesT<D>::kRot;
+  for (std::size_t k = 0; k < D * n; ++k) {
+    v[k] += h * f[k] * im[k];
+    x[k] += dt * v[k];  // drift
+  }
+  for (std::size_t k = 0; k < R * n; ++k) {
+    w[k] += h * t[k] * iI[k];
+    if constexpr (D == 2) th[k] += dt * w[k];  // (3D: the orientation is not tracked)
+    t[k] = 0.0;
+  }
   int moved = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    vx[i] += h * fx[i] * im[i];
-    vy[i] += h * fy[i] * im[i];
-    om[i] += h * tq[i] * iI[i];
-    x[i] += dt * vx[i];  // drift
-    y[i] += dt * vy[i];
-    th[i] += dt * om[i];
-    const double ddx = x[i] - xb[i], ddy = y[i] - yb[i];
-    moved |= ddx * ddx + ddy * ddy > lim2 ? 1 : 0;
-    fx[i] = Gravity ? m[i] * gx : 0.0;
-    fy[i] = Gravity ? m[i] * gy : 0.0;
-    tq[i] = 0.0;
-  }
-  return moved;
-}
-template <bool Gravity>
-int kick_drift_pass(std::size_t n, double h, double dt, double lim2, Particles& P,
-                    const double* im, const double* iI, const double* xb, const double* yb,
-                    double gx, double gy) {
-  return kick_drift_pass_impl<Gravity>(n, h, dt, lim2, P.vx.data(), P.vy.data(), P.omega.data(),
-                                       P.x.data(), P.y.data(), P.theta.data(), P.fx.data(),
-                                       P.fy.data(), P.torque.data(), im, iI, xb, yb,
-                                       P.mass.data(), gx, gy);
-}
-// 3D: the same passes over (x, y, z), the spin vector (wx, wy, omega) and the torque (tx, ty,
-// torque); spheres have an isotropic inertia, so the spin kick is h tau / I per component.
-template <bool Track>
-double kick_pass3(std::size_t n, double h, Particles& P, const double* __restrict im, const double* __restrict iI) {
-  double* __restrict vx = P.vx.data();
-  double* __restrict vy = P.vy.data();
-  double* __restrict vz = P.vz.data();
-  double* __restrict wx = P.wx.data();
-  double* __restrict wy = P.wy.data();
-  double* __restrict wz = P.omega.data();
-  const double* __restrict fx = P.fx.data();
-  const double* __restrict fy = P.fy.data();
-  const double* __restrict fz = P.fz.data();
-  const double* __restrict tx = P.tx.data();
-  const double* __restrict ty = P.ty.data();
-  const double* __restrict tz = P.torque.data();
-  double vmax2 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    vx[i] += h * fx[i] * im[i];
-    vy[i] += h * fy[i] * im[i];
-    vz[i] += h * fz[i] * im[i];
-    wx[i] += h * tx[i] * iI[i];
-    wy[i] += h * ty[i] * iI[i];
-    wz[i] += h * tz[i] * iI[i];
-    if constexpr (Track) {
-      const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-      vmax2 = v2 <= vmax2 ? vmax2 : v2;
+    const double* const xi = x + D * i;
+    const double* const bi = xb + D * i;
+    const double ddx = xi[0] - bi[0], ddy = xi[1] - bi[1];
+    double d2 = ddx * ddx + ddy * ddy;
+    if constexpr (D == 3) {
+      const double ddz = xi[2] - bi[2];
+      d2 += ddz * ddz;
     }
-  }
-  return vmax2;
-}
-int kick_drift_pass3(std::size_t n, double h, double dt, double lim2, Particles& P, const double* __restrict im,
-                     const double* __restrict iI, const double* __restrict xb, const double* __restrict yb,
-                     const double* __restrict zb, double gx, double gy, double gz) {
-  kick_pass3<false>(n, h, P, im, iI);
-  int moved = 0;
-  double* __restrict x = P.x.data();
-  double* __restrict y = P.y.data();
-  double* __restrict z = P.z.data();
-  const double* __restrict vx = P.vx.data();
-  const double* __restrict vy = P.vy.data();
-  const double* __restrict vz = P.vz.data();
-  const double* __restrict m = P.mass.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    x[i] += dt * vx[i];  // drift
-    y[i] += dt * vy[i];
-    z[i] += dt * vz[i];
-    const double ddx = x[i] - xb[i], ddy = y[i] - yb[i], ddz = z[i] - zb[i];
-    moved |= ddx * ddx + ddy * ddy + ddz * ddz > lim2 ? 1 : 0;
-    P.fx[i] = m[i] * gx;
-    P.fy[i] = m[i] * gy;
-    P.fz[i] = m[i] * gz;
-    P.tx[i] = P.ty[i] = P.torque[i] = 0.0;
+    moved |= d2 > lim2 ? 1 : 0;
+    for (int c = 0; c < D; ++c) f[D * i + c] = Gravity ? m[i] * g[c] : 0.0;
   }
   return moved;
+}
+template <int D, bool Gravity>
+int kick_drift_pass(std::size_t n, double h, double dt, double lim2, ParticlesT<D>& P, const double* im,
+                    const double* iI, const double* xb, const double (&g)[3]) {
+  return kick_drift_pass_impl<D, Gravity>(n, h, dt, lim2, P.pos.data(), P.rot.data(), P.vel.data(), P.spin.data(),
+                                          P.force.data(), P.torque.data(), P.mass.data(), im, iI, xb, g);
 }
 }  // namespace
 
@@ -706,16 +657,17 @@ void DynamicSolverT<D>::advance(bool full) {
       return (wall_force_[2 * which + 1] - w.pressure * A - w.damping * wall_v_[which]) / w.mass;
     }
   };
-  if (inv_mass_.size() != n || inv_scale_ != radius_scale_) {  // no division in the kicks
-    inv_mass_.resize(n);
-    inv_inertia_.resize(n);
+  constexpr std::size_t R = ParticlesT<D>::kRot;
+  if (inv_mass_.size() != D * n || inv_scale_ != radius_scale_) {  // no division in the kicks
+    inv_mass_.resize(D * n);  // (D per particle, kRot per particle: the kicks' flat loops)
+    inv_inertia_.resize(R * n);
     for (std::size_t i = 0; i < n; ++i) {
-      inv_mass_[i] = 1.0 / P_.mass[i];
-      inv_inertia_[i] = 1.0 / P_.inertia[i];
+      std::fill_n(&inv_mass_[D * i], D, 1.0 / P_.mass[i]);
+      std::fill_n(&inv_inertia_[R * i], R, 1.0 / P_.inertia[i]);
     }
     for (std::uint32_t p : prescribed_) {  // the kicks leave them
-      inv_mass_[p] = 0.0;
-      if (spin_held_[p]) inv_inertia_[p] = 0.0;
+      std::fill_n(&inv_mass_[D * p], D, 0.0);
+      if (spin_held_[p]) std::fill_n(&inv_inertia_[R * p], R, 0.0);
     }
     if (!rotations_) std::fill(inv_inertia_.begin(), inv_inertia_.end(), 0.0);
     inv_scale_ = radius_scale_;
@@ -729,43 +681,24 @@ void DynamicSolverT<D>::advance(bool full) {
   const double lim2 = lim * lim;
   bool far = !(lim > 0.0);
   auto kick = [&](bool drift) {
-    if constexpr (D == 3) {
-      if (drift) {
-        far = far || kick_drift_pass3(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(), x_build_.data(),
-                                      y_build_.data(), z_build_.data(), opt_.gravity_x, opt_.gravity_y,
-                                      opt_.gravity_z) != 0;
-        forces_initialised_ = true;
-      } else if (check) {
-        vmax2 = kick_pass3<true>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
-      } else {
-        kick_pass3<false>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
-      }
-      if (box_.enabled)
-        for (int a = 0; a < 3; ++a) wall_v_[a] += h * wall_accel(a);
-      return;
-    }
     if (drift) {
-      const bool gravity = opt_.gravity_x != 0.0 || opt_.gravity_y != 0.0;
-      const int moved =
-          gravity ? kick_drift_pass<true>(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(),
-                                          x_build_.data(), y_build_.data(), opt_.gravity_x,
-                                          opt_.gravity_y)
-                  : kick_drift_pass<false>(n, h, dt, lim2, P_, inv_mass_.data(),
-                                           inv_inertia_.data(), x_build_.data(), y_build_.data(),
-                                           0.0, 0.0);
+      const double g[3] = {opt_.gravity_x, opt_.gravity_y, opt_.gravity_z};
+      const bool gravity = g[0] != 0.0 || g[1] != 0.0 || (D == 3 && g[2] != 0.0);
+      const int moved = gravity ? kick_drift_pass<D, true>(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(),
+                                                           pos_build_.data(), g)
+                                : kick_drift_pass<D, false>(n, h, dt, lim2, P_, inv_mass_.data(),
+                                                            inv_inertia_.data(), pos_build_.data(), g);
       far = far || moved != 0;
       forces_initialised_ = true;
     } else if (check) {
-      vmax2 = kick_pass<true>(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(),
-                              P_.fy.data(), P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
+      vmax2 = kick_pass<D, true>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
     } else {
-      kick_pass<false>(n, h, P_.vx.data(), P_.vy.data(), P_.omega.data(), P_.fx.data(),
-                       P_.fy.data(), P_.torque.data(), inv_mass_.data(), inv_inertia_.data());
+      kick_pass<D, false>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
     }
     if (box_.enabled) {
-      const double a0 = wall_accel(0), a1 = wall_accel(1);
-      wall_v_[0] += h * a0;
-      wall_v_[1] += h * a1;
+      double acc[D];  // (all from the walls' state before the kick)
+      for (int a = 0; a < D; ++a) acc[a] = wall_accel(a);
+      for (int a = 0; a < D; ++a) wall_v_[a] += h * acc[a];
     }
   };
   kick(true);

@@ -70,34 +70,27 @@ void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33, dou
 template <int D>
 void DynamicSolverT<D>::set_affine_velocities() {
   if (periodic_) {  // the velocities are the fluctuations about the affine field
-    for (auto* v : {&P_.vx, &P_.vy, &P_.vz, &P_.omega, &P_.wx, &P_.wy}) std::fill(v->begin(), v->end(), 0.0);
+    for (auto* v : {&P_.vel, &P_.spin}) std::fill(v->begin(), v->end(), 0.0);
     return;
   }
   if constexpr (D == 3) {
     for (std::size_t i = 0; i < P_.size(); ++i) {
-      const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
-      P_.vx[i] = edot3_[0] * d[0];
-      P_.vy[i] = edot3_[1] * d[1];
-      P_.vz[i] = edot3_[2] * d[2];
-      if (shear3_) {
-        P_.vx[i] += L3_[0][1] * d[1] + L3_[0][2] * d[2];
-        P_.vy[i] += L3_[1][0] * d[0] + L3_[1][2] * d[2];
-        P_.vz[i] += L3_[2][0] * d[0] + L3_[2][1] * d[1];
-      }
-      P_.wx[i] = P_.wy[i] = P_.omega[i] = 0.0;
+      affine_velocity3(i, &P_.vel[D * i]);
+      P_.spin[D * i] = P_.spin[D * i + 1] = P_.spin[D * i + 2] = 0.0;  // (kRot = D)
     }
     return;
   }
   const double e12 = edot_[2];
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
-    P_.vx[i] = edot_[0] * dx;
-    P_.vy[i] = edot_[1] * dy;
+    const double dx = P_.pos[D * i] - box_.x_min, dy = P_.pos[D * i + 1] - box_.y_min;
+    double* const v = &P_.vel[D * i];
+    v[0] = edot_[0] * dx;
+    v[1] = edot_[1] * dy;
     if (e12 != 0.0) {
-      P_.vx[i] += e12 * dy;
-      P_.vy[i] += e12 * dx;
+      v[0] += e12 * dy;
+      v[1] += e12 * dx;
     }
-    P_.omega[i] = 0.0;
+    P_.spin[i] = 0.0;
   }
 }
 
@@ -106,14 +99,11 @@ void DynamicSolverT<D>::shift_affine_velocities(const Eigen::Matrix<double, D, D
   if (periodic_) return;  // the velocities are the fluctuations about the affine field
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) continue;  // imposed at the next step
+    const double lo[3] = {box_.x_min, box_.y_min, box_.z_min};
     Eigen::Matrix<double, D, 1> d;
-    d(0) = P_.x[i] - box_.x_min;
-    d(1) = P_.y[i] - box_.y_min;
-    if constexpr (D == 3) d(2) = P_.z[i] - box_.z_min;
+    for (int a = 0; a < D; ++a) d(a) = P_.pos[D * i + a] - lo[a];
     const Eigen::Matrix<double, D, 1> dv = dL * d;
-    P_.vx[i] += dv(0);
-    P_.vy[i] += dv(1);
-    if constexpr (D == 3) P_.vz[i] += dv(2);
+    for (int a = 0; a < D; ++a) P_.vel[D * i + a] += dv(a);
   }
 }
 
@@ -132,17 +122,18 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
       branch(k, i, j, d);
       double L2 = d[0] * d[0] + d[1] * d[1];
       if constexpr (D == 3) L2 += d[2] * d[2];
-      t.pair[k] = L::start_unloading_branch(t.pair[k], P_.radius[i] + P_.radius[j] - std::sqrt(L2));
+      t.pair[k] = L::start_unloading_branch(t.pair[k], P_.r[i] + P_.r[j] - std::sqrt(L2));
     }
     if (walls_active())
       for (std::size_t i = 0; i < P_.size(); ++i) {
-        double dw[2 * D] = {P_.x[i] - box_.x_min, box_.x_max - P_.x[i], P_.y[i] - box_.y_min, box_.y_max - P_.y[i]};
-        if constexpr (D == 3) {
-          dw[4] = P_.z[i] - box_.z_min;
-          dw[5] = box_.z_max - P_.z[i];
+        const double lo[3] = {box_.x_min, box_.y_min, box_.z_min}, hi[3] = {box_.x_max, box_.y_max, box_.z_max};
+        double dw[2 * D];
+        for (int a = 0; a < D; ++a) {
+          dw[2 * a] = P_.pos[D * i + a] - lo[a];
+          dw[2 * a + 1] = hi[a] - P_.pos[D * i + a];
         }
         for (std::size_t w = 0; w < kWalls; ++w)
-          t.wall[kWalls * i + w] = L::start_unloading_branch(t.wall[kWalls * i + w], P_.radius[i] - dw[w]);
+          t.wall[kWalls * i + w] = L::start_unloading_branch(t.wall[kWalls * i + w], P_.r[i] - dw[w]);
       }
   }
   opt_.plastic = law;
@@ -157,13 +148,7 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
 template <int D>
 void DynamicSolverT<D>::set_rotations(bool free) {
   rotations_ = free;
-  if (!free) std::fill(P_.omega.begin(), P_.omega.end(), 0.0);
-  if constexpr (D == 3) {
-    if (!free) {
-      std::fill(P_.wx.begin(), P_.wx.end(), 0.0);
-      std::fill(P_.wy.begin(), P_.wy.end(), 0.0);
-    }
-  }
+  if (!free) std::fill(P_.spin.begin(), P_.spin.end(), 0.0);
   inv_mass_.clear();  // refilled by the next step
 }
 
@@ -173,8 +158,7 @@ void DynamicSolverT<D>::hold_spins(const std::vector<std::uint32_t>& particles) 
     if (p >= P_.size() || is_prescribed_.empty() || !is_prescribed_[p])
       fail("hold_spins: particle " + std::to_string(p) + " is not prescribed (call set_prescribed first)");
     spin_held_[p] = 1;
-    P_.omega[p] = 0.0;
-    if constexpr (D == 3) P_.wx[p] = P_.wy[p] = 0.0;
+    for (int c = 0; c < ParticlesT<D>::kRot; ++c) P_.spin[ParticlesT<D>::kRot * p + c] = 0.0;
   }
   inv_mass_.clear();  // the kicks' inverse inertias are refilled
 }
@@ -224,11 +208,10 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) F3m_[static_cast<std::size_t>(3 * a + b)] *= 1.0 + md[a];
       if (periodic_) advect_periodic(Eigen::Matrix3d(Eigen::Vector3d(md[0], md[1], md[2]).asDiagonal()));
+      const double lo[3] = {box_.x_min, box_.y_min, box_.z_min};
       for (std::uint32_t p : prescribed_) {
-        P_.vx[p] = g[0] * (P_.x[p] - box_.x_min);
-        P_.vy[p] = g[1] * (P_.y[p] - box_.y_min);
-        P_.vz[p] = g[2] * (P_.z[p] - box_.z_min);
-        if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+        for (int a = 0; a < 3; ++a) P_.vel[D * p + a] = g[a] * (P_.pos[D * p + a] - lo[a]);
+        if (spin_held_[p]) P_.spin[D * p] = P_.spin[D * p + 1] = P_.spin[D * p + 2] = 0.0;
       }
     } else {  // G = exp(L dt) - I = V diag(expm1(lambda dt)) V^T
       double G[3][3] = {}, m[3];
@@ -253,12 +236,12 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
           F3m_[static_cast<std::size_t>(3 * a + b)] = v;
         }
       const double inv = 1.0 / dt;
+      const double lo[3] = {box_.x_min, box_.y_min, box_.z_min};
       for (std::uint32_t p : prescribed_) {
-        const double d[3] = {P_.x[p] - box_.x_min, P_.y[p] - box_.y_min, P_.z[p] - box_.z_min};
-        P_.vx[p] = (G[0][0] * d[0] + G[0][1] * d[1] + G[0][2] * d[2]) * inv;
-        P_.vy[p] = (G[1][0] * d[0] + G[1][1] * d[1] + G[1][2] * d[2]) * inv;
-        P_.vz[p] = (G[2][0] * d[0] + G[2][1] * d[1] + G[2][2] * d[2]) * inv;
-        if (spin_held_[p]) P_.wx[p] = P_.wy[p] = P_.omega[p] = 0.0;
+        double d[3];
+        for (int a = 0; a < 3; ++a) d[a] = P_.pos[D * p + a] - lo[a];
+        for (int a = 0; a < 3; ++a) P_.vel[D * p + a] = (G[a][0] * d[0] + G[a][1] * d[1] + G[a][2] * d[2]) * inv;
+        if (spin_held_[p]) P_.spin[D * p] = P_.spin[D * p + 1] = P_.spin[D * p + 2] = 0.0;
       }
     }
     // the box: the axis-aligned box of the diagonal rates
@@ -284,16 +267,16 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
     const auto G = expm1_sym2(edot_[0], edot_[1], edot_[2], dt);
     const double g11 = G[0] / dt, g22 = G[3] / dt, g12 = G[1] / dt;
     for (std::uint32_t p : prescribed_) {
-      const double dx = P_.x[p] - box_.x_min, dy = P_.y[p] - box_.y_min;
-      P_.vx[p] = g11 * dx + g12 * dy;
-      P_.vy[p] = g12 * dx + g22 * dy;
-      if (spin_held_[p]) P_.omega[p] = 0.0;
+      const double dx = P_.pos[D * p] - box_.x_min, dy = P_.pos[D * p + 1] - box_.y_min;
+      P_.vel[D * p] = g11 * dx + g12 * dy;
+      P_.vel[D * p + 1] = g12 * dx + g22 * dy;
+      if (spin_held_[p]) P_.spin[p] = 0.0;
     }
   } else {
     for (std::uint32_t p : prescribed_) {
-      P_.vx[p] = gx * (P_.x[p] - box_.x_min);
-      P_.vy[p] = gy * (P_.y[p] - box_.y_min);
-      if (spin_held_[p]) P_.omega[p] = 0.0;
+      P_.vel[D * p] = gx * (P_.pos[D * p] - box_.x_min);
+      P_.vel[D * p + 1] = gy * (P_.pos[D * p + 1] - box_.y_min);
+      if (spin_held_[p]) P_.spin[p] = 0.0;
     }
   }
   if (box_.right.mode == WallMode::Affine) wall_v_[0] = gx * (box_.x_max - box_.x_min);
@@ -308,7 +291,8 @@ void DynamicSolverT<D>::affine_velocity3(std::size_t i, double* a) const {
       a[0] = a[1] = a[2] = 0.0;
       return;
     }
-    const double d[3] = {P_.x[i] - box_.x_min, P_.y[i] - box_.y_min, P_.z[i] - box_.z_min};
+    const double* const x = &P_.pos[D * i];
+    const double d[3] = {x[0] - box_.x_min, x[1] - box_.y_min, x[D - 1] - box_.z_min};
     a[0] = edot3_[0] * d[0];
     a[1] = edot3_[1] * d[1];
     a[2] = edot3_[2] * d[2];
@@ -337,9 +321,10 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
     for (std::size_t i = 0; i < P_.size(); ++i) {
       const bool pres = !is_prescribed_.empty() && is_prescribed_[i];
       if (rotations_ && !(pres && spin_held_[i])) {
-        const double r = P_.radius[i], I = P_.inertia[i];
-        const double mx = (P_.tx[i] + c * I * P_.wx[i]) / r, my = (P_.ty[i] + c * I * P_.wy[i]) / r,
-                     mz = (P_.torque[i] + c * I * P_.omega[i]) / r;
+        const double r = P_.r[i], I = P_.inertia[i];
+        const double* const t = &P_.torque[D * i];  // (kRot = D)
+        const double* const w = &P_.spin[D * i];
+        const double mx = (t[0] + c * I * w[0]) / r, my = (t[1] + c * I * w[1]) / r, mz = (t[2] + c * I * w[2]) / r;
         sum += mx * mx + my * my + mz * mz;
         ++n;
       }
@@ -347,9 +332,11 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
       const double m = P_.mass[i];
       double a[3];
       affine_velocity3(i, a);
-      const double fx = P_.fx[i] + c * m * (P_.vx[i] - a[0]);
-      const double fy = P_.fy[i] + c * m * (P_.vy[i] - a[1]);
-      const double fz = P_.fz[i] + c * m * (P_.vz[i] - a[2]);
+      const double* const f = &P_.force[D * i];
+      const double* const v = &P_.vel[D * i];
+      const double fx = f[0] + c * m * (v[0] - a[0]);
+      const double fy = f[1] + c * m * (v[1] - a[1]);
+      const double fz = f[2] + c * m * (v[2] - a[2]);
       sum += fx * fx + fy * fy + fz * fz;
       if (!rotations_) ++n;
     }
@@ -361,17 +348,20 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
       if (!spin_held_[i] && rotations_) {  // a prescribed centre with a free spin: its torque
-        const double m = (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i];
+        const double m = (P_.torque[i] + c * P_.inertia[i] * P_.spin[i]) / P_.r[i];
         sum += m * m;
         ++n;
       }
       continue;
     }
-    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
+    const double* const x = &P_.pos[D * i];
+    const double* const f = &P_.force[D * i];
+    const double* const v = &P_.vel[D * i];
+    const double dx = x[0] - box_.x_min, dy = x[1] - box_.y_min;
     double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
     if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
-    const double fx = P_.fx[i] + c * P_.mass[i] * (P_.vx[i] - ax), fy = P_.fy[i] + c * P_.mass[i] * (P_.vy[i] - ay);
-    const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * P_.omega[i]) / P_.radius[i] : 0.0;
+    const double fx = f[0] + c * P_.mass[i] * (v[0] - ax), fy = f[1] + c * P_.mass[i] * (v[1] - ay);
+    const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * P_.spin[i]) / P_.r[i] : 0.0;
     sum += fx * fx + fy * fy + m * m;
     ++n;
   }
@@ -385,35 +375,31 @@ void DynamicSolverT<D>::apply_affine_drag() {
     for (std::size_t i = 0; i < P_.size(); ++i) {
       const bool pres = !is_prescribed_.empty() && is_prescribed_[i];
       if (!(pres && spin_held_[i])) {
-        P_.tx[i] -= c * P_.inertia[i] * P_.wx[i];
-        P_.ty[i] -= c * P_.inertia[i] * P_.wy[i];
-        P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
+        for (int k = 0; k < 3; ++k) P_.torque[D * i + k] -= c * P_.inertia[i] * P_.spin[D * i + k];  // (kRot = D)
       }
       if (pres) continue;
       double a[3];
       affine_velocity3(i, a);
-      P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - a[0]);
-      P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - a[1]);
-      P_.fz[i] -= c * P_.mass[i] * (P_.vz[i] - a[2]);
+      for (int k = 0; k < 3; ++k) P_.force[D * i + k] -= c * P_.mass[i] * (P_.vel[D * i + k] - a[k]);
     }
     return;
   }
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
-      if (!spin_held_[i]) P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];  // a free spin
+      if (!spin_held_[i]) P_.torque[i] -= c * P_.inertia[i] * P_.spin[i];  // a free spin
       continue;
     }
-    const double dx = P_.x[i] - box_.x_min, dy = P_.y[i] - box_.y_min;
+    const double dx = P_.pos[D * i] - box_.x_min, dy = P_.pos[D * i + 1] - box_.y_min;
     double ax = edot_[0] * dx, ay = edot_[1] * dy;
     if (edot_[2] != 0.0) {
       ax += edot_[2] * dy;
       ay += edot_[2] * dx;
     }
     if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
-    P_.fx[i] -= c * P_.mass[i] * (P_.vx[i] - ax);
-    P_.fy[i] -= c * P_.mass[i] * (P_.vy[i] - ay);
-    P_.torque[i] -= c * P_.inertia[i] * P_.omega[i];
+    P_.force[D * i] -= c * P_.mass[i] * (P_.vel[D * i] - ax);
+    P_.force[D * i + 1] -= c * P_.mass[i] * (P_.vel[D * i + 1] - ay);
+    P_.torque[i] -= c * P_.inertia[i] * P_.spin[i];
   }
 }
 
@@ -432,8 +418,9 @@ auto DynamicSolverT<D>::boundary_stress() const -> Stress {
       }
     }
     for (std::uint32_t p : prescribed_) {
-      const double f[3] = {P_.fx[p], P_.fy[p], P_.fz[p]};
-      const double l[3] = {P_.x[p] - c[0], P_.y[p] - c[1], P_.z[p] - c[2]};
+      const double* const f = &P_.force[D * p];
+      double l[3];
+      for (int a = 0; a < 3; ++a) l[a] = P_.pos[D * p + a] - c[a];
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) s.s[a][b] += f[a] * l[b];
     }
@@ -451,11 +438,12 @@ auto DynamicSolverT<D>::boundary_stress() const -> Stress {
     yc = box_.y_min + F_[2] * X + F_[3] * Y;
   }
   for (std::uint32_t p : prescribed_) {
-    const double lx = P_.x[p] - xc, ly = P_.y[p] - yc;
-    s.xx += P_.fx[p] * lx;
-    s.xy += P_.fx[p] * ly;
-    s.yx += P_.fy[p] * lx;
-    s.yy += P_.fy[p] * ly;
+    const double lx = P_.pos[D * p] - xc, ly = P_.pos[D * p + 1] - yc;
+    const double fx = P_.force[D * p], fy = P_.force[D * p + 1];
+    s.xx += fx * lx;
+    s.xy += fx * ly;
+    s.yx += fy * lx;
+    s.yy += fy * ly;
   }
   // f_p = the contact forces on p, balanced by the boundary's -f_p: sum_p f_p (x) (x_p - x_c) is
   // the contact stress sum when every particle is prescribed (compression positive)
@@ -475,19 +463,19 @@ auto DynamicSolverT<D>::boundary_stress() const -> Stress {
 template <int D>
 void DynamicSolverT<D>::advect_periodic(const Eigen::Matrix<double, D, D>& G) {
   const Eigen::Matrix<double, D, 1> o = cell_.origin;
-  auto move = [&](std::vector<double>& x, std::vector<double>& y, std::vector<double>& z) {
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      const double d[3] = {x[i] - o(0), y[i] - o(1), D == 3 ? z[i] - o(D - 1) : 0.0};
+  auto move = [&](std::vector<double>& pos) {  // D per particle
+    for (std::size_t i = 0; i < pos.size() / D; ++i) {
+      double* const x = &pos[D * i];
+      double d[D];
+      for (int a = 0; a < D; ++a) d[a] = x[a] - o(a);
       double g[3] = {0.0, 0.0, 0.0};
       for (int a = 0; a < D; ++a)
         for (int b = 0; b < D; ++b) g[a] += G(a, b) * d[b];
-      x[i] += g[0];
-      y[i] += g[1];
-      if constexpr (D == 3) z[i] += g[2];
+      for (int a = 0; a < D; ++a) x[a] += g[a];
     }
   };
-  move(P_.x, P_.y, P_.z);
-  move(x_build_, y_build_, z_build_);
+  move(P_.pos);
+  move(pos_build_);
   cell_.h += G * cell_.h;
   F_build_ += G * F_build_;
   set_box_to_cell();

@@ -68,23 +68,23 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
   const bool track = vmax2 < 0.0;  // (NaN: not negative, the pass below reports it)
   if (track) vmax2 = 0.0;
   double rmin = std::numeric_limits<double>::infinity(), area = 0.0;
+  constexpr std::size_t R = ParticlesT<D>::kRot;
   for (std::size_t i = 0; i < n; ++i) {
-    const double v[7] = {P_.x[i], P_.y[i], P_.vx[i], P_.vy[i], P_.omega[i], P_.fx[i], P_.fy[i]};
-    bool fin = std::isfinite(P_.radius[i]) && std::isfinite(P_.torque[i]);
-    for (double q : v) fin = fin && std::isfinite(q);
-    if constexpr (D == 3) {
-      const double v3[7] = {P_.z[i], P_.vz[i], P_.wx[i], P_.wy[i], P_.fz[i], P_.tx[i], P_.ty[i]};
-      for (double q : v3) fin = fin && std::isfinite(q);
-    }
+    bool fin = std::isfinite(P_.r[i]);
+    for (std::size_t c = 0; c < D; ++c)
+      fin = fin && std::isfinite(P_.pos[D * i + c]) && std::isfinite(P_.vel[D * i + c]) &&
+            std::isfinite(P_.force[D * i + c]);
+    for (std::size_t c = 0; c < R; ++c) fin = fin && std::isfinite(P_.spin[R * i + c]) && std::isfinite(P_.torque[R * i + c]);
     if (!fin)
       breach("finite", fmt::format("particle {} has a non-finite position, velocity or force", i), kCauseStep);
-    rmin = std::min(rmin, P_.radius[i]);
+    rmin = std::min(rmin, P_.r[i]);
+    const double* const v = &P_.vel[D * i];
     if constexpr (D == 2) {
-      area += P_.radius[i] * P_.radius[i];
-      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]);
+      area += P_.r[i] * P_.r[i];
+      if (track) vmax2 = std::max(vmax2, v[0] * v[0] + v[1] * v[1]);
     } else {
-      area += P_.radius[i] * P_.radius[i] * P_.radius[i];
-      if (track) vmax2 = std::max(vmax2, P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]);
+      area += P_.r[i] * P_.r[i] * P_.r[i];
+      if (track) vmax2 = std::max(vmax2, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     }
   }
   if (!(std::isfinite(vmax2))) breach("finite", "a particle velocity is not finite", kCauseStep);
@@ -112,11 +112,13 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
     if (!(wv * dt < travel))
       breach("velocity", fmt::format("a wall moves {:.3g} m per step, not below 0.1 r_min = {:.3g} m", wv * dt, travel),
              kCauseWall);
+    const double lo[3] = {box_.x_min, box_.y_min, box_.z_min}, hi[3] = {box_.x_max, box_.y_max, box_.z_max};
     for (std::size_t i = 0; i < n && box_.contact_walls; ++i) {
-      bool inside = P_.x[i] >= box_.x_min && P_.x[i] <= box_.x_max && P_.y[i] >= box_.y_min && P_.y[i] <= box_.y_max;
-      if constexpr (D == 3) inside = inside && P_.z[i] >= box_.z_min && P_.z[i] <= box_.z_max;
+      const double* const x = &P_.pos[D * i];
+      bool inside = true;
+      for (int a = 0; a < D; ++a) inside = inside && x[a] >= lo[a] && x[a] <= hi[a];
       if (!inside)
-        breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, P_.x[i], P_.y[i]),
+        breach("centre", fmt::format("the centre of particle {} ({:.6g}, {:.6g}) m is outside the box", i, x[0], x[1]),
                kCauseLoad);
     }
   }
@@ -127,11 +129,11 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
     const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
     double dd[3];
     branch(k, i, j, dd);
-    const double s = P_.radius[i] + P_.radius[j];
+    const double s = P_.r[i] + P_.r[j];
     double L2 = dd[0] * dd[0] + dd[1] * dd[1];
     if constexpr (D == 3) L2 += dd[2] * dd[2];
     if (!(L2 < s * s)) continue;
-    const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.radius[i], P_.radius[j]);
+    const double d = s - std::sqrt(L2), lim = HealthLimits::kMaxOverlap * std::min(P_.r[i], P_.r[j]);
     if (!(d < lim))
       breach("overlap", fmt::format("the overlap {:.3g} m of particles {} and {} is not below half the smaller radius, "
                                     "{:.3g} m", d, i, j, lim),
@@ -139,10 +141,11 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
   }
   if (walls_active()) {
     for (std::size_t i = 0; i < n; ++i) {
-      const double r = P_.radius[i];
-      double d = std::max(std::max(r - (P_.x[i] - box_.x_min), r - (box_.x_max - P_.x[i])),
-                          std::max(r - (P_.y[i] - box_.y_min), r - (box_.y_max - P_.y[i])));
-      if constexpr (D == 3) d = std::max(d, std::max(r - (P_.z[i] - box_.z_min), r - (box_.z_max - P_.z[i])));
+      const double r = P_.r[i];
+      const double* const x = &P_.pos[D * i];
+      double d = std::max(std::max(r - (x[0] - box_.x_min), r - (box_.x_max - x[0])),
+                          std::max(r - (x[1] - box_.y_min), r - (box_.y_max - x[1])));
+      if constexpr (D == 3) d = std::max(d, std::max(r - (x[2] - box_.z_min), r - (box_.z_max - x[2])));
       if (!(d < HealthLimits::kMaxOverlap * r))
         breach("overlap", fmt::format("particle {} overlaps a wall by {:.3g} m, not below half its radius, {:.3g} m", i, d,
                                       HealthLimits::kMaxOverlap * r),
@@ -210,11 +213,11 @@ double DynamicSolverT<D>::density() const {
   if (!box_.enabled) return 0.0;
   double a = 0.0;
   if constexpr (D == 2) {
-    for (double r : P_.radius) a += std::numbers::pi * r * r;
+    for (double r : P_.r) a += std::numbers::pi * r * r;
     if (periodic_) return a / cell_.measure();
     return a / ((box_.x_max - box_.x_min) * (box_.y_max - box_.y_min));
   } else {
-    for (double r : P_.radius) a += (4.0 / 3.0) * std::numbers::pi * r * r * r;
+    for (double r : P_.r) a += (4.0 / 3.0) * std::numbers::pi * r * r * r;
     return a / box_measure();
   }
 }
@@ -225,7 +228,8 @@ auto DynamicSolverT<D>::kinetic_stress() const -> Stress {
   if (!box_.enabled) return s;
   double k[3][3] = {};
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    const double u[3] = {P_.vx[i], P_.vy[i], D == 3 ? P_.vz[i] : 0.0}, m = P_.mass[i];
+    const double* const u = &P_.vel[D * i];
+    const double m = P_.mass[i];
     for (int a = 0; a < D; ++a)
       for (int b = 0; b < D; ++b) k[a][b] += m * u[a] * u[b];
   }
@@ -245,11 +249,9 @@ packing::Packing DynamicSolverT<D>::periodic_packing() const {
   packing::Packing pk;
   pk.dim = D;
   pk.periodic = true;
-  pk.r = P_.radius;
+  pk.r = P_.r;
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    Eigen::Matrix<double, D, 1> x;
-    x(0) = P_.x[i], x(1) = P_.y[i];
-    if constexpr (D == 3) x(2) = P_.z[i];
+    Eigen::Matrix<double, D, 1> x = P_.position(i);
     // wrapped into [0, 1) (the rounding of origin + h s can land on the upper face: s = 1 - ulp)
     Eigen::Matrix<double, D, 1> f = cell_.fractional(x);
     for (int a = 0; a < D; ++a) {
@@ -276,14 +278,17 @@ template <int D>
 Energies DynamicSolverT<D>::energies() const {
   Energies e;
   for (std::size_t i = 0; i < P_.size(); ++i) {
+    const double* const x = &P_.pos[D * i];
+    const double* const v = &P_.vel[D * i];
     if constexpr (D == 2) {
-      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i]) +
-                   0.5 * P_.inertia[i] * P_.omega[i] * P_.omega[i];
-      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i]);
+      const double w = P_.spin[i];
+      e.kinetic += 0.5 * P_.mass[i] * (v[0] * v[0] + v[1] * v[1]) + 0.5 * P_.inertia[i] * w * w;
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * x[0] + opt_.gravity_y * x[1]);
     } else {
-      e.kinetic += 0.5 * P_.mass[i] * (P_.vx[i] * P_.vx[i] + P_.vy[i] * P_.vy[i] + P_.vz[i] * P_.vz[i]) +
-                   0.5 * P_.inertia[i] * (P_.wx[i] * P_.wx[i] + P_.wy[i] * P_.wy[i] + P_.omega[i] * P_.omega[i]);
-      e.gravity -= P_.mass[i] * (opt_.gravity_x * P_.x[i] + opt_.gravity_y * P_.y[i] + opt_.gravity_z * P_.z[i]);
+      const double* const w = &P_.spin[3 * i];
+      e.kinetic += 0.5 * P_.mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
+                   0.5 * P_.inertia[i] * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+      e.gravity -= P_.mass[i] * (opt_.gravity_x * x[0] + opt_.gravity_y * x[1] + opt_.gravity_z * x[2]);
     }
   }
   e.elastic = elastic_;

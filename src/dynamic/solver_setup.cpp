@@ -20,65 +20,6 @@ namespace netdem::dem {
 using detail::displacement_limit;
 using detail::fail;
 
-std::size_t Particles::add_with_mass(double px, double py, double r, double m, double pvx, double pvy,
-                                     double pomega) {
-  if (dim != 2) fail("Particles: a disk cannot join spheres");
-  x.push_back(px);
-  y.push_back(py);
-  vx.push_back(pvx);
-  vy.push_back(pvy);
-  omega.push_back(pomega);
-  theta.push_back(0.0);
-  radius.push_back(r);
-  mass.push_back(m);
-  inertia.push_back(0.5 * m * r * r);
-  fx.push_back(0.0);
-  fy.push_back(0.0);
-  torque.push_back(0.0);
-  return x.size() - 1;
-}
-
-std::size_t Particles::add(double px, double py, double r, const LudingParams& p, double pvx, double pvy,
-                           double pomega) {
-  return add_with_mass(px, py, r, contact::luding_mass(p, r), pvx, pvy, pomega);
-}
-
-std::size_t Particles::add_disk(double px, double py, double r, double rho, double pvx, double pvy,
-                                double pomega) {
-  return add_with_mass(px, py, r, rho * std::numbers::pi * r * r, pvx, pvy, pomega);
-}
-
-std::size_t Particles::add_sphere_with_mass(double px, double py, double pz, double r, double m,
-                                            const std::array<double, 3>& v, const std::array<double, 3>& w) {
-  if (dim != 3 && !x.empty()) fail("Particles: a sphere cannot join disks");
-  dim = 3;
-  x.push_back(px);
-  y.push_back(py);
-  z.push_back(pz);
-  vx.push_back(v[0]);
-  vy.push_back(v[1]);
-  vz.push_back(v[2]);
-  wx.push_back(w[0]);
-  wy.push_back(w[1]);
-  omega.push_back(w[2]);
-  theta.push_back(0.0);
-  radius.push_back(r);
-  mass.push_back(m);
-  inertia.push_back(contact::Dim<3>::kInertia * m * r * r);
-  fx.push_back(0.0);
-  fy.push_back(0.0);
-  fz.push_back(0.0);
-  tx.push_back(0.0);
-  ty.push_back(0.0);
-  torque.push_back(0.0);
-  return x.size() - 1;
-}
-
-std::size_t Particles::add_sphere(double px, double py, double pz, double r, double rho,
-                                  const std::array<double, 3>& v) {
-  return add_sphere_with_mass(px, py, pz, r, rho * (4.0 / 3.0) * std::numbers::pi * r * r * r, v);
-}
-
 namespace {
 // The walled readers refuse a periodic packing (issue 29): its centres near a face touch the
 // particles at the opposite face, which a box would not see.
@@ -89,26 +30,28 @@ void refuse_periodic(const packing::Packing& pk) {
 }
 }  // namespace
 
-Particles periodic_particles_from(const packing::Packing& pk, double rho) {
+template <int D>
+ParticlesT<D> periodic_particles_from(const packing::Packing& pk, double rho) {
   if (!pk.periodic) fail("periodic_particles_from: the packing is not periodic (no '# periodic' line)");
+  if (pk.dim != D) fail(fmt::format("periodic_particles_from: the packing is {}D, the particles {}D", pk.dim, D));
   if (!(rho > 0.0) || !std::isfinite(rho)) fail("periodic_particles_from: the density must be positive and finite");
-  Particles P;
-  P.dim = pk.dim;
+  ParticlesT<D> P;
   for (std::size_t i = 0; i < pk.size(); ++i) {
-    if (pk.dim == 3)
+    if constexpr (D == 3)
       P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], rho);
     else
       P.add_disk(pk.x[i], pk.y[i], pk.r[i], rho);
   }
   return P;
 }
+template Particles periodic_particles_from<2>(const packing::Packing&, double);
+template Particles3 periodic_particles_from<3>(const packing::Packing&, double);
 
-Particles spheres_from(const packing::Packing& pk, double rho) {
+Particles3 spheres_from(const packing::Packing& pk, double rho) {
   refuse_periodic(pk);
   if (pk.dim != 3) fail("spheres_from: the packing is 2D");
   if (!(rho > 0.0) || !std::isfinite(rho)) fail("spheres_from: the density must be positive and finite");
-  Particles P;
-  P.dim = 3;
+  Particles3 P;
   for (std::size_t i = 0; i < pk.size(); ++i) P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], rho);
   return P;
 }
@@ -129,14 +72,19 @@ Particles particles_from(const packing::Packing& pk, double rho) {
   return P;
 }
 
-packing::Packing to_packing(const Particles& P, const packing::Box& box) {
+template <int D>
+packing::Packing to_packing(const ParticlesT<D>& P, const packing::Box& box) {
   packing::Packing pk;
-  pk.x = P.x;
-  pk.y = P.y;
-  pk.r = P.radius;
+  pk.dim = D;
+  pk.x = P.axis(0);
+  pk.y = P.axis(1);
+  if constexpr (D == 3) pk.z = P.axis(2);
+  pk.r = P.r;
   pk.box = box;
   return pk;
 }
+template packing::Packing to_packing(const Particles&, const packing::Box&);
+template packing::Packing to_packing(const Particles3&, const packing::Box&);
 
 void DynamicOptions::validate() const {
   if (!(steps_per_contact > 0.0)) fail("DynamicOptions: steps_per_contact must be > 0");
@@ -155,13 +103,13 @@ double contact_duration(double k2, double gamma0, double m12) {
 
 namespace {
 // The two lightest masses (m_lo <= m_lo2) of the particles.
-void lightest_pair(const Particles& P, double& m_lo, double& m_lo2) {
-  m_lo = m_lo2 = P.mass[0];
-  if (P.size() < 2) return;
-  m_lo = std::min(P.mass[0], P.mass[1]);
-  m_lo2 = std::max(P.mass[0], P.mass[1]);
-  for (std::size_t i = 2; i < P.size(); ++i) {
-    const double m = P.mass[i];
+void lightest_pair(const std::vector<double>& mass, double& m_lo, double& m_lo2) {
+  m_lo = m_lo2 = mass[0];
+  if (mass.size() < 2) return;
+  m_lo = std::min(mass[0], mass[1]);
+  m_lo2 = std::max(mass[0], mass[1]);
+  for (std::size_t i = 2; i < mass.size(); ++i) {
+    const double m = mass[i];
     if (m < m_lo) {
       m_lo2 = m_lo;
       m_lo = m;
@@ -186,7 +134,8 @@ double tangential_period(double m_eff, double k_t, int dim) {
                   : std::numbers::pi * std::sqrt(m_eff / 3.0 / k_t);
 }
 
-TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound& b, bool mean_pair,
+template <int D>
+TimeStepInfo choose_time_step(const ParticlesT<D>& P, const contact::StiffnessBound& b, bool mean_pair,
                               const DynamicOptions& o, double area_max) {
   o.validate();
   const std::size_t n = P.size();
@@ -198,7 +147,7 @@ TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound&
   double mean = 0.0, m_lo = 0.0, m_lo2 = 0.0;
   for (double m : P.mass) mean += m;
   mean /= static_cast<double>(n);
-  lightest_pair(P, m_lo, m_lo2);
+  lightest_pair(P.mass, m_lo, m_lo2);
   const double m12 = m_lo * m_lo2 / (m_lo + m_lo2);
   TimeStepInfo ts;
   ts.tc_mean = period(b.k_n, b.gamma_n, 0.5 * mean);
@@ -207,8 +156,8 @@ TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound&
   const bool use_mean = mean_pair && o.rule == TimeStepRule::MeanPair;
   const double tc_rule = use_mean ? ts.tc_mean : ts.tc_lightest;
   const double kt = b.k_t + b.k_t_area * area_max;
-  const double tc_t_rule = kt > 0.0 ? tangential_period(use_mean ? 0.5 * mean : m12, kt, P.dim) : 0.0;
-  if (kt > 0.0) ts.tc_tangential = tangential_period(m12, kt, P.dim);
+  const double tc_t_rule = kt > 0.0 ? tangential_period(use_mean ? 0.5 * mean : m12, kt, D) : 0.0;
+  if (kt > 0.0) ts.tc_tangential = tangential_period(m12, kt, D);
   const double tc = tc_t_rule > 0.0 ? std::min(tc_rule, tc_t_rule) : tc_rule;
   const double tc_check = ts.tc_tangential > 0.0 ? std::min(ts.tc_lightest, ts.tc_tangential) : ts.tc_lightest;
   ts.dt = o.dt > 0.0 ? o.dt : tc / o.steps_per_contact;  // LMM05 section 3.1.2: t_MD = pi / (50 omega)
@@ -219,11 +168,15 @@ TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound&
                      ts.dt, ts.steps_per_contact_lightest, tc_check, o.min_steps_per_contact));
   return ts;
 }
+template TimeStepInfo choose_time_step(const Particles&, const contact::StiffnessBound&, bool, const DynamicOptions&,
+                                       double);
+template TimeStepInfo choose_time_step(const Particles3&, const contact::StiffnessBound&, bool, const DynamicOptions&,
+                                       double);
 
 template <int D>
 void DynamicSolverT<D>::choose_time_step_of_law(const DynamicOptions& o, double area) {
   double r_max = 0.0;
-  for (double r : P_.radius) r_max = std::max(r_max, r);
+  for (double r : P_.r) r_max = std::max(r_max, r);
   visit_law([&](const auto& law) {
     bound_ = law.stiffness_bound(r_max);
     mean_pair_ = contact::kMeanPairTimeStep<std::decay_t<decltype(law)>>;
@@ -247,12 +200,12 @@ DynamicOptions plastic_options(DynamicOptions o, const contact::PlasticIndentati
 }  // namespace
 
 template <int D>
-DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const LudingParams& params, const Box& box,
                                   const DynamicOptions& options)
     : DynamicSolverT(std::move(particles), params, box, luding_options(options), Setup{}) {}
 
 template <int D>
-DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
+DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const contact::PlasticIndentationParams& law, const Box& box,
                                   const DynamicOptions& options)
     : DynamicSolverT(std::move(particles), LudingParams{}, box, plastic_options(options, law), Setup{}) {}
 
@@ -276,18 +229,18 @@ Box periodic_box(const packing::PeriodicCellT<D>& cell) {
 }  // namespace
 
 template <int D>
-DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params,
+DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const LudingParams& params,
                                   const packing::PeriodicCellT<D>& cell, const DynamicOptions& options)
     : DynamicSolverT(std::move(particles), params, periodic_box(cell), luding_options(options), Setup{&cell}) {}
 
 template <int D>
-DynamicSolverT<D>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law,
+DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const contact::PlasticIndentationParams& law,
                                   const packing::PeriodicCellT<D>& cell, const DynamicOptions& options)
     : DynamicSolverT(std::move(particles), LudingParams{}, periodic_box(cell), plastic_options(options, law),
                      Setup{&cell}) {}
 
 template <int D>
-DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const LudingParams& params, const Box& box,
                                   const DynamicOptions& options, Setup setup)
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
@@ -299,17 +252,14 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   }
   const std::size_t n = P_.size();
   if (n >= (std::size_t{1} << 32)) fail("DynamicSolver: too many particles");
-  if (P_.dim != D) fail(fmt::format("DynamicSolver: the particles are {}D, the solver {}D", P_.dim, D));
+  if (!P_.consistent()) fail("DynamicSolver: inconsistent particle arrays");
   if constexpr (D == 3) {
     if (box_.enabled && !(box_.z_max > box_.z_min)) fail("DynamicSolver: a 3D box must have z_max > z_min");
-    if (!(P_.z.size() == n && P_.vz.size() == n && P_.fz.size() == n && P_.wx.size() == n && P_.wy.size() == n &&
-          P_.tx.size() == n && P_.ty.size() == n))
-      fail("DynamicSolver: inconsistent 3D particle arrays");
   }
   if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
     fail("DynamicSolver: box must have x_max > x_min and y_max > y_min");
   for (std::size_t i = 0; i < n; ++i)
-    if (!(P_.radius[i] > 0.0) || !(P_.mass[i] > 0.0) || !(P_.inertia[i] > 0.0))
+    if (!(P_.r[i] > 0.0) || !(P_.mass[i] > 0.0) || !(P_.inertia[i] > 0.0))
       fail("DynamicSolver: particle " + std::to_string(i) + " has a non-positive radius or mass");
   for (const MovingWall* w : {&box_.right, &box_.top, &box_.back})
     if (w->mode == WallMode::Stress && !(w->mass > 0.0 && w->damping >= 0.0))
@@ -318,12 +268,12 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   if (plastic()) opt_.plastic.validate();
   choose_time_step_of_law(opt_, 0.0);
   // The given radii are a(T_radius_ref) (Eq 9); the full law starts at a(T).
-  radius_ref_ = P_.radius;
+  radius_ref_ = P_.r;
   if (opt_.model == ContactModel::Full) {
     radius_scale_ = contact::luding_radius(params_, 1.0, thermal_.T);
     for (std::size_t i = 0; i < n; ++i) {
-      P_.radius[i] = radius_ref_[i] * radius_scale_;
-      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
+      P_.r[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.r[i] * P_.r[i];
     }
   }
   for (int a = 0; a < D; ++a) {
@@ -336,10 +286,10 @@ DynamicSolverT<D>::DynamicSolverT(Particles particles, const LudingParams& param
   make_tables(n);
   finish_setup();
   if (periodic_) {
-    for (double x : P_.x)
+    for (double x : P_.pos)
       if (!std::isfinite(x)) fail("DynamicSolver: a particle position is not finite");
     double rmax = 0.0;
-    for (double r : P_.radius) rmax = std::max(rmax, r);
+    for (double r : P_.r) rmax = std::max(rmax, r);
     if (n >= 2 && !(cell_.min_width() >= 2.0 * (2.0 * rmax + skin_)))
       fail(fmt::format("DynamicSolver: the periodic cell is {:.4g} wide across an axis, less than twice the largest "
                        "interaction range 2 r_max + skin = {:.4g} (a pair would meet through two images)",
@@ -357,7 +307,7 @@ void DynamicSolverT<D>::finish_setup() {
   pl_wall_params_.mu = opt_.plastic_wall_mu;
   if (n > 0) {
     double m_lo = 0.0, m_lo2 = 0.0, mean = 0.0;
-    lightest_pair(P_, m_lo, m_lo2);
+    lightest_pair(P_.mass, m_lo, m_lo2);
     m12_ = m_lo * m_lo2 / (m_lo + m_lo2);
     for (double m : P_.mass) mean += m;
     mean /= static_cast<double>(n);
@@ -392,11 +342,11 @@ template void DynamicSolverT<2>::finish_setup();
 template void DynamicSolverT<2>::choose_friction();
 template void DynamicSolverT<2>::choose_time_step_of_law(const DynamicOptions& o, double area);
 
-template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
-template DynamicSolverT<3>::DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
-template DynamicSolverT<3>::DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
-template DynamicSolverT<3>::DynamicSolverT(Particles, const LudingParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
-template DynamicSolverT<3>::DynamicSolverT(Particles, const contact::PlasticIndentationParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
+template DynamicSolverT<3>::DynamicSolverT(Particles3 particles, const LudingParams& params, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles3 particles, const contact::PlasticIndentationParams& law, const Box& box, const DynamicOptions& options);
+template DynamicSolverT<3>::DynamicSolverT(Particles3 particles, const LudingParams& params, const Box& box, const DynamicOptions& options, Setup);
+template DynamicSolverT<3>::DynamicSolverT(Particles3, const LudingParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
+template DynamicSolverT<3>::DynamicSolverT(Particles3, const contact::PlasticIndentationParams&, const packing::PeriodicCellT<3>&, const DynamicOptions&);
 template void DynamicSolverT<3>::finish_setup();
 template void DynamicSolverT<3>::choose_friction();
 template void DynamicSolverT<3>::choose_time_step_of_law(const DynamicOptions& o, double area);

@@ -18,6 +18,13 @@ namespace {
 
 
 namespace {
+// The particles of a state of dimension D (one line if it is of the other).
+template <int D>
+const ParticlesT<D>& state_particles(const SolverState& st) {
+  if (st.dim() != D) fail(fmt::format("state: the particles are {}D, the solver {}D", st.dim(), D));
+  return st.particles_of<D>();
+}
+
 // The options of a restart: a plastic-law state brings its law and wall friction.
 DynamicOptions restart_options(const SolverState& st, DynamicOptions o) {
   if (st.plastic_law() && o.model == ContactModel::PlasticIndentation) {
@@ -30,23 +37,15 @@ DynamicOptions restart_options(const SolverState& st, DynamicOptions o) {
 
 template <int D>
 DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& options)
-    : P_(st.particles), params_(st.params), box_(st.box), opt_(restart_options(st, options)) {
+    : P_(state_particles<D>(st)), params_(st.params), box_(st.box), opt_(restart_options(st, options)) {
   using S = StateOf<D>;
   if (st.periodic)
     fail("state: a state in a periodic cell cannot restart (the cell and the pairs' images are not in a state yet)");
   params_.validate();
   opt_.validate();
   const std::size_t n = P_.size();
-  if (P_.dim != D) fail(fmt::format("state: the particles are {}D, the solver {}D", P_.dim, D));
-  auto same = [n](std::size_t m) { return m == n; };
   const std::size_t nw = static_cast<std::size_t>(kWalls);
-  bool sizes = same(P_.y.size()) && same(P_.vx.size()) && same(P_.vy.size()) && same(P_.omega.size()) &&
-               same(P_.theta.size()) && same(P_.radius.size()) && same(P_.mass.size()) &&
-               same(P_.inertia.size()) && same(P_.fx.size()) && same(P_.fy.size()) && same(P_.torque.size()) &&
-               same(st.radius_ref.size());
-  if constexpr (D == 3)
-    sizes = sizes && same(P_.z.size()) && same(P_.vz.size()) && same(P_.fz.size()) && same(P_.wx.size()) &&
-            same(P_.wy.size()) && same(P_.tx.size()) && same(P_.ty.size());
+  const bool sizes = P_.consistent() && st.radius_ref.size() == n;
   // the histories of the state's law (whichever it is): of dimension D, one per pair, 2 D per particle
   const bool hist_sizes = std::visit([&](const auto& h) {
     return h.kDim == D && h.wall.size() == nw * n && h.pair.size() == st.pair_key.size();
@@ -57,7 +56,7 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   if (!sizes || !hist_sizes) fail("state: inconsistent array sizes");
   if (n == 0) fail("state: no particles");
   for (std::size_t i = 0; i < n; ++i)
-    if (!(st.radius_ref[i] > 0.0 && P_.radius[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
+    if (!(st.radius_ref[i] > 0.0 && P_.r[i] > 0.0 && P_.mass[i] > 0.0 && P_.inertia[i] > 0.0))
       fail("state: particle " + std::to_string(i) + " has a non-positive radius or mass");
   if (box_.enabled && !(box_.x_max > box_.x_min && box_.y_max > box_.y_min))
     fail("state: box must have x_max > x_min and y_max > y_min");
@@ -76,7 +75,7 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   thermal_ = st.thermal;
   time_ = st.time;
   radius_ref_ = st.radius_ref;
-  radius_scale_ = P_.radius[0] / radius_ref_[0];
+  radius_scale_ = P_.r[0] / radius_ref_[0];
   std::copy(S::wall_velocity(st), S::wall_velocity(st) + D, wall_v_);
   std::copy(S::wall_force(st), S::wall_force(st) + 2 * D, wall_force_);
   if constexpr (D == 2) {
@@ -112,7 +111,7 @@ template <int D>
 SolverState DynamicSolverT<D>::state() const {
   using S = StateOf<D>;
   SolverState st;
-  st.particles = P_;
+  st.particles = P_;  // (the alternative of dimension D)
   st.radius_ref = radius_ref_;
   st.box = box_;
   std::copy(wall_v_, wall_v_ + D, S::wall_velocity(st));
@@ -154,7 +153,7 @@ SolverState DynamicSolverT<D>::state() const {
 
 template <int D>
 void DynamicSolverT<D>::refresh_forces() {
-  for (const auto* v : {&P_.vx, &P_.vy, &P_.omega, &P_.vz, &P_.wx, &P_.wy})
+  for (const auto* v : {&P_.vel, &P_.spin})
     for (double x : *v)
       if (x != 0.0) throw std::logic_error("refresh_forces: a particle moves (the forces of a state at rest only)");
   for (int a = 0; a < D; ++a)
@@ -175,8 +174,8 @@ void DynamicSolverT<D>::advance_temperature(double T_new, double dt, double t0) 
   if (t_changed) {  // Eq 9 with constant mass
     radius_scale_ = contact::luding_radius(params_, 1.0, T_new);
     for (std::size_t i = 0; i < P_.size(); ++i) {
-      P_.radius[i] = radius_ref_[i] * radius_scale_;
-      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.radius[i] * P_.radius[i];
+      P_.r[i] = radius_ref_[i] * radius_scale_;
+      P_.inertia[i] = contact::Dim<D>::kInertia * P_.mass[i] * P_.r[i] * P_.r[i];
     }
   }
 }
@@ -248,11 +247,10 @@ template <int D>
 std::size_t DynamicSolverT<D>::wall_contacts() const {
   if (!walls_active()) return 0;
   std::size_t c = 0;
+  const double lo[3] = {box_.x_min, box_.y_min, box_.z_min}, hi[3] = {box_.x_max, box_.y_max, box_.z_max};
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    const double r = P_.radius[i];
-    c += (P_.x[i] - box_.x_min < r) + (box_.x_max - P_.x[i] < r) + (P_.y[i] - box_.y_min < r) +
-         (box_.y_max - P_.y[i] < r);
-    if constexpr (D == 3) c += (P_.z[i] - box_.z_min < r) + (box_.z_max - P_.z[i] < r);
+    const double r = P_.r[i];
+    for (int a = 0; a < D; ++a) c += (P_.pos[D * i + a] - lo[a] < r) + (hi[a] - P_.pos[D * i + a] < r);
   }
   return c;
 }
@@ -278,16 +276,26 @@ struct PeriodicFrame {
   double L[9] = {};
 };
 template <int D, class H, class Eval>
-void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint64_t>& keys,
+void contacts_of(const ParticlesT<D>& P, const Box& box, const std::vector<std::uint64_t>& keys,
                  const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval,
                  const PeriodicFrame* frame = nullptr) {
   out.clear();
-  auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
-  auto vzc = [&](std::size_t i) { return D == 3 ? P.vz[i] : 0.0; };
+  auto xc = [&](std::size_t i) { return P.pos[D * i]; };
+  auto yc = [&](std::size_t i) { return P.pos[D * i + 1]; };
+  auto zc = [&](std::size_t i) {
+    if constexpr (D == 3) return P.pos[D * i + 2];
+    else return 0.0;
+  };
+  auto vxc = [&](std::size_t i) { return P.vel[D * i]; };
+  auto vyc = [&](std::size_t i) { return P.vel[D * i + 1]; };
+  auto vzc = [&](std::size_t i) {
+    if constexpr (D == 3) return P.vel[D * i + 2];
+    else return 0.0;
+  };
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
     const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
-    double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
+    double dx = xc(j) - xc(i), dy = yc(j) - yc(i), dz = zc(j) - zc(i);
     double avx = 0.0, avy = 0.0, avz = 0.0;  // periodic: L l
     if (frame) {
       const double* o = &frame->offset[static_cast<std::size_t>(D) * k];
@@ -298,7 +306,7 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
       avy = L[3] * dx + L[4] * dy + L[5] * dz;
       avz = L[6] * dx + L[7] * dy + L[8] * dz;
     }
-    const double ri = P.radius[i], rj = P.radius[j], s = ri + rj;
+    const double ri = P.r[i], rj = P.r[j], s = ri + rj;
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
     if (!(L2 < s * s)) continue;
     const double L = std::sqrt(L2), nx = dx / L, ny = dy / L, nz = dz / L;
@@ -306,12 +314,12 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
     contact::Kinematics<D> in;
     in.overlap = in.overlap_start = s - L;
     if (frame) {
-      in.v_n = -((P.vx[j] - P.vx[i] + avx) * nx + (P.vy[j] - P.vy[i] + avy) * ny);
+      in.v_n = -((vxc(j) - vxc(i) + avx) * nx + (vyc(j) - vyc(i) + avy) * ny);
       if constexpr (D == 3) in.v_n -= (vzc(j) - vzc(i) + avz) * nz;
     } else if constexpr (D == 2) {
-      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny);
+      in.v_n = -((vxc(j) - vxc(i)) * nx + (vyc(j) - vyc(i)) * ny);
     } else {
-      in.v_n = -((P.vx[j] - P.vx[i]) * nx + (P.vy[j] - P.vy[i]) * ny + (vzc(j) - vzc(i)) * nz);
+      in.v_n = -((vxc(j) - vxc(i)) * nx + (vyc(j) - vyc(i)) * ny + (vzc(j) - vzc(i)) * nz);
     }
     in.r_eff = ri * rj / s;
     in.m_eff = P.mass[i] * P.mass[j] / (P.mass[i] + P.mass[j]);
@@ -338,15 +346,15 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
     for (int w = 0; w < W; ++w) {
       const int axis = w / 2;
       const double sign = (w % 2 == 0) ? 1.0 : -1.0;  // the normal from the wall into the box
-      const double xa = axis == 0 ? P.x[i] : axis == 1 ? P.y[i] : zc(i);
-      const double va = axis == 0 ? P.vx[i] : axis == 1 ? P.vy[i] : vzc(i);
+      const double xa = P.pos[D * i + static_cast<std::size_t>(axis)];
+      const double va = P.vel[D * i + static_cast<std::size_t>(axis)];
       const double dist = sign * (xa - pos[w]);
-      const double delta = P.radius[i] - dist;
+      const double delta = P.r[i] - dist;
       if (!(delta > 0.0)) continue;
       contact::Kinematics<D> in;
       in.overlap = in.overlap_start = delta;
       in.v_n = -(va * sign);
-      in.r_eff = P.radius[i];
+      in.r_eff = P.r[i];
       in.m_eff = P.mass[i];
       const H& h = whist[static_cast<std::size_t>(W) * i + static_cast<std::size_t>(w)];
       ContactInfo c;
@@ -368,7 +376,7 @@ void contacts_of(const Particles& P, const Box& box, const std::vector<std::uint
 }
 
 template <contact::LudingFeatures F, int D>
-void luding_contacts(const Particles& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
+void luding_contacts(const ParticlesT<D>& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
                      const std::vector<std::uint64_t>& keys, const std::vector<contact::LudingHistoryT<D>>& hist,
                      const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out,
                      const PeriodicFrame* frame) {
@@ -392,7 +400,7 @@ constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
 
 // The plastic-indentation law: the contacts on their loaded branch.
 template <int D>
-void plastic_contacts(const Particles& P, const Box& box, const contact::PlasticIndentationParams& pp,
+void plastic_contacts(const ParticlesT<D>& P, const Box& box, const contact::PlasticIndentationParams& pp,
                       const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
                       const std::vector<contact::PlasticIndentationHistoryT<D>>& hist,
                       const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out,

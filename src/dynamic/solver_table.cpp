@@ -62,10 +62,12 @@ bool DynamicSolverT<D>::needs_rebuild() const {
   if (!(lim > 0.0) || walls_moved()) return true;
   const double lim2 = lim * lim;
   for (std::size_t i = 0; i < P_.size(); ++i) {
-    const double dx = P_.x[i] - x_build_[i], dy = P_.y[i] - y_build_[i];
+    const double* const x = &P_.pos[D * i];
+    const double* const xb = &pos_build_[D * i];
+    const double dx = x[0] - xb[0], dy = x[1] - xb[1];
     double d2 = dx * dx + dy * dy;
     if constexpr (D == 3) {
-      const double dz = P_.z[i] - z_build_[i];
+      const double dz = x[2] - xb[2];
       d2 += dz * dz;
     }
     if (d2 > lim2) return true;
@@ -92,10 +94,13 @@ void DynamicSolverT<D>::build_wall_list() {
   constexpr std::uint8_t kAll = (1u << kWalls) - 1u;
   if (wall_touch_.size() != n) wall_touch_.assign(n, kAll);
   for (std::size_t i = 0; i < n; ++i) {
-    const double xi = P_.x[i], yi = P_.y[i], reach = P_.radius[i] + skin_;
+    const double xi = P_.pos[D * i], yi = P_.pos[D * i + 1], reach = P_.r[i] + skin_;
     bool near = xi - box_.x_min < reach || box_.x_max - xi < reach ||
                 yi - box_.y_min < reach || box_.y_max - yi < reach;
-    if constexpr (D == 3) near = near || P_.z[i] - box_.z_min < reach || box_.z_max - P_.z[i] < reach;
+    if constexpr (D == 3) {
+      const double zi = P_.pos[D * i + 2];
+      near = near || zi - box_.z_min < reach || box_.z_max - zi < reach;
+    }
     if (near) {
       wall_list_.push_back(static_cast<std::uint32_t>(i));
       wall_touch_[i] = kAll;  // the next evaluation visits its wall histories
@@ -128,38 +133,36 @@ void DynamicSolverT<D>::build_table() {
   const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
-  x_build_ = P_.x;
-  y_build_ = P_.y;
-  if constexpr (D == 3) z_build_ = P_.z;
+  pos_build_ = P_.pos;
   build_wall_list();
   new_key_.clear();
   if (n >= 2) {
     double rmax = 0.0;
-    for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.radius[i]);
-    // cell side >= largest interaction range 2 rmax + skin (3 x 3 cells per query); <= ~4 n cells
-    if constexpr (D == 2) {
-      grid_.rebuild(P_.x, P_.y, 2.0 * rmax + skin_);
-      for (std::size_t i = 0; i < n; ++i) {
-        const double xi = P_.x[i], yi = P_.y[i], ri = P_.radius[i];
-        grid_.for_each_near(xi, yi, ri + rmax + skin_, [&](std::uint32_t j) {
-          if (j <= i) return;
-          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi;
-          const double range = ri + P_.radius[j] + skin_;
-          if (dx * dx + dy * dy < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
-        });
-      }
-    } else {  // 3 x 3 x 3 cells per query
-      grid_.rebuild(P_.x, P_.y, P_.z, 2.0 * rmax + skin_);
-      for (std::size_t i = 0; i < n; ++i) {
-        const double xi = P_.x[i], yi = P_.y[i], zi = P_.z[i], ri = P_.radius[i];
-        grid_.for_each_near(xi, yi, zi, ri + rmax + skin_, [&](std::uint32_t j) {
-          if (j <= i) return;
-          const double dx = P_.x[j] - xi, dy = P_.y[j] - yi, dz = P_.z[j] - zi;
-          const double range = ri + P_.radius[j] + skin_;
-          if (dx * dx + dy * dy + dz * dz < range * range)
-            new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
-        });
-      }
+    for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.r[i]);
+    // cell side >= largest interaction range 2 rmax + skin (3^D cells per query); <= ~4 n cells
+    typename packing::CellGridT<D>::Axes spans;  // the grid reads the centres by axis
+    for (std::size_t a = 0; a < D; ++a) {
+      axes_[a].resize(n);
+      for (std::size_t i = 0; i < n; ++i) axes_[a][i] = P_.pos[D * i + a];
+      spans[a] = axes_[a];
+    }
+    grid_.rebuild(spans, 2.0 * rmax + skin_);
+    const double* const x = P_.pos.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      typename packing::CellGridT<D>::Point xi;
+      for (std::size_t a = 0; a < D; ++a) xi[a] = x[D * i + a];
+      const double ri = P_.r[i];
+      grid_.for_each_near(xi, ri + rmax + skin_, [&](std::uint32_t j) {
+        if (j <= i) return;
+        const double dx = x[D * j] - xi[0], dy = x[D * j + 1] - xi[1];
+        double d2 = dx * dx + dy * dy;
+        if constexpr (D == 3) {
+          const double dz = x[D * j + 2] - xi[2];
+          d2 += dz * dz;
+        }
+        const double range = ri + P_.r[j] + skin_;
+        if (d2 < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
+      });
     }
     std::sort(new_key_.begin(), new_key_.end());
   }
@@ -179,21 +182,13 @@ void DynamicSolverT<D>::build_table_periodic() {
   const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
-  x_build_ = P_.x;
-  y_build_ = P_.y;
-  if constexpr (D == 3) z_build_ = P_.z;
+  pos_build_ = P_.pos;
   F_build_.setIdentity();
   wall_list_.clear();
   wall_list_valid_ = false;
   double rmax = 0.0;
-  for (double r : P_.radius) rmax = std::max(rmax, r);
+  for (double r : P_.r) rmax = std::max(rmax, r);
   range_max_ = 2.0 * rmax + skin_;
-  pos_scratch_.resize(static_cast<std::size_t>(D) * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    pos_scratch_[D * i] = P_.x[i];
-    pos_scratch_[D * i + 1] = P_.y[i];
-    if constexpr (D == 3) pos_scratch_[D * i + 2] = P_.z[i];
-  }
   new_key_.clear();
   new_shift_.clear();
   if (n >= 2) {
@@ -202,7 +197,7 @@ void DynamicSolverT<D>::build_table_periodic() {
              fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "
                          "range 2 r_max + skin = {:.4g}", cell_.min_width(), range_max_),
              "the cell was compressed or sheared too far for its number of particles (a larger packing)");
-    const auto& found = periodic_pairs_.find(pos_scratch_, P_.radius, cell_, skin_);
+    const auto& found = periodic_pairs_.find(P_.pos, P_.r, cell_, skin_);
     for (const auto& pr : found) {
       new_key_.push_back((static_cast<std::uint64_t>(pr.i) << 32) | static_cast<std::uint32_t>(pr.j));
       for (int a = 0; a < D; ++a) new_shift_.push_back(pr.n[static_cast<std::size_t>(a)]);
@@ -220,16 +215,11 @@ void DynamicSolverT<D>::remove_mean_velocity() {
   double m = 0.0, p[3] = {0.0, 0.0, 0.0};
   for (std::size_t i = 0; i < P_.size(); ++i) {
     m += P_.mass[i];
-    p[0] += P_.mass[i] * P_.vx[i];
-    p[1] += P_.mass[i] * P_.vy[i];
-    if constexpr (D == 3) p[2] += P_.mass[i] * P_.vz[i];
+    for (int a = 0; a < D; ++a) p[a] += P_.mass[i] * P_.vel[D * i + a];
   }
   if (!(m > 0.0)) return;
-  for (std::size_t i = 0; i < P_.size(); ++i) {
-    P_.vx[i] -= p[0] / m;
-    P_.vy[i] -= p[1] / m;
-    if constexpr (D == 3) P_.vz[i] -= p[2] / m;
-  }
+  for (std::size_t i = 0; i < P_.size(); ++i)
+    for (int a = 0; a < D; ++a) P_.vel[D * i + a] -= p[a] / m;
 }
 
 template <int D>
@@ -242,7 +232,7 @@ void DynamicSolverT<D>::touching_pairs(
     const std::uint32_t j = static_cast<std::uint32_t>(key & 0xffffffffu);
     double d[3];
     branch(k, i, j, d);
-    const double s = P_.radius[i] + P_.radius[j];
+    const double s = P_.r[i] + P_.r[j];
     double L2 = d[0] * d[0] + d[1] * d[1];
     if constexpr (D == 3) L2 += d[2] * d[2];
     if (L2 < s * s) out.emplace_back(i, j);

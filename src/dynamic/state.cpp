@@ -3,6 +3,7 @@
 #include "netdem/dynamic/state.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -53,31 +54,40 @@ namespace {
 
 constexpr const char* kWallModes[] = {"fixed", "strain", "stress", "affine"};
 
-// The particle columns of dimension D: name, and the array of Particles (or radius_ref).
+// The particle columns of dimension D: name, and the array of ParticlesT<D> (or radius_ref) with
+// the column's component: entry `comp` of every `stride` (a vector quantity has D per particle).
+template <int D>
 struct Column {
   const char* name;
-  std::vector<double> Particles::*member;  ///< nullptr: radius_ref
+  std::vector<double> ParticlesT<D>::*member;  ///< nullptr: radius_ref
+  std::size_t stride = 1, comp = 0;
 };
 template <int D>
-std::span<const Column> columns() {
-  using P = Particles;
-  static const Column c2[] = {{"x", &P::x},           {"y", &P::y},          {"vx", &P::vx},     {"vy", &P::vy},
-                              {"omega", &P::omega},   {"theta", &P::theta},  {"radius", &P::radius},
-                              {"radius_ref", nullptr}, {"mass", &P::mass},    {"inertia", &P::inertia},
-                              {"fx", &P::fx},         {"fy", &P::fy},        {"torque", &P::torque}};
-  static const Column c3[] = {{"x", &P::x},         {"y", &P::y},           {"z", &P::z},         {"vx", &P::vx},
-                              {"vy", &P::vy},       {"vz", &P::vz},         {"wx", &P::wx},       {"wy", &P::wy},
-                              {"wz", &P::omega},    {"radius", &P::radius}, {"radius_ref", nullptr},
-                              {"mass", &P::mass},   {"inertia", &P::inertia}, {"fx", &P::fx},     {"fy", &P::fy},
-                              {"fz", &P::fz},       {"tx", &P::tx},         {"ty", &P::ty},       {"tz", &P::torque}};
+std::span<const Column<D>> columns() {
+  using P = ParticlesT<2>;
+  static const Column<2> c2[] = {{"x", &P::pos, 2, 0},    {"y", &P::pos, 2, 1},      {"vx", &P::vel, 2, 0},
+                                 {"vy", &P::vel, 2, 1},   {"omega", &P::spin},       {"theta", &P::rot},
+                                 {"radius", &P::r},       {"radius_ref", nullptr},   {"mass", &P::mass},
+                                 {"inertia", &P::inertia}, {"fx", &P::force, 2, 0},  {"fy", &P::force, 2, 1},
+                                 {"torque", &P::torque}};
+  using Q = ParticlesT<3>;
+  static const Column<3> c3[] = {{"x", &Q::pos, 3, 0},     {"y", &Q::pos, 3, 1},     {"z", &Q::pos, 3, 2},
+                                 {"vx", &Q::vel, 3, 0},    {"vy", &Q::vel, 3, 1},    {"vz", &Q::vel, 3, 2},
+                                 {"wx", &Q::spin, 3, 0},   {"wy", &Q::spin, 3, 1},   {"wz", &Q::spin, 3, 2},
+                                 {"radius", &Q::r},        {"radius_ref", nullptr},  {"mass", &Q::mass},
+                                 {"inertia", &Q::inertia}, {"fx", &Q::force, 3, 0},  {"fy", &Q::force, 3, 1},
+                                 {"fz", &Q::force, 3, 2},  {"tx", &Q::torque, 3, 0}, {"ty", &Q::torque, 3, 1},
+                                 {"tz", &Q::torque, 3, 2}};
   if constexpr (D == 2) return c2;
   else return c3;
 }
-std::vector<double>& column(SolverState& st, const Column& c) {
-  return c.member ? st.particles.*c.member : st.radius_ref;
+template <int D>
+std::vector<double>& column(ParticlesT<D>& P, std::vector<double>& radius_ref, const Column<D>& c) {
+  return c.member ? P.*c.member : radius_ref;
 }
-const std::vector<double>& column(const SolverState& st, const Column& c) {
-  return c.member ? st.particles.*c.member : st.radius_ref;
+template <int D>
+const std::vector<double>& column(const ParticlesT<D>& P, const std::vector<double>& radius_ref, const Column<D>& c) {
+  return c.member ? P.*c.member : radius_ref;
 }
 
 Json reals(const double* v, std::size_t n, const char* what) {
@@ -149,9 +159,11 @@ Json state_json(const SolverState& st) {
     j["plastic_area_max"] = real_json(st.plastic_area_max, "plastic_area_max");
   }
   Json cols = Json::object();
-  for (const Column& c : columns<D>()) {
-    const auto& v = column(st, c);
-    cols[c.name] = reals(v.data(), v.size(), c.name);
+  for (const Column<D>& c : columns<D>()) {
+    const auto& v = column(st.particles_of<D>(), st.radius_ref, c);
+    Json a = Json::array();
+    for (std::size_t k = c.comp; k < v.size(); k += c.stride) a.push_back(real_json(v[k], c.name));
+    cols[c.name] = a;
   }
   j["particles"] = cols;
   // the state's law by its name, and its histories through their JSON (law_json.hpp)
@@ -293,25 +305,20 @@ template <int D>
 void read_particles(const Field& r, SolverState& st, bool luding) {
   const Field pc = r["particles"];
   std::vector<std::string_view> names;
-  for (const Column& c : columns<D>()) names.push_back(c.name);
+  for (const Column<D>& c : columns<D>()) names.push_back(c.name);
   if (!pc.json().is_object()) pc.fail(fmt::format("expected an object, found {}", pc.json().type_name()));
   for (const auto& [key, value] : pc.json().items())
     if (std::find(names.begin(), names.end(), key) == names.end()) pc[key].fail("unknown member");
   const std::size_t n = pc["x"].array(1, StateLimits::kMaxParticles);
-  Particles& P = st.particles;
-  P.dim = D;
-  for (const Column& c : columns<D>()) {
+  ParticlesT<D>& P = st.particles.emplace<ParticlesT<D>>();
+  for (const Column<D>& c : columns<D>()) {
     const Field f = pc[c.name];
     f.array(n);
-    auto& v = column(st, c);
-    v.resize(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = f[i].real();
+    auto& v = column(P, st.radius_ref, c);
+    v.resize(c.stride * n);
+    for (std::size_t i = 0; i < n; ++i) v[c.stride * i + c.comp] = f[i].real();
   }
-  if constexpr (D == 2) {
-    P.z.clear();  // the 3D-only arrays stay empty
-  } else {
-    P.theta.assign(n, 0.0);
-  }
+  if constexpr (D == 3) P.rot.assign(ParticlesT<D>::kRot * n, 0.0);  // (the orientation is not tracked)
   const double L = length_scale(st, luding);
   const double rlo = L / StateLimits::kRadiusRange, rhi = L * StateLimits::kRadiusRange;
   constexpr double kI = contact::Dim<D>::kInertia;
@@ -320,7 +327,7 @@ void read_particles(const Field& r, SolverState& st, bool luding) {
   if (!luding)
     for (std::size_t i = 0; i < n; ++i) rho += P.mass[i] / volume(st.radius_ref[i]) / static_cast<double>(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const double a = P.radius[i], a_ref = st.radius_ref[i], m = P.mass[i], I = P.inertia[i];
+    const double a = P.r[i], a_ref = st.radius_ref[i], m = P.mass[i], I = P.inertia[i];
     if (!(a >= rlo && a <= rhi)) pc["radius"][i].fail(fmt::format("radius must be within [L / 100, 100 L] = [{:g}, {:g}]", rlo, rhi));
     if (!(a_ref >= rlo && a_ref <= rhi))
       pc["radius_ref"][i].fail(fmt::format("radius_ref must be within [L / 100, 100 L] = [{:g}, {:g}]", rlo, rhi));
@@ -342,7 +349,7 @@ void read_particles(const Field& r, SolverState& st, bool luding) {
 template <int D>
 void check_particles(const Field& r, const SolverState& st, bool luding) {
   using S = StateOf<D>;
-  const Particles& P = st.particles;
+  const ParticlesT<D>& P = st.particles_of<D>();
   const Field pc = r["particles"];
   const std::size_t n = P.size();
   const double L = length_scale(st, luding);
@@ -353,36 +360,40 @@ void check_particles(const Field& r, const SolverState& st, bool luding) {
         r["box"].fail(fmt::format("box coordinates must be within +-{:g} L = {:g}", StateLimits::kMaxBox,
                                   StateLimits::kMaxBox * L));
   }
-  double rmin = P.radius[0], rmax = 0.0;
-  for (double a : P.radius) rmin = std::min(rmin, a), rmax = std::max(rmax, a);
+  double rmin = P.r[0], rmax = 0.0;
+  for (double a : P.r) rmin = std::min(rmin, a), rmax = std::max(rmax, a);
   const double travel = StateLimits::kMaxTravel * rmin, dt = st.dt;
-  auto zc = [&](std::size_t i) { return D == 3 ? P.z[i] : 0.0; };
+  auto xc = [&](std::size_t i, int a) { return a < D ? P.pos[D * i + static_cast<std::size_t>(a)] : 0.0; };
   for (std::size_t i = 0; i < n; ++i) {
-    const bool inside = P.x[i] >= st.box.x_min && P.x[i] <= st.box.x_max && P.y[i] >= st.box.y_min &&
-                        P.y[i] <= st.box.y_max && (D == 2 || (zc(i) >= st.box.z_min && zc(i) <= st.box.z_max));
+    const double x = xc(i, 0), y = xc(i, 1), z = xc(i, 2);
+    const bool inside = x >= st.box.x_min && x <= st.box.x_max && y >= st.box.y_min && y <= st.box.y_max &&
+                        (D == 2 || (z >= st.box.z_min && z <= st.box.z_max));
     if (st.box.enabled && st.box.contact_walls && !inside)
-      pc["x"][i].fail(fmt::format("particle {}: the centre ({:g}, {:g}, {:g}) is outside the box", i, P.x[i], P.y[i], zc(i)));
+      pc["x"][i].fail(fmt::format("particle {}: the centre ({:g}, {:g}, {:g}) is outside the box", i, x, y, z));
     const double far = StateLimits::kMaxBox * L;
-    if (!(std::fabs(P.x[i]) <= far && std::fabs(P.y[i]) <= far && std::fabs(zc(i)) <= far))
+    if (!(std::fabs(x) <= far && std::fabs(y) <= far && std::fabs(z) <= far))
       pc["x"][i].fail(fmt::format("particle {}: the centre must be within +-{:g} L", i, StateLimits::kMaxBox));
     double v = 0.0, f = 0.0, tq = 0.0;
+    const double* const u = &P.vel[D * i];
+    const double* const fi = &P.force[D * i];
     if constexpr (D == 2) {
-      v = std::hypot(P.vx[i], P.vy[i]) + std::fabs(P.omega[i]) * P.radius[i];
-      f = std::hypot(P.fx[i], P.fy[i]);
+      v = std::hypot(u[0], u[1]) + std::fabs(P.spin[i]) * P.r[i];
+      f = std::hypot(fi[0], fi[1]);
       tq = std::fabs(P.torque[i]);
     } else {
-      v = std::sqrt(P.vx[i] * P.vx[i] + P.vy[i] * P.vy[i] + P.vz[i] * P.vz[i]) +
-          std::sqrt(P.wx[i] * P.wx[i] + P.wy[i] * P.wy[i] + P.omega[i] * P.omega[i]) * P.radius[i];
-      f = std::sqrt(P.fx[i] * P.fx[i] + P.fy[i] * P.fy[i] + P.fz[i] * P.fz[i]);
-      tq = std::sqrt(P.tx[i] * P.tx[i] + P.ty[i] * P.ty[i] + P.torque[i] * P.torque[i]);
+      const double* const w = &P.spin[3 * i];
+      const double* const t = &P.torque[3 * i];
+      v = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) + std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * P.r[i];
+      f = std::sqrt(fi[0] * fi[0] + fi[1] * fi[1] + fi[2] * fi[2]);
+      tq = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
     }
     // the torque, as the force: its half kick must not turn the surface by 0.1 r_min in a step (a torque of
     // 1e300 passed before and wrote inf into vibrate's timeseries.csv: campaign of issue 27)
     const double dw = 0.5 * dt * tq / P.inertia[i];
-    if (!(dw * dt * P.radius[i] < travel))
+    if (!(dw * dt * P.r[i] < travel))
       pc[D == 2 ? "torque" : "tx"][i].fail(fmt::format(
           "particle {}: torque {:.3g} would turn its surface {:.3g} in the next step, not below 0.1 r_min", i, tq,
-          dw * dt * P.radius[i]));
+          dw * dt * P.r[i]));
     if (!(v * dt < travel))
       pc["vx"][i].fail(fmt::format("particle {}: speed {:.3g} moves it {:.3g} per step, not below 0.1 r_min = {:.3g}",
                                    i, v, v * dt, travel));
@@ -399,19 +410,23 @@ void check_particles(const Field& r, const SolverState& st, bool luding) {
   }
   auto check = [&](std::size_t i, std::uint32_t j) {
     if (j <= i) return;
-    const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], dz = zc(j) - zc(i);
-    const double lim = std::max(P.radius[i], P.radius[j]);
+    const double dx = xc(j, 0) - xc(i, 0), dy = xc(j, 1) - xc(i, 1), dz = xc(j, 2) - xc(i, 2);
+    const double lim = std::max(P.r[i], P.r[j]);
     if (dx * dx + dy * dy + dz * dz < lim * lim)
       pc["x"][j].fail(fmt::format("particles {} and {}: centre distance {:.3g} is below the larger radius {:.3g} "
                                   "(a duplicate?)", i, j, std::sqrt(dx * dx + dy * dy + dz * dz), lim));
   };
-  if constexpr (D == 2) {
-    const packing::CellGrid grid(P.x, P.y, rmax);
-    for (std::size_t i = 0; i < n; ++i) grid.for_each_near(P.x[i], P.y[i], rmax, [&](std::uint32_t j) { check(i, j); });
-  } else {
-    const packing::CellGrid3 grid(P.x, P.y, P.z, rmax);
-    for (std::size_t i = 0; i < n; ++i)
-      grid.for_each_near(P.x[i], P.y[i], P.z[i], rmax, [&](std::uint32_t j) { check(i, j); });
+  std::array<std::vector<double>, D> axes;
+  typename packing::CellGridT<D>::Axes spans;
+  for (int a = 0; a < D; ++a) {
+    axes[a] = P.axis(a);
+    spans[a] = axes[a];
+  }
+  const packing::CellGridT<D> grid(spans, rmax);
+  for (std::size_t i = 0; i < n; ++i) {
+    typename packing::CellGridT<D>::Point at;
+    for (int a = 0; a < D; ++a) at[a] = xc(i, a);
+    grid.for_each_near(at, rmax, [&](std::uint32_t j) { check(i, j); });
   }
 }
 
@@ -434,7 +449,8 @@ void check_history(const Field& h, const H& v, double reach, double delta_fluid,
 // the histories of the state's law.
 template <int D, class H>
 void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::vector<H>& wall) {
-  const std::size_t n = st.particles.size();
+  const std::vector<double>& radius = st.particles_of<D>().r;
+  const std::size_t n = radius.size();
   const Field pr = r["pairs"];
   pr.object({"i", "j", "history"});
   const std::size_t m = pr["i"].array(0, n * (n - 1) / 2);
@@ -447,7 +463,7 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     st.pair_key.push_back((i << 32) | j);
     if (k > 0 && !(st.pair_key[k - 1] < st.pair_key[k])) pr["i"][k].fail("pairs must be sorted by (i, j)");
     pair.push_back(pr["history"][k].get<H>());
-    check_history(pr["history"][k], pair.back(), st.particles.radius[i] + st.particles.radius[j],
+    check_history(pr["history"][k], pair.back(), radius[i] + radius[j],
                   st.params.delta_fluid(), i, static_cast<std::int64_t>(j));
   }
   constexpr std::size_t W = 2 * D;
@@ -464,7 +480,7 @@ void read_contacts(const Field& r, SolverState& st, std::vector<H>& pair, std::v
     if (k > 0 && !(W * i + w > last)) wc["particle"][k].fail("wall contacts must be sorted by (particle, wall)");
     last = W * i + w;
     wall[last] = wc["history"][k].get<H>();
-    check_history(wc["history"][k], wall[last], 2.0 * st.particles.radius[i], st.params.delta_fluid(), i, -1);
+    check_history(wc["history"][k], wall[last], 2.0 * radius[i], st.params.delta_fluid(), i, -1);
   }
 }
 

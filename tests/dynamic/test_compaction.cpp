@@ -101,7 +101,7 @@ void affine_lattice_compaction() {
   const int m = 4;
   const double u0 = 1e-9;
   const auto pk = lattice<D>(m, u0);
-  Particles P = D == 2 ? particles_from(pk, 1.0) : spheres_from(pk, 1.0);
+  ParticlesT<D> P = particles_at_rest<D>(pk, 1.0);
   Box box(pk.box);
   box.contact_walls = false;  // the box follows the affine field (as demsolve compact --affine)
   box.right.mode = box.top.mode = WallMode::Affine;
@@ -262,17 +262,17 @@ TEST(DemCompaction, RateChangeKeepsTheFluctuationsAndStepToEndsOnTime) {
   s.run(3);
   std::vector<double> wx, wy;  // the velocities relative to the affine field
   for (std::size_t i = 0; i < s.particles().size(); ++i) {
-    wx.push_back(s.particles().vx[i] + 0.01 * (s.particles().x[i] - s.box().x_min));
-    wy.push_back(s.particles().vy[i] + 0.01 * (s.particles().y[i] - s.box().y_min));
+    wx.push_back(s.particles().vel[2 * i] + 0.01 * (s.particles().pos[2 * i] - s.box().x_min));
+    wy.push_back(s.particles().vel[2 * i + 1] + 0.01 * (s.particles().pos[2 * i + 1] - s.box().y_min));
   }
   s.set_strain_rate(0.02, -0.03, 0.005);
   Eigen::Matrix2d dL;
   dL << 0.03, 0.005, 0.005, -0.02;
   s.shift_affine_velocities(dL);
   for (std::size_t i = 0; i < s.particles().size(); ++i) {
-    const double dx = s.particles().x[i] - s.box().x_min, dy = s.particles().y[i] - s.box().y_min;
-    EXPECT_NEAR(s.particles().vx[i] - 0.02 * dx - 0.005 * dy, wx[i], 1e-15);
-    EXPECT_NEAR(s.particles().vy[i] + 0.03 * dy - 0.005 * dx, wy[i], 1e-15);
+    const double dx = s.particles().pos[2 * i] - s.box().x_min, dy = s.particles().pos[2 * i + 1] - s.box().y_min;
+    EXPECT_NEAR(s.particles().vel[2 * i] - 0.02 * dx - 0.005 * dy, wx[i], 1e-15);
+    EXPECT_NEAR(s.particles().vel[2 * i + 1] + 0.03 * dy - 0.005 * dx, wy[i], 1e-15);
   }
   const double dt = s.dt(), t = s.time() + 0.4 * dt;
   s.step_to(t);

@@ -72,7 +72,7 @@ Collision two_disk(const LudingParams& p, ContactModel model, double steps_per_c
   DynamicSolver s(std::move(P), p, box, o);
   auto overlap = [&] {
     const auto& q = s.particles();
-    return 2.0 * a - (q.x[1] - q.x[0]);
+    return 2.0 * a - (q.pos[2] - q.pos[0]);
   };
   double d_prev = overlap(), t_in = -1.0, t_out = -1.0;
   for (int k = 0; k < 1000000 && t_out < 0.0; ++k) {
@@ -86,7 +86,7 @@ Collision two_disk(const LudingParams& p, ContactModel model, double steps_per_c
   EXPECT_GT(t_out, 0.0);
   s.run(5);  // free flight
   const auto& q = s.particles();
-  return {(q.vx[1] - q.vx[0]) / v0, t_out - t_in};
+  return {(q.vel[2] - q.vel[0]) / v0, t_out - t_in};
 }
 
 }  // namespace
@@ -307,7 +307,7 @@ TEST(Dynamic, FreeSetConservesMomentum) {
     if (!friction) p = elastic_params();
     // an overlapping cluster flying apart and colliding: 64 disks, pitch < 2a
     Particles P = lattice(p, 8, 8, 2.1 * p.a0, 0.1, 0.5, 11);
-    for (std::size_t i = 0; i < P.size(); ++i) P.omega[i] = 200.0 * std::sin(1.0 + i);
+    for (std::size_t i = 0; i < P.size(); ++i) P.spin[i] = 200.0 * std::sin(1.0 + i);
     Box box;
     box.enabled = false;
     DynamicOptions o;
@@ -318,12 +318,12 @@ TEST(Dynamic, FreeSetConservesMomentum) {
       const auto& q = s.particles();
       px = py = L = scale = lscale = 0.0;
       for (std::size_t i = 0; i < q.size(); ++i) {
-        px += q.mass[i] * q.vx[i];
-        py += q.mass[i] * q.vy[i];
+        px += q.mass[i] * q.vel[2 * i];
+        py += q.mass[i] * q.vel[2 * i + 1];
         const double li =
-            q.mass[i] * (q.x[i] * q.vy[i] - q.y[i] * q.vx[i]) + q.inertia[i] * q.omega[i];
+            q.mass[i] * (q.pos[2 * i] * q.vel[2 * i + 1] - q.pos[2 * i + 1] * q.vel[2 * i]) + q.inertia[i] * q.spin[i];
         L += li;
-        scale += q.mass[i] * std::hypot(q.vx[i], q.vy[i]);
+        scale += q.mass[i] * std::hypot(q.vel[2 * i], q.vel[2 * i + 1]);
         lscale += std::fabs(li);
       }
     };
@@ -369,7 +369,7 @@ TEST(Dynamic, VerletTableExactForRadiusRatio100) {
       std::vector<std::pair<std::uint32_t, std::uint32_t>> touching, found;
       for (std::uint32_t i = 0; i < P.size(); ++i)
         for (std::uint32_t j = i + 1; j < P.size(); ++j) {
-          const double dx = P.x[j] - P.x[i], dy = P.y[j] - P.y[i], r = P.radius[i] + P.radius[j];
+          const double dx = P.pos[2 * j] - P.pos[2 * i], dy = P.pos[2 * j + 1] - P.pos[2 * i + 1], r = P.r[i] + P.r[j];
           if (dx * dx + dy * dy < (r + o.skin) * (r + o.skin)) {
             ++in_range;
             EXPECT_NE(s.history(i, j), nullptr) << i << " " << j;
@@ -410,7 +410,7 @@ TEST(Dynamic, VerletTableMatchesAllPairs) {
     ref.clear();
     for (std::uint32_t i = 0; i < q.size(); ++i)
       for (std::uint32_t j = i + 1; j < q.size(); ++j) {
-        const double dx = q.x[j] - q.x[i], dy = q.y[j] - q.y[i], r = q.radius[i] + q.radius[j];
+        const double dx = q.pos[2 * j] - q.pos[2 * i], dy = q.pos[2 * j + 1] - q.pos[2 * i + 1], r = q.r[i] + q.r[j];
         if (dx * dx + dy * dy < r * r) ref.emplace_back(i, j);
       }
     ASSERT_EQ(found, ref) << "step " << k;
@@ -504,7 +504,7 @@ TEST(Dynamic, GravityRestingDiskOnBottomWall) {
   DynamicSolver s(std::move(P), p, box, o);
   s.run(static_cast<std::size_t>(0.05 / s.dt()));
   const auto& q = s.particles();
-  const double delta = q.radius[0] - q.y[0];
+  const double delta = q.r[0] - q.pos[1];
   std::printf("  resting overlap %.6e m, m g / k2 = %.6e m\n", delta, q.mass[0] * 9.81 / p.k2);
   EXPECT_NEAR(delta * p.k2 / (q.mass[0] * 9.81), 1.0, 1e-6);
 }
@@ -571,14 +571,14 @@ TEST(Dynamic, InPlaceUpdateIsBitIdentical) {
       s.run(small_scale() ? 6000 : 20000);
       out[ref] = s.state();
     }
-    const auto& a = out[0].particles;
-    const auto& b = out[1].particles;
+    const auto& a = out[0].particles_of<2>();
+    const auto& b = out[1].particles_of<2>();
     ASSERT_EQ(a.size(), b.size());
     std::size_t touching = 0;
     for (std::size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(std::memcmp(&a.x[i], &b.x[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.vy[i], &b.vy[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.omega[i], &b.omega[i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.pos[2 * i], &b.pos[2 * i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.vel[2 * i + 1], &b.vel[2 * i + 1], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.spin[i], &b.spin[i], sizeof(double)), 0);
     }
     const auto &s0 = out[0].histories_of<LudingHistory>(), &s1 = out[1].histories_of<LudingHistory>();
     ASSERT_EQ(s0.pair.size(), s1.pair.size());

@@ -10,7 +10,9 @@
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <type_traits>
 #include <utility>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -39,10 +41,10 @@ double sphere_mass(double a) { return kRho * 4.0 / 3.0 * std::numbers::pi * a * 
 
 // side^3 spheres on a cubic lattice of the given pitch (centres at (i + 1/2) pitch), radii
 // a0 (1 + dr u) and velocity components v u (u uniform in [-1, 1), seed), drawn in that order.
-Particles cubic_sample(int side, double pitch, double a0, double dr, double v, std::uint64_t seed) {
+Particles3 cubic_sample(int side, double pitch, double a0, double dr, double v, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles P;
+  Particles3 P;
   for (int a = 0; a < side; ++a)
     for (int b = 0; b < side; ++b)
       for (int c = 0; c < side; ++c) {
@@ -61,7 +63,7 @@ struct Collision {
 
 // Head-on collision of two equal spheres in free space along a skew direction u, relative speed v0.
 Collision two_sphere(const LudingParams& p, double steps_per_contact, const Eigen::Vector3d& u) {
-  Particles P;
+  Particles3 P;
   const double a = p.a0, v0 = 0.1;
   const Eigen::Vector3d x1 = (2.0 * a + 1e-6) * u, v = 0.5 * v0 * u;
   P.add_sphere(0.0, 0.0, 0.0, a, kRho, {v.x(), v.y(), v.z()});
@@ -74,7 +76,7 @@ Collision two_sphere(const LudingParams& p, double steps_per_contact, const Eige
   DynamicSolver3 s(std::move(P), p, box, o);
   auto overlap = [&] {
     const auto& q = s.particles();
-    const Eigen::Vector3d d(q.x[1] - q.x[0], q.y[1] - q.y[0], q.z[1] - q.z[0]);
+    const Eigen::Vector3d d(q.pos[3] - q.pos[0], q.pos[4] - q.pos[1], q.pos[5] - q.pos[2]);
     return 2.0 * a - d.norm();
   };
   double d_prev = overlap(), t_in = -1.0, t_out = -1.0;
@@ -89,7 +91,7 @@ Collision two_sphere(const LudingParams& p, double steps_per_contact, const Eige
   EXPECT_GT(t_out, 0.0);
   s.run(5);
   const auto& q = s.particles();
-  const Eigen::Vector3d dv(q.vx[1] - q.vx[0], q.vy[1] - q.vy[0], q.vz[1] - q.vz[0]);
+  const Eigen::Vector3d dv(q.vel[3] - q.vel[0], q.vel[4] - q.vel[1], q.vel[5] - q.vel[2]);
   return {dv.dot(u) / v0, t_out - t_in};
 }
 
@@ -134,7 +136,7 @@ static double lattice_energy_error(double steps_per_contact, double duration, in
   p.gamma_t = 0.0;
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles P;
+  Particles3 P;
   const double pitch = 1.85 * p.a0, v = 0.3;
   for (int a = 0; a < side; ++a)
     for (int b = 0; b < side; ++b)
@@ -188,7 +190,7 @@ TEST(Dynamic3D, SphereOnInclineSticksSlidesAndRolls) {
     p.mu_wall = mu;
     p.gamma_n = 0.5;
     p.gamma_t = 0.1;
-    Particles P;
+    Particles3 P;
     P.add_sphere(0.05, 0.05, p.a0 + 1e-9, p.a0, kRho);
     Box box;
     box.x_max = 1.0;
@@ -201,10 +203,10 @@ TEST(Dynamic3D, SphereOnInclineSticksSlidesAndRolls) {
     DynamicSolver3 s(std::move(P), p, box, o);
     s.set_rotations(rotation);
     s.run(static_cast<std::size_t>(0.02 / s.dt()));  // settle on the plane
-    const double x0 = s.particles().x[0], v0 = s.particles().vx[0], t0 = s.time();
+    const double x0 = s.particles().pos[0], v0 = s.particles().vel[0], t0 = s.time();
     s.run(static_cast<std::size_t>(0.05 / s.dt()));
     const double T = s.time() - t0;
-    const double dxs = s.particles().x[0] - x0;
+    const double dxs = s.particles().pos[0] - x0;
     return 2.0 * (dxs - v0 * T) / (T * T);  // mean acceleration along the incline
   };
   const double th_stick = std::atan(0.8 * mu), th_slide = std::atan(1.5 * mu), th_roll = std::atan(2.0 * mu),
@@ -270,7 +272,7 @@ TEST(Dynamic3D, StressControlledWallsSettleToPressure) {
   p.gamma_n = 1.0;
   const int side = netdem::test::small_scale() ? 3 : 4;
   const double pitch = 2.2 * p.a0;
-  Particles P = cubic_sample(side, pitch, p.a0, 0.2, 0.0, 5);
+  Particles3 P = cubic_sample(side, pitch, p.a0, 0.2, 0.0, 5);
   Box box;
   box.x_max = box.y_max = box.z_max = side * pitch;
   const double pressure = 1e5;  // N/m^2
@@ -310,7 +312,7 @@ TEST(Dynamic3D, InPlaceUpdateIsBitIdentical) {
     p.mu_wall = 0.3;
     const int side = netdem::test::small_scale() ? 3 : 4;
     const double pitch = 2.02 * p.a0;
-    const Particles P0 = cubic_sample(side, pitch, p.a0, 0.05, 0.05, 9);
+    const Particles3 P0 = cubic_sample(side, pitch, p.a0, 0.05, 0.05, 9);
     Box box;
     box.x_max = box.y_max = box.z_max = side * pitch;
     for (MovingWall* w : {&box.right, &box.back, &box.top}) {
@@ -325,19 +327,19 @@ TEST(Dynamic3D, InPlaceUpdateIsBitIdentical) {
       o.model = model;
       o.reference_contact_path = ref == 1;
       o.gravity_z = -9.81;
-      DynamicSolver3 s(Particles(P0), p, box, o);
+      DynamicSolver3 s(Particles3(P0), p, box, o);
       s.run(netdem::test::small_scale() ? 3000 : 10000);
       out[ref] = s.state();
     }
-    const auto& a = out[0].particles;
-    const auto& b = out[1].particles;
+    const auto& a = out[0].particles_of<3>();
+    const auto& b = out[1].particles_of<3>();
     ASSERT_EQ(a.size(), b.size());
     for (std::size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(std::memcmp(&a.x[i], &b.x[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.z[i], &b.z[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.vy[i], &b.vy[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.wx[i], &b.wx[i], sizeof(double)), 0);
-      EXPECT_EQ(std::memcmp(&a.omega[i], &b.omega[i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.pos[3 * i], &b.pos[3 * i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.pos[3 * i + 2], &b.pos[3 * i + 2], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.vel[3 * i + 1], &b.vel[3 * i + 1], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.spin[3 * i], &b.spin[3 * i], sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(&a.spin[3 * i + 2], &b.spin[3 * i + 2], sizeof(double)), 0);
     }
     using H3 = netdem::contact::LudingHistoryT<3>;
     const auto &p0 = out[0].histories_of<H3>().pair, &p1 = out[1].histories_of<H3>().pair;
@@ -359,7 +361,7 @@ TEST(Dynamic3D, InPlaceUpdateIsBitIdentical) {
 // The 3D solver refuses what it does not do yet, with one line.
 TEST(Dynamic3D, RefusesTheTwoDOnlyParts) {
   LudingParams p = linear_params();
-  Particles P;
+  Particles3 P;
   P.add_sphere(0.005, 0.005, 0.005, p.a0, kRho);
   Box box;
   box.x_max = box.y_max = box.z_max = 0.01;
@@ -367,11 +369,9 @@ TEST(Dynamic3D, RefusesTheTwoDOnlyParts) {
   o.model = ContactModel::Linear;
   DynamicSolver3 s(P, p, box, o);
   EXPECT_THROW(s.set_strain_rate(-1.0, -1.0), std::logic_error);
-  // disks into a 3D solver, spheres into a 2D one
-  Particles disks;
-  disks.add(0.005, 0.005, p.a0, p);
-  EXPECT_THROW(DynamicSolver3(disks, p, box, o), std::invalid_argument);
-  EXPECT_THROW(DynamicSolver(P, p, box, o), std::invalid_argument);
+  // disks into a 3D solver, spheres into a 2D one: the particles' type has the dimension
+  static_assert(!std::is_constructible_v<DynamicSolver3, Particles, LudingParams, Box, DynamicOptions>);
+  static_assert(!std::is_constructible_v<DynamicSolver, Particles3, LudingParams, Box, DynamicOptions>);
   Box flat = box;
   flat.z_max = 0.0;
   EXPECT_THROW(DynamicSolver3(P, p, flat, o), std::invalid_argument);
@@ -387,7 +387,7 @@ TEST(Dynamic3D, RefusesTheTwoDOnlyParts) {
 TEST(Dynamic3D, CubicLatticeAffineCompactionClosedForm) {
   const int n = 4;
   const double R = 1.0, rho = 1.0;
-  Particles P;
+  Particles3 P;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k) P.add_sphere(R + 2 * R * i, R + 2 * R * j, R + 2 * R * k, R, rho);
@@ -415,8 +415,7 @@ TEST(Dynamic3D, CubicLatticeAffineCompactionClosedForm) {
   const auto& q = s.particles();
   double du = 0.0;
   for (const auto& [i, j] : pairs) {
-    const double L = std::sqrt((q.x[j] - q.x[i]) * (q.x[j] - q.x[i]) + (q.y[j] - q.y[i]) * (q.y[j] - q.y[i]) +
-                               (q.z[j] - q.z[i]) * (q.z[j] - q.z[i]));
+    const double L = (q.position(j) - q.position(i)).norm();
     du = std::fmax(du, std::fabs(2.0 * R - L - u));
   }
   EXPECT_LT(du, 1e-12 * R);  // the affine motion is exact (to the rounding of the drifts)

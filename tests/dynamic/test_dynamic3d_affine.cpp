@@ -49,7 +49,7 @@ struct LatticeRun {
 /// without contact walls, every centre prescribed (spins held), frictionless reversible plastic
 /// indentation (F = 6 pi sigma_y R* u, no damping), driven by L up to time T.
 LatticeRun run_lattice(double s, const std::array<double, 6>& e, double T, double gravity_z = 0.0) {
-  Particles P;
+  Particles3 P;
   std::vector<Eigen::Vector3d> X;
   for (int i = 0; i < kN; ++i)
     for (int j = 0; j < kN; ++j)
@@ -86,7 +86,7 @@ LatticeRun run_lattice(double s, const std::array<double, 6>& e, double T, doubl
   const auto& Q = sv.particles();
   for (std::size_t p = 0; p < X.size(); ++p) {
     const Eigen::Vector3d want = F * X[p];  // x_0 = 0
-    r.position_error = std::fmax(r.position_error, (Eigen::Vector3d(Q.x[p], Q.y[p], Q.z[p]) - want).norm() / s);
+    r.position_error = std::fmax(r.position_error, (Q.position(p) - want).norm() / s);
   }
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   sv.touching_pairs(pairs);
@@ -195,7 +195,7 @@ TEST(Dynamic3DAffine, StressRotatesAndMirrorsWithTheStrainRate) {
 // A shear rate needs a box without contact walls (the walls stay axis-aligned), as in 2D; the
 // diagonal rates still work with walls.
 TEST(Dynamic3DAffine, ShearRateRefusedWithContactWalls) {
-  Particles P;
+  Particles3 P;
   P.add_sphere(2.0, 2.0, 2.0, 1.0, 1.0);
   Box box;
   box.x_max = box.y_max = box.z_max = 4.0;
@@ -213,7 +213,7 @@ TEST(Dynamic3DAffine, ShearRateRefusedWithContactWalls) {
 // field alone the shear part w of the velocity shows as c m |w| (the RMS per sphere of the force and
 // the torque / radius, the spin at rest).
 TEST(Dynamic3DAffine, AffineVelocitiesAndDragUseTheFullField) {
-  Particles P;
+  Particles3 P;
   P.add_sphere(3.0, 2.0, 1.0, 0.5, 1.0);
   Box box;
   box.x_max = box.y_max = box.z_max = 6.0;
@@ -226,9 +226,9 @@ TEST(Dynamic3DAffine, AffineVelocitiesAndDragUseTheFullField) {
   sv.set_strain_rate3(e11, e22, e33, e23, e13, e12);
   sv.set_affine_velocities();
   const auto& q = sv.particles();
-  EXPECT_DOUBLE_EQ(q.vx[0], e11 * 3 + e12 * 2 + e13 * 1);
-  EXPECT_DOUBLE_EQ(q.vy[0], e12 * 3 + e22 * 2 + e23 * 1);
-  EXPECT_DOUBLE_EQ(q.vz[0], e13 * 3 + e23 * 2 + e33 * 1);
+  EXPECT_DOUBLE_EQ(q.vel[0], e11 * 3 + e12 * 2 + e13 * 1);
+  EXPECT_DOUBLE_EQ(q.vel[1], e12 * 3 + e22 * 2 + e23 * 1);
+  EXPECT_DOUBLE_EQ(q.vel[2], e13 * 3 + e23 * 2 + e33 * 1);
   EXPECT_EQ(sv.unbalanced_force_rms(), 0.0);
   EXPECT_DOUBLE_EQ(sv.strain_rate3(0, 2), e13);
   EXPECT_DOUBLE_EQ(sv.strain_rate3(2, 1), e23);

@@ -37,7 +37,7 @@ Collision collide(const ct::PlasticIndentationParams& law, double v0, double dt,
   o.dt = dt;
   o.min_steps_per_contact = 1.0;
   DynamicSolver s(std::move(P), law, box, o);  // (the law's parameters: the model follows)
-  auto overlap = [&] { return 2.0 - (s.particles().x[1] - s.particles().x[0]); };
+  auto overlap = [&] { return 2.0 - (s.particles().pos[2] - s.particles().pos[0]); };
   double d_prev = overlap(), t_in = -1.0, t_out = -1.0;
   Collision c;
   for (long k = 0; k < 10000000 && t_out < 0.0; ++k) {
@@ -51,7 +51,7 @@ Collision collide(const ct::PlasticIndentationParams& law, double v0, double dt,
   }
   EXPECT_GT(t_out, 0.0);
   s.run(3);
-  c.e = (s.particles().vx[1] - s.particles().vx[0]) / v0;
+  c.e = (s.particles().vel[2] - s.particles().vel[0]) / v0;
   c.tc = t_out - t_in;
   return c;
 }
@@ -168,8 +168,9 @@ TEST(DynamicPlastic, RestartIsBitIdentical) {
               a.contact_stress().yy);
   EXPECT_GT(ca.size(), 36u);
   ASSERT_EQ(ca.size(), cb.size());
-  EXPECT_EQ(std::memcmp(&a.particles().x[0], &b.particles().x[0], sizeof(double) * a.particles().size()), 0);
-  EXPECT_EQ(std::memcmp(&a.particles().omega[0], &b.particles().omega[0], sizeof(double) * a.particles().size()),
+  EXPECT_EQ(std::memcmp(a.particles().pos.data(), b.particles().pos.data(), sizeof(double) * a.particles().pos.size()),
+            0);
+  EXPECT_EQ(std::memcmp(a.particles().spin.data(), b.particles().spin.data(), sizeof(double) * a.particles().size()),
             0);
   EXPECT_EQ(a.dt(), b.dt());
   for (std::size_t k = 0; k < ca.size(); ++k) EXPECT_EQ(ca[k].f_t, cb[k].f_t);
@@ -225,8 +226,8 @@ TEST(DynamicPlastic, AffineMotionIsExactAndBoundaryStressIsContactStress) {
     const double t = s.time();
     double err = 0.0;
     for (std::size_t i = 0; i < P0.size(); ++i) {
-      err = std::max(err, std::fabs(s.particles().x[i] - (x0 + std::exp(e11 * t) * (P0.x[i] - x0))));
-      err = std::max(err, std::fabs(s.particles().y[i] - (y0 + std::exp(e22 * t) * (P0.y[i] - y0))));
+      err = std::max(err, std::fabs(s.particles().pos[2 * i] - (x0 + std::exp(e11 * t) * (P0.pos[2 * i] - x0))));
+      err = std::max(err, std::fabs(s.particles().pos[2 * i + 1] - (y0 + std::exp(e22 * t) * (P0.pos[2 * i + 1] - y0))));
     }
     const double box_err = std::max(std::fabs(s.box().x_max - (x0 + std::exp(e11 * t) * (X1 - x0))),
                                     std::fabs(s.box().y_max - (y0 + std::exp(e22 * t) * (Y1 - y0))));
@@ -266,13 +267,13 @@ TEST(DynamicPlastic, AffineDragActsOnTheRelativeMotion) {
       s.set_strain_rate(e, e);
       s.set_affine_velocities();
       SolverState st = s.state();
-      st.particles.vx[0] += off * w0;
+      st.particles_of<2>().vel[0] += off * w0;
       DynamicSolver r(st, o);
       r.set_strain_rate(e, e);
       r.run(4000);
       t = r.time();
-      dx += (off ? 1.0 : -1.0) * r.particles().x[0];
-      dv += (off ? 1.0 : -1.0) * r.particles().vx[0];
+      dx += (off ? 1.0 : -1.0) * r.particles().pos[0];
+      dv += (off ? 1.0 : -1.0) * r.particles().vel[0];
     }
     const double d = std::sqrt(c * c + 4.0 * c * e), l1 = 0.5 * (-c + d), l2 = 0.5 * (-c - d);
     const double dx_ref = w0 * (std::exp(l1 * t) - std::exp(l2 * t)) / (l1 - l2);
@@ -299,9 +300,9 @@ TEST(DynamicPlastic, PrescribedCentresWithFreeSpinsAndHeldRotations) {
     const double t = s.time();
     double err = 0.0, spin = 0.0;
     for (std::size_t i = 0; i < P0.size(); ++i) {
-      err = std::max(err, std::fabs(s.particles().x[i] - std::exp(e * t) * P0.x[i]));
-      err = std::max(err, std::fabs(s.particles().y[i] - std::exp(f * t) * P0.y[i]));
-      spin = std::max(spin, std::fabs(s.particles().theta[i]) + std::fabs(s.particles().omega[i]));
+      err = std::max(err, std::fabs(s.particles().pos[2 * i] - std::exp(e * t) * P0.pos[2 * i]));
+      err = std::max(err, std::fabs(s.particles().pos[2 * i + 1] - std::exp(f * t) * P0.pos[2 * i + 1]));
+      spin = std::max(spin, std::fabs(s.particles().rot[i]) + std::fabs(s.particles().spin[i]));
     }
     std::printf("  rotations %d: max |x - affine| = %.2e, max |theta| + |omega| = %.3e\n", rotations, err, spin);
     EXPECT_LT(err, 1e-11);

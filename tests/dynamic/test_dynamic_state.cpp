@@ -97,11 +97,11 @@ TEST(DynamicState, RestartThroughStateFileIsBitwiseExact) {
               cohesive);
   EXPECT_GT(sliding + cohesive, 0u) << "the test must exercise the history";
   for (std::size_t i = 0; i < A.size(); ++i) {
-    ASSERT_EQ(A.x[i], B.x[i]) << i;
-    ASSERT_EQ(A.y[i], B.y[i]) << i;
-    ASSERT_EQ(A.vx[i], B.vx[i]) << i;
-    ASSERT_EQ(A.omega[i], B.omega[i]) << i;
-    ASSERT_EQ(A.radius[i], B.radius[i]) << i;
+    ASSERT_EQ(A.pos[2 * i], B.pos[2 * i]) << i;
+    ASSERT_EQ(A.pos[2 * i + 1], B.pos[2 * i + 1]) << i;
+    ASSERT_EQ(A.vel[2 * i], B.vel[2 * i]) << i;
+    ASSERT_EQ(A.spin[i], B.spin[i]) << i;
+    ASSERT_EQ(A.r[i], B.r[i]) << i;
   }
   EXPECT_EQ(a.box().x_max, b.box().x_max);
   EXPECT_EQ(a.box().y_max, b.box().y_max);
@@ -125,10 +125,10 @@ TEST(DynamicState, TemperatureScalesRadiiEq9AndRelaxesK1Eq11) {
   auto a_of = [&](double ref, double T) {
     return ref * (1.0 - p.da_T * (p.T_melt - T)) / (1.0 - p.da_T * (p.T_melt - p.T_radius_ref));
   };
-  EXPECT_DOUBLE_EQ(s.particles().radius[1], a_of(0.7e-3, 80.0));
+  EXPECT_DOUBLE_EQ(s.particles().r[1], a_of(0.7e-3, 80.0));
   const double nu80 = s.density(), m0 = s.particles().mass[0];
   s.advance_temperature(140.0, s.dt(), 1e3);
-  EXPECT_DOUBLE_EQ(s.particles().radius[0], a_of(1.0e-3, 140.0));
+  EXPECT_DOUBLE_EQ(s.particles().r[0], a_of(1.0e-3, 140.0));
   EXPECT_DOUBLE_EQ(s.particles().mass[0], m0);
   EXPECT_NEAR(s.density() / nu80, std::pow(a_of(1.0, 140.0) / a_of(1.0, 80.0), 2), 1e-14);
   // hold at 140 C with t0 = 0.1 s: Eq 11 from the value after the jump
@@ -144,7 +144,7 @@ TEST(DynamicState, TemperatureScalesRadiiEq9AndRelaxesK1Eq11) {
   // cooling with k1(T) above k1(T, t): the contact freezes at once (section 3.4)
   s.advance_temperature(80.0, dt, 1e3);
   EXPECT_DOUBLE_EQ(s.thermal().k1_Tt, netdem::contact::luding_k1_of_T(p, 80.0));
-  EXPECT_DOUBLE_EQ(s.particles().radius[0], a_of(1.0e-3, 80.0));
+  EXPECT_DOUBLE_EQ(s.particles().r[0], a_of(1.0e-3, 80.0));
   // a temperature needs the full law
   o.model = ContactModel::Linear;
   DynamicSolver lin(P, p, box, o);

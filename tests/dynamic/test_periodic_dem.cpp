@@ -39,7 +39,7 @@ DynamicOptions plastic_options(double mu) {
 
 template <int D>
 DynamicSolverT<D> periodic_solver(const packing::Packing& pk, const DynamicOptions& o) {
-  return DynamicSolverT<D>(periodic_particles_from(pk, 1.0), o.plastic, packing::periodic_cell<D>(pk), o);
+  return DynamicSolverT<D>(periodic_particles_from<D>(pk, 1.0), o.plastic, packing::periodic_cell<D>(pk), o);
 }
 
 // A disordered periodic packing of n x n disks: a square lattice of spacing 2.0 with jittered
@@ -274,10 +274,10 @@ TEST(PeriodicDem, ShiftRenumberAndMirrorInvariance) {
 TEST(PeriodicDem, NoDrift) {
   const packing::Packing pk = jittered(8, 3, 3.0);  // loose: the disks fly and collide
   DynamicOptions o = plastic_options(0.3);
-  Particles P = periodic_particles_from(pk, 1.0);
+  Particles P = periodic_particles_from<2>(pk, 1.0);
   std::mt19937_64 rng(9);
   std::normal_distribution<double> G(0.0, 0.5);
-  for (std::size_t i = 0; i < P.size(); ++i) P.vx[i] = G(rng), P.vy[i] = G(rng);
+  for (std::size_t i = 0; i < P.size(); ++i) P.vel[2 * i] = G(rng), P.vel[2 * i + 1] = G(rng);
   DynamicSolver s(std::move(P), o.plastic, packing::periodic_cell<2>(pk), o);
   s.set_strain_rate(-0.02, -0.02, 0.0);
   s.run(60000);
@@ -285,15 +285,15 @@ TEST(PeriodicDem, NoDrift) {
   double p[2] = {0, 0}, m = 0, vrms = 0;
   int outside = 0;
   for (std::size_t i = 0; i < Q.size(); ++i) {
-    p[0] += Q.mass[i] * Q.vx[i];
-    p[1] += Q.mass[i] * Q.vy[i];
+    p[0] += Q.mass[i] * Q.vel[2 * i];
+    p[1] += Q.mass[i] * Q.vel[2 * i + 1];
     m += Q.mass[i];
-    vrms += Q.vx[i] * Q.vx[i] + Q.vy[i] * Q.vy[i];
-    const auto f = s.cell().fractional(Eigen::Vector2d(Q.x[i], Q.y[i]));
+    vrms += Q.vel[2 * i] * Q.vel[2 * i] + Q.vel[2 * i + 1] * Q.vel[2 * i + 1];
+    const auto f = s.cell().fractional(Q.position(i));
     outside += f.minCoeff() < 0.0 || f.maxCoeff() >= 1.0;
   }
   vrms = std::sqrt(vrms / static_cast<double>(Q.size()));
-  std::printf("  t = %g, dt = %g, rebuilds %zu, vrms %g, x0 %g\n", s.time(), s.dt(), s.rebuilds(), vrms, Q.x[0]);
+  std::printf("  t = %g, dt = %g, rebuilds %zu, vrms %g, x0 %g\n", s.time(), s.dt(), s.rebuilds(), vrms, Q.pos[0]);
   EXPECT_GT(outside, 0) << "some centres crossed a face (the positions stay unwrapped)";
   EXPECT_GT(vrms, 1e-3);
   EXPECT_LT(std::hypot(p[0], p[1]) / m, 1e-13 * vrms) << "the mean fluctuation velocity";
@@ -317,15 +317,15 @@ TEST(PeriodicDem, HistoryAcrossTheFaces) {
   pk.r = {1.0, 1.0, std::sqrt(2.0)};
   DynamicOptions o = plastic_options(kInf);
   o.plastic.damping_n = o.plastic.damping_t = 1.0;
-  Particles P = periodic_particles_from(pk, 1.0);
-  P.vx = {0.5, 0.5, -0.5};  // the third has the mass of the first two
+  Particles P = periodic_particles_from<2>(pk, 1.0);
+  P.vel = {0.5, 0.0, 0.5, 0.0, -0.5, 0.0};  // (vx, vy) of each: the third has the mass of the first two
   DynamicSolver s(std::move(P), o.plastic, packing::periodic_cell<2>(pk), o);
   s.run(5);
   ASSERT_NE(s.plastic_history(0, 1), nullptr);
   const double u_max = s.plastic_history(0, 1)->u_max;
   EXPECT_GT(u_max, 0.05);
   const std::size_t builds = s.rebuilds();
-  while (s.particles().x[0] < 12.5) s.step();
+  while (s.particles().pos[0] < 12.5) s.step();
   EXPECT_GT(s.rebuilds(), builds) << "the table was built again after the crossing";
   ASSERT_NE(s.plastic_history(0, 1), nullptr);
   EXPECT_EQ(s.plastic_history(0, 1)->u_max, u_max);
@@ -341,7 +341,7 @@ TEST(PeriodicDem, Refusals) {
   EXPECT_THROW(spheres_from(cubic_lattice(4), 1.0), std::invalid_argument);
   packing::Packing walled = pk;
   walled.periodic = false;
-  EXPECT_THROW(periodic_particles_from(walled, 1.0), std::invalid_argument);
+  EXPECT_THROW(periodic_particles_from<2>(walled, 1.0), std::invalid_argument);
   // a cell narrower than two interaction ranges
   const packing::Packing small = triangular_lattice(2, 2);
   DynamicOptions o = plastic_options(0.0);

@@ -65,17 +65,17 @@ TEST(Protocol, PackingRoundTripThroughDemsolveSample) {
       const double s = unit > 0.0 ? unit : lp.a0 / mean(file.r);
       EXPECT_EQ(used, s);
       if (unit == 0.0) {
-        EXPECT_NEAR(mean(P.radius), lp.a0, 1e-15);  // the mean radius is a0
+        EXPECT_NEAR(mean(P.r), lp.a0, 1e-15);  // the mean radius is a0
       }
       ASSERT_EQ(P.size(), file.size());
       double top = 0.0;
       for (std::size_t i = 0; i < P.size(); ++i) {
-        EXPECT_EQ(P.x[i], s * file.x[i]);
-        EXPECT_EQ(P.y[i], s * file.y[i]);
-        EXPECT_EQ(P.radius[i], s * file.r[i]);
-        EXPECT_EQ(P.vx[i], 0.0);
-        EXPECT_EQ(P.vy[i], 0.0);
-        top = std::max(top, P.y[i] + P.radius[i]);
+        EXPECT_EQ(P.pos[2 * i], s * file.x[i]);
+        EXPECT_EQ(P.pos[2 * i + 1], s * file.y[i]);
+        EXPECT_EQ(P.r[i], s * file.r[i]);
+        EXPECT_EQ(P.vel[2 * i], 0.0);
+        EXPECT_EQ(P.vel[2 * i + 1], 0.0);
+        top = std::max(top, P.pos[2 * i + 1] + P.r[i]);
       }
       EXPECT_EQ(box.x_min, s * file.box.x_min);
       EXPECT_EQ(box.y_min, s * file.box.y_min);
@@ -87,11 +87,11 @@ TEST(Protocol, PackingRoundTripThroughDemsolveSample) {
       o.temperature = lp.T_radius_ref;
       const DynamicSolver solver(P, lp, box, o);
       const SolverState st = solver.state();
-      EXPECT_EQ(st.radius_ref, P.radius);
-      EXPECT_EQ(st.particles.x, P.x);
+      EXPECT_EQ(st.radius_ref, P.r);
+      EXPECT_EQ(st.particles_of<2>().pos, P.pos);
       EXPECT_EQ(st.box.x_max, box.x_max);
       // and back to a packing in file units, equal to round-off
-      const pk::Packing back = to_packing(st.particles, st.box);
+      const pk::Packing back = to_packing(st.particles_of<2>(), st.box);
       for (std::size_t i = 0; i < back.size(); ++i) {
         EXPECT_NEAR(back.x[i] / s, file.x[i], 1e-13 * std::fabs(file.x[i]) + 1e-300);
         EXPECT_NEAR(back.y[i] / s, file.y[i], 1e-13 * (std::fabs(file.y[i]) + 1.0));
@@ -152,25 +152,26 @@ TEST(Protocol, RandomSampleIsInsideWithoutOverlapAndDeterministic) {
   spec.seed = 5;
   Box box, box2;
   const Particles P = make_sample(spec, lp, box), Q = place_sample(spec, lp, box2);
-  EXPECT_EQ(P.x, Q.x);
-  EXPECT_EQ(P.vy, Q.vy);
+  EXPECT_EQ(P.pos, Q.pos);
+  EXPECT_EQ(P.vel, Q.vel);
   ASSERT_EQ(P.size(), 200u);
   double area = 0.0;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const double r = P.radius[i];
+    const double r = P.r[i];
     EXPECT_GE(r, lp.a0 * (1 - lp.w0));
     EXPECT_LE(r, lp.a0 * (1 + lp.w0));
-    EXPECT_GE(P.x[i] - r, box.x_min);
-    EXPECT_LE(P.x[i] + r, box.x_max);
-    EXPECT_GE(P.y[i] - r, box.y_min);
-    EXPECT_LE(P.y[i] + r, box.y_max);
-    EXPECT_LE(std::fabs(P.vx[i]), 0.01);
-    for (std::size_t j = 0; j < i; ++j) EXPECT_GE(std::hypot(P.x[i] - P.x[j], P.y[i] - P.y[j]), r + P.radius[j]);
+    EXPECT_GE(P.pos[2 * i] - r, box.x_min);
+    EXPECT_LE(P.pos[2 * i] + r, box.x_max);
+    EXPECT_GE(P.pos[2 * i + 1] - r, box.y_min);
+    EXPECT_LE(P.pos[2 * i + 1] + r, box.y_max);
+    EXPECT_LE(std::fabs(P.vel[2 * i]), 0.01);
+    for (std::size_t j = 0; j < i; ++j)
+      EXPECT_GE(std::hypot(P.coord(i, 0) - P.coord(j, 0), P.coord(i, 1) - P.coord(j, 1)), r + P.r[j]);
     area += std::numbers::pi * r * r;
   }
   EXPECT_NEAR(area / ((box.x_max - box.x_min) * (box.y_max - box.y_min)), spec.initial_density, 1e-12);
   spec.seed = 6;
-  EXPECT_NE(place_sample(spec, lp, box2).x, P.x);
+  EXPECT_NE(place_sample(spec, lp, box2).pos, P.pos);
 }
 
 struct Recorder final : PhaseObserver {

@@ -46,7 +46,7 @@ Box stress_box(const LudingParams& p, int n, double pressure) {
 bool finite_state(const DynamicSolver& s) {
   const Particles& P = s.particles();
   for (std::size_t i = 0; i < P.size(); ++i)
-    if (!(std::isfinite(P.x[i]) && std::isfinite(P.y[i]) && std::isfinite(P.vx[i]) && std::isfinite(P.vy[i])))
+    if (!(std::isfinite(P.pos[2 * i]) && std::isfinite(P.pos[2 * i + 1]) && std::isfinite(P.vel[2 * i]) && std::isfinite(P.vel[2 * i + 1])))
       return false;
   return std::isfinite(s.box().x_max) && std::isfinite(s.box().y_max);
 }
@@ -176,8 +176,8 @@ TEST(Stability, ChecksDoNotChangeTheRun) {
   const auto& A = a.particles();
   const auto& B = b.particles();
   for (std::size_t i = 0; i < A.size(); ++i) {
-    ASSERT_EQ(A.x[i], B.x[i]);
-    ASSERT_EQ(A.vy[i], B.vy[i]);
+    ASSERT_EQ(A.pos[2 * i], B.pos[2 * i]);
+    ASSERT_EQ(A.vel[2 * i + 1], B.vel[2 * i + 1]);
   }
   EXPECT_EQ(a.box().x_max, b.box().x_max);
   ASSERT_NE(a.last_good(), nullptr);

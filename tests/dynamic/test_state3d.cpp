@@ -24,10 +24,10 @@ using netdem::test::small_scale;
 
 // side^3 spheres on a jittered lattice of pitch 2.05 a0, radii a0 (1 +- 0.3), random velocities
 // and spins; density rho_p (Table 1) per volume.
-Particles dense3(const LudingParams& p, int side, unsigned seed) {
+Particles3 dense3(const LudingParams& p, int side, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles P;
+  Particles3 P;
   const double pitch = 2.05 * p.a0;
   for (int k = 0; k < side; ++k)
     for (int j = 0; j < side; ++j)
@@ -88,7 +88,7 @@ TEST(DynamicState3D, RestartThroughStateFileIsBitwiseExact) {
   EXPECT_EQ(format_state(b.state()), text) << "state -> file -> state is not the identity";
   advance(a, n2, ramp);
   advance(b, n2, ramp);
-  const Particles &A = a.particles(), &B = b.particles();
+  const Particles3 &A = a.particles(), &B = b.particles();
   std::size_t sliding = 0, cohesive = 0, slipped = 0;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   a.touching_pairs(pairs);
@@ -107,14 +107,14 @@ TEST(DynamicState3D, RestartThroughStateFileIsBitwiseExact) {
   EXPECT_GT(sliding + cohesive, 0u) << "the test must exercise the history";
   EXPECT_NE(a.box().z_max, stress_box3(side, p, 0.0).z_max) << "the stress walls must have moved";
   for (std::size_t i = 0; i < A.size(); ++i) {
-    ASSERT_EQ(A.x[i], B.x[i]) << i;
-    ASSERT_EQ(A.y[i], B.y[i]) << i;
-    ASSERT_EQ(A.z[i], B.z[i]) << i;
-    ASSERT_EQ(A.vz[i], B.vz[i]) << i;
-    ASSERT_EQ(A.wx[i], B.wx[i]) << i;
-    ASSERT_EQ(A.wy[i], B.wy[i]) << i;
-    ASSERT_EQ(A.omega[i], B.omega[i]) << i;
-    ASSERT_EQ(A.radius[i], B.radius[i]) << i;
+    ASSERT_EQ(A.pos[3 * i], B.pos[3 * i]) << i;
+    ASSERT_EQ(A.pos[3 * i + 1], B.pos[3 * i + 1]) << i;
+    ASSERT_EQ(A.pos[3 * i + 2], B.pos[3 * i + 2]) << i;
+    ASSERT_EQ(A.vel[3 * i + 2], B.vel[3 * i + 2]) << i;
+    ASSERT_EQ(A.spin[3 * i], B.spin[3 * i]) << i;
+    ASSERT_EQ(A.spin[3 * i + 1], B.spin[3 * i + 1]) << i;
+    ASSERT_EQ(A.spin[3 * i + 2], B.spin[3 * i + 2]) << i;
+    ASSERT_EQ(A.r[i], B.r[i]) << i;
   }
   EXPECT_EQ(a.box().y_max, b.box().y_max);
   EXPECT_EQ(a.box().z_max, b.box().z_max);
@@ -138,7 +138,7 @@ TEST(DynamicState3D, ContactsGiveTheForcesOfTheLawInThreeDimensions) {
   p.mu = 0.5;
   const double a = p.a0, d1 = 1e-4 * a, d2 = 2e-4 * a;  // small: the contact forces barely move the spheres in a step
   const double ux = 2.0 / 3.0, uy = 1.0 / 3.0, uz = 2.0 / 3.0;  // a unit vector
-  Particles P;
+  Particles3 P;
   P.add_sphere(5 * a, 5 * a, a - d1, a, p.rho_p);  // on the floor, overlap d1
   const double L = 2 * a - d2;
   P.add_sphere(5 * a + L * ux, 5 * a + L * uy, a - d1 + L * uz, a, p.rho_p);
@@ -172,10 +172,11 @@ TEST(DynamicState3D, ContactsGiveTheForcesOfTheLawInThreeDimensions) {
   const double v = 0.02;  // [m/s]
   for (int k = 0; k < 10; ++k) {
     // a prescribed slow tangential motion: set the velocity before each step
-    auto& Q = const_cast<Particles&>(s.particles());
-    for (std::size_t i = 0; i < 2; ++i) Q.vx[i] = Q.vy[i] = Q.vz[i] = Q.wx[i] = Q.wy[i] = Q.omega[i] = 0.0;
-    Q.vx[1] = v * tx;
-    Q.vy[1] = v * ty;
+    auto& Q = const_cast<Particles3&>(s.particles());
+    std::fill(Q.vel.begin(), Q.vel.end(), 0.0);  // (two spheres)
+    std::fill(Q.spin.begin(), Q.spin.end(), 0.0);
+    Q.vel[3] = v * tx;
+    Q.vel[4] = v * ty;
     s.step();
     shift += v * s.dt();
   }
@@ -222,13 +223,13 @@ TEST(DynamicState3D, BadStateFilesGiveOneLineErrors) {
   {  // a centre outside the box (z above z_max)
     std::istringstream in(good);
     SolverState st = parse_state(in, "s3");
-    st.particles.z[0] = st.box.z_max + 0.5 * st.particles.radius[0];
+    st.particles_of<3>().pos[2] = st.box.z_max + 0.5 * st.particles_of<3>().r[0];
     refuse(format_state(st), "outside the box");
   }
   {  // a torque of 1e300 about x (campaign of issue 27: accepted before, inf in the outputs)
     std::istringstream in(good);
     SolverState st = parse_state(in, "s3");
-    st.particles.tx[1] = 1e300;
+    st.particles_of<3>().torque[3] = 1e300;  // (tx of particle 1)
     refuse(format_state(st), "/particles/tx/1: particle 1: torque");
   }
   {  // a Luding history's delta0 against the contact's geometry (campaign of issue 27: delta0 = 1e300

@@ -32,7 +32,7 @@ template <int D>
 DynamicSolverT<D> plastic_box(double mu) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Particles P;
+  ParticlesT<D> P;
   const int side = D == 2 ? 6 : 3;
   for (int k = 0; k < (D == 3 ? side : 1); ++k)
     for (int j = 0; j < side; ++j)
@@ -61,7 +61,6 @@ DynamicSolverT<D> plastic_box(double mu) {
   return DynamicSolverT<D>(std::move(P), o.plastic, box, o);
 }
 
-template <int D>
 bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0);
 }
@@ -99,11 +98,9 @@ void plastic_restart(double mu) {
   EXPECT_GT(wall_sheared, 0u) << "the test must exercise the tangential spring of the walls";
   a.run(3000);
   b.run(3000);
-  const Particles &A = a.particles(), &B = b.particles();
-  EXPECT_TRUE(same_bits<D>(A.x, B.x) && same_bits<D>(A.y, B.y) && same_bits<D>(A.z, B.z));
-  EXPECT_TRUE(same_bits<D>(A.vx, B.vx) && same_bits<D>(A.vy, B.vy) && same_bits<D>(A.vz, B.vz));
-  EXPECT_TRUE(same_bits<D>(A.omega, B.omega) && same_bits<D>(A.wx, B.wx) && same_bits<D>(A.wy, B.wy));
-  EXPECT_TRUE(same_bits<D>(A.fx, B.fx) && same_bits<D>(A.fy, B.fy) && same_bits<D>(A.torque, B.torque));
+  const ParticlesT<D> &A = a.particles(), &B = b.particles();
+  EXPECT_TRUE(same_bits(A.pos, B.pos) && same_bits(A.vel, B.vel) && same_bits(A.spin, B.spin));
+  EXPECT_TRUE(same_bits(A.force, B.force) && same_bits(A.torque, B.torque) && same_bits(A.rot, B.rot));
   EXPECT_EQ(a.box().x_max, b.box().x_max);
   EXPECT_EQ(a.box().y_max, b.box().y_max);
   EXPECT_EQ(a.box().z_max, b.box().z_max);
@@ -130,7 +127,7 @@ TEST(StateArchive, HistoriesAreTheLawsAlternative) {
   ASSERT_TRUE(st.plastic_law());
   ASSERT_TRUE(st.holds<ct::PlasticIndentationHistoryT<2>>());
   EXPECT_EQ(st.histories_dim(), 2);
-  EXPECT_EQ(st.histories_of<ct::PlasticIndentationHistoryT<2>>().wall.size(), 4 * st.particles.size());
+  EXPECT_EQ(st.histories_of<ct::PlasticIndentationHistoryT<2>>().wall.size(), 4 * st.particle_count());
   DynamicOptions o;
   o.model = ContactModel::PlasticIndentation;
   SolverState other = st;  // the same sizes, of the other dimension
@@ -184,7 +181,7 @@ TEST(StateArchive, DoublesRoundTripBitExactly) {
   EXPECT_THROW((void)sys::Field(e)[std::size_t{0}].real(), sys::FieldError) << "a finite field takes no infinity";
   EXPECT_THROW((void)sys::real_json(std::nan(""), "mu"), std::invalid_argument);
   SolverState st = plastic_box<2>(0.3).state();
-  st.particles.vx[3] = std::nan("");
+  st.particles_of<2>().vel[6] = std::nan("");  // (vx of particle 3)
   EXPECT_THROW((void)format_state(st), std::invalid_argument);
 }
 

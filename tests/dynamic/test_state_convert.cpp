@@ -36,25 +36,42 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return v;
 }
 
+// The particle columns of the old text format by name: one value per particle (component c of
+// every `stride` of the state's arrays).
+template <int D>
+std::map<std::string, std::vector<double>> columns_of(const SolverState& st) {
+  const auto& P = st.particles_of<D>();
+  auto comp = [](const std::vector<double>& v, std::size_t stride, std::size_t c) {
+    std::vector<double> out;
+    for (std::size_t k = c; k < v.size(); k += stride) out.push_back(v[k]);
+    return out;
+  };
+  std::map<std::string, std::vector<double>> col = {
+      {"x", comp(P.pos, D, 0)},   {"y", comp(P.pos, D, 1)},     {"vx", comp(P.vel, D, 0)},
+      {"vy", comp(P.vel, D, 1)},  {"radius", P.r},              {"radius_ref", st.radius_ref},
+      {"mass", P.mass},           {"inertia", P.inertia},       {"fx", comp(P.force, D, 0)},
+      {"fy", comp(P.force, D, 1)}};
+  if constexpr (D == 2) {
+    col["omega"] = P.spin;
+    col["theta"] = P.rot;
+    col["torque"] = P.torque;
+  } else {
+    for (std::size_t a = 0; a < 3; ++a) {
+      col[std::string("w") + "xyz"[a]] = comp(P.spin, 3, a);
+      col[std::string("t") + "xyz"[a]] = comp(P.torque, 3, a);
+    }
+    col["z"] = comp(P.pos, 3, 2);
+    col["vz"] = comp(P.vel, 3, 2);
+    col["fz"] = comp(P.force, 3, 2);
+  }
+  return col;
+}
+
 // The lines of the old file, and the count of numbers that differ from the converted state.
 std::size_t differing(const std::string& old_text, const SolverState& st) {
   std::vector<std::string> lines = split(old_text, '\n');
   const int D = st.dim();
-  std::map<std::string, const std::vector<double>*> col = {
-      {"x", &st.particles.x},         {"y", &st.particles.y},           {"vx", &st.particles.vx},
-      {"vy", &st.particles.vy},       {"radius", &st.particles.radius}, {"radius_ref", &st.radius_ref},
-      {"mass", &st.particles.mass},   {"inertia", &st.particles.inertia}, {"fx", &st.particles.fx},
-      {"fy", &st.particles.fy}};
-  if (D == 2) {
-    col["omega"] = &st.particles.omega;
-    col["theta"] = &st.particles.theta;
-    col["torque"] = &st.particles.torque;
-  } else {
-    for (auto [k, v] : {std::pair{"z", &st.particles.z}, {"vz", &st.particles.vz}, {"wx", &st.particles.wx},
-                        {"wy", &st.particles.wy}, {"wz", &st.particles.omega}, {"fz", &st.particles.fz},
-                        {"tx", &st.particles.tx}, {"ty", &st.particles.ty}, {"tz", &st.particles.torque}})
-      col[k] = v;
-  }
+  const auto col = D == 2 ? columns_of<2>(st) : columns_of<3>(st);
   std::size_t bad = 0, compared = 0;
   auto cmp = [&](const std::string& tok, double v) {
     ++compared;
@@ -68,11 +85,11 @@ std::size_t differing(const std::string& old_text, const SolverState& st) {
     if (lines[k].rfind("id,", 0) == 0) break;
   }
   const auto head = split(lines[k], ',');
-  for (std::size_t i = 0; i < st.particles.size(); ++i) {
+  for (std::size_t i = 0; i < st.particle_count(); ++i) {
     const auto f = split(lines[k + 1 + i], ',');
-    for (std::size_t c = 1; c < head.size(); ++c) cmp(f[c], (*col.at(head[c]))[i]);
+    for (std::size_t c = 1; c < head.size(); ++c) cmp(f[c], col.at(head[c])[i]);
   }
-  k += 1 + st.particles.size();
+  k += 1 + st.particle_count();
   const std::size_t ph = st.pair_key.size();
   for (std::size_t p = 0; p < ph; ++p) {
     const auto w = split(lines[k + 2 + p], ' ');  // after "pairs M" and its comment

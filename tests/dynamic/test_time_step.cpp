@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -21,9 +22,10 @@ namespace ct = netdem::contact;
 namespace {
 
 // Two equal particles (disks of unit depth or spheres) of radius r and density rho.
-Particles pair_of(int dim, double r, double rho) {
-  Particles P;
-  if (dim == 2) {
+template <int D>
+ParticlesT<D> pair_of(double r, double rho) {
+  ParticlesT<D> P;
+  if constexpr (D == 2) {
     P.add_disk(0.0, 0.0, r, rho);
     P.add_disk(3.0 * r, 0.0, r, rho);
   } else {
@@ -34,11 +36,12 @@ Particles pair_of(int dim, double r, double rho) {
 }
 
 // A polydisperse set (radii 0.5 .. 1.5) of disks or spheres.
-Particles mixed(int dim) {
-  Particles P;
+template <int D>
+ParticlesT<D> mixed() {
+  ParticlesT<D> P;
   for (int i = 0; i < 12; ++i) {
     const double r = 0.5 + 0.09 * i;
-    if (dim == 2)
+    if constexpr (D == 2)
       P.add_disk(4.0 * i, 0.0, r, 1.0);
     else
       P.add_sphere(4.0 * i, 0.0, 0.0, r, 1.0);
@@ -46,7 +49,8 @@ Particles mixed(int dim) {
   return P;
 }
 
-double lightest_m12(const Particles& P) {
+template <int D>
+double lightest_m12(const ParticlesT<D>& P) {
   std::vector<double> m = P.mass;
   std::sort(m.begin(), m.end());
   return m[0] * m[1] / (m[0] + m[1]);
@@ -68,36 +72,36 @@ ct::PlasticIndentationParams plastic_law() {
 TEST(TimeStep, ClosedFormOfAKnownPair) {
   DynamicOptions o;
   o.steps_per_contact = 50.0;
-  for (int dim : {2, 3}) {
-    const Particles P = pair_of(dim, 1.0, 2.0);
+  auto check = [&](auto dimension) {
+    constexpr int dim = decltype(dimension)::value;
+    const ParticlesT<dim> P = pair_of<dim>(1.0, 2.0);
     const double m12 = 0.5 * P.mass[0];
     ct::LudingParams lp;
     lp.gamma_n = 0.0;
-    const TimeStepInfo tl = dim == 2 ? choose_time_step(P, ct::LudingLaw<ct::kLudingFull, 2>(lp, 0.0), o)
-                                     : choose_time_step(P, ct::LudingLaw<ct::kLudingFull, 3>(lp, 0.0), o);
+    const TimeStepInfo tl = choose_time_step(P, ct::LudingLaw<ct::kLudingFull, dim>(lp, 0.0), o);
     EXPECT_DOUBLE_EQ(tl.dt, std::numbers::pi * std::sqrt(m12 / lp.k2) / 50.0) << dim;
     // alpha = 0.2: the tangential spring alpha k2 on m*/3 (2/7 m*) is slower than the normal one
     EXPECT_GT(tl.tc_tangential, tl.tc_lightest) << dim;
     const ct::PlasticIndentationParams pp = plastic_law<2>();
     const double kn = (dim == 2 ? 6.0 * pp.sigma_y / std::sqrt(pp.first_touch) : 6.0 * std::numbers::pi * pp.sigma_y * 1.0) *
                       pp.unload_ratio;
-    const TimeStepInfo tp = dim == 2 ? choose_time_step(P, ct::PlasticIndentationLawT<2>(pp), o)
-                                     : choose_time_step(P, ct::PlasticIndentationLawT<3>(pp), o);
+    const TimeStepInfo tp = choose_time_step(P, ct::PlasticIndentationLawT<dim>(pp), o);
     EXPECT_NEAR(tp.dt, std::numbers::pi * std::sqrt(m12 / kn) / 50.0, 1e-14 * tp.dt) << dim;
     EXPECT_EQ(tp.tc_tangential, 0.0) << dim;  // no contact area yet
     // a contact width A: the tangential spring k_t sigma_y A on the tangential mass m*/3 (2/7 m*)
     const double A = 0.3, kt = pp.k_t * pp.sigma_y * A, mt = dim == 2 ? m12 / 3.0 : m12 * 2.0 / 7.0;
-    const TimeStepInfo ta = dim == 2 ? choose_time_step(P, ct::PlasticIndentationLawT<2>(pp), o, A)
-                                     : choose_time_step(P, ct::PlasticIndentationLawT<3>(pp), o, A);
+    const TimeStepInfo ta = choose_time_step(P, ct::PlasticIndentationLawT<dim>(pp), o, A);
     EXPECT_NEAR(ta.tc_tangential, std::numbers::pi * std::sqrt(mt / kt), 1e-14 * ta.tc_tangential) << dim;
     EXPECT_NEAR(ta.dt, std::min(tp.tc_lightest, ta.tc_tangential) / 50.0, 1e-14 * ta.dt) << dim;
-  }
+  };
+  check(std::integral_constant<int, 2>{});
+  check(std::integral_constant<int, 3>{});
 }
 
 // A Luding tangential spring stiffer than the normal one on the tangential mass (alpha = 0.5 > 1/3
 // for disks): the tangential period sets the step, so that it, too, gets steps_per_contact steps.
 TEST(TimeStep, StiffTangentialSpringSetsTheStep) {
-  const Particles P = pair_of(2, 1.0, 1.0);
+  const Particles P = pair_of<2>(1.0, 1.0);
   const double m12 = 0.5 * P.mass[0];
   ct::LudingParams lp;
   lp.gamma_n = 0.0;
@@ -116,8 +120,8 @@ template <int D>
 void check_plastic_bound_covers_contacts() {
   const ct::PlasticIndentationParams pp = plastic_law<D>();
   const ct::PlasticIndentationLawT<D> law(pp);
-  const Particles P = mixed(D);
-  const double r_max = *std::max_element(P.radius.begin(), P.radius.end());
+  const ParticlesT<D> P = mixed<D>();
+  const double r_max = *std::max_element(P.r.begin(), P.r.end());
   const ct::StiffnessBound b = law.stiffness_bound(r_max);
   double kn_seen = 0.0;
   for (double r_eff : {0.25, 0.5 * r_max, r_max}) {
@@ -155,14 +159,14 @@ TEST(TimeStep, PlasticBoundCoversEveryContact3D) { check_plastic_bound_covers_co
 // The Luding law: the mean-pair rule (Eq 6) gives the lightest pair fewer than 50 steps but at
 // least min_steps_per_contact; the lightest-pair rule 50. A fixed dt below the minimum is refused.
 TEST(TimeStep, LudingLightestPairSteps) {
-  for (int dim : {2, 3}) {
-    const Particles P = mixed(dim);
+  auto check = [&](auto dimension) {
+    constexpr int dim = decltype(dimension)::value;
+    const ParticlesT<dim> P = mixed<dim>();
     ct::LudingParams lp;
     lp.gamma_n = 0.0;
     DynamicOptions o;
     auto choose = [&](const DynamicOptions& oo) {
-      return dim == 2 ? choose_time_step(P, ct::LudingLaw<ct::kLudingFull, 2>(lp, 0.0), oo)
-                      : choose_time_step(P, ct::LudingLaw<ct::kLudingFull, 3>(lp, 0.0), oo);
+      return choose_time_step(P, ct::LudingLaw<ct::kLudingFull, dim>(lp, 0.0), oo);
     };
     const TimeStepInfo mean = choose(o);
     const double t_light = std::numbers::pi * std::sqrt(lightest_m12(P) / lp.k2);
@@ -173,13 +177,15 @@ TEST(TimeStep, LudingLightestPairSteps) {
     EXPECT_NEAR(choose(o).dt, t_light / o.steps_per_contact, 1e-14 * t_light);
     o.dt = t_light / 9.0;
     EXPECT_THROW((void)choose(o), std::invalid_argument);
-  }
+  };
+  check(std::integral_constant<int, 2>{});
+  check(std::integral_constant<int, 3>{});
 }
 
 // The plastic law ignores the mean-pair rule (its bound is for the lightest pair: the law has no
 // kMeanPairTimeStep), and a law without a finite normal bound (first_touch = 0) is refused.
 TEST(TimeStep, PlasticLawBoundsTheLightestPair) {
-  const Particles P = mixed(2);
+  const Particles P = mixed<2>();
   const ct::PlasticIndentationParams pp = plastic_law<2>();
   DynamicOptions o;
   o.rule = TimeStepRule::MeanPair;
@@ -230,9 +236,9 @@ TEST(TimeStep, EveryContactOfARunIsResolved) {
       const ct::PlasticIndentationHistory* h = s.plastic_history(i, j);
       ASSERT_NE(h, nullptr);
       ct::ContactKinematics k;
-      const double dx = Q.x[j] - Q.x[i], dy = Q.y[j] - Q.y[i];
-      k.overlap = Q.radius[i] + Q.radius[j] - std::sqrt(dx * dx + dy * dy);
-      k.r_eff = Q.radius[i] * Q.radius[j] / (Q.radius[i] + Q.radius[j]);
+      const double dx = Q.coord(j, 0) - Q.coord(i, 0), dy = Q.coord(j, 1) - Q.coord(i, 1);
+      k.overlap = Q.r[i] + Q.r[j] - std::sqrt(dx * dx + dy * dy);
+      k.r_eff = Q.r[i] * Q.r[j] / (Q.r[i] + Q.r[j]);
       const double m = Q.mass[i] * Q.mass[j] / (Q.mass[i] + Q.mass[j]);
       const ct::StiffnessBound b = pl.stiffness_bound(*h, k);
       kt_max = std::max(kt_max, b.k_t);

@@ -43,7 +43,7 @@ Particles place_sample(const SampleSpec& spec, const LudingParams& lp, Box& box)
 /// (random sequential addition of spheres jams near 0.38, so 2D's 0.35 is out of reach), then the
 /// velocities uniform in [-0.01, 0.01] m/s per component from std::mt19937_64(seed + 1). The
 /// three-particle arrangements are 2D only.
-Particles place_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box);
+Particles3 place_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box);
 inline constexpr double kInitialDensity3 = 0.25;
 
 /// The metres per file unit of the rule in the file comment (length_unit, or a0 / mean radius).
@@ -64,7 +64,7 @@ Particles particles_from_packing(const packing::Packing& p, const LudingParams& 
 Particles make_sample(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit = nullptr);
 /// 3D: a 3D packing file's spheres at rest (density rho_p per volume; lengths as above, the lid
 /// raised to the highest sphere top), else place_sample3.
-Particles make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit = nullptr);
+Particles3 make_sample3(const SampleSpec& spec, const LudingParams& lp, Box& box, double* length_unit = nullptr);
 
 /// LMM05 Eq 1: right and top walls stress-controlled at pressure p [N/m], with the wall mass and
 /// damping of the parameters (Table 1). dim 3: the right, back and top walls, p in N/m^2.
@@ -86,9 +86,10 @@ ContactCounts count_contacts(const DynamicSolverT<D>& s, std::vector<std::pair<s
 
 /// Average stress of each particle, p_i = (1 / (2 pi a_i^2)) sum_c f_n d_i over its contacts in
 /// `contacts` (DynamicSolver::contacts; normal forces, compression positive, N/m like the wall
-/// pressure; LMM05 Fig 20's colouring), and its number of contacts z_i. Spheres (P.dim == 3): the
+/// pressure; LMM05 Fig 20's colouring), and its number of contacts z_i. Spheres (D = 3): the
 /// mean of the trace, p_i = (1 / (4 pi a_i^3)) sum_c f_n d_i [N/m^2].
-void particle_stress(const Particles& P, const std::vector<ContactInfo>& contacts, std::vector<double>& p,
+template <int D>
+void particle_stress(const ParticlesT<D>& P, const std::vector<ContactInfo>& contacts, std::vector<double>& p,
                      std::vector<double>& z);
 
 /// What the caller records while run_phases() steps.

@@ -35,6 +35,7 @@
 #include "netdem/contact/luding.hpp"
 #include "netdem/contact/luding_law.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
+#include "netdem/dynamic/particles.hpp"
 #include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/packing/periodic.hpp"
@@ -44,49 +45,29 @@ namespace netdem::dem {
 using contact::LudingHistory;
 using contact::LudingParams;
 
-/// Particle state in flat arrays (structure of arrays), index = particle id. 3D (spheres, dim 3):
-/// z, vz, fz and the spin and torque about x and y are filled as well; omega and torque are then the
-/// components about z and theta is unused (0).
-struct Particles {
-  std::vector<double> x, y, vx, vy, omega, theta;  ///< position [m], velocity [m/s], angle [rad]
-  std::vector<double> radius, mass, inertia;       ///< [m], [kg], [kg m^2]
-  std::vector<double> fx, fy, torque;              ///< accumulators [N], [N m]
-  std::vector<double> z, vz, fz, wx, wy, tx, ty;   ///< 3D only (empty in 2D)
-  int dim = 2;                                     ///< 2: disks; 3: spheres (set by the first add)
-  std::size_t size() const { return x.size(); }
-  /// Adds a sphere of radius r and mass m, I = 2/5 m r^2, with velocity v and spin w (dim = 3; a
-  /// Particles holds disks or spheres, not both: throws std::invalid_argument).
-  std::size_t add_sphere_with_mass(double px, double py, double pz, double r, double m,
-                                   const std::array<double, 3>& v = {0, 0, 0},
-                                   const std::array<double, 3>& w = {0, 0, 0});
-  /// Adds a sphere of density rho: m = rho 4/3 pi r^3.
-  std::size_t add_sphere(double px, double py, double pz, double r, double rho,
-                         const std::array<double, 3>& v = {0, 0, 0});
-  /// Adds a disk of radius r: mass rho_p pi r^2 h (contact::luding_mass), I = m r^2 / 2.
-  std::size_t add(double px, double py, double r, const LudingParams& p, double pvx = 0.0,
-                  double pvy = 0.0, double pomega = 0.0);
-  /// Adds a disk of radius r and mass m, I = m r^2 / 2, at rest unless velocities are given.
-  std::size_t add_with_mass(double px, double py, double r, double m, double pvx = 0.0, double pvy = 0.0,
-                            double pomega = 0.0);
-  /// Adds a disk of radius r and unit depth with the areal density rho: m = rho pi r^2, I = m r^2/2.
-  std::size_t add_disk(double px, double py, double r, double rho, double pvx = 0.0,
-                       double pvy = 0.0, double pomega = 0.0);
-};
-
 /// The spheres of a 3D packing at rest, density rho (add_sphere()).
 /// The readers below are for walled (or open) packings: a periodic packing (Packing::periodic) is
 /// refused with one line (std::invalid_argument); periodic_particles_from() reads it.
-Particles spheres_from(const packing::Packing& p, double rho);
-/// The particles of a packing (x, y, r; SI units, m) at rest: add() of each disk in order.
+Particles3 spheres_from(const packing::Packing& p, double rho);
+/// The particles of a 2D packing (x, y, r; SI units, m) at rest: add() of each disk in order.
 Particles particles_from(const packing::Packing& p, const LudingParams& params);
-/// The particles of a packing at rest as disks of areal density rho (add_disk(); any units).
+/// The particles of a 2D packing at rest as disks of areal density rho (add_disk(); any units).
 Particles particles_from(const packing::Packing& p, double rho);
-/// The particles of a periodic packing (issue 29) at rest, disks or spheres by its dimension, of
+/// The particles of a walled or open packing of dimension D at rest, of density rho:
+/// particles_from (disks) or spheres_from (spheres).
+template <int D>
+ParticlesT<D> particles_at_rest(const packing::Packing& p, double rho) {
+  if constexpr (D == 2) return particles_from(p, rho);
+  else return spheres_from(p, rho);
+}
+/// The particles of a periodic packing (issue 29) of dimension D at rest, disks or spheres of
 /// density rho (add_disk(), add_sphere()): for the solver constructors that take a periodic cell
-/// (packing::periodic_cell()). Refuses a packing that is not periodic (one line).
-Particles periodic_particles_from(const packing::Packing& p, double rho);
-/// The geometric description of the particles (x, y, radius) in `box`; seed 0, no comments.
-packing::Packing to_packing(const Particles& P, const packing::Box& box);
+/// (packing::periodic_cell()). Refuses a packing that is not periodic or of another dimension (one line).
+template <int D>
+ParticlesT<D> periodic_particles_from(const packing::Packing& p, double rho);
+/// The geometric description of the particles (centres, radii) in `box`; seed 0, no comments.
+template <int D>
+packing::Packing to_packing(const ParticlesT<D>& P, const packing::Box& box);
 
 /// Contact-law instantiation, chosen once per run (no virtual call per contact).
 enum class ContactModel : std::uint8_t {
@@ -222,14 +203,15 @@ double tangential_period(double m_eff, double k_t, int dim);
 /// `mean_pair`: kMeanPairTimeStep; else the lightest pair); dt = the shorter / steps_per_contact,
 /// or options.dt. The lightest pair's periods are checked (TimeStepInfo::tc_lightest, tc_tangential). Throws std::invalid_argument if the lightest pair gets fewer
 /// than options.min_steps_per_contact steps per period, or if the bound is not finite.
-TimeStepInfo choose_time_step(const Particles& P, const contact::StiffnessBound& bound, bool mean_pair,
+template <int D>
+TimeStepInfo choose_time_step(const ParticlesT<D>& P, const contact::StiffnessBound& bound, bool mean_pair,
                               const DynamicOptions& o, double area_max = 0.0);
 /// The same with the law's bound for the largest particle radius (a wall contact's R* = r_i).
-template <class Law>
-TimeStepInfo choose_time_step(const Particles& P, const Law& law, const DynamicOptions& o, double area_max = 0.0) {
+template <int D, class Law>
+TimeStepInfo choose_time_step(const ParticlesT<D>& P, const Law& law, const DynamicOptions& o, double area_max = 0.0) {
   static_assert(contact::kHasExplicitBound<Law>, "an explicit time step needs the law's stiffness_bound(r_eff)");
   double r_max = 0.0;
-  for (double r : P.radius) r_max = r > r_max ? r : r_max;
+  for (double r : P.r) r_max = r > r_max ? r : r_max;
   return choose_time_step(P, law.stiffness_bound(r_max), contact::kMeanPairTimeStep<Law>, o, area_max);
 }
 
@@ -253,7 +235,9 @@ struct Energies {
 /// the wall forces of the last evaluation are part of it: velocity Verlet's closing half kick used
 /// them, and re-evaluating them would commit the last slip increment twice.
 struct SolverState {
-  Particles particles;              ///< radius = current a_i(T); fx, fy, torque = last forces
+  /// The particles of the state's dimension (the default: none, 2D); r = current a_i(T); force,
+  /// torque = the last forces.
+  std::variant<Particles, Particles3> particles;
   std::vector<double> radius_ref;   ///< radii at params.T_radius_ref (Eq 9), constant
   Box box;
   double wall_velocity[2] = {0, 0};  ///< right, top [m/s]
@@ -268,7 +252,7 @@ struct SolverState {
   /// The histories of the state's law and dimension: one alternative per law of DemLaws and
   /// dimension (the default: the Luding law's in 2D, empty).
   DemLaws::Of2And3<LawHistories> histories;
-  // 3D (particles.dim == 3) instead of the 2D arrays above: the moving walls right (x_max), back
+  // 3D (dim() == 3) instead of the 2D arrays above: the moving walls right (x_max), back
   // (y_max), top (z_max); the six walls x_min, x_max, y_min, y_max, z_min, z_max; sum f (x) l row-major.
   double wall_velocity3[3] = {0, 0, 0};
   double wall_force3[6] = {0, 0, 0, 0, 0, 0};
@@ -283,7 +267,20 @@ struct SolverState {
   /// The state of a solver in a periodic cell (issue 29): kept in memory (DynamicSolverT::last_good());
   /// the state file and the restart refuse it (the cell and the pairs' images are not in the format).
   bool periodic = false;
-  int dim() const { return particles.dim; }
+  int dim() const { return particles.index() == 0 ? 2 : 3; }
+  /// The particles of dimension D (std::bad_variant_access if the state is of the other one).
+  template <int D>
+  ParticlesT<D>& particles_of() {
+    return std::get<ParticlesT<D>>(particles);
+  }
+  template <int D>
+  const ParticlesT<D>& particles_of() const {
+    return std::get<ParticlesT<D>>(particles);
+  }
+  /// The number of particles (either dimension).
+  std::size_t particle_count() const {
+    return std::visit([](const auto& p) { return p.size(); }, particles);
+  }
   /// The histories hold law history H (its law and dimension).
   template <class H>
   bool holds() const {
@@ -373,11 +370,11 @@ class DynamicSolverT {
 
   /// The Luding law (options.model: Linear, Hysteretic or Full) with its parameters. Validates,
   /// chooses the time step, builds the neighbour table, computes the first forces.
-  DynamicSolverT(Particles particles, const LudingParams& params, const Box& box,
+  DynamicSolverT(ParticlesT<D> particles, const LudingParams& params, const Box& box,
                  const DynamicOptions& options);
   /// The plastic-indentation law with its parameters `law` (options.model and options.plastic are
   /// set from it; the walls' friction is options.plastic_wall_mu). As above.
-  DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law, const Box& box,
+  DynamicSolverT(ParticlesT<D> particles, const contact::PlasticIndentationParams& law, const Box& box,
                  const DynamicOptions& options);
   /// The same two laws in a periodic cell (issue 29; docs/dynamic.md "Periodic cell"): no walls;
   /// the cell follows the strain rate of set_strain_rate() (h <- exp(L dt) h about cell.origin), the
@@ -386,9 +383,9 @@ class DynamicSolverT {
   /// build (branch x_j + h n - x_i; positions unwrapped, so a pair keeps its image and its history
   /// when a particle crosses the boundary). box() is the cell's bounding box. The cell must stay
   /// at least 2 (2 r_max + skin) wide across every axis (else InstabilityError at a table build).
-  DynamicSolverT(Particles particles, const LudingParams& params, const packing::PeriodicCellT<D>& cell,
+  DynamicSolverT(ParticlesT<D> particles, const LudingParams& params, const packing::PeriodicCellT<D>& cell,
                  const DynamicOptions& options);
-  DynamicSolverT(Particles particles, const contact::PlasticIndentationParams& law,
+  DynamicSolverT(ParticlesT<D> particles, const contact::PlasticIndentationParams& law,
                  const packing::PeriodicCellT<D>& cell, const DynamicOptions& options);
   /// A periodic cell (the constructors above).
   bool periodic() const { return periodic_; }
@@ -420,7 +417,7 @@ class DynamicSolverT {
   const SolverState* last_good() const { return last_good_.get(); }
   void run(std::size_t n_steps);  ///< n_steps steps
 
-  const Particles& particles() const { return P_; }
+  const ParticlesT<D>& particles() const { return P_; }
   const Box& box() const { return box_; }
   const TimeStepInfo& time_step() const { return ts_; }
   double dt() const { return ts_.dt; }
@@ -598,7 +595,7 @@ class DynamicSolverT {
   struct Setup {
     const packing::PeriodicCellT<D>* cell = nullptr;
   };
-  DynamicSolverT(Particles particles, const LudingParams& params, const Box& box, const DynamicOptions& options,
+  DynamicSolverT(ParticlesT<D> particles, const LudingParams& params, const Box& box, const DynamicOptions& options,
                  Setup);
   /// A new table of the law's history type, with fresh wall histories for n particles.
   void make_tables(std::size_t n);
@@ -622,7 +619,7 @@ class DynamicSolverT {
   [[noreturn]] void breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
   void check_health_with(double vmax2) const;
 
-  Particles P_;
+  ParticlesT<D> P_;
   LudingParams params_, wall_params_;
   Box box_;
   DynamicOptions opt_;
@@ -644,7 +641,6 @@ class DynamicSolverT {
   Eigen::Matrix<double, D, D> F_build_ = Eigen::Matrix<double, D, D>::Identity();
   double range_max_ = 0.0;  ///< 2 r_max + skin at the last build
   packing::PeriodicPairsT<D> periodic_pairs_;
-  std::vector<double> pos_scratch_;
   void build_table_periodic();
   void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
   void remove_mean_velocity();
@@ -652,9 +648,7 @@ class DynamicSolverT {
   void hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const;  ///< h and L as 3 x 3 (the force loop)
   /// The branch x_j (+ h n) - x_i of table row k (D components).
   void branch(std::size_t k, std::size_t i, std::size_t j, double* d) const {
-    d[0] = P_.x[j] - P_.x[i];
-    d[1] = P_.y[j] - P_.y[i];
-    if constexpr (D == 3) d[2] = P_.z[j] - P_.z[i];
+    for (int a = 0; a < D; ++a) d[a] = P_.pos[D * j + a] - P_.pos[D * i + a];
     if (periodic_) {
       const int* n = &pair_shift_[static_cast<std::size_t>(D) * k];
       for (int a = 0; a < D; ++a)
@@ -695,7 +689,8 @@ class DynamicSolverT {
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
-  std::vector<double> x_build_, y_build_, z_build_;
+  std::vector<double> pos_build_;  ///< D per particle: the centres at the last table build
+  std::array<std::vector<double>, D> axes_;  ///< scratch: the centres by axis, for the cell grid
   /// over the positions of the last table build (storage reused)
   packing::CellGridT<D> grid_;
   /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
@@ -708,8 +703,9 @@ class DynamicSolverT {
   std::vector<std::uint32_t> wall_list_;
   double box_build_[2 * D] = {};  ///< x_min, x_max, y_min, y_max (, z_min, z_max) at the build
   bool wall_list_valid_ = false;
-  /// 1/m and 1/I for the kicks, refilled by step() when the particle count or radius_scale_ (the
-  /// only thing that changes the inertia, Eq 9) differs from the values they were computed for.
+  /// 1/m (D per particle) and 1/I (kRot per particle) for the kicks, refilled by step() when the
+  /// particle count or radius_scale_ (the only thing that changes the inertia, Eq 9) differs from
+  /// the values they were computed for.
   std::vector<double> inv_mass_, inv_inertia_;
   double inv_scale_ = -1.0;
   /// step() set the force accumulators to m g in its first pass (compute_forces skips its own)
