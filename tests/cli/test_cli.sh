@@ -133,7 +133,7 @@ fi
 # --merit energy-friction: the trust region also with friction; summary.json names it, the run
 # ends on accepted increments with finite files
 ef="$tmp/energy_friction"
-if "$ns" compact --width 20 --friction 0.1 --increments 20 --iteration pseudo-transient --merit energy-friction \
+if "$ns" compact --width 16 --friction 0.1 --increments 10 --iteration pseudo-transient --merit energy-friction \
     --quiet --allow-unconverged --snapshots '' --out "$ef" >/dev/null 2>"$tmp/stderr" && /usr/bin/python3 - "$ef" <<'PY'
 import csv, json, math, sys
 rows = list(csv.DictReader(open(sys.argv[1] + "/history.csv")))
