@@ -176,7 +176,7 @@ struct LawArgs {
   double k_t = contact::PlasticIndentationParams{}.k_t, sigma_y = contact::PlasticIndentationParams{}.sigma_y;
   double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
   double first_touch = contact::PlasticIndentationParams{}.first_touch;
-  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit, frictionless: 500)
+  int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit: 500)
   std::string iteration = "legacy-drag";
   double regularisation_scale = 1.0;
   int max_cuts = qs::SolverOptions{}.max_cuts;
@@ -218,8 +218,9 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
       ->capture_default_str();
   app.add_option("--tol", a.tol, "Newton tolerance: RMS residual / mean contact force")->capture_default_str();
   app.add_option("--max-newton", a.max_newton,
-                 "Newton iterations per increment (0: the iteration's own, legacy-drag 10, pseudo-transient 50, "
-                 "pseudo-transient frictionless with --merit energy 200)")
+                 "Newton iterations per increment (0: the iteration's own, legacy-drag 10, pseudo-transient " +
+                     std::to_string(kPseudoTransientMaxNewton) + ", pseudo-transient on the energy merit " +
+                     std::to_string(kEnergyMaxNewton) + ")")
       ->capture_default_str();
   app.add_option("--viscosity", a.viscosity,
                  "drag / mean contact stiffness: legacy-drag: on the non-affine motion of the increment (0: pure "

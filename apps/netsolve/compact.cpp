@@ -243,7 +243,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["solver"]["iteration"] = so.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
   j["solver"]["regularisation_scale"] = so.regularisation_scale;
   j["solver"]["max_cuts"] = so.max_cuts;
-  // the merit the iteration used: the energy only without friction
+  // the merit the iteration used (energy, energy-friction or residual)
   if (so.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = so.merit_name();
   if (so.uses_energy_merit()) j["solver"]["unjammed_increments"] = unjammed;
   j["solver"]["instability_events"] = instabilities;

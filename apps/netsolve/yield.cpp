@@ -596,7 +596,7 @@ int YieldRun::finish() {
                  {"iteration", so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag"},
                  {"regularisation_scale", so_.regularisation_scale},
                  {"max_cuts", so_.max_cuts}};
-  if (so_.iteration == qs::Iteration::PseudoTransient)  // the merit used: the energy only without friction
+  if (so_.iteration == qs::Iteration::PseudoTransient)  // the merit used (energy, energy-friction or residual)
     j["solver"]["merit"] = so_.merit_name();
   j["timing_s"] = {{"total", total},
                    {"compaction", t_compact_},

@@ -14,7 +14,10 @@
 // acts on the step only: the accepted state solves f = 0, whatever eta. A rearrangement (a
 // snap-through: no nearby minimum) is followed downhill in energy, which the residual's line
 // search cannot judge (the residual rises on the way). docs/quasistatic.md "Frictionless: a
-// trust region on the energy".
+// trust region on the energy". With friction (opt-in, friction_energy_merit, 2D) the same trust
+// region runs on an incremental potential: each tangential spring's stiffness and limit frozen at
+// the iterate (freeze_tangential; docs/quasistatic.md "With friction: a trust region on an
+// incremental potential").
 #include <algorithm>
 #include <chrono>
 #include <cmath>
