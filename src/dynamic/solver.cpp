@@ -163,7 +163,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
   // particle-particle contacts from the Verlet table
-  const std::size_t n_pairs = pair_key_.size();
+  const std::size_t n_pairs = rows_.pairs();
   if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
   // (positions, velocities and forces D per particle; spins and torques kRot: 2D omega, 3D (x, y, z))
@@ -175,19 +175,21 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
   double* const p_t = P_.torque.data();
   // the cell and the strain rate (Periodic), hoisted: 3 x 3 with zeros beyond D
   double hc[3][3] = {}, Lr[3][3] = {};
-  const int* const shift = pair_shift_.data();
+  const int* const p_i = rows_.pi.data();  // the rows' particles and images
+  const int* const p_j = rows_.pj.data();
+  const auto* const shift = rows_.shift.data();
   if constexpr (Periodic) hoist_cell(hc, Lr);
   double s3p[3][3] = {};  // Periodic, 3D: the stress sums per contact
   for (std::size_t k = 0; k < n_pairs; ++k) {
-    const std::size_t i = static_cast<std::size_t>(pair_key_[k] >> 32);
-    const std::size_t j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
+    const auto i = static_cast<std::size_t>(p_i[k]);
+    const auto j = static_cast<std::size_t>(p_j[k]);
     const double* const xi = p_x + D * i;  // the centres of i and j
     const double* const xj = p_x + D * j;
     double dx = xj[0] - xi[0], dy = xj[1] - xi[1];
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
     if constexpr (D == 3) dz = xj[2] - xi[2];
-    if constexpr (Periodic) add_image<D>(shift + D * k, hc, dx, dy, dz);
+    if constexpr (Periodic) add_image<D>(shift[k].data(), hc, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)

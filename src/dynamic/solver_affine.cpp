@@ -116,8 +116,8 @@ void DynamicSolverT<D>::set_plastic_law(const contact::PlasticIndentationParams&
   if (opt_.plastic.reversible && !law.reversible) {
     using L = contact::PlasticIndentationLawT<D>;
     HistoryTable<PlasticHist>& t = table<PlasticHist>();
-    for (std::size_t k = 0; k < pair_key_.size(); ++k) {
-      const auto i = static_cast<std::size_t>(pair_key_[k] >> 32), j = static_cast<std::size_t>(pair_key_[k] & 0xffffffffu);
+    for (std::size_t k = 0; k < rows_.pairs(); ++k) {
+      const auto i = static_cast<std::size_t>(rows_.pi[k]), j = static_cast<std::size_t>(rows_.pj[k]);
       double d[3];
       branch(k, i, j, d);
       double L2 = d[0] * d[0] + d[1] * d[1];

@@ -124,9 +124,8 @@ void DynamicSolverT<D>::check_health_with(double vmax2) const {
   }
   // overlaps: the pairs of the table (complete for the touching pairs) and the walls, each against
   // half the smaller radius of its contact (>= 0.5 r_min; docs/dynamic.md)
-  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
-    const std::uint64_t key = pair_key_[k];
-    const auto i = static_cast<std::size_t>(key >> 32), j = static_cast<std::size_t>(key & 0xffffffffu);
+  for (std::size_t k = 0; k < rows_.pairs(); ++k) {
+    const auto i = static_cast<std::size_t>(rows_.pi[k]), j = static_cast<std::size_t>(rows_.pj[k]);
     double dd[3];
     branch(k, i, j, dd);
     const double s = P_.r[i] + P_.r[j];

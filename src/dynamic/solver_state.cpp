@@ -95,7 +95,14 @@ DynamicSolverT<D>::DynamicSolverT(const SolverState& st, const DynamicOptions& o
   finish_setup();
   // The table is rebuilt from the current positions, carrying the stored histories; forces are
   // NOT re-evaluated (the stored ones are those of the last step).
-  pair_key_ = st.pair_key;
+  {  // the rows of the state, carried by the build below
+    std::vector<int> pi(st.pair_key.size()), pj(st.pair_key.size());
+    for (std::size_t k = 0; k < st.pair_key.size(); ++k) {
+      pi[k] = static_cast<int>(st.pair_key[k] >> 32);
+      pj[k] = static_cast<int>(st.pair_key[k] & 0xffffffffu);
+    }
+    rows_.assign(std::move(pi), std::move(pj));
+  }
   visit_law([&](const auto& law) {
     using H = typename std::decay_t<decltype(law)>::History;
     if (!st.holds<H>()) fail("state: the state's histories are not of the solver's law (options.model)");
@@ -141,9 +148,9 @@ SolverState DynamicSolverT<D>::state() const {
     using H = typename std::decay_t<decltype(law)>::History;
     const HistoryTable<H>& t = *table_if<H>();
     LawHistories<H>& h = st.histories.template emplace<LawHistories<H>>();
-    for (std::size_t k = 0; k < pair_key_.size(); ++k)
+    for (std::size_t k = 0; k < rows_.pairs(); ++k)
       if (law.has_history(t.pair[k])) {
-        st.pair_key.push_back(pair_key_[k]);
+        st.pair_key.push_back((static_cast<std::uint64_t>(rows_.pi[k]) << 32) | static_cast<std::uint32_t>(rows_.pj[k]));
         h.pair.push_back(t.pair[k]);
       }
     h.wall = t.wall;
@@ -276,7 +283,7 @@ struct PeriodicFrame {
   double L[9] = {};
 };
 template <int D, class H, class Eval>
-void contacts_of(const ParticlesT<D>& P, const Box& box, const std::vector<std::uint64_t>& keys,
+void contacts_of(const ParticlesT<D>& P, const Box& box, const sys::PairRows<D>& rows,
                  const std::vector<H>& hist, const std::vector<H>& whist, std::vector<ContactInfo>& out, Eval&& eval,
                  const PeriodicFrame* frame = nullptr) {
   out.clear();
@@ -292,9 +299,9 @@ void contacts_of(const ParticlesT<D>& P, const Box& box, const std::vector<std::
     if constexpr (D == 3) return P.vel[D * i + 2];
     else return 0.0;
   };
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    const auto i = static_cast<std::uint32_t>(keys[k] >> 32);
-    const auto j = static_cast<std::uint32_t>(keys[k] & 0xffffffffu);
+  for (std::size_t k = 0; k < rows.pairs(); ++k) {
+    const auto i = static_cast<std::uint32_t>(rows.pi[k]);
+    const auto j = static_cast<std::uint32_t>(rows.pj[k]);
     double dx = xc(j) - xc(i), dy = yc(j) - yc(i), dz = zc(j) - zc(i);
     double avx = 0.0, avy = 0.0, avz = 0.0;  // periodic: L l
     if (frame) {
@@ -377,10 +384,10 @@ void contacts_of(const ParticlesT<D>& P, const Box& box, const std::vector<std::
 
 template <contact::LudingFeatures F, int D>
 void luding_contacts(const ParticlesT<D>& P, const Box& box, const LudingParams& pp, const LudingParams& pw, double k1Tt,
-                     const std::vector<std::uint64_t>& keys, const std::vector<contact::LudingHistoryT<D>>& hist,
+                     const sys::PairRows<D>& rows, const std::vector<contact::LudingHistoryT<D>>& hist,
                      const std::vector<contact::LudingHistoryT<D>>& whist, std::vector<ContactInfo>& out,
                      const PeriodicFrame* frame) {
-  contacts_of<D>(P, box, keys, hist, whist, out,
+  contacts_of<D>(P, box, rows, hist, whist, out,
                  [&](const contact::LudingHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall, ContactInfo& c) {
                    contact::LudingInputT<D> in;
                    in.delta = k.overlap;
@@ -401,12 +408,12 @@ constexpr contact::LudingFeatures kHystereticOut{true, false, false, true};
 // The plastic-indentation law: the contacts on their loaded branch.
 template <int D>
 void plastic_contacts(const ParticlesT<D>& P, const Box& box, const contact::PlasticIndentationParams& pp,
-                      const contact::PlasticIndentationParams& pw, const std::vector<std::uint64_t>& keys,
+                      const contact::PlasticIndentationParams& pw, const sys::PairRows<D>& rows,
                       const std::vector<contact::PlasticIndentationHistoryT<D>>& hist,
                       const std::vector<contact::PlasticIndentationHistoryT<D>>& whist, std::vector<ContactInfo>& out,
                       const PeriodicFrame* frame) {
   const contact::PlasticIndentationLawT<D> lp(pp), lw(pw);
-  contacts_of<D>(P, box, keys, hist, whist, out,
+  contacts_of<D>(P, box, rows, hist, whist, out,
                  [&](const contact::PlasticIndentationHistoryT<D>& h, const contact::Kinematics<D>& k, bool wall,
                      ContactInfo& c) {
                    const auto& law = wall ? lw : lp;
@@ -429,11 +436,11 @@ void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
   PeriodicFrame frame_storage;
   const PeriodicFrame* frame = nullptr;
   if (periodic_) {  // the rows' branch offsets h n and the strain rate
-    frame_storage.offset.resize(static_cast<std::size_t>(D) * pair_key_.size());
-    for (std::size_t k = 0; k < pair_key_.size(); ++k)
+    frame_storage.offset.resize(static_cast<std::size_t>(D) * rows_.pairs());
+    for (std::size_t k = 0; k < rows_.pairs(); ++k)
       for (int a = 0; a < D; ++a) {
         double o = 0.0;
-        for (int b = 0; b < D; ++b) o += cell_.h(a, b) * pair_shift_[static_cast<std::size_t>(D) * k + b];
+        for (int b = 0; b < D; ++b) o += cell_.h(a, b) * rows_.shift[k][static_cast<std::size_t>(b)];
         frame_storage.offset[static_cast<std::size_t>(D) * k + a] = o;
       }
     for (int a = 0; a < D; ++a)
@@ -442,21 +449,21 @@ void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
     frame = &frame_storage;
   }
   if (const HistoryTable<PlasticHist>* t = table_if<PlasticHist>()) {
-    plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, pair_key_, t->pair, t->wall, out, frame);
+    plastic_contacts<D>(P_, box_, opt_.plastic, pl_wall_params_, rows_, t->pair, t->wall, out, frame);
     return;
   }
   const HistoryTable<LudingHist>& t = *table_if<LudingHist>();
   switch (opt_.model) {
     case ContactModel::Linear:
-      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
+      luding_contacts<contact::kLudingLinear, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, rows_, t.pair,
                                                  t.wall, out, frame);
       break;
     case ContactModel::Hysteretic:
-      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair, t.wall,
+      luding_contacts<kHystereticOut, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, rows_, t.pair, t.wall,
                                          out, frame);
       break;
     default:
-      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, pair_key_, t.pair,
+      luding_contacts<contact::kLudingFull, D>(P_, box_, params_, wall_params_, thermal_.k1_Tt, rows_, t.pair,
                                                t.wall, out, frame);
       break;
   }

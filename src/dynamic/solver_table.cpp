@@ -20,6 +20,18 @@ namespace netdem::dem {
 using detail::displacement_limit;
 using detail::fail;
 
+namespace {
+/// The row of pair (i, j), i < j, or -1.
+template <int D>
+std::ptrdiff_t find_row(const sys::PairRows<D>& rows, std::uint32_t i, std::uint32_t j) {
+  const auto lo = std::lower_bound(rows.pi.begin(), rows.pi.end(), static_cast<int>(i));
+  const auto hi = std::upper_bound(lo, rows.pi.end(), static_cast<int>(i));
+  const auto b = rows.pj.begin() + (lo - rows.pi.begin()), e = rows.pj.begin() + (hi - rows.pi.begin());
+  const auto it = std::lower_bound(b, e, static_cast<int>(j));
+  return it != e && *it == static_cast<int>(j) ? it - rows.pj.begin() : -1;
+}
+}  // namespace
+
 // ---- the history table of the law (HistoryTables) ------------------------------------------------
 template <int D>
 void DynamicSolverT<D>::make_tables(std::size_t n) {
@@ -30,25 +42,20 @@ void DynamicSolverT<D>::make_tables(std::size_t n) {
   });
 }
 
-// The committed histories of the pairs that stay in the table (pair_key_ and new_key_ sorted); a
-// pair is live (evaluated while apart) when the law says its history holds something
-// (Law::has_history: the lifecycle is the law's).
+// The committed histories of the pairs that stay in the table (rows_.carry: every history is
+// carried, the law clears it at separation in the force loop); a pair is live (evaluated while
+// apart) when the law says its history holds something (Law::has_history: the lifecycle is the
+// law's).
 template <int D>
 template <class Law>
-void DynamicSolverT<D>::carry_histories(const Law& law, std::size_t n_new) {
+void DynamicSolverT<D>::carry_histories(const Law& law) {
   using H = typename Law::History;
-  std::vector<H>& old_h = table<H>().pair;
-  std::vector<H>& new_h = table<H>().next;
-  new_h.assign(n_new, H{});
-  std::size_t a = 0;
-  for (std::size_t b = 0; b < n_new; ++b) {
-    while (a < pair_key_.size() && pair_key_[a] < new_key_[b]) ++a;
-    if (a < pair_key_.size() && pair_key_[a] == new_key_[b]) {
-      new_h[b] = old_h[a];
-      pair_live_[b] = law.has_history(new_h[b]) ? 1 : 0;
-    }
-  }
-  old_h.swap(new_h);
+  std::vector<H>& h = table<H>().pair;
+  rows_.carry(h, H{}, table<H>().next);
+  pair_live_.assign(h.size(), 0);
+  const std::vector<int>& from = rows_.carried_from();
+  for (std::size_t k = 0; k < h.size(); ++k)
+    if (from[k] >= 0) pair_live_[k] = law.has_history(h[k]) ? 1 : 0;
 }
 
 // ---- neighbour search: cell list + Verlet table ------------------------------------------------
@@ -130,46 +137,14 @@ void DynamicSolverT<D>::build_table() {
     build_table_periodic();
     return;
   }
-  const std::size_t n = P_.size();
   ++rebuilds_;
   radius_scale_build_ = radius_scale_;
   pos_build_ = P_.pos;
   build_wall_list();
-  new_key_.clear();
-  if (n >= 2) {
-    double rmax = 0.0;
-    for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, P_.r[i]);
-    // cell side >= largest interaction range 2 rmax + skin (3^D cells per query); <= ~4 n cells
-    typename packing::CellGridT<D>::Axes spans;  // the grid reads the centres by axis
-    for (std::size_t a = 0; a < D; ++a) {
-      axes_[a].resize(n);
-      for (std::size_t i = 0; i < n; ++i) axes_[a][i] = P_.pos[D * i + a];
-      spans[a] = axes_[a];
-    }
-    grid_.rebuild(spans, 2.0 * rmax + skin_);
-    const double* const x = P_.pos.data();
-    for (std::size_t i = 0; i < n; ++i) {
-      typename packing::CellGridT<D>::Point xi;
-      for (std::size_t a = 0; a < D; ++a) xi[a] = x[D * i + a];
-      const double ri = P_.r[i];
-      grid_.for_each_near(xi, ri + rmax + skin_, [&](std::uint32_t j) {
-        if (j <= i) return;
-        const double dx = x[D * j] - xi[0], dy = x[D * j + 1] - xi[1];
-        double d2 = dx * dx + dy * dy;
-        if constexpr (D == 3) {
-          const double dz = x[D * j + 2] - xi[2];
-          d2 += dz * dz;
-        }
-        const double range = ri + P_.r[j] + skin_;
-        if (d2 < range * range) new_key_.push_back((static_cast<std::uint64_t>(i) << 32) | j);
-      });
-    }
-    std::sort(new_key_.begin(), new_key_.end());
-  }
-  // carry the committed histories of the pairs that stay in the table (both lists sorted)
-  pair_live_.assign(new_key_.size(), 0);
-  visit_law([&](const auto& law) { carry_histories(law, new_key_.size()); });
-  pair_key_.swap(new_key_);
+  double rmax = 0.0;
+  for (double r : P_.r) rmax = std::max(rmax, r);
+  rows_.find(P_, skin_, rmax);
+  visit_law([&](const auto& law) { carry_histories(law); });
 }
 
 // The periodic table (issue 29): the pairs within r_i + r_j + skin through the images of the
@@ -189,24 +164,13 @@ void DynamicSolverT<D>::build_table_periodic() {
   double rmax = 0.0;
   for (double r : P_.r) rmax = std::max(rmax, r);
   range_max_ = 2.0 * rmax + skin_;
-  new_key_.clear();
-  new_shift_.clear();
-  if (n >= 2) {
-    if (!(cell_.min_width() >= 2.0 * range_max_))
-      breach("cell",
-             fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "
-                         "range 2 r_max + skin = {:.4g}", cell_.min_width(), range_max_),
-             "the cell was compressed or sheared too far for its number of particles (a larger packing)");
-    const auto& found = periodic_pairs_.find(P_.pos, P_.r, cell_, skin_);
-    for (const auto& pr : found) {
-      new_key_.push_back((static_cast<std::uint64_t>(pr.i) << 32) | static_cast<std::uint32_t>(pr.j));
-      for (int a = 0; a < D; ++a) new_shift_.push_back(pr.n[static_cast<std::size_t>(a)]);
-    }
-  }
-  pair_live_.assign(new_key_.size(), 0);
-  visit_law([&](const auto& law) { carry_histories(law, new_key_.size()); });
-  pair_key_.swap(new_key_);
-  pair_shift_.swap(new_shift_);
+  if (n >= 2 && !(cell_.min_width() >= 2.0 * range_max_))
+    breach("cell",
+           fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "
+                       "range 2 r_max + skin = {:.4g}", cell_.min_width(), range_max_),
+           "the cell was compressed or sheared too far for its number of particles (a larger packing)");
+  rows_.find(P_, skin_, rmax, &cell_);
+  visit_law([&](const auto& law) { carry_histories(law); });
   remove_mean_velocity();
 }
 
@@ -226,10 +190,8 @@ template <int D>
 void DynamicSolverT<D>::touching_pairs(
     std::vector<std::pair<std::uint32_t, std::uint32_t>>& out) const {
   out.clear();
-  for (std::size_t k = 0; k < pair_key_.size(); ++k) {
-    const std::uint64_t key = pair_key_[k];
-    const std::uint32_t i = static_cast<std::uint32_t>(key >> 32);
-    const std::uint32_t j = static_cast<std::uint32_t>(key & 0xffffffffu);
+  for (std::size_t k = 0; k < rows_.pairs(); ++k) {
+    const auto i = static_cast<std::uint32_t>(rows_.pi[k]), j = static_cast<std::uint32_t>(rows_.pj[k]);
     double d[3];
     branch(k, i, j, d);
     const double s = P_.r[i] + P_.r[j];
@@ -241,20 +203,18 @@ void DynamicSolverT<D>::touching_pairs(
 
 template <int D>
 auto DynamicSolverT<D>::history(std::uint32_t i, std::uint32_t j) const -> const LudingHist* {
-  const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
-  auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
+  const std::ptrdiff_t k = find_row(rows_, i, j);
   const HistoryTable<LudingHist>* t = table_if<LudingHist>();
-  if (!t || it == pair_key_.end() || *it != key) return nullptr;
-  return &t->pair[static_cast<std::size_t>(it - pair_key_.begin())];
+  if (!t || k < 0) return nullptr;
+  return &t->pair[static_cast<std::size_t>(k)];
 }
 
 template <int D>
 auto DynamicSolverT<D>::plastic_history(std::uint32_t i, std::uint32_t j) const -> const PlasticHist* {
-  const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) | j;
-  auto it = std::lower_bound(pair_key_.begin(), pair_key_.end(), key);
+  const std::ptrdiff_t k = find_row(rows_, i, j);
   const HistoryTable<PlasticHist>* t = table_if<PlasticHist>();
-  if (!t || it == pair_key_.end() || *it != key) return nullptr;
-  return &t->pair[static_cast<std::size_t>(it - pair_key_.begin())];
+  if (!t || k < 0) return nullptr;
+  return &t->pair[static_cast<std::size_t>(k)];
 }
 
 template bool DynamicSolverT<2>::needs_rebuild() const;

@@ -36,9 +36,9 @@
 #include "netdem/contact/luding_law.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/dynamic/particles.hpp"
-#include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "netdem/system/pair_rows.hpp"
 
 namespace netdem::dem {
 
@@ -423,7 +423,7 @@ class DynamicSolverT {
   double dt() const { return ts_.dt; }
   double time() const { return time_; }
   std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
-  std::size_t table_size() const { return pair_key_.size(); }
+  std::size_t table_size() const { return rows_.pairs(); }
   /// Material thermal state (ContactModel::Full); the temperature schedule is the caller's.
   const contact::LudingThermalState& thermal() const { return thermal_; }
   /// Moves the material to temperature T_new over the time dt with relaxation time t0
@@ -569,11 +569,11 @@ class DynamicSolverT {
   void wall_forces_2d(const L& wall_law, ForceSums& a);
   template <class L, bool InPlace>
   void wall_forces_3d(const L& wall_law, ForceSums& a);
-  /// The contact histories of one law: one per pair of the Verlet table (pair_key_), the scratch
-  /// of a table build, kWalls per particle for the walls (x_min, x_max, y_min, ...).
+  /// The contact histories of one law: one per row of the Verlet table (rows_), the scratch of a
+  /// table build, kWalls per particle for the walls (x_min, x_max, y_min, ...).
   template <class H>
   struct HistoryTable {
-    std::vector<H> pair, next, wall;
+    std::vector<H> pair, next, wall;  ///< (next: the scratch of a table build)
   };
   /// One history table per law, chosen at construction (the law's history type); a force
   /// evaluation takes its table once (std::get), not per contact. One alternative per law of DemLaws.
@@ -600,7 +600,7 @@ class DynamicSolverT {
   /// A new table of the law's history type, with fresh wall histories for n particles.
   void make_tables(std::size_t n);
   template <class Law>
-  void carry_histories(const Law& law, std::size_t n_new);
+  void carry_histories(const Law& law);
   bool plastic() const { return opt_.model == ContactModel::PlasticIndentation; }
   /// A law whose tangential bound grows with the contact area: the time step follows the largest
   /// area of the last force evaluation (StiffnessBound::k_t_area, with 10 % margin).
@@ -631,16 +631,15 @@ class DynamicSolverT {
   bool friction_ = true;             ///< any friction (particles or walls): F.friction instantiation
   std::vector<double> radius_ref_;   ///< radii at T_radius_ref (Eq 9)
   double radius_scale_ = 1.0, radius_scale_build_ = 1.0, radius_ref_max_ = 0.0;
-  // Verlet table: sorted keys (i << 32 | j), i < j, and the committed history of each pair.
-  std::vector<std::uint64_t> pair_key_, new_key_;
-  // periodic cell (issue 29): the cell now, the image n of j of each row (D per row, with
-  // pair_key_), the map since the last table build (the table's affine stretch), the search
+  // Verlet table: the system layer's rows (pairs i < j sorted by (i, j), the periodic image of j
+  // per row, the neighbour search); the histories per row are hist_'s, carried by rows_.carry().
+  sys::PairRows<D> rows_;
+  // periodic cell (issue 29): the cell now, the map since the last table build (the table's
+  // affine stretch)
   bool periodic_ = false;
   packing::PeriodicCellT<D> cell_;
-  std::vector<int> pair_shift_, new_shift_;
   Eigen::Matrix<double, D, D> F_build_ = Eigen::Matrix<double, D, D>::Identity();
   double range_max_ = 0.0;  ///< 2 r_max + skin at the last build
-  packing::PeriodicPairsT<D> periodic_pairs_;
   void build_table_periodic();
   void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
   void remove_mean_velocity();
@@ -650,12 +649,12 @@ class DynamicSolverT {
   void branch(std::size_t k, std::size_t i, std::size_t j, double* d) const {
     for (int a = 0; a < D; ++a) d[a] = P_.pos[D * j + a] - P_.pos[D * i + a];
     if (periodic_) {
-      const int* n = &pair_shift_[static_cast<std::size_t>(D) * k];
+      const int* n = rows_.shift[k].data();
       for (int a = 0; a < D; ++a)
         for (int b = 0; b < D; ++b) d[a] += cell_.h(a, b) * n[b];
     }
   }
-  HistoryTables hist_;  ///< the law's histories of the pairs (one per pair_key_) and of the walls
+  HistoryTables hist_;  ///< the law's histories of the pairs (one per row of rows_) and of the walls
   // ContactModel::PlasticIndentation: the walls' law
   contact::PlasticIndentationParams pl_wall_params_;
   double area_max_ = 0.0;  ///< largest contact width of the last force evaluation (kHasContactArea)
@@ -690,9 +689,6 @@ class DynamicSolverT {
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
   std::vector<double> pos_build_;  ///< D per particle: the centres at the last table build
-  std::array<std::vector<double>, D> axes_;  ///< scratch: the centres by axis, for the cell grid
-  /// over the positions of the last table build (storage reused)
-  packing::CellGridT<D> grid_;
   /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
   /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
   /// histories of the other particles. Particles with no bit and no overlap are skipped by the

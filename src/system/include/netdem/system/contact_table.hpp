@@ -1,9 +1,9 @@
 #pragma once
-// The contact table of a solver in dimension D (issue 26): one row per neighbour pair, keys i < j
-// sorted by (i, j), the committed history of the contact law per row, and the adjacency (the rows
-// of each particle, CSR in increasing row order). rebuild() finds every pair with a gap below the
-// skin over one cell grid (packing::CellGridT<D>) and carries the committed history of the rows
-// that stay; per-row data of the solver follows with carry().
+// The contact table of a solver in dimension D (issue 26): the rows of PairRows<D> (pair_rows.hpp:
+// keys i < j sorted by (i, j), the periodic image of j), the committed history of the contact law
+// per row, and the adjacency (the rows of each particle, CSR in increasing row order). rebuild()
+// finds every pair whose centres are closer than r_i + r_j + skin and carries the committed
+// history of the rows that stay; per-row data of the solver follows with carry().
 //
 // Lifecycle, read from the law (law.hpp):
 //   * a row is created with a fresh history (History{}) when a pair comes within the skin;
@@ -16,9 +16,7 @@
 // with_history(law) counts the rows whose history the law says matters (L::has_history).
 //
 // Periodic cells (issue 29): rebuild() with a cell finds the pairs through the images of the
-// cell (packing/periodic.hpp) and keeps per row the image n of j: the branch is x_j + h n - x_i
-// with h the current cell vectors. Positions stay unwrapped, so a row's image never changes while
-// the row lives; without a cell every shift is zero.
+// cell (pair_rows.hpp).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -31,84 +29,46 @@
 #include <Eigen/LU>
 
 #include "netdem/contact/law.hpp"
-#include "netdem/packing/cell_grid.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "netdem/system/pair_rows.hpp"
 #include "netdem/system/particle_set.hpp"
 
 namespace netdem::sys {
 
 template <class History, int D>
-class ContactTable {
+class ContactTable : public PairRows<D> {
  public:
-  static constexpr int kDim = D;
   using Mat = Eigen::Matrix<double, D, D>;
   using Vec = Eigen::Matrix<double, D, 1>;
+  using typename PairRows<D>::Shift;
+  using PairRows<D>::pi;
+  using PairRows<D>::pj;
+  using PairRows<D>::shift;
 
-  using Shift = std::array<int, D>;
-  std::vector<int> pi, pj;           ///< the rows' particles, i < j, sorted by (i, j)
-  std::vector<Shift> shift;          ///< the image of j per row (periodic cells; else zero)
   std::vector<History> hist;         ///< committed history per row
   std::vector<int> adj_start, adj_pair;  ///< rows of each particle (CSR, increasing row index)
   std::vector<double> pos_build;     ///< D per particle: the centres at the last rebuild
   Mat F_build = Mat::Identity();     ///< the box deformation at the last rebuild
 
-  std::size_t pairs() const { return pi.size(); }
-
-  /// New rows: every pair with gap < skin (radii up to r_max) merged with the committed history
-  /// (the lifecycle above); F is the current box deformation (kept for needs_rebuild()); `cell`,
-  /// if given, the current periodic cell (the pairs through its images).
+  /// New rows: every pair within r_i + r_j + skin (radii up to r_max) merged with the committed
+  /// history (the lifecycle above); F is the current box deformation (kept for needs_rebuild());
+  /// `cell`, if given, the current periodic cell (the pairs through its images).
   template <contact::ContactLaw L>
   void rebuild(const L&, const ParticleSet<D>& ps, double skin, double r_max, const Mat& F,
                const packing::PeriodicCellT<D>* cell = nullptr) {
-    const int n = static_cast<int>(ps.size());
-    found_.clear();
-    found_shift_.clear();
-    if (cell) {
-      for (const auto& pr : periodic_.find(ps.pos, ps.r, *cell, skin)) {
-        found_.emplace_back(pr.i, pr.j);
-        found_shift_.push_back(pr.n);
-      }
-    } else {
-      find_pairs(ps, skin, r_max);
-    }
-    // merge with the old rows (both sorted); rows farther apart than the skin are dropped
-    from_.assign(found_.size(), -1);
-    std::vector<History> nh(found_.size());
-    std::size_t o = 0;
-    for (std::size_t k = 0; k < found_.size(); ++k) {
-      while (o < pi.size() && std::make_pair(pi[o], pj[o]) < found_[k]) ++o;
-      if (o < pi.size() && pi[o] == found_[k].first && pj[o] == found_[k].second) {
-        from_[k] = static_cast<int>(o);
-        const Shift sk = cell ? found_shift_[k] : Shift{};
-        const Vec image = cell ? cell->image(sk) : Vec::Zero();
-        if (L::kHistoryOutlivesSeparation || gap(ps, found_[k].first, found_[k].second, image) < 0.0) nh[k] = hist[o];
-      }
-    }
-    pi.resize(found_.size());
-    pj.resize(found_.size());
-    shift.assign(found_.size(), Shift{});
-    for (std::size_t k = 0; k < found_.size(); ++k) {
-      pi[k] = found_[k].first;
-      pj[k] = found_[k].second;
-      if (cell) shift[k] = found_shift_[k];
+    this->find(ps, skin, r_max, cell);
+    const std::vector<int>& from = this->carried_from();
+    std::vector<History> nh(from.size());
+    for (std::size_t k = 0; k < from.size(); ++k) {
+      if (from[k] < 0) continue;
+      const Vec image = cell ? cell->image(shift[k]) : Vec::Zero();
+      if (L::kHistoryOutlivesSeparation || gap(ps, pi[k], pj[k], image) < 0.0) nh[k] = hist[static_cast<std::size_t>(from[k])];
     }
     hist.swap(nh);
     pos_build = ps.pos;
     F_build = F;
-    build_adjacency(n);
+    build_adjacency(static_cast<int>(ps.size()));
   }
-
-  /// Per-row data of the solver after rebuild(): the value of the old row a new row continues,
-  /// `fresh` for a new pair.
-  template <class T>
-  void carry(std::vector<T>& v, const T& fresh) const {
-    std::vector<T> out(from_.size(), fresh);
-    for (std::size_t k = 0; k < from_.size(); ++k)
-      if (from_[k] >= 0) out[k] = v[static_cast<std::size_t>(from_[k])];
-    v.swap(out);
-  }
-  /// Per new row: the old row it continues, -1 for a new pair (the last rebuild).
-  const std::vector<int>& carried_from() const { return from_; }
 
   /// The adjacency of the current rows over n particles.
   void build_adjacency(int n) {
@@ -163,36 +123,7 @@ class ContactTable {
   }
 
  private:
-  /// found_ = every pair with gap < skin over the cell grid, sorted.
-  void find_pairs(const ParticleSet<D>& ps, double skin, double r_max) {
-    const int n = static_cast<int>(ps.size());
-    for (std::size_t a = 0; a < D; ++a) {  // the grid reads the centres by axis (storage reused)
-      axes_[a].resize(static_cast<std::size_t>(n));
-      for (std::size_t p = 0; p < axes_[a].size(); ++p) axes_[a][p] = ps.pos[D * p + a];
-    }
-    typename packing::CellGridT<D>::Axes spans;
-    for (std::size_t a = 0; a < D; ++a) spans[a] = axes_[a];
-    grid_.rebuild(spans, 2.0 * r_max + skin);
-    found_.reserve(pi.size() + static_cast<std::size_t>(n));
-    for (int p = 0; p < n; ++p) {
-      typename packing::CellGridT<D>::Point at;
-      for (std::size_t a = 0; a < D; ++a) at[a] = ps.pos[D * static_cast<std::size_t>(p) + a];
-      grid_.for_each_near(at, ps.r[p] + r_max + skin, [&](std::uint32_t qq) {
-        const int q = static_cast<int>(qq);
-        if (q <= p) return;
-        if (gap(ps, p, q) < skin) found_.emplace_back(p, q);
-      });
-    }
-    std::sort(found_.begin(), found_.end());
-  }
-
-  packing::CellGridT<D> grid_;  ///< the neighbour search (storage reused across rebuilds)
-  std::array<std::vector<double>, D> axes_;  ///< scratch: the centres by axis for the grid
-  std::vector<std::pair<int, int>> found_;   ///< scratch: the pairs of a rebuild
-  std::vector<Shift> found_shift_;           ///< scratch: their images (periodic)
-  packing::PeriodicPairsT<D> periodic_;      ///< the periodic search (storage reused)
-  std::vector<int> from_;                    ///< per row: the old row it continues or -1
-  std::vector<int> fill_;                    ///< scratch of build_adjacency
+  std::vector<int> fill_;  ///< scratch of build_adjacency
 };
 
 }  // namespace netdem::sys
