@@ -153,6 +153,7 @@ struct CompactRecord {
   netdem::app::netsolve::EquilibriumRecord equilibrium;
   std::string stopped;
   int instabilities = 0, cut_increments = 0;  ///< increments with an instability event, cut increments
+  int unconverged_substeps = 0;  ///< sub-increments committed unaccepted (IncrementReport)
   int unjammed = 0;  ///< increments accepted as unjammed (energy merit)
   double drag_work = 0.0, contact_work = 0.0;  ///< summed over the increments
   std::array<LegEnd, 2> legs;  ///< the last row of each leg (a run that precompacts)
@@ -201,7 +202,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   const double sy = so.law.sigma_y;
   const auto& tm = solver.timings();
   const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped, instabilities,
-               cut_increments, unjammed, drag_work, contact_work, legs] = r;
+               cut_increments, unconverged_substeps, unjammed, drag_work, contact_work, legs] = r;
   nlohmann::json j;
   j["command"] = command;
   status.write(j);
@@ -248,6 +249,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   if (so.uses_energy_merit()) j["solver"]["unjammed_increments"] = unjammed;
   j["solver"]["instability_events"] = instabilities;
   j["solver"]["cut_increments"] = cut_increments;
+  j["solver"]["unconverged_substeps"] = unconverged_substeps;
   j["solver"]["drag_work_fraction"] = contact_work > 0.0 ? drag_work / contact_work : 0.0;
   j["solver"]["max_newton_residual"] = conv.max_newton_residual;
   j["solver"]["last_increment_converged"] = conv.last_converged;
@@ -275,7 +277,8 @@ struct CompactRows {
     csv = legs ? "increment,leg," : "increment,";
     csv += "E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
            "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
-           "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction\n";
+           "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,"
+           "unconverged_substeps\n";
     conv.tol = so.residual_tol;
     if (so.iteration == qs::Iteration::PseudoTransient) conv.max_unconverged_fraction = 0.0;
     growth.tol = so.residual_tol;
@@ -286,18 +289,19 @@ struct CompactRows {
     csv += fmt::format("{}", row.increment);
     if (legs) csv += fmt::format(",{}", row.leg);
     csv += fmt::format(",{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{}\n",
                        m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0,
                        m.net_force_ratio, m.eq13_vs_contacts, row.report.substeps, row.report.instability ? 1 : 0,
-                       qs::drag_work_fraction(row.report));
+                       qs::drag_work_fraction(row.report), row.report.unconverged_substeps);
     if (row.increment > 0) {
       instabilities += row.report.instability;
       unjammed += row.report.unjammed;
       cut_increments += row.report.substeps > 1;
+      unconverged_substeps += row.report.unconverged_substeps;
       drag_work += row.report.drag_work;
       contact_work += row.report.contact_work;
       unconverged += !row.report.converged;
@@ -328,7 +332,7 @@ struct CompactRows {
   Progress progress;
   std::string csv;
   std::size_t next_snap = 0;
-  int unconverged = 0, instabilities = 0, cut_increments = 0, unjammed = 0, done = 0;
+  int unconverged = 0, instabilities = 0, cut_increments = 0, unconverged_substeps = 0, unjammed = 0, done = 0;
   double max_residual = 0.0, drag_work = 0.0, contact_work = 0.0;
   qs::StateMeasures last;
   ConvergenceRecord conv;
@@ -402,7 +406,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const nlohmann::json j =
       compact_summary(command, a, ra, so, co, pk, solver, status,
                       {source, rows.done, rows.unconverged, outside, rows.max_residual, wall, last, rows.conv,
-                       rows.equilibrium, stopped, rows.instabilities, rows.cut_increments, rows.unjammed, rows.drag_work,
+                       rows.equilibrium, stopped, rows.instabilities, rows.cut_increments, rows.unconverged_substeps, rows.unjammed, rows.drag_work,
                        rows.contact_work, rows.leg_end});
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);

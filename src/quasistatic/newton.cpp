@@ -26,10 +26,17 @@ IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
 // An increment, cut in halves while it is not accepted (pseudo-transient iteration): the committed
 // state before it is restored exactly (the state copy continues bit-identically) and the two
 // halves are done in turn. The report sums the iterations of all attempts (the undone one
-// included) and the drag work of the path kept; a cut increment is an instability event.
+// included) and the drag work of the path kept; a cut increment is an instability event. It is
+// accepted when its second half is (the state it ends in is an equilibrium); a sub-increment at
+// the finest cut that is not accepted is committed as it is, part of the damped path, and counted
+// (unconverged_substeps).
 template <int D>
 IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
-  auto attempt = [this](const Mat& d) { return impl_->energy_mode() ? impl_->attempt_energy(d) : impl_->attempt(d); };
+  auto attempt = [this](const Mat& d) {
+    IncrementReport r = impl_->energy_mode() ? impl_->attempt_energy(d) : impl_->attempt(d);
+    r.unconverged_substeps = r.converged ? 0 : 1;
+    return r;
+  };
   if (!impl_->pseudo_transient() || depth >= impl_->opt.max_cuts) return attempt(dE);
   const State saved = state();
   IncrementReport first;
@@ -47,7 +54,8 @@ IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
   const IncrementReport second = advance(dE / 2.0, depth + 1);
   rep.newton_iterations += first.newton_iterations + second.newton_iterations;
   rep.linear_iterations += first.linear_iterations + second.linear_iterations;
-  rep.converged = rep.converged && second.converged;
+  rep.converged = second.converged;
+  rep.unconverged_substeps += second.unconverged_substeps;
   rep.residual = second.residual;
   rep.residual_rms = second.residual_rms;
   rep.newton_residual = second.newton_residual;

@@ -42,6 +42,8 @@ struct WallCase {
   double x1 = 0, x2 = 0, force = 0;  ///< the disks' centres and the common contact force
   bool converged = true;
   int substeps = 0;
+  int unconverged_substeps = 0;     ///< of the last increment
+  double residual = 0, residual_rms = 0;  ///< the undragged residual the last increment ends with
 };
 
 // Compacts the two-disk case by the strain E11 in n increments; `then` (if given) takes over for
@@ -59,6 +61,9 @@ WallCase run_walls(const qs::SolverOptions& so, double E11, int n, const qs::Sol
     const auto rep = s.increment(dE);
     c.converged = c.converged && rep.converged;
     c.substeps += rep.substeps;
+    c.unconverged_substeps = rep.unconverged_substeps;
+    c.residual = rep.residual;
+    c.residual_rms = rep.residual_rms;
   }
   c.x1 = s.x()[0];
   c.x2 = s.x()[1];
@@ -147,6 +152,43 @@ TEST(Equilibrium, CutIncrementsEndOnTheSameEquilibrium) {
   EXPECT_NEAR(cut.force, full.force, 1e-7 * full.force);
   few.max_cuts = 0;  // without cuts the same iteration budget leaves the increment unaccepted
   EXPECT_FALSE(run_walls(so, -0.05, 2, &few, 4.0).converged);
+}
+
+// A cut increment whose early sub-increments are not accepted but whose last one is: the first
+// touch of the two disks (one increment from u = 0, where Eq 2's stiffness is infinite) in six
+// iterations at most per attempt, two cuts. It is accepted, its end state meets the criterion on
+// the undragged residual, and (the reversible law's answer does not depend on the path) its force
+// is the closed form's. The unaccepted sub-increments are counted. With one cut the last half is
+// not accepted either, and neither is the increment.
+TEST(Equilibrium, CutIncrementIsAcceptedOnItsEndStateAndCountsItsUnacceptedSubsteps) {
+  qs::SolverOptions so;
+  so.mode = qs::BoundaryMode::Walls;
+  so.law.mu = kInf;
+  so.law.first_touch = 0.0;
+  so.viscosity = 0.1;
+  so.residual_tol = 1e-9;
+  so.linear_tolerance = 1e-10;
+  so = pseudo_transient(so, 1.0);
+  so.max_newton = 6;
+  so.max_cuts = 2;
+  const double E11 = -0.05;
+  const auto closed = two_disks_closed_form(E11);
+  const WallCase c = run_walls(so, E11, 1);
+  std::printf("one increment from the touch, 6 iterations, 2 cuts: accepted %d, %d sub-increments, %d unaccepted, "
+              "end residual RMS %.2e, max %.2e, F %.12f (closed form %.12f)\n", c.converged, c.substeps,
+              c.unconverged_substeps, c.residual_rms, c.residual, c.force, closed.F);
+  EXPECT_TRUE(c.converged);
+  EXPECT_EQ(c.substeps, 4);
+  EXPECT_GT(c.unconverged_substeps, 0);
+  EXPECT_LT(c.unconverged_substeps, c.substeps);
+  EXPECT_LE(c.residual_rms, so.residual_tol);
+  EXPECT_LE(c.residual, 10.0 * so.residual_tol);
+  EXPECT_NEAR(c.force, closed.F, 1e-7 * closed.F);
+  so.max_cuts = 1;
+  const WallCase halves = run_walls(so, E11, 1);
+  EXPECT_FALSE(halves.converged);
+  EXPECT_EQ(halves.unconverged_substeps, 2);
+  EXPECT_GT(halves.residual_rms, so.residual_tol);
 }
 
 // The answer of options o on the sticking case (40 hydrostatic increments) against pure Newton's:

@@ -398,14 +398,25 @@ def make_figures(R, mode, runs, out):
 
 
 # ------------------------------------------------------------------------------------------- report
+def unaccepted_substeps(r):
+    """Sub-increments netsolve committed without accepting them (history.csv `unconverged_substeps`,
+    the damped path of a cut increment; docs/quasistatic.md "Cut increments"), or None for a run
+    older than that column."""
+    if not r.ok or "unconverged_substeps" not in r.h:
+        return None
+    return int(np.sum(r.h["unconverged_substeps"][1:]))
+
+
 def run_table(R, names):
-    lines = ["| run | status | wall time [s] | unaccepted increments |", "|---|---|---|---|"]
+    lines = ["| run | status | wall time [s] | unaccepted increments | unaccepted sub-increments |",
+             "|---|---|---|---|---|"]
     for n in names:
         r = R[n]
         ua = unaccepted(r) if r.tool == "netsolve" else None
+        us = unaccepted_substeps(r) if r.tool == "netsolve" else None
         wall = r.meta.get("wall_s")
         lines.append(f"| `{n}` | {r.status if r.ok else 'missing'} | {fmt(wall, 1) if wall is not None else '—'} | "
-                     f"{'—' if ua is None else f'{ua[0]} of {ua[1]}'} |")
+                     f"{'—' if ua is None else f'{ua[0]} of {ua[1]}'} | {'—' if us is None else us} |")
     return lines
 
 

@@ -76,6 +76,12 @@ struct IncrementReport {
   int new_contacts = 0, lost_contacts = 0, sliding = 0;
   /// Sub-increments the increment was cut into (1: not cut) after an unaccepted attempt.
   int substeps = 1;
+  /// Sub-increments committed without being accepted (at the finest cut, max_cuts; an uncut
+  /// increment that is not accepted counts 1). A cut increment is accepted when its last
+  /// sub-increment is: its end state is an equilibrium by the criterion, and the unaccepted
+  /// sub-increments before it are the damped path through an instability (instability is set;
+  /// their drag work is in drag_work). docs/quasistatic.md "Cut increments".
+  int unconverged_substeps = 0;
   /// Instability event (pseudo-transient iteration): the undragged residual rose between two
   /// fresh iterations, so the pseudo-time step had to damp the path (drag above its start value).
   bool instability = false;
