@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -618,4 +620,26 @@ TEST(PlasticIndentation, TangentialWorkIsThePotentialOfTheTangentialForceAtAFroz
   p0.mu = 0.0;
   const PlasticIndentationLawT<2> frictionless(p0);
   EXPECT_EQ(frictionless.tangential_frozen(1.0).second, 0.0);
+}
+
+// The laws' inline fmax/fmin (contact/fminmax.hpp) give std::fmax's and std::fmin's bits for every
+// pair of a set with both signed zeros, infinities, NaNs and equal values (the glibc rule: equal
+// arguments give the second one, a NaN gives the other argument).
+TEST(FMinMax, SameBitsAsTheLibrary) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> v = {0.0, -0.0, 1.0, -1.0, 1e-300, -2.5, inf, -inf, nan, 1.0 + 1e-16};
+  auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  auto same = [&](double x, double y) { return (x != x && y != y) || bits(x) == bits(y); };
+  volatile double sink = 0.0;  // keep the library calls
+  for (double a : v)
+    for (double b : v) {
+      sink = a;
+      const double va = sink;
+      EXPECT_TRUE(same(netdem::contact::fmax_of(va, b), std::fmax(va, b))) << a << " " << b;
+      EXPECT_TRUE(same(netdem::contact::fmin_of(va, b), std::fmin(va, b))) << a << " " << b;
+    }
 }

@@ -23,6 +23,7 @@
 #include <numbers>
 
 #include "netdem/contact/dim.hpp"
+#include "netdem/contact/fminmax.hpp"
 
 namespace netdem::contact {
 
@@ -269,7 +270,7 @@ inline LudingHistoryT<D> luding_thermal_update(const LudingParams& p, const Ludi
     if (p.cooling_stiffness_update && p.stiffness_growth) {
       if (k1_Tt < p.k2) {  // (k1 = k2: no plastic range left, delta_max stays)
         // LMM05 section 3.3.2 with Eq 7 re-evaluated: delta_max^- = delta_0 / (1 - k1(T)/k2(dmax^-))
-        r.delta_max = std::fmax(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
+        r.delta_max = fmax_of(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
         r.k2_line = luding_k2_of(p, r.delta_max);  // "also the stiffness is increased accordingly"
       }
     } else if (k1_Tt < k2l) {
@@ -306,12 +307,12 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
   if constexpr (!F.hysteresis) {
     f = p.k2 * delta;  // LMM05 Eq 4 with k1 = k2: linear spring
     kn = p.k2;
-    h.delta_max = std::fmax(h.delta_max, delta);
+    h.delta_max = fmax_of(h.delta_max, delta);
     h.k2_line = p.k2;
     r.branch = LudingBranch::Line;
   } else {
     if (h.fluid) {
-      h.delta_max = std::fmax(h.delta_max, delta);
+      h.delta_max = fmax_of(h.delta_max, delta);
       f = h.k2_line * (delta - h.delta0);  // LMM05 Fig 3: liquid branch, slope k2, delta_0 fixed
       kn = h.k2_line;
       r.branch = LudingBranch::Fluid;

@@ -39,6 +39,7 @@
 #include <numbers>
 #include <utility>
 
+#include "netdem/contact/fminmax.hpp"
 #include "netdem/contact/kinematics.hpp"
 #include "netdem/contact/law.hpp"
 
@@ -62,7 +63,7 @@ struct PlasticIndentationParams {
   double damping_n = 0.0, damping_t = 0.0;
 
   /// min(mu, 1/(3 sqrt 3)): the Coulomb limit and the shear cap tau_y = sigma_y/sqrt(3) combined.
-  double mu_eff() const { return std::fmin(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
+  double mu_eff() const { return fmin_of(mu, 1.0 / (3.0 * std::sqrt(3.0))); }
   bool frictional() const { return mu > 0.0; }
   /// The shear stress per unit slip in absolute units, k_t sigma_y (k_t is given in sigma_y / R,
   /// lengths in R): so that every force, and S / sigma_y unchanged, scales with sigma_y.
@@ -217,7 +218,7 @@ inline double tangential_work(const typename Dim<D>::Tan& f_t_committed, double 
   if (!(kt_force > 0.0)) {  // no spring: the committed force (within the limit) does the work
     const double m = tan_norm(f_t_committed);
     if (!(m > 0.0)) return 0.0;
-    return -tan_dot(f_t_committed, dslip) * std::fmin(1.0, limit / m);
+    return -tan_dot(f_t_committed, dslip) * fmin_of(1.0, limit / m);
   }
   const typename Dim<D>::Tan y = f_t_committed - kt_force * dslip;
   const double m = tan_norm(y);
@@ -235,10 +236,10 @@ inline double normal_secant(const PlasticIndentationParams& p, double r_eff, dou
   NormalBranch b;
   normal_force<D>(p, r_eff, u_max, u0, f0, k0, b);
   // the end point sees the history the start point leaves behind (u_max >= u0 once committed)
-  normal_force<D>(p, r_eff, std::fmax(u_max, u0), u1, f1, k1, b);
+  normal_force<D>(p, r_eff, fmax_of(u_max, u0), u1, f1, k1, b);
   const double du = u1 - u0;
   if (std::fabs(du) <= 1e-14 * (1.0 + std::fabs(u0))) return k0;
-  return std::fmax((f1 - f0) / du, 0.0);
+  return fmax_of((f1 - f0) / du, 0.0);
 }
 
 /// One trial increment in the contact frame: end overlap u_n and slip increment dslip (Eq 5),
@@ -251,7 +252,7 @@ inline PlasticIndentationResultT<D> evaluate(const PlasticIndentationParams& p,
   using Tan = typename Dim<D>::Tan;
   PlasticIndentationResultT<D> r;
   normal_force<D>(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
-  r.history.u_max = std::fmax(h.u_max, u_n);
+  r.history.u_max = fmax_of(h.u_max, u_n);
   r.area = r.f_n / (3.0 * p.sigma_y);
   if (!p.frictional() || r.branch == NormalBranch::Open) {
     r.history.f_t = tan_zero<Tan>();
@@ -300,7 +301,7 @@ inline PlasticIndentationResultT<D> evaluate_damped(const PlasticIndentationPara
   using Tan = typename Dim<D>::Tan;
   PlasticIndentationResultT<D> r;
   normal_force<D>(p, r_eff, h.u_max, u_n, r.f_n, r.k_n, r.branch);
-  r.history.u_max = std::fmax(h.u_max, u_n);
+  r.history.u_max = fmax_of(h.u_max, u_n);
   r.area = r.f_n / (3.0 * p.sigma_y);
   if (r.branch == NormalBranch::Open) {
     r.history.f_t = tan_zero<Tan>();
@@ -446,8 +447,8 @@ class PlasticIndentationLawT {
     double f, kn;
     NormalBranch b;
     normal_force<D>(p_, k.r_eff, h.u_max, k.overlap, f, kn, b);
-    const double u_max = p_.reversible ? 0.0 : std::fmax(h.u_max, k.overlap);
-    if (u_max > 0.0) kn = std::fmax(kn, p_.unload_ratio * loading_tangent<D>(p_, k.r_eff, u_max));
+    const double u_max = p_.reversible ? 0.0 : fmax_of(h.u_max, k.overlap);
+    if (u_max > 0.0) kn = fmax_of(kn, p_.unload_ratio * loading_tangent<D>(p_, k.r_eff, u_max));
     StiffnessBound s;
     s.k_n = kn;
     s.k_t = p_.frictional() ? p_.shear_stiffness() * f / (3.0 * p_.sigma_y) : 0.0;
@@ -475,11 +476,11 @@ class PlasticIndentationLawT {
     IterationStiffness s;
     if (r.branch == static_cast<std::uint8_t>(NormalBranch::Plastic)) {
       const double u_sep = separation_overlap<D>(p_, k.r_eff, h.u_max);
-      const double u_from = std::fmax(k.overlap_start, u_sep);
+      const double u_from = fmax_of(k.overlap_start, u_sep);
       if (k.overlap > u_from) {
         const double ksec = normal_secant<D>(p_, k.r_eff, h.u_max, u_from, k.overlap);
         const double kn = loading_tangent<D>(p_, k.r_eff, k.overlap);
-        s.k_n_add = std::fmax(0.0, ksec - kn);
+        s.k_n_add = fmax_of(0.0, ksec - kn);
       }
     }
     double f_spring = r.f_n;  // the contact width comes from the spring force (no dashpot)
@@ -497,7 +498,7 @@ class PlasticIndentationLawT {
   /// contact loses its tangential force.
   static History start_unloading_branch(const History& h, double u) {
     History r = h;
-    r.u_max = std::fmax(u, 0.0);
+    r.u_max = fmax_of(u, 0.0);
     if (u <= 0.0) {
       r.f_t = tan_zero<Tan>();
       r.sliding = 0;
