@@ -169,9 +169,9 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
   m.Sk = voigt_of<D>(s.kinetic_stress());
   s.contacts(cs_);
   const ParticlesT<D>& P = s.particles();
-  auto& formed = formed_;  // (a member: its buckets are reused from sample to sample)
+  auto& formed = formed_;  // (a member: its storage is reused from sample to sample)
   formed.clear();
-  formed.reserve(cs_.size());
+  const auto by_key = [](const auto& e, std::uint64_t k) { return e.first < k; };
   int loaded = 0;
   double sum_fn = 0;
   sys::AffineDeviation dev(r_mean_);
@@ -179,8 +179,9 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
     if (ct.wall >= 0 || !(ct.f_spring > 0.0)) continue;
     const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
     Voigt<D> ef = prev_;  // first seen: the strain at the previous sample
-    if (const auto it = form_.find(key); it != form_.end()) ef = it->second;
-    formed.emplace(key, ef);
+    if (const auto it = std::lower_bound(form_.begin(), form_.end(), key, by_key); it != form_.end() && it->first == key)
+      ef = it->second;
+    formed.emplace_back(key, ef);
     ++loaded;
     sum_fn += ct.f_spring;
     m.sliding += ct.sliding ? 1.0 : 0.0;
@@ -194,6 +195,9 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
     // Eq 16 with the strain accumulated since the contact formed
     dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.r[ct.i] + P.r[ct.j]));
   }
+  // (the contacts come in the table's (i, j) order; sorted in case a table ever is not)
+  if (!std::is_sorted(formed.begin(), formed.end(), [](const auto& a, const auto& b) { return a.first < b.first; }))
+    std::sort(formed.begin(), formed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   form_.swap(formed);
   prev_ = E;
   m.contacts = loaded;

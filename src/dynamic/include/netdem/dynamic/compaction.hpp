@@ -9,7 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "netdem/dynamic/solver.hpp"
@@ -56,7 +56,9 @@ class CompactionMeterT {
   double r_mean_;
   std::vector<ContactInfo> cs_;
   std::vector<std::uint8_t> is_pre_;
-  std::unordered_map<std::uint64_t, Voigt<D>> form_, formed_;  ///< strain at formation: last sample, this one
+  /// The strain at formation of each loaded pair (key i << 32 | j, sorted): the last sample's and
+  /// this one's (storage reused from sample to sample: no allocation once it is large enough).
+  std::vector<std::pair<std::uint64_t, Voigt<D>>> form_, formed_;
   Voigt<D> prev_{};
 };
 
