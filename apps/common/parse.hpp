@@ -85,4 +85,10 @@ CLI::Option* add_list_option(CLI::App& app, const std::string& name, std::vector
       ->default_str(def);
 }
 
+/// The check of a file option: an empty value is refused with one line ("--state: is empty: give
+/// a jammed state file") instead of being read as "not given".
+inline CLI::Validator non_empty_file(const std::string& what) {
+  return CLI::Validator([what](std::string& v) { return v.empty() ? "is empty: give " + what : std::string(); }, "FILE");
+}
+
 }  // namespace netdem::app::netsolve

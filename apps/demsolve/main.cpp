@@ -42,15 +42,19 @@
 #include "netdem/dynamic/compaction.hpp"
 #include "netdem/dynamic/state.hpp"
 #include "compact.hpp"
+#include "parse.hpp"
 #include "protocol.hpp"
 
 using namespace netdem::app::dem;
 using netdem::dem::quote_input;
+using netdem::app::netsolve::non_empty_file;
 
 /// demsolve compress's options (section 4.4.1).
 CLI::App* add_compress(CLI::App& app, CompressArgs& ca, std::string& out_compress) {
   auto* comp = app.add_subcommand("compress", "bi-axial compression test of a sample (section 4.4.1): sigma_xx = p held, top wall at constant strain rate");
-  comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")->required();
+  comp->add_option("--state", ca.state_file, "state file of the sample (e.g. state.txt of a sinter run)")
+      ->required()
+      ->check(non_empty_file("a state file"));
   comp->add_option("--strain-rate", ca.strain_rate, "vertical strain rate [1/s] (eps_zz = 1 - z/z0)")->capture_default_str();
   comp->add_option("--max-strain", ca.max_strain, "final vertical strain")->capture_default_str();
   comp->add_option("--ramp-time", ca.ramp_time, "the top wall's speed rises smoothly over this time [s]")->capture_default_str();
@@ -67,7 +71,7 @@ CLI::App* add_compress(CLI::App& app, CompressArgs& ca, std::string& out_compres
 /// demsolve vibrate's options (section 4.4).
 CLI::App* add_vibrate(CLI::App& app, VibrateArgs& va, std::string& out_vibrate) {
   auto* vib = app.add_subcommand("vibrate", "vibration test (section 4.4): walls removed, vertical vibration on a flat bottom in gravity");
-  vib->add_option("--state", va.state_file, "state file of the sample")->required();
+  vib->add_option("--state", va.state_file, "state file of the sample")->required()->check(non_empty_file("a state file"));
   vib->add_option("--frequency", va.frequency, "[Hz]")->capture_default_str();
   vib->add_option("--amplitude", va.amplitude, "[m]")->capture_default_str();
   vib->add_option("--time", va.time, "vibration time [s]")->capture_default_str();
@@ -112,7 +116,8 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
                             ->capture_default_str();
   dcomp->add_option("--packing", dc.packing_file, "packing CSV (netsolve pack's packing.csv) instead of a new deposition");
   dcomp->add_option("--state", dc.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) "
-                                             "instead of a new deposition: its particles, box, walls and contact histories");
+                                             "instead of a new deposition: its particles, box, walls and contact histories")
+      ->check(non_empty_file("a jammed state file"));
   dcomp->add_flag("--save-state", dc.save_state, "write the final jammed state to jammed.json (netsolve and demsolve compact "
                                                  "--state start from it)");
   dcomp->add_flag("--affine", dc.affine, "every centre follows the macroscopic strain (spins free); default: the peripheral layer only");
@@ -280,7 +285,8 @@ int main(int argc, char** argv) {
 
   auto* sint = app.add_subcommand("sinter", "the long-time sintering protocol of section 4.1 (Fig 7)");
   common(sint);
-  sint->add_option("--state", run.state_file, "start from this state file (e.g. state_prepare.txt of a run)");
+  sint->add_option("--state", run.state_file, "start from this state file (e.g. state_prepare.txt of a run)")
+      ->check(non_empty_file("a state file"));
   sint->add_option("--t-heat", prot.t_heat, "preparation time t_heat [s]")->capture_default_str();
   sint->add_option("--heat-time", prot.heat, "heating time t_sinter - t_heat [s]")->capture_default_str();
   sint->add_option("--sinter-time", prot.sinter, "sintering time t_s [s] (quenched axis)")->capture_default_str();

@@ -471,7 +471,8 @@ CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std
   comp->add_flag("--save-state", ca.save_state, "write the final state: jammed.json (the jammed state netsolve and demsolve compact --state start from) "
                  "and, except with --boundary walls, state.txt (exact; netsolve yield --from-state continues from it)");
   comp->add_option("--state", ca.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) instead of "
-                   "a packing: its disks, box, walls and contact histories");
+                   "a packing: its disks, box, walls and contact histories")
+      ->check(non_empty_file("a jammed state file"));
   comp->add_flag("--verbose", ca.verbose, "print every Newton iteration");
   comp->add_flag("--quiet", ca.quiet, "no progress on stderr");
   comp->add_flag("--allow-unconverged", ra.allow_unconverged,

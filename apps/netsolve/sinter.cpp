@@ -650,7 +650,8 @@ int run_sinter_command(int argc, char** argv) {
   Args a;
   CLI::App app{"netsolve sinter: the staggered quasi-static sintering scheme of Ivannikov et al. in 3D (docs/staggered.md). SI units; "
                "defaults: the Cu benchmark."};
-  auto* o_pk = app.add_option("--packing", a.packing, "3D packing CSV (id,x,y,z,r in metres, as netsolve pack --dim 3 --route green-body writes)");
+  auto* o_pk = app.add_option("--packing", a.packing, "3D packing CSV (id,x,y,z,r in metres, as netsolve pack --dim 3 --route green-body writes)")
+                   ->check(netdem::app::netsolve::non_empty_file("a packing CSV file"));
   auto* o_gen = app.add_option("--generate", a.generate, "make the packing in-process: cu = the green-body route with 805 spheres, "
                                                          "mean diameter 50e-6 m +- 10 % (the default when --packing is not given)")
                     ->check(CLI::IsMember({"cu"}))
@@ -664,7 +665,8 @@ int run_sinter_command(int argc, char** argv) {
   app.add_option("--material", a.material, "cu | ti (built in) | FILE (docs/sintering_pair.md format; needs E and nu)")->capture_default_str();
   app.add_option("--set", a.set, "override a material key, KEY=VALUE (repeatable), e.g. --set D_vol0=1.9e-7");
   auto* o_T = app.add_option("--temperature", a.temperature, "constant temperature [K]")->capture_default_str();
-  auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows");
+  auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows")
+                  ->check(netdem::app::netsolve::non_empty_file("a temperature profile CSV file"));
   o_T->excludes(o_p);
   app.add_option("--time", a.t_end, "end time [s]")->capture_default_str();
   app.add_option("--strategy", a.strategy, "time marching: 1 (one global dt, steps rejected) | 2 (global dt, per-contact sub-steps)")
@@ -685,7 +687,8 @@ int run_sinter_command(int argc, char** argv) {
       ->check(CLI::IsMember({"box", "spheres"}))
       ->capture_default_str();
   app.add_option("--snapshots", a.snapshots, "particles_K.vtp / bonds_K.vtp at N equally spaced times, plus the last")->capture_default_str();
-  app.add_option("--restart", a.restart, "continue from a state.txt of an earlier run to --time, into a new --out folder");
+  app.add_option("--restart", a.restart, "continue from a state.txt of an earlier run to --time, into a new --out folder")
+      ->check(netdem::app::netsolve::non_empty_file("a state.txt of an earlier run"));
   netdem::app::netsolve::add_list_option(app, "--checkpoints", a.checkpoints,
                                          "comma list of increasing times [s] at which the steps end and state_K.txt is written (K = 1, 2, ...)");
   app.add_option("--max-steps", a.max_steps, "stop (incomplete, exit 3) after this many steps")->capture_default_str();

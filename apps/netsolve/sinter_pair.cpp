@@ -321,7 +321,8 @@ int run_sinter_pair_command(int argc, char** argv) {
   auto* o_rr = netdem::app::netsolve::add_list_option(app, "--radii", a.radii, "RA,RB radii of the two particles [m]");
   o_r->excludes(o_rr);
   auto* o_T = app.add_option("--temperature", a.temperature, "constant temperature [K]")->capture_default_str();
-  auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows");
+  auto* o_p = app.add_option("--profile", a.profile, "temperature profile: CSV with header time,T [s, K], linear between rows")
+                  ->check(netdem::app::netsolve::non_empty_file("a temperature profile CSV file"));
   o_T->excludes(o_p);
   app.add_option("--time", a.t_end, "end time [s]")->capture_default_str();
   app.add_option("--integrator", a.integrator, "dp45 (default) | rk4 (dt = c x/|dx/dt|) | cvode (BDF) | arkode (ERKStep DP5(4))")

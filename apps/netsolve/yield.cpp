@@ -55,6 +55,7 @@ int run_yield_command(int argc, char** argv);
 
 namespace {
 
+using netdem::app::netsolve::non_empty_file;
 using netdem::app::netsolve::parse_int;
 using netdem::app::netsolve::yield::Analytic;
 using netdem::app::netsolve::yield::from_json;
@@ -647,10 +648,11 @@ int run_yield_command(int argc, char** argv) {
         ->check(netdem::app::netsolve::seed_validator())
         ->capture_default_str();
     app.add_option("--packing", a.packing_file, "packing CSV instead of a new deposition")
-        ->check(CLI::Validator([](std::string& v) { return v.empty() ? std::string("is empty: give a packing CSV file") : std::string(); }, "FILE"));
+        ->check(non_empty_file("a packing CSV file"));
     app.add_option("--from-state", a.from_state,
                    "start from a compacted state (state.txt of `netsolve compact --save-state`) instead of precompacting; "
-                   "its strain must lie along --precompact");
+                   "its strain must lie along --precompact")
+        ->check(non_empty_file("a state.txt of netsolve compact --save-state"));
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
     app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();

@@ -123,4 +123,18 @@ if start_long "$d" "$ds" prepare --dim 3 --n 300 --time 50 --quiet --out "$d"; t
 else
   fail=$((fail + 1))
 fi
+
+# An empty file option is refused with one line naming it (it was read as "not given": the run
+# went on from the defaults), and no folder is made.
+tool="$ns"
+check_bad empty_compact_state "--state" compact --state ''
+check_bad empty_yield_from_state "--from-state" yield --from-state ''
+check_bad empty_sinter_restart "--restart" sinter --restart ''
+check_bad empty_sinter_packing "--packing" sinter --packing ''
+check_bad empty_sinter_profile "--profile" sinter --profile ''
+check_bad empty_pair_profile "--profile" sinter-pair --profile ''
+tool="$ds"
+check_bad empty_dem_compact_state "--state" compact --state ''
+check_bad empty_dem_sinter_state "--state" sinter --state ''
+check_bad empty_dem_compress_state "--state" compress --state ''
 finish
