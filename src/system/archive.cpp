@@ -1,11 +1,14 @@
 // The state archive: fields checked at the door (archive.hpp).
 #include "netdem/system/archive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -180,14 +183,37 @@ Json parse_archive(std::string_view text, const std::string& file) {
       --depth;
     }
   }
+  // a key twice in one object: nlohmann keeps the last silently, so two writers' values would mix
+  std::vector<std::vector<std::string>> keys;  // the keys of each open object (a few each)
+  std::string twice;
+  const auto check_keys = [&](int, Json::parse_event_t ev, Json& parsed) {
+    if (ev == Json::parse_event_t::object_start) {
+      keys.emplace_back();
+    } else if (ev == Json::parse_event_t::object_end) {
+      keys.pop_back();
+    } else if (ev == Json::parse_event_t::key && !keys.empty()) {
+      const auto& k = parsed.get_ref<const std::string&>();
+      auto& seen = keys.back();
+      if (std::find(seen.begin(), seen.end(), k) != seen.end()) {
+        if (twice.empty()) twice = k;
+      } else {
+        seen.push_back(k);
+      }
+    }
+    return true;
+  };
+  Json j;
   try {
-    return Json::parse(text);
+    j = Json::parse(text, check_keys);
   } catch (const Json::exception& e) {
     // nlohmann's parse_error carries the byte; out_of_range (a number beyond double) too, in its text
     const auto* pe = dynamic_cast<const Json::parse_error*>(&e);
     throw FieldError(file, "", pe ? fmt::format("not a JSON state archive (syntax error at byte {})", pe->byte)
                                   : "not a JSON state archive (a number out of range)");
   }
+  if (!twice.empty())
+    throw FieldError(file, "", fmt::format("not a state archive (the key \"{}\" appears twice in one object)", quote(twice)));
+  return j;
 }
 
 int check_header(const Field& root, std::string_view kind, int max_version) {

@@ -341,6 +341,15 @@ TEST(JammedState, BadFilesAreRefusedWithOneLine) {
   std::string text = sys::format_jammed_state(tiny());
   text.replace(text.find("\"x\":[1") + 5, 1, "NaN");
   EXPECT_THROW(sys::parse_jammed_state<2>(text, "nan.json"), std::invalid_argument);
+  // a key twice in one object (JSON allows it, the reader would keep the last): refused, naming it
+  std::string twice = sys::format_jammed_state(tiny());
+  twice.insert(twice.find("\"dim\":") + 1, "dim\":3,\"");
+  try {
+    sys::parse_jammed_state<2>(twice, "twice.json");
+    ADD_FAILURE() << "accepted a key twice: " << twice.substr(0, 120);
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("\"dim\" appears twice"), std::string::npos) << e.what();
+  }
   // the writer refuses what the reader would
   Jammed j = tiny();
   j.pair_j = {2};
