@@ -84,6 +84,18 @@ ClosedForm two_disks_closed_form(double E11) {
   return {std::sqrt(72.0 * c), r1 - c / r1, L0 * std::exp(E11) - (r2 - c / r2)};
 }
 
+// The two disks' options: walls, sticking, Eq 2 from u = 0 (no first-touch chord), tight tolerances.
+qs::SolverOptions two_disk_options() {
+  qs::SolverOptions o;
+  o.mode = qs::BoundaryMode::Walls;
+  o.law.mu = kInf;
+  o.law.first_touch = 0.0;
+  o.viscosity = 0.1;
+  o.residual_tol = 1e-9;
+  o.linear_tolerance = 1e-10;
+  return o;
+}
+
 // Three unit disks on a line, the middle one 0.01 R off it (the buckling chain).
 packing::Packing buckling_chain() {
   packing::Packing pk;
@@ -105,13 +117,7 @@ packing::Packing buckling_chain() {
 TEST(Equilibrium, TwoDisksBetweenWallsMatchClosedFormForEveryDrag) {
   const double E11 = -0.02;
   const auto [F, x1, x2] = two_disks_closed_form(E11);
-  qs::SolverOptions base;
-  base.mode = qs::BoundaryMode::Walls;
-  base.law.mu = kInf;
-  base.law.first_touch = 0.0;
-  base.viscosity = 0.1;
-  base.residual_tol = 1e-9;
-  base.linear_tolerance = 1e-10;
+  qs::SolverOptions base = two_disk_options();
   for (double scale : {0.1, 1.0, 10.0}) {
     const WallCase w = run_walls(pseudo_transient(base, scale), E11, 4);
     std::printf("pseudo-transient, drag x %g: F = %.12f (closed form %.12f), x1 %.3e, x2 %.3e off\n", scale, w.force, F,
@@ -161,14 +167,7 @@ TEST(Equilibrium, CutIncrementsEndOnTheSameEquilibrium) {
 // is the closed form's. The unaccepted sub-increments are counted. With one cut the last half is
 // not accepted either, and neither is the increment.
 TEST(Equilibrium, CutIncrementIsAcceptedOnItsEndStateAndCountsItsUnacceptedSubsteps) {
-  qs::SolverOptions so;
-  so.mode = qs::BoundaryMode::Walls;
-  so.law.mu = kInf;
-  so.law.first_touch = 0.0;
-  so.viscosity = 0.1;
-  so.residual_tol = 1e-9;
-  so.linear_tolerance = 1e-10;
-  so = pseudo_transient(so, 1.0);
+  qs::SolverOptions so = pseudo_transient(two_disk_options(), 1.0);
   so.max_newton = 6;
   so.max_cuts = 2;
   const double E11 = -0.05;
