@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A/B of the explicit DEM between two builds, interleaved, in CPU time (no LAMMPS needed).
 
-    /usr/bin/python3 bench/dem_ab_cpu.py BUILD_A BUILD_B [--reps 8] [--cache DIR] [--only WORD,...]
+    /usr/bin/python3 bench/dem_ab_cpu.py BUILD_A BUILD_B [--reps 8] [--cache DIR] [--only WORD,...] [--big]
 
 Runs, for each repetition, every case with both builds, the order alternating (A B, B A, ...) so
 that the slow phases of a shared machine fall on both: `bench_dem` (bench/bench_dem.cpp: 2D
@@ -28,6 +28,8 @@ def main():
     ap.add_argument("--reps", type=int, default=8)
     ap.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "dem-ab-cache"))
     ap.add_argument("--only", default="", help="comma list: run the cases whose name contains one of them")
+    ap.add_argument("--big", action="store_true",
+                    help="add bench 3D N=1e5 linear (its packing takes about 9 min of CPU to prepare, once)")
     a = ap.parse_args()
     builds = {"A": a.a, "B": a.b}
     work = tempfile.mkdtemp(prefix="dem-ab-")
@@ -36,6 +38,9 @@ def main():
              ("bench 2D N=3000 full", ["--n", "3000", "--models", "full", "--psteps", "3e7", "--warmup", "1000"]),
              ("bench 3D N=1e4 linear",
               ["--dim", "3", "--n", "10000", "--models", "linear", "--psteps", "2e7", "--warmup", "300"])]
+    if a.big:
+        bench.append(("bench 3D N=1e5 linear",
+                      ["--dim", "3", "--n", "100000", "--models", "linear", "--psteps", "2e7", "--warmup", "300"]))
     demsolve = [("demsolve compact 2D plastic", ["compact", "--width", "10", "--to-density", "0.82"]),
                 ("demsolve compact 3D plastic",
                  ["compact", "--dim", "3", "--boundary", "walls", "--width", "4", "--to-density", "0.6"])]
