@@ -196,8 +196,8 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
     dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.r[ct.i] + P.r[ct.j]));
   }
   // (the contacts come in the table's (i, j) order; sorted in case a table ever is not)
-  if (!std::is_sorted(formed.begin(), formed.end(), [](const auto& a, const auto& b) { return a.first < b.first; }))
-    std::sort(formed.begin(), formed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto by_first = [](const auto& a, const auto& b) { return a.first < b.first; };
+  if (!std::is_sorted(formed.begin(), formed.end(), by_first)) std::sort(formed.begin(), formed.end(), by_first);
   form_.swap(formed);
   prev_ = E;
   m.contacts = loaded;

@@ -150,7 +150,7 @@ SolverState DynamicSolverT<D>::state() const {
     LawHistories<H>& h = st.histories.template emplace<LawHistories<H>>();
     for (std::size_t k = 0; k < rows_.pairs(); ++k)
       if (law.has_history(t.pair[k])) {
-        st.pair_key.push_back((static_cast<std::uint64_t>(rows_.pi[k]) << 32) | static_cast<std::uint32_t>(rows_.pj[k]));
+        st.pair_key.push_back(sys::PairRows<D>::key(rows_.pi[k], rows_.pj[k]));
         h.pair.push_back(t.pair[k]);
       }
     h.wall = t.wall;

@@ -90,6 +90,12 @@ class PairRows {
   /// Per new row: the old row it continues, -1 for a new pair (the last find()).
   const std::vector<int>& carried_from() const { return from_; }
 
+  /// The key of pair (i, j): i in the high half, so that keys sort as (i, j) (the DEM's state
+  /// names its rows by it).
+  static std::uint64_t key(int i, int j) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) | static_cast<std::uint32_t>(j);
+  }
+
  private:
   /// found_ = every pair within r_i + r_j + skin over the cell grid, sorted.
   void find_pairs(const ParticleSet<D>& ps, double skin, double r_max) {
@@ -121,11 +127,6 @@ class PairRows {
       });
     }
     std::sort(found_.begin(), found_.end());
-  }
-
-  /// The sort key of pair (i, j): i in the high half, so that keys sort as (i, j).
-  static std::uint64_t key(int i, int j) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) | static_cast<std::uint32_t>(j);
   }
 
   packing::CellGridT<D> grid_;                ///< the neighbour search (storage reused across finds)
