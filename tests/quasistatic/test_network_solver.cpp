@@ -395,7 +395,8 @@ TEST(NetworkSolver, SmallSlideStiffnessConvergesFaster) {
 // the same equilibrium (to the tolerance), with fewer factorisations than Newton iterations.
 TEST(NetworkSolver, ChordStepsReachTheSameEquilibrium) {
   auto [pk, so, D] = sticking_newton_case();
-  auto run = [&](int chord, double linear_tol) {
+  // (init-captures: clang 14, the sanitizer build's compiler, cannot capture structured bindings)
+  auto run = [&pk = pk, &so = so, D = D](int chord, double linear_tol) {
     qs::SolverOptions o = so;
     o.chord_steps = chord;
     o.linear_tolerance = linear_tol;
@@ -435,7 +436,7 @@ TEST(NetworkSolver, ThreadedForceEvaluationIsBitIdentical) {
   so.viscosity = 0.01;
   so.residual_tol = 1e-3;
   so.max_residual_tol = kInf;
-  auto run = [&](int threads) {
+  auto run = [&pk = pk, &so = so, D = D](int threads) {
     qs::SolverOptions o = so;
     o.threads = threads;
     return compact(pk, o, qs::StrainPath::hydrostatic(), D, 10).m;

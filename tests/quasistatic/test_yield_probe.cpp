@@ -213,7 +213,8 @@ TEST(YieldProbe, AffineProbeAlongLoadingDirectionYieldsAtLoadingPoint) {
   const auto [pk, so, co] = affine_case();
   qs::StateMeasures loaded;
   // compact, remember the loaded state, unload (each probe needs its own copy: netsolve forks)
-  auto prepare = [&](qs::NetworkSolver& s) {
+  // (init-captures: clang 14, the sanitizer build's compiler, cannot capture structured bindings)
+  auto prepare = [&co = co, &so = so, &loaded](qs::NetworkSolver& s) {
     qs::run_compaction(s, co, [](const qs::CompactionRow&) {});
     loaded = s.measures();
     return qs::unload(s, co.path.rate(), 1.0, so.law.unload_ratio);
