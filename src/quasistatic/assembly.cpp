@@ -13,8 +13,8 @@ namespace netdem::qs {
 
 // Sparsity pattern of the free-DOF matrix and the slots of the pairs (pair_pattern.hpp): diagonal
 // kN x kN blocks + one block pair per neighbour pair, columns in DOF order; M shares it.
-template <int D>
-void NetworkSolverT<D>::Impl::build_pattern() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::build_pattern() {
   pattern.build(K, n, kN, dof, nfree, pi.size(), [&](std::size_t k) { return std::pair<int, int>(pi[k], pj[k]); });
   M = K;
   pattern_changed = true;
@@ -22,8 +22,8 @@ void NetworkSolverT<D>::Impl::build_pattern() {
 
 // Trial evaluation of every pair from the committed state and the increment du, with assembly:
 // fills f (kN n), pf, the trial results and the values of K and M.
-template <int D>
-void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::assemble(bool& any_nonsymmetric) {
   std::fill(f.begin(), f.end(), 0.0);
   pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
@@ -82,8 +82,8 @@ void NetworkSolverT<D>::Impl::assemble(bool& any_nonsymmetric) {
 // Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix, from
 // the law's iteration stiffness (law.hpp); returns the normal stiffness of the symmetric matrix M
 // and its tangential stiffness in k_t.
-template <int D>
-double NetworkSolverT<D>::Impl::iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt,
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::iteration_stiffness(std::size_t k, const PairVec& bn, const SlipGradient& bt,
                                                     Element& e, double& k_t) {
   const ct::IterationStiffness is = law.iteration_stiffness(hist[k], e.kin, e.law);
   const double kn_extra = is.k_n_add;
@@ -107,36 +107,29 @@ double NetworkSolverT<D>::Impl::iteration_stiffness(std::size_t k, const PairVec
 }
 
 // Adds pair k's iteration matrix to K and its symmetric slip-status tangent to M.
-template <int D>
-void NetworkSolverT<D>::Impl::scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt,
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::scatter(std::size_t k, const Element& e, const PairVec& bn, const SlipGradient& bt,
                                       double kn_sym, double k_t) {
   const double kt = k_t;
   double* Kv = K.valuePtr();
   double* Mv = M.valuePtr();
-  const int* pk = pattern.slots(k);
   if constexpr (D == 2) {
-    for (int b = 0; b < 6; ++b)
-      for (int a = 0; a < 6; ++a) {
-        const int q = pk[6 * b + a];
-        if (q < 0) continue;
-        Kv[q] += e.stiffness(a, b);
-        Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
-      }
+    pattern.for_each_entry<kP>(k, [&](int q, int a, int b) {
+      Kv[q] += e.stiffness(a, b);
+      Mv[q] += kn_sym * bn(a) * bn(b) + kt * bt(a) * bt(b);
+    });
   } else {
     const PairMat Ms = kn_sym * bn * bn.transpose() + kt * bt.transpose() * bt;
-    for (int b = 0; b < kP; ++b)
-      for (int a = 0; a < kP; ++a) {
-        const int q = pk[kP * b + a];
-        if (q < 0) continue;
-        Kv[q] += e.stiffness(a, b);
-        Mv[q] += Ms(a, b);
-      }
+    pattern.for_each_entry<kP>(k, [&](int q, int a, int b) {
+      Kv[q] += e.stiffness(a, b);
+      Mv[q] += Ms(a, b);
+    });
   }
 }
 
 /// Pair k has never touched and is apart: zero trial state and force.
-template <int D>
-void NetworkSolverT<D>::Impl::set_apart(std::size_t k) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::set_apart(std::size_t k) {
   trial[k] = Response{};
   trial_slip[k] = ct::tan_zero<Tan>();
   std::fill_n(&pf[kP * k], kP, 0.0);
@@ -147,8 +140,8 @@ void NetworkSolverT<D>::Impl::set_apart(std::size_t k) {
 /// Trial state and force (pf, no tangent) of pair k at the current du; e is scratch. A pair
 /// that has never touched and is clearly apart costs a squared distance (its zero trial state
 /// and force are written once, then flagged in `apart`).
-template <int D>
-void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::pair_forces(std::size_t k, Element& e) {
   const int i = pi[k], j = pj[k];
   const Vec xi = moved(i), xj = moved_j(k);
   if (!law.has_history(hist[k])) {
@@ -174,8 +167,8 @@ void NetworkSolverT<D>::Impl::pair_forces(std::size_t k, Element& e) {
 // Forces only, on opt.threads threads: the pairs (in parallel), then f gathered per particle
 // over its pairs in increasing pair order, i.e. the same sums in the same order as the
 // assembling loop (bit-identical results for any number of threads).
-template <int D>
-void NetworkSolverT<D>::Impl::evaluate_forces() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::evaluate_forces() {
   pf.resize(kP * pi.size());
   apart.resize(pi.size(), 0);
   pw.resize(pi.size(), 0.0);
@@ -207,28 +200,24 @@ void NetworkSolverT<D>::Impl::evaluate_forces() {
 // Open/closed cycling: a pair that closed and opened again within this increment keeps the
 // normal stiffness it last had while closed, so that the Newton step lands near touch instead
 // of jumping across it (iteration matrix only).
-template <int D>
-void NetworkSolverT<D>::Impl::open_contact_stiffness(std::size_t k, const Geometry& g1) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::open_contact_stiffness(std::size_t k, const Geometry& g1) {
   if (!last_open[k]) open_flips[k] = static_cast<std::uint8_t>(std::min(open_flips[k] + 1, 100));
   last_open[k] = 1;
   if (open_flips[k] < 2 || last_kn[k] <= 0.0) return;
   const double kn = last_kn[k];
   const PairVec bn = ct::normal_gradient(g1);
-  const int* pk = pattern.slots(k);
-  for (int b = 0; b < kP; ++b)
-    for (int a = 0; a < kP; ++a) {
-      const int q = pk[kP * b + a];
-      if (q < 0) continue;
-      const double v = kn * bn(a) * bn(b);
-      K.valuePtr()[q] += v;
-      M.valuePtr()[q] += v;
-    }
+  pattern.for_each_entry<kP>(k, [&](int q, int a, int b) {
+    const double v = kn * bn(a) * bn(b);
+    K.valuePtr()[q] += v;
+    M.valuePtr()[q] += v;
+  });
 }
 
 /// Re-evaluates (forces only) the pairs of the given particles after their du changed, keeping
 /// f, pf and the trial state consistent with du without a full evaluation.
-template <int D>
-void NetworkSolverT<D>::Impl::refresh_particles(const std::vector<int>& group) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::refresh_particles(const std::vector<int>& group) {
   Element e;
   for (const int p : group)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) {
@@ -258,8 +247,8 @@ void NetworkSolverT<D>::Impl::refresh_particles(const std::vector<int>& group) {
 }
 
 /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).
-template <int D>
-double NetworkSolverT<D>::Impl::mean_diagonal() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::mean_diagonal() const {
   double sum = 0.0, rot = 0.0;
   int c = 0, cr = 0;
   for (int p = 0; p < n; ++p)
@@ -275,12 +264,12 @@ double NetworkSolverT<D>::Impl::mean_diagonal() const {
       }
   if (c > 0 && sum > 0.0) return sum / c;
   if (cr > 0 && rot > 0.0) return rot / cr / (r_mean * r_mean);
-  return opt.law.sigma_y;
+  return law.reference_stiffness(r_mean);
 }
 
 /// Adds the viscous drag and the tiny regularisation to the diagonal of K and M.
-template <int D>
-void NetworkSolverT<D>::Impl::regularise() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::regularise() {
   const double ref = mean_diagonal();
   const double eps = opt.regularisation * ref;
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
@@ -295,5 +284,7 @@ void NetworkSolverT<D>::Impl::regularise() {
 
 template struct NetworkSolverT<2>::Impl;
 template struct NetworkSolverT<3>::Impl;
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

@@ -27,8 +27,8 @@ void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free
 // part (scaled; rotations: the previous rotation increment, scaled) on an unchanged strain path,
 // else the affine motion alone. The non-affine part is du_prev minus the previous affine motion
 // at the previous increment's start positions, so the predictor does not depend on the origin.
-template <int D>
-void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::prescribe(const Mat& dE) {
   const Mat A = small_expm<D>(dE) - Mat::Identity();
   Fbox_trial = small_expm<D>(dE) * Fbox;  // the walls of BoundaryMode::Walls at the end of the increment
   du_aff.assign(kN * n, 0.0);
@@ -64,8 +64,8 @@ void NetworkSolverT<D>::Impl::prescribe(const Mat& dE) {
 
 /// loaded[p] = 1 if particle p has a loaded contact (a pair or, in walls mode, a wall) in the
 /// committed state.
-template <int D>
-void NetworkSolverT<D>::Impl::loaded_particle(std::vector<std::uint8_t>& loaded) const {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::loaded_particle(std::vector<std::uint8_t>& loaded) const {
   loaded.assign(n, 0);
   for (std::size_t k = 0; k < pi.size(); ++k)
     if (fn_c[k] > 0.0) loaded[pi[k]] = loaded[pj[k]] = 1;
@@ -73,8 +73,9 @@ void NetworkSolverT<D>::Impl::loaded_particle(std::vector<std::uint8_t>& loaded)
     if (wfn_c[s] > 0.0) loaded[s / 4] = 1;
 }
 
-template <int D>
-void NetworkSolverT<D>::set_reversible_normal(bool reversible) {
+template <int D, class L>
+void NetworkSolverT<D, L>::set_reversible_normal(bool reversible) {
+  static_assert(kPlastic, "the section 3.4 unloading branch is the plastic-indentation law's");
   auto& s = *impl_;
   if (!reversible && s.opt.law.reversible) {
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
@@ -83,12 +84,16 @@ void NetworkSolverT<D>::set_reversible_normal(bool reversible) {
       s.hist[k] = Impl::Law::start_unloading_branch(s.hist[k], u);
     }
   }
-  SolverOptions o = s.opt;
+  Options o = s.opt;
   o.law.reversible = reversible;
   s.set_options(o);
 }
 
 template class NetworkSolverT<2>;
 template class NetworkSolverT<3>;
+// the linear law: the Impl's members only (set_reversible_normal is the plastic law's, and clang 14
+// instantiates constrained members too)
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

@@ -6,10 +6,10 @@
 
 namespace netdem::qs {
 
-template <int D>
-void ContactTableT<D>::rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max,
+template <int D, class L>
+void ContactTableT<D, L>::rebuild(const L& law, const sys::ParticleSet<D>& ps, double skin, double r_max,
                                const Mat& E, const Mat& Fbox, const packing::PeriodicCellT<D>* cell) {
-  sys::ContactTable<typename LawT<D>::History, D>::rebuild(law, ps, skin, r_max, Fbox, cell);
+  sys::ContactTable<typename L::History, D>::rebuild(law, ps, skin, r_max, Fbox, cell);
   PairAuxT<D> fresh;
   fresh.E_form = E;
   this->carry(aux, fresh);
@@ -18,8 +18,8 @@ void ContactTableT<D>::rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps
   this->carry(slide_c, std::uint8_t{0});
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::build_neighbours() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::build_neighbours() {
   const auto t0 = std::chrono::steady_clock::now();
   if (periodic()) {
     const packing::PeriodicCellT<D> cell = cell0.deformed(Fbox);
@@ -32,9 +32,13 @@ void NetworkSolverT<D>::Impl::build_neighbours() {
   tim.neighbours += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-template struct ContactTableT<2>;
-template struct ContactTableT<3>;
+template struct ContactTableT<2, ct::PlasticIndentationLawT<2>>;
+template struct ContactTableT<3, ct::PlasticIndentationLawT<3>>;
+template struct ContactTableT<2, LinearLawT<2>>;
+template struct ContactTableT<3, LinearLawT<3>>;
 template struct NetworkSolverT<2>::Impl;
 template struct NetworkSolverT<3>::Impl;
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

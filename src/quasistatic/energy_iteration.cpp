@@ -33,8 +33,8 @@ using Clock = std::chrono::steady_clock;
 
 /// The contact energy of the trial state: the pairs' normal_work (pw, filled with the forces),
 /// then the wall contacts' (fixed order: reproducible to the bit).
-template <int D>
-double NetworkSolverT<D>::Impl::energy() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::energy() const {
   double w = 0.0;
   for (double x : pw) w += x;
   if constexpr (D == 2)
@@ -44,18 +44,22 @@ double NetworkSolverT<D>::Impl::energy() const {
 }
 
 /// Pair k's tangential spring stiffness and limit frozen at the normal force f_n of the iterate.
-template <int D>
-void NetworkSolverT<D>::Impl::freeze_tangential(std::size_t k, double f_n) {
-  const auto [kt, limit] = law.tangential_frozen(f_n);
-  t_kt[k] = kt;
-  t_limit[k] = limit;
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::freeze_tangential(std::size_t k, double f_n) {
+  if constexpr (ct::kHasPotential<Law>) {
+    const auto [kt, limit] = law.tangential_frozen(f_n);
+    t_kt[k] = kt;
+    t_limit[k] = limit;
+  } else {
+    (void)k, (void)f_n;
+  }
 }
 
 /// After a rebuild within a step (friction): the frozen stiffness and limit of the new rows, from
 /// the normal forces at the iterate (du_ref); returns the energy there (the trial state is left to
 /// the caller's evaluation).
-template <int D>
-double NetworkSolverT<D>::Impl::refreeze_at_iterate() {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::refreeze_at_iterate() {
   std::swap(du, du_ref);
   t_kt.assign(pi.size(), 0.0);
   t_limit.assign(pi.size(), 0.0);
@@ -70,8 +74,8 @@ double NetworkSolverT<D>::Impl::refreeze_at_iterate() {
 
 /// Keeps the assembled diagonal of M (with the tiny regularisation) so that shifts can be changed
 /// without assembling again.
-template <int D>
-void NetworkSolverT<D>::Impl::keep_diagonal() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::keep_diagonal() {
   const double eps = opt.regularisation * mean_diagonal();
   mdiag.assign(static_cast<std::size_t>(nfree), 0.0);
   for (int p = 0; p < n; ++p)
@@ -82,8 +86,8 @@ void NetworkSolverT<D>::Impl::keep_diagonal() {
 }
 
 /// M's diagonal = the kept one + shift W.
-template <int D>
-void NetworkSolverT<D>::Impl::shift_matrix(double shift) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::shift_matrix(double shift) {
   for (int p = 0; p < n; ++p)
     for (int a = 0; a < kN; ++a)
       if (const int d = dof[kN * p + a]; d >= 0)
@@ -93,8 +97,8 @@ void NetworkSolverT<D>::Impl::shift_matrix(double shift) {
 
 /// The uniform factor (<= 1) that keeps every particle's translation in sol within max_step mean
 /// radii (and its rotation within max_rotation_step).
-template <int D>
-double NetworkSolverT<D>::Impl::step_scale() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::step_scale() const {
   double s = 1.0;
   for (int p = 0; p < n; ++p) {
     double t2 = 0.0, r2 = 0.0;
@@ -108,8 +112,8 @@ double NetworkSolverT<D>::Impl::step_scale() const {
 }
 
 /// du += a sol on the free DOFs.
-template <int D>
-void NetworkSolverT<D>::Impl::add_step(double a) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::add_step(double a) {
   for (int p = 0; p < n; ++p)
     for (int c = 0; c < kN; ++c)
       if (const int d = dof[kN * p + c]; d >= 0) du[kN * p + c] += a * sol(d);
@@ -117,8 +121,8 @@ void NetworkSolverT<D>::Impl::add_step(double a) {
 
 /// Whether the trial state (x + du, the trial box) has moved so far from the positions of the last
 /// neighbour rebuild that a pair outside the table could touch (the table's own rule).
-template <int D>
-bool NetworkSolverT<D>::Impl::trial_needs_rebuild() {
+template <int D, class L>
+bool NetworkSolverT<D, L>::Impl::trial_needs_rebuild() {
   ps_trial.pos = ps.pos;
   if (ps_trial.r.size() != ps.r.size()) ps_trial.r = ps.r;  // the radii do not change
   for (int p = 0; p < n; ++p)
@@ -129,8 +133,8 @@ bool NetworkSolverT<D>::Impl::trial_needs_rebuild() {
 /// A rebuild within the increment: the rows found at the trial positions and box (their committed
 /// history and data carried, new rows fresh), then the per-pair data of the increment for them.
 /// A frictionless rearrangement can carry a particle farther than the skin in one increment.
-template <int D>
-void NetworkSolverT<D>::Impl::rebuild_at_trial() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::rebuild_at_trial() {
   std::swap(ps.pos, ps_trial.pos);  // ps_trial holds x + du (trial_needs_rebuild)
   const Mat F = Fbox;
   Fbox = Fbox_trial;
@@ -140,8 +144,8 @@ void NetworkSolverT<D>::Impl::rebuild_at_trial() {
   begin_pairs();
 }
 
-template <int D>
-IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
+template <int D, class L>
+IncrementReport NetworkSolverT<D, L>::Impl::attempt_energy(const Mat& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
   start_attempt(dE, rep);  // the affine predictor (prescribe)
@@ -169,7 +173,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
   // no load-bearing network the law resolves, and the residual is measured against it instead of
   // a mean contact force that tends to zero (an unjammed state's equilibrium is force-free)
   const double r_star = 0.5 * r_mean;
-  const double f_touch = ct::loading_force<D>(opt.law, r_star, ct::first_touch_overlap(opt.law, r_star));
+  const double f_touch = law.first_touch_force(r_star);
   for (int it = 0;; ++it) {
     if (!assembled) {
       const auto ta = Clock::now();
@@ -185,7 +189,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
     }
     du_ref = du;  // the step's drag is zero at the iterate: the residual is the undragged one
     fbar = mean_normal_force();
-    if (fbar <= 0.0) fbar = opt.law.sigma_y * r_mean * 1e-6;
+    if (fbar <= 0.0) fbar = law.reference_force(r_mean) * 1e-6;
     const bool below_touch = fbar < f_touch;
     fbar = std::max(fbar, f_touch);
     double res_max = 0.0;
@@ -288,5 +292,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt_energy(const Mat& dE) {
 
 template struct NetworkSolverT<2>::Impl;
 template struct NetworkSolverT<3>::Impl;
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

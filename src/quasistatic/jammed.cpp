@@ -6,9 +6,10 @@
 
 namespace netdem::qs {
 
-template <int D>
-NetworkSolverT<D>::NetworkSolverT(const sys::JammedStateT<D>& j, const SolverOptions& options)
+template <int D, class L>
+NetworkSolverT<D, L>::NetworkSolverT(const sys::JammedStateT<D>& j, const Options& options)
     : NetworkSolverT((j.validate(), j.packing()), options) {  // the particles in the box, fresh rows
+  static_assert(kPlastic, "the jammed state is the plastic-indentation law's");
   auto& s = *impl_;
   if (!j.wall_particle.empty() && !s.walls())
     throw std::invalid_argument("network solver: the jammed state has wall contacts; its boundary mode has no walls");
@@ -47,8 +48,8 @@ NetworkSolverT<D>::NetworkSolverT(const sys::JammedStateT<D>& j, const SolverOpt
 namespace {
 
 /// The committed state as a jammed state, histories as committed.
-template <int D>
-sys::JammedStateT<D> raw_jammed(const typename NetworkSolverT<D>::Impl& s) {
+template <int D, class L>
+sys::JammedStateT<D> raw_jammed(const typename NetworkSolverT<D, L>::Impl& s) {
   for (int r = 0; r < D; ++r)
     for (int c = 0; c < D; ++c)
       if (r != c && s.Fbox(r, c) != 0.0)
@@ -88,11 +89,12 @@ sys::JammedStateT<D> raw_jammed(const typename NetworkSolverT<D>::Impl& s) {
 /// At rest: the histories as the law leaves them after one more evaluation without an increment
 /// (a contact that slid in the last increment holds now: its sliding flag is 0), as the DEM's
 /// jammed_state() (the same state read by either solver is then a fixed point of it).
-template <int D>
-sys::JammedStateT<D> NetworkSolverT<D>::jammed_state() const {
+template <int D, class L>
+sys::JammedStateT<D> NetworkSolverT<D, L>::jammed_state() const {
+  static_assert(kPlastic, "the jammed state is the plastic-indentation law's");
   if (impl_->periodic()) throw std::invalid_argument("jammed state: a periodic cell is not a jammed state's box (not yet)");
-  const NetworkSolverT rest(raw_jammed<D>(*impl_), impl_->opt);
-  return raw_jammed<D>(*rest.impl_);
+  const NetworkSolverT rest(raw_jammed<D, L>(*impl_), impl_->opt);
+  return raw_jammed<D, L>(*rest.impl_);
 }
 
 template NetworkSolverT<2>::NetworkSolverT(const sys::JammedStateT<2>&, const SolverOptions&);

@@ -16,8 +16,8 @@
 
 namespace netdem::qs {
 
-template <int D>
-StateMeasures NetworkSolverT<D>::measures() const
+template <int D, class L>
+StateMeasures NetworkSolverT<D, L>::measures() const
   requires(D == 2)
 {
   const auto& s = *impl_;
@@ -114,8 +114,8 @@ StateMeasures NetworkSolverT<D>::measures() const
     for (std::size_t k = 0; k < s.pi.size(); ++k) {
       const int i = s.pi[k], j = s.pj[k];
       const Eigen::Vector2d d = s.at_j(k) - s.at(i);
-      const double L = std::hypot(d.x(), d.y());
-      if (L <= (s.ps.r[i] + s.ps.r[j]) * (1.0 + 1e-6)) ++loaded;
+      const double dist = std::hypot(d.x(), d.y());
+      if (dist <= (s.ps.r[i] + s.ps.r[j]) * (1.0 + 1e-6)) ++loaded;
     }
   }
   m.contacts = loaded;
@@ -129,8 +129,8 @@ StateMeasures NetworkSolverT<D>::measures() const
   return m;
 }
 
-template <int D>
-std::vector<ContactView> NetworkSolverT<D>::contacts() const {
+template <int D, class L>
+std::vector<ContactView> NetworkSolverT<D, L>::contacts() const {
   const auto& s = *impl_;
   std::vector<ContactView> out;
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
@@ -138,26 +138,26 @@ std::vector<ContactView> NetworkSolverT<D>::contacts() const {
     const int i = s.pi[k], j = s.pj[k];
     const typename Impl::Vec d = s.at_j(k) - s.at(i);
     if constexpr (D == 2) {
-      const double L = std::hypot(d.x(), d.y());
-      out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0, {d.x(), d.y(), 0.0}});
+      const double dist = std::hypot(d.x(), d.y());
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k], s.ps.r[i] + s.ps.r[j] - dist, s.slide_c[k] != 0, {d.x(), d.y(), 0.0}});
     } else {
-      const double L = d.norm();
-      out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - L, s.slide_c[k] != 0, {d.x(), d.y(), d.z()}});
+      const double dist = d.norm();
+      out.push_back({i, j, s.fn_c[k], s.ft_c[k].norm(), s.ps.r[i] + s.ps.r[j] - dist, s.slide_c[k] != 0, {d.x(), d.y(), d.z()}});
     }
   }
   return out;
 }
 
-template <int D>
-std::optional<packing::PeriodicCellT<D>> NetworkSolverT<D>::periodic_cell() const {
+template <int D, class L>
+std::optional<packing::PeriodicCellT<D>> NetworkSolverT<D, L>::periodic_cell() const {
   if (!impl_->periodic()) return std::nullopt;
   return impl_->cell0.deformed(impl_->Fbox);
 }
 
 // The Eq 13 stress of the prescribed particles' reactions (lever arms from the centre of the
 // current box, as measures()) and the Love-Weber contact stress, in any dimension.
-template <int D>
-StressMeasuresT<D> NetworkSolverT<D>::stress() const {
+template <int D, class L>
+StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   const auto& s = *impl_;
   using Mat = Eigen::Matrix<double, D, D>;
   using Vec = typename Impl::Vec;
@@ -218,8 +218,8 @@ StressMeasuresT<D> NetworkSolverT<D>::stress() const {
 
 /// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
 /// out-of-balance contact force, i.e. the viscous drag that holds the increment.
-template <int D>
-double NetworkSolverT<D>::Impl::unbalance(double fbar, double* rms) const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::unbalance(double fbar, double* rms) const {
   double m = 0.0, s2 = 0.0;
   int c = 0;
   for (int p = 0; p < n; ++p)
@@ -236,8 +236,8 @@ double NetworkSolverT<D>::Impl::unbalance(double fbar, double* rms) const {
 
 
 /// Diagnostics (verbose): one line per Newton iteration with the branch transitions since the last.
-template <int D>
-void NetworkSolverT<D>::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::print_iteration(int it, double newton_res, double newton_max, double fbar) {
   const std::size_t np = pi.size();
   int tr[3][3] = {}, ss = 0;
   if (it == 0 || diag_branch.size() != np) diag_branch.assign(np, 0);  // new rows after a rebuild: no transitions
@@ -257,8 +257,8 @@ void NetworkSolverT<D>::Impl::print_iteration(int it, double newton_res, double 
 }
 
 /// Diagnostics (verbose): the particles with the largest Newton residual.
-template <int D>
-void NetworkSolverT<D>::Impl::print_worst(double fbar) const {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::print_worst(double fbar) const {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   std::vector<std::pair<double, int>> worst;
   for (int p = 0; p < n; ++p) {
@@ -303,5 +303,10 @@ template std::vector<ContactView> NetworkSolverT<3>::contacts() const;
 template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3>::periodic_cell() const;
 template StressMeasuresT<3> NetworkSolverT<3>::stress() const;
 template struct NetworkSolverT<3>::Impl;
+template class NetworkSolverT<2, LinearLawT<2>>;
+template std::vector<ContactView> NetworkSolverT<3, LinearLawT<3>>::contacts() const;
+template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3, LinearLawT<3>>::periodic_cell() const;
+template StressMeasuresT<3> NetworkSolverT<3, LinearLawT<3>>::stress() const;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

@@ -1,4 +1,4 @@
-// NetworkSolverT<D>: construction from a packing or from a state, the copyable state, and the public
+// NetworkSolverT<D, L>: construction from a packing or from a state, the copyable state, and the public
 // accessors. The parts are listed in solver_impl.hpp.
 #include "netdem/quasistatic/network_solver.hpp"
 
@@ -17,8 +17,8 @@
 
 namespace netdem::qs {
 
-template <int D>
-void NetworkSolverT<D>::Impl::init_linear_solver() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::init_linear_solver() {
   LinearSolverOptions lo;
   lo.gmres_tolerance = opt.linear_tolerance;
   lin = LinearSolver(lo);
@@ -33,17 +33,20 @@ void NetworkSolverT<D>::Impl::init_linear_solver() {
   f.assign(kN * n, 0.0);
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::set_options(const SolverOptions& o) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::set_options(const Options& o) {
   if constexpr (D == 3) {
     if (o.mode == BoundaryMode::Walls)
       throw std::invalid_argument("network solver: the walls boundary mode is 2D only (3D: affine or die)");
   }
+  if (o.uses_energy_merit() && !ct::kHasPotential<Law>)
+    throw std::invalid_argument("network solver: the energy merit needs a contact law with a potential; this law has "
+                                "none (use the residual merit)");
   opt = o;
-  law = Law(o.law);
-  contact::PlasticIndentationParams frictionless = o.law;
-  frictionless.mu = 0.0;
-  wall_law = Law(frictionless);
+  law = Law(opt.law);
+  wall_params = opt.law;
+  wall_params.mu = 0.0;
+  wall_law = Law(wall_params);
 }
 
 namespace {
@@ -74,8 +77,8 @@ std::vector<std::uint8_t> peripheral_layer_3d(const packing::Packing& pk) {
 
 }  // namespace
 
-template <int D>
-NetworkSolverT<D>::NetworkSolverT(const packing::Packing& pk, const SolverOptions& options)
+template <int D, class L>
+NetworkSolverT<D, L>::NetworkSolverT(const packing::Packing& pk, const Options& options)
     : impl_(std::make_unique<Impl>()) {
   options.validate();
   if (pk.dim != D)
@@ -112,13 +115,13 @@ NetworkSolverT<D>::NetworkSolverT(const packing::Packing& pk, const SolverOption
   s.build_neighbours();
 }
 
-template <int D>
-NetworkSolverT<D>::NetworkSolverT(const State& st, const SolverOptions& options) : impl_(std::make_unique<Impl>()) {
+template <int D, class L>
+NetworkSolverT<D, L>::NetworkSolverT(const State& st, const Options& options) : impl_(std::make_unique<Impl>()) {
   options.validate();
   st.validate();
   auto& s = *impl_;
   s.set_options(options);
-  if constexpr (D == 2) {  // the 2D state keeps the layout of the 2D state file
+  if constexpr (kFileLayout) {  // the 2D state keeps the layout of the 2D state file
     s.n = static_cast<int>(st.x.size());
     s.ps.pos.resize(2 * st.x.size());
     s.pos_build.resize(2 * st.x.size());
@@ -182,17 +185,17 @@ NetworkSolverT<D>::NetworkSolverT(const State& st, const SolverOptions& options)
   s.wfn_c = st.wall_f_n;
 }
 
-template <int D>
-NetworkSolverT<D>::NetworkSolverT(const NetworkSolverT& other) : NetworkSolverT(other.state(), other.options()) {}
+template <int D, class L>
+NetworkSolverT<D, L>::NetworkSolverT(const NetworkSolverT& other) : NetworkSolverT(other.state(), other.options()) {}
 
-template <int D>
-NetworkSolverT<D>::~NetworkSolverT() = default;
+template <int D, class L>
+NetworkSolverT<D, L>::~NetworkSolverT() = default;
 
-template <int D>
-typename NetworkSolverT<D>::State NetworkSolverT<D>::state() const {
+template <int D, class L>
+typename NetworkSolverT<D, L>::State NetworkSolverT<D, L>::state() const {
   const auto& s = *impl_;
   State st;
-  if constexpr (D == 2) {
+  if constexpr (kFileLayout) {
     st.x = s.ps.axis(0);
     st.y = s.ps.axis(1);
     st.theta = s.ps.rot;
@@ -271,8 +274,8 @@ void check_box_stretch(const Eigen::Matrix<double, D, D>& F, const Bad& bad) {
 }
 }  // namespace
 
-template <int D>
-void NetworkStateT<D>::validate() const {
+template <int D, class H>
+void NetworkStateT<D, H>::validate() const {
   auto bad = [](const std::string& m) { throw std::invalid_argument("network state: " + m); };
   constexpr std::size_t kN = contact::Dim<D>::kNodeDofs;
   const std::size_t n = particles.size(), np = pair_i.size();
@@ -284,7 +287,11 @@ void NetworkStateT<D>::validate() const {
   if (pair_j.size() != np || history.size() != np || aux.size() != np || f_n.size() != np || f_t.size() != np ||
       sliding.size() != np)
     bad(fmt::format("per-pair arrays do not all have {} entries", np));
-  if (!wall_history.empty() || !wall_f_n.empty()) bad("the walls mode is 2D only");
+  if constexpr (D == 3) {
+    if (!wall_history.empty() || !wall_f_n.empty()) bad("the walls mode is 2D only");
+  } else if ((!wall_history.empty() && wall_history.size() != 4 * n) || wall_f_n.size() != wall_history.size()) {
+    bad(fmt::format("the wall-contact arrays must be empty or have 4 x {} entries", n));
+  }
   check_periodic(*this, n, np, bad);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pair_i[k], j = pair_j[k];
@@ -364,75 +371,79 @@ void NetworkStateT<2>::validate() const {
   if (!strain.allFinite() || !dE_prev.allFinite()) bad("non-finite strain");
 }
 
-template <int D>
-const SolverOptions& NetworkSolverT<D>::options() const {
+template <int D, class L>
+const typename NetworkSolverT<D, L>::Options& NetworkSolverT<D, L>::options() const {
   return impl_->opt;
 }
-template <int D>
-const SolverTimings& NetworkSolverT<D>::timings() const {
+template <int D, class L>
+const SolverTimings& NetworkSolverT<D, L>::timings() const {
   return impl_->tim;
 }
-template <int D>
-std::size_t NetworkSolverT<D>::size() const {
+template <int D, class L>
+std::size_t NetworkSolverT<D, L>::size() const {
   return static_cast<std::size_t>(impl_->n);
 }
-template <int D>
-std::vector<double> NetworkSolverT<D>::x() const
+template <int D, class L>
+std::vector<double> NetworkSolverT<D, L>::x() const
   requires(D == 2)
 {
   return impl_->ps.axis(0);
 }
-template <int D>
-std::vector<double> NetworkSolverT<D>::y() const
+template <int D, class L>
+std::vector<double> NetworkSolverT<D, L>::y() const
   requires(D == 2)
 {
   return impl_->ps.axis(1);
 }
-template <int D>
-const std::vector<double>& NetworkSolverT<D>::theta() const
+template <int D, class L>
+const std::vector<double>& NetworkSolverT<D, L>::theta() const
   requires(D == 2)
 {
   return impl_->ps.rot;
 }
-template <int D>
-const std::vector<double>& NetworkSolverT<D>::radius() const {
+template <int D, class L>
+const std::vector<double>& NetworkSolverT<D, L>::radius() const {
   return impl_->ps.r;
 }
-template <int D>
-const sys::ParticleSet<D>& NetworkSolverT<D>::particles() const {
+template <int D, class L>
+const sys::ParticleSet<D>& NetworkSolverT<D, L>::particles() const {
   return impl_->ps;
 }
-template <int D>
-const std::vector<std::uint8_t>& NetworkSolverT<D>::peripheral() const {
+template <int D, class L>
+const std::vector<std::uint8_t>& NetworkSolverT<D, L>::peripheral() const {
   return impl_->periph;
 }
-template <int D>
-typename NetworkSolverT<D>::Mat NetworkSolverT<D>::box_deformation() const {
+template <int D, class L>
+typename NetworkSolverT<D, L>::Mat NetworkSolverT<D, L>::box_deformation() const {
   return impl_->Fbox;
 }
-template <int D>
-double NetworkSolverT<D>::solid_area() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::solid_area() const {
   return impl_->solid_area;
 }
-template <int D>
-double NetworkSolverT<D>::initial_density() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::initial_density() const {
   return impl_->D0;
 }
-template <int D>
-const packing::Box& NetworkSolverT<D>::initial_box() const {
+template <int D, class L>
+const packing::Box& NetworkSolverT<D, L>::initial_box() const {
   return impl_->box0;
 }
-template <int D>
-std::uint64_t NetworkSolverT<D>::seed() const {
+template <int D, class L>
+std::uint64_t NetworkSolverT<D, L>::seed() const {
   return impl_->seed;
 }
-template <int D>
-int NetworkSolverT<D>::free_dofs() const {
+template <int D, class L>
+int NetworkSolverT<D, L>::free_dofs() const {
   return impl_->nfree;
 }
 
 template struct NetworkStateT<3>;
+template struct NetworkStateT<2, LinearLawT<2>::History>;
+template struct NetworkStateT<3, LinearLawT<3>::History>;
 template class NetworkSolverT<2>;
 template class NetworkSolverT<3>;
+template class NetworkSolverT<2, LinearLawT<2>>;
+template class NetworkSolverT<3, LinearLawT<3>>;
 
 }  // namespace netdem::qs

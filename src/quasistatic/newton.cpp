@@ -17,8 +17,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 }  // namespace
 
-template <int D>
-IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
+template <int D, class L>
+IncrementReport NetworkSolverT<D, L>::increment(const Mat& dE) {
   if (!dE.allFinite()) throw std::runtime_error("increment: strain increment is not finite");
   return advance(dE, 0);
 }
@@ -30,8 +30,8 @@ IncrementReport NetworkSolverT<D>::increment(const Mat& dE) {
 // accepted when its second half is (the state it ends in is an equilibrium); a sub-increment at
 // the finest cut that is not accepted is committed as it is, part of the damped path, and counted
 // (unconverged_substeps).
-template <int D>
-IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
+template <int D, class L>
+IncrementReport NetworkSolverT<D, L>::advance(const Mat& dE, int depth) {
   auto attempt = [this](const Mat& d) {
     IncrementReport r = impl_->energy_mode() ? impl_->attempt_energy(d) : impl_->attempt(d);
     r.unconverged_substeps = r.converged ? 0 : 1;
@@ -71,8 +71,8 @@ IncrementReport NetworkSolverT<D>::advance(const Mat& dE, int depth) {
   return rep;
 }
 
-template <int D>
-IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
+template <int D, class L>
+IncrementReport NetworkSolverT<D, L>::Impl::attempt(const Mat& dE) {
   const auto t_start = Clock::now();
   IncrementReport rep;
   start_attempt(dE, rep);
@@ -95,7 +95,7 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
     if (pseudo_transient()) du_ref = du;
     if (eta < 0.0 && want_tangent && nfree > 0) start_drag(dE);
     fbar = mean_normal_force();
-    if (fbar <= 0.0) fbar = opt.law.sigma_y * r_mean * 1e-6;
+    if (fbar <= 0.0) fbar = law.reference_force(r_mean) * 1e-6;
     double newton_max = 0.0;
     const double newton_res = nfree > 0 ? residual(fbar, true, &newton_max) : 0.0;  // RMS
     rep.newton_residual = newton_res;
@@ -121,8 +121,8 @@ IncrementReport NetworkSolverT<D>::Impl::attempt(const Mat& dE) {
 
 // The start of an attempt at an increment: the neighbour table rebuilt if the committed state has
 // moved past its skin, the predictor and the per-pair data.
-template <int D>
-void NetworkSolverT<D>::Impl::start_attempt(const Mat& dE, IncrementReport& rep) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::start_attempt(const Mat& dE, IncrementReport& rep) {
   if (this->needs_rebuild(ps, Fbox, opt.skin * r_mean, r_max)) {
     build_neighbours();
     rep.reanalysed = true;
@@ -131,8 +131,8 @@ void NetworkSolverT<D>::Impl::start_attempt(const Mat& dE, IncrementReport& rep)
 }
 
 // The end of an attempt: the undragged residual, the contact work, the commit and the timers.
-template <int D>
-void NetworkSolverT<D>::Impl::finish_attempt(const Mat& dE, double fbar, Clock::time_point t_start,
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::finish_attempt(const Mat& dE, double fbar, Clock::time_point t_start,
                                              IncrementReport& rep) {
   rep.residual = nfree > 0 ? unbalance(fbar, &rep.residual_rms) : 0.0;
   if (opt.verbose && nfree > 0) print_worst(fbar);
@@ -144,8 +144,8 @@ void NetworkSolverT<D>::Impl::finish_attempt(const Mat& dE, double fbar, Clock::
 
 /// Whether an iterate with this residual (RMS and max over the free DOFs, relative to the mean
 /// contact force) is an accepted equilibrium. Pseudo-transient: the residual is the undragged one.
-template <int D>
-bool NetworkSolverT<D>::Impl::accepted(double rms, double max) const {
+template <int D, class L>
+bool NetworkSolverT<D, L>::Impl::accepted(double rms, double max) const {
   if (pseudo_transient()) return rms <= opt.residual_tol && max <= opt.max_residual_factor * opt.residual_tol;
   return rms <= opt.residual_tol && max <= opt.max_residual_tol;
 }
@@ -159,8 +159,8 @@ bool NetworkSolverT<D>::Impl::accepted(double rms, double max) const {
 ///   that the path is followed faster (switched evolution relaxation would raise it and stall on
 ///   the unstable branch). A single rise is often a contact changing status.
 /// A rise above the start value marks the increment as an instability event.
-template <int D>
-void NetworkSolverT<D>::Impl::adapt_drag(double res, IncrementReport& rep) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::adapt_drag(double res, IncrementReport& rep) {
   if (res_fresh > 0.0 && res > 0.0) {
     const double ratio = res / res_fresh;
     rises = ratio > 1.0 ? rises + 1 : 0;
@@ -175,8 +175,8 @@ void NetworkSolverT<D>::Impl::adapt_drag(double res, IncrementReport& rep) {
 /// Work of the drag along the step from `before` to du: eta (du - du_ref) . (du - before) over the
 /// free DOFs (rotations with eta r_mean^2). Pseudo-transient: eta |step|^2, the energy the path
 /// dissipated in the step.
-template <int D>
-double NetworkSolverT<D>::Impl::drag_work(const std::vector<double>& before) const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::drag_work(const std::vector<double>& before) const {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   double w = 0.0;
   for (int q = 0; q < kN * n; ++q)
@@ -186,8 +186,8 @@ double NetworkSolverT<D>::Impl::drag_work(const std::vector<double>& before) con
 
 /// Work of the contact forces over the increment, trapezoidal in the committed and the trial
 /// forces: normal force on the overlap change, tangential force on the slip increment.
-template <int D>
-double NetworkSolverT<D>::Impl::contact_work() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::contact_work() const {
   double w = 0.0;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const auto& t = trial[k];
@@ -206,8 +206,8 @@ double NetworkSolverT<D>::Impl::contact_work() const {
 
 // Per-increment set-up: the start geometry of every pair, the prescribed motion and predictor,
 // the flip counters of the iteration matrix, and the drag (computed at the first assembly).
-template <int D>
-void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::begin_increment(const Mat& dE) {
   prescribe(dE);
   begin_pairs();
   rhs.resize(nfree);
@@ -221,8 +221,8 @@ void NetworkSolverT<D>::Impl::begin_increment(const Mat& dE) {
 
 // The per-pair data of an increment (also after a rebuild within it): the committed geometry of
 // every row and the flip counters of the iteration matrix.
-template <int D>
-void NetworkSolverT<D>::Impl::begin_pairs() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::begin_pairs() {
   const std::size_t np = pi.size();
   g0.resize(np);
   trial.resize(np);
@@ -252,8 +252,8 @@ void NetworkSolverT<D>::Impl::begin_pairs() {
 // only); legacy drag: du_ref is the affine motion of the increment (the drag stays in the answer). Homogeneous (affine) motion is not
 // resisted; its size, max|f_contact| / mean contact force, is reported as the unbalanced force
 // of the increment. With viscosity_strain > 0 the drag is per unit strain (|dE| scaled).
-template <int D>
-void NetworkSolverT<D>::Impl::start_drag(const Mat& dE) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::start_drag(const Mat& dE) {
   const double md = mean_diagonal();
   kl_ref = md;
   eta = opt.viscosity * opt.regularisation_scale * md;
@@ -263,8 +263,8 @@ void NetworkSolverT<D>::Impl::start_drag(const Mat& dE) {
 
 // The Newton step into sol: a fresh factorisation of M (with drag and regularisation) on fresh
 // iterations, then GMRES on K preconditioned by it (direct solve when symmetric); clipped.
-template <int D>
-bool NetworkSolverT<D>::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
+template <int D, class L>
+bool NetworkSolverT<D, L>::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
   LinearStatus st;
   if (fresh) {
     regularise();
@@ -286,8 +286,8 @@ bool NetworkSolverT<D>::Impl::linear_step(bool fresh, bool nonsym, IncrementRepo
 // Backtracking line search on the RMS residual (steps 1, 1/2, ... backtracks of them): the first
 // step that lowers it, else the best step tried. Returns whether f and the trial state belong to
 // the final du (false when it went back to an earlier step).
-template <int D>
-bool NetworkSolverT<D>::Impl::line_search(double newton_res) {
+template <int D, class L>
+bool NetworkSolverT<D, L>::Impl::line_search(double newton_res) {
   bool f_current = true;
   du_start = du;
   auto apply = [&](double a) {
@@ -320,8 +320,8 @@ bool NetworkSolverT<D>::Impl::line_search(double newton_res) {
 
 // Nonlinear Gauss-Seidel on the worst particles after the global step; returns whether f and
 // the trial state belong to the final du.
-template <int D>
-bool NetworkSolverT<D>::Impl::local_sweeps(bool f_current) {
+template <int D, class L>
+bool NetworkSolverT<D, L>::Impl::local_sweeps(bool f_current) {
   for (int sweep = 0; sweep < opt.local_sweeps; ++sweep) {
     if (!f_current) {
       evaluate_forces();
@@ -338,8 +338,8 @@ bool NetworkSolverT<D>::Impl::local_sweeps(bool f_current) {
 
 // Commits the trial state of the increment: contact histories, affine-deviation bookkeeping,
 // committed forces, positions, the strain and the box.
-template <int D>
-void NetworkSolverT<D>::Impl::commit(const Mat& dE, IncrementReport& rep) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::commit(const Mat& dE, IncrementReport& rep) {
   const Mat E_old = E;
   for (std::size_t k = 0; k < pi.size(); ++k) {
     const auto& t = trial[k];
@@ -387,8 +387,8 @@ void NetworkSolverT<D>::Impl::commit(const Mat& dE, IncrementReport& rep) {
   tim.increments += 1;
 }
 
-template <int D>
-double NetworkSolverT<D>::Impl::mean_normal_force() const {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::mean_normal_force() const {
   double s = 0.0;
   int c = 0;
   for (const auto& t : trial)
@@ -401,8 +401,8 @@ double NetworkSolverT<D>::Impl::mean_normal_force() const {
 
 /// Newton residual r = f_contact - eta (du - du_ref) on the free DOFs, as RMS / fbar (max-norm
 /// in max_norm). If fill_rhs, also stores r in rhs for the linear solve.
-template <int D>
-double NetworkSolverT<D>::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::residual(double fbar, bool fill_rhs, double* max_norm) {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   double m = 0.0, s2 = 0.0;
   for (int p = 0; p < n; ++p)
@@ -420,8 +420,8 @@ double NetworkSolverT<D>::Impl::residual(double fbar, bool fill_rhs, double* max
 }
 
 /// Per-particle step limits: a single soft mode must not freeze the whole network.
-template <int D>
-void NetworkSolverT<D>::Impl::clip_step() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::clip_step() {
   for (int p = 0; p < n; ++p) {
     if constexpr (D == 2) {
       const int dx = dof[3 * p], dy = dof[3 * p + 1], dr = dof[3 * p + 2];
@@ -452,5 +452,7 @@ void NetworkSolverT<D>::Impl::clip_step() {
 
 template class NetworkSolverT<2>;
 template class NetworkSolverT<3>;
+template class NetworkSolverT<2, LinearLawT<2>>;
+template class NetworkSolverT<3, LinearLawT<3>>;
 
 }  // namespace netdem::qs

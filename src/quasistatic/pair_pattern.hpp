@@ -12,8 +12,9 @@
 //   * the slots: per pair k, (2 kN)^2 value indices, slots(k)[2 kN b + a] for row a and column b of
 //     the pair's element (a, b over the first node's DOFs, then the second's), -1 where a DOF is
 //     not free; per free DOF the index of its diagonal entry.
-// Both solvers add their element matrices through the slots in pair order, so the sums do not
-// depend on how the pattern was built.
+// Both solvers add their element matrices through the slots in pair order (for_each_entry: the
+// one assembly loop, for any element over the DOFs of two nodes), so the sums do not depend on
+// how the pattern was built.
 #include <algorithm>
 #include <cstddef>
 #include <utility>
@@ -106,6 +107,17 @@ class PairPattern {
 
   /// The value indices of pair k's element entries (row a, column b at [2 kN b + a]; -1: not free).
   const int* slots(std::size_t k) const { return &slot_[kP2_ * k]; }
+  /// The assembly of pair k's element: fn(q, a, b) for every entry (row a, column b of the
+  /// element, 0 <= a, b < kP = 2 kN) whose DOFs are both free, q its value index. Distinct entries
+  /// of one element have distinct q, so a sum over the pairs in pair order does not depend on the
+  /// order within an element.
+  template <int kP, class Fn>
+  void for_each_entry(std::size_t k, Fn&& fn) const {
+    const int* s = slots(k);
+    for (int b = 0; b < kP; ++b)
+      for (int a = 0; a < kP; ++a)
+        if (const int q = s[kP * b + a]; q >= 0) fn(q, a, b);
+  }
   /// The value index of the diagonal entry of free DOF d.
   int diag(int d) const { return diag_[static_cast<std::size_t>(d)]; }
 

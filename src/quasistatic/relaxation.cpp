@@ -13,8 +13,8 @@ namespace netdem::qs {
 
 /// Residual (contact force - drag) and tangent of a set of m particles (1 or 2) alone, with all
 /// other particles held at their current trial positions: kN entries per particle.
-template <int D>
-void NetworkSolverT<D>::Impl::local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const {
   res.setZero(kN * m);
   Kl.setZero(kN * m, kN * m);
   const ct::TangentOptions topt;
@@ -71,8 +71,8 @@ void NetworkSolverT<D>::Impl::local_eval(const int* group, int m, Eigen::VectorX
 }
 
 /// Nonlinear Gauss-Seidel on a set of particles: damped Newton on their own free DOFs.
-template <int D>
-void NetworkSolverT<D>::Impl::relax_set(const int* group, int m, double fbar) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::relax_set(const int* group, int m, double fbar) {
   int idx[kP], nf = 0;  // local index kN t + a of the free DOFs (m <= 2)
   for (int t = 0; t < m; ++t)
     for (int a = 0; a < kN; ++a)
@@ -129,8 +129,8 @@ void NetworkSolverT<D>::Impl::relax_set(const int* group, int m, double fbar) {
 /// One Gauss-Seidel sweep over the particles whose residual exceeds local_threshold x the RMS
 /// residual (and the tolerance), largest first. Needs f from the current trial state; leaves f
 /// and the trial state current (the pairs of the moved particles are refreshed).
-template <int D>
-int NetworkSolverT<D>::Impl::relax_worst(double fbar, double rms) {
+template <int D, class L>
+int NetworkSolverT<D, L>::Impl::relax_worst(double fbar, double rms) {
   const double eta_t = std::max(eta, 0.0), eta_r = eta_t * r_mean * r_mean;
   const double thr = std::max(opt.local_threshold * rms, opt.residual_tol) * fbar;
   auto& bad = relax_bad;
@@ -166,5 +166,7 @@ int NetworkSolverT<D>::Impl::relax_worst(double fbar, double rms) {
 
 template struct NetworkSolverT<2>::Impl;
 template struct NetworkSolverT<3>::Impl;
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 
 }  // namespace netdem::qs

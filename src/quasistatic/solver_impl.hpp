@@ -1,5 +1,5 @@
 #pragma once
-// Private: the parts of the network solver (NetworkSolverT<D>::Impl) and which file owns what.
+// Private: the parts of the network solver (NetworkSolverT<D, L>::Impl) and which file owns what.
 //
 //   contact_table.cpp  ContactTableT<D>: the system layer's table (netdem/system/contact_table.hpp)
 //                      with the solver's per-row data, and the neighbour rebuild
@@ -41,19 +41,14 @@ namespace netdem::qs {
 
 namespace ct = netdem::contact;
 
-/// The network solver's contact law, chosen at compile time. The solver reaches it only through
-/// the contact-law interface (netdem/contact/law.hpp): evaluate, iteration_stiffness, has_history.
-template <int D>
-using LawT = ct::PlasticIndentationLawT<D>;
-
 /// The contact table of the network solver: the system layer's table (netdem/system/
 /// contact_table.hpp: rows i < j sorted, every pair with a gap below the skin at the last rebuild,
 /// touching or not; their committed history; the adjacency; the lifecycle, read from the law)
 /// plus the solver's own per-row data, carried across rebuilds with the history: the
 /// affine-deviation bookkeeping (a new row starts with E_form = the strain at its creation) and
 /// the committed forces.
-template <int D>
-struct ContactTableT : sys::ContactTable<typename LawT<D>::History, D> {
+template <int D, class Law>
+struct ContactTableT : sys::ContactTable<typename Law::History, D> {
   using Mat = Eigen::Matrix<double, D, D>;
   using Tan = typename ct::Dim<D>::Tan;
   std::vector<PairAuxT<D>> aux;
@@ -62,7 +57,7 @@ struct ContactTableT : sys::ContactTable<typename LawT<D>::History, D> {
   std::vector<std::uint8_t> slide_c;  ///< committed sliding flag
 
   /// New rows (gap < skin) merged with the committed history and the per-row data above.
-  void rebuild(const LawT<D>& law, const sys::ParticleSet<D>& ps, double skin, double r_max, const Mat& E,
+  void rebuild(const Law& law, const sys::ParticleSet<D>& ps, double skin, double r_max, const Mat& E,
                const Mat& Fbox, const packing::PeriodicCellT<D>* cell = nullptr);
 };
 
@@ -81,19 +76,21 @@ struct DofMap {
 
 /// BoundaryMode::Walls (2D): the contacts of every particle with the four walls (slot 4 p + w;
 /// w = 0 left, 1 right, 2 bottom, 3 top), the plastic-indentation law with R* = r_p and mu = 0.
-template <int D>
+template <int D, class Law>
 struct WallTableT {
-  std::vector<typename LawT<D>::History> whist;  ///< committed history
-  std::vector<double> wfn_c;                     ///< committed normal force
-  std::vector<typename LawT<D>::Response> wtrial;  ///< trial state of the current du
+  std::vector<typename Law::History> whist;  ///< committed history
+  std::vector<double> wfn_c;                 ///< committed normal force
+  std::vector<typename Law::Response> wtrial;  ///< trial state of the current du
   std::vector<double> wwork;   ///< the normal force's potential per slot (energy mode only)
   std::vector<double> wf, wk;  ///< trial force on p along its wall axis (signed), iteration stiffness
   Eigen::Matrix<double, D, D> Fbox_trial = Eigen::Matrix<double, D, D>::Identity();  ///< the box at the end of the increment
 };
 
-template <int D>
-struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
-  using Law = LawT<D>;
+template <int D, class L>
+struct NetworkSolverT<D, L>::Impl : ContactTableT<D, L>, DofMap, WallTableT<D, L> {
+  using Law = L;
+  static_assert(ct::ContactLaw<Law> && ct::kHasReferenceScales<Law>,
+                "the network solver's law: law.hpp's interface and its reference scales");
   using Element = ct::PairElementT<Law>;
   using Response = typename Law::Response;
   using Geometry = ct::PairGeometryT<D>;
@@ -104,7 +101,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   /// d slip / d q of a pair: b_t (6) in 2D, B_t (3 x 12) in 3D (kinematics.hpp slip_gradient).
   using SlipGradient = std::conditional_t<D == 2, PairVec, Eigen::Matrix<double, 3, 12>>;
   using Mat = Eigen::Matrix<double, D, D>;
-  using Table = ContactTableT<D>;
+  using Table = ContactTableT<D, L>;
   static constexpr int kN = ct::Dim<D>::kNodeDofs;  ///< DOFs per node
   static constexpr int kP = 2 * kN;                 ///< DOFs per pair element
   static constexpr int kR = ct::Dim<D>::kRotDofs;
@@ -119,17 +116,18 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   using Table::pj;
   using Table::pos_build;
   using Table::slide_c;
-  using WallTableT<D>::whist;
-  using WallTableT<D>::wfn_c;
-  using WallTableT<D>::wtrial;
-  using WallTableT<D>::wf;
-  using WallTableT<D>::wk;
-  using WallTableT<D>::wwork;
-  using WallTableT<D>::Fbox_trial;
+  using WallTableT<D, L>::whist;
+  using WallTableT<D, L>::wfn_c;
+  using WallTableT<D, L>::wtrial;
+  using WallTableT<D, L>::wf;
+  using WallTableT<D, L>::wk;
+  using WallTableT<D, L>::wwork;
+  using WallTableT<D, L>::Fbox_trial;
 
-  SolverOptions opt;
+  Options opt;
   Law law;       ///< the law of opt.law (set_options keeps both together)
   Law wall_law;  ///< the same law without friction (the walls are frictionless)
+  typename Law::Params wall_params;  ///< wall_law's parameters (a law may hold them by reference)
   int n = 0;
   sys::ParticleSet<D> ps;  ///< centres, rotations, radii (committed state)
   std::vector<std::uint8_t> periph;
@@ -232,7 +230,7 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   static bool is_rotation(int c) { return c >= D; }
 
   // construction (network_solver.cpp)
-  void set_options(const SolverOptions& o);
+  void set_options(const Options& o);
   void init_linear_solver();
   // contact_table.cpp
   void build_neighbours();
@@ -250,10 +248,15 @@ struct NetworkSolverT<D>::Impl : ContactTableT<D>, DofMap, WallTableT<D> {
   /// committed history, R* of its radii) plus, with friction, the tangential spring's at the
   /// stiffness and limit frozen at the iterate (t_kt, t_limit).
   double pair_work(std::size_t k, double u, const Tan& dslip) const {
-    const double ri = ps.r[pi[k]], rj = ps.r[pj[k]];
-    const double w = law.normal_work(hist[k], ri * rj / (ri + rj), u);
-    if (!friction_energy() || k >= t_kt.size()) return w;  // (no frozen values before the first step)
-    return w + law.tangential_work(hist[k], t_kt[k], t_limit[k], dslip);
+    if constexpr (ct::kHasPotential<Law>) {
+      const double ri = ps.r[pi[k]], rj = ps.r[pj[k]];
+      const double w = law.normal_work(hist[k], ri * rj / (ri + rj), u);
+      if (!friction_energy() || k >= t_kt.size()) return w;  // (no frozen values before the first step)
+      return w + law.tangential_work(hist[k], t_kt[k], t_limit[k], dslip);
+    } else {  // (set_options refuses the energy merit for a law without a potential)
+      (void)k, (void)u, (void)dslip;
+      return 0.0;
+    }
   }
   /// Energy mode with a frictional law (2D): the merit adds the tangential springs' potential.
   bool friction_energy() const { return D == 2 && opt.law.frictional() && energy_mode(); }

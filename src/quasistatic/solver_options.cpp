@@ -17,8 +17,7 @@ void require(bool ok, const std::string& msg) {
 }
 }  // namespace
 
-void SolverOptions::validate() const {
-  law.validate();
+void IterationOptions::validate() const {
   require(std::isfinite(skin) && skin > 0.0, fmt::format("solver: skin must be positive, got {}", skin));
   require(max_newton >= 0 && max_newton <= 1000, fmt::format("solver: max_newton must be in [0, 1000], got {}", max_newton));
   require(!std::isnan(max_residual_tol) && max_residual_tol > 0.0,
@@ -57,8 +56,10 @@ void SolverOptions::validate() const {
           fmt::format("solver: slide_stiffness_fraction must be in [0, 1], got {}", slide_stiffness_fraction));
 }
 
-SolverOptions SolverOptions::compact() {
-  SolverOptions o;
+template <class P>
+SolverOptionsT<P> SolverOptionsT<P>::compact() {
+  static_assert(kPlastic, "the presets are the plastic-indentation law's");
+  SolverOptionsT o;
   o.law.mu = std::numeric_limits<double>::infinity();
   o.law.reversible = true;     // the paper's compaction law (sections 2-3.3)
   o.residual_tol = 3e-3;       // S22 moves 0.1 % against 1e-3 (W = 80), 0.2 % at W = 640; 1e-2: 1.5 %
@@ -70,13 +71,21 @@ SolverOptions SolverOptions::compact() {
   return o;
 }
 
-SolverOptions SolverOptions::yield_precompaction() { return compact(); }
+template <class P>
+SolverOptionsT<P> SolverOptionsT<P>::yield_precompaction() {
+  static_assert(kPlastic, "the presets are the plastic-indentation law's");
+  return compact();
+}
 
-SolverOptions SolverOptions::yield_probe() {
-  SolverOptions o;
+template <class P>
+SolverOptionsT<P> SolverOptionsT<P>::yield_probe() {
+  static_assert(kPlastic, "the presets are the plastic-indentation law's");
+  SolverOptionsT o;
   o.law.mu = std::numeric_limits<double>::infinity();
   o.law.reversible = false;  // section 3.4: elastic un/reloading with 10^3 x the loading tangent
   return o;
 }
+
+template struct SolverOptionsT<contact::PlasticIndentationParams>;
 
 }  // namespace netdem::qs

@@ -172,10 +172,7 @@ void Staggered::Impl::assemble(const std::vector<contact::BondElement>& e) {
   std::fill(v, v + K.nonZeros(), 0.0);
   for (std::size_t kc = 0; kc < e.size(); ++kc) {
     const contact::BondMat12 Ke = contact::bond_stiffness(e[kc], bmat);
-    const int* s = pattern.slots(kc);  // row i, column j at 12 j + i
-    for (int i = 0; i < 12; ++i)
-      for (int j = 0; j < 12; ++j)
-        if (s[12 * j + i] >= 0) v[s[12 * j + i]] += cscale * dof_scale(i) * dof_scale(j) * Ke(i, j);
+    pattern.for_each_entry<12>(kc, [&](int q, int i, int j) { v[q] += cscale * dof_scale(i) * dof_scale(j) * Ke(i, j); });
   }
 }
 

@@ -29,8 +29,8 @@ double distance(int w, double px, double py, double f) {
 }
 }  // namespace
 
-template <int D>
-typename NetworkSolverT<D>::Impl::WallEval NetworkSolverT<D>::Impl::wall_eval(int p, int w) const {
+template <int D, class L>
+typename NetworkSolverT<D, L>::Impl::WallEval NetworkSolverT<D, L>::Impl::wall_eval(int p, int w) const {
   WallEval e;
   const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
   const double d1 = distance(w, ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1], face(Fbox_trial, box0, w));
@@ -41,7 +41,8 @@ typename NetworkSolverT<D>::Impl::WallEval NetworkSolverT<D>::Impl::wall_eval(in
   k.r_eff = ps.r[p];
   ct::ContactTangent t;
   e.r = wall_law.evaluate(whist[s], k, &t);
-  if (energy_mode()) e.work = wall_law.normal_work(whist[s], k.r_eff, k.overlap);
+  if constexpr (ct::kHasPotential<Law>)
+    if (energy_mode()) e.work = wall_law.normal_work(whist[s], k.r_eff, k.overlap);
   if (!e.r.loaded) return e;
   const double sign = (w == 0 || w == 2) ? 1.0 : -1.0;  // the inward normal along the wall's axis
   e.force = sign * e.r.f_n;
@@ -49,8 +50,8 @@ typename NetworkSolverT<D>::Impl::WallEval NetworkSolverT<D>::Impl::wall_eval(in
   return e;
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::wall_particle(int p, double sign) {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::wall_particle(int p, double sign) {
   for (int w = 0; w < 4; ++w) {
     const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w);
     const int axis = w < 2 ? 0 : 1;
@@ -67,8 +68,8 @@ void NetworkSolverT<D>::Impl::wall_particle(int p, double sign) {
   }
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::wall_forces() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::wall_forces() {
   if (!walls()) return;
   const std::size_t slots = 4 * static_cast<std::size_t>(n);
   if (whist.size() != slots) {
@@ -82,8 +83,8 @@ void NetworkSolverT<D>::Impl::wall_forces() {
   for (int p = 0; p < n; ++p) wall_particle(p, 1.0);
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::wall_stiffness() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::wall_stiffness() {
   if (!walls()) return;
   for (int p = 0; p < n; ++p)
     for (int w = 0; w < 4; ++w) {
@@ -96,8 +97,8 @@ void NetworkSolverT<D>::Impl::wall_stiffness() {
     }
 }
 
-template <int D>
-void NetworkSolverT<D>::Impl::commit_walls() {
+template <int D, class L>
+void NetworkSolverT<D, L>::Impl::commit_walls() {
   if (!walls()) return;
   for (std::size_t s = 0; s < whist.size(); ++s) {
     if (wtrial[s].loaded || wall_law.has_history(whist[s])) whist[s] = wtrial[s].history;
@@ -107,5 +108,6 @@ void NetworkSolverT<D>::Impl::commit_walls() {
 
 // 2D only: the 3D solver refuses the walls mode (network_solver.cpp) and never calls these
 template struct NetworkSolverT<2>::Impl;
+template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 
 }  // namespace netdem::qs

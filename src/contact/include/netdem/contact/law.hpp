@@ -203,6 +203,28 @@ inline constexpr bool kHasExplicitBound = requires(const L& law, double r_eff) {
 template <class L>
 inline constexpr bool kMeanPairTimeStep = requires { requires L::kMeanPairTimeStep; };
 
+/// The law gives the scales an implicit solver measures its residual against where no contact
+/// carries a force yet (the network solver, NetworkSolverT<D, Law>): `reference_force(r)` and
+/// `reference_stiffness(r)` for particles of radius r, and `first_touch_force(r_eff)`, the force
+/// at the smallest overlap the law resolves (0 for a law whose force starts at zero overlap).
+template <class L>
+inline constexpr bool kHasReferenceScales = requires(const L& law, double r) {
+  { law.reference_force(r) } -> std::convertible_to<double>;
+  { law.reference_stiffness(r) } -> std::convertible_to<double>;
+  { law.first_touch_force(r) } -> std::convertible_to<double>;
+};
+/// The law's normal force has a potential at fixed history, `normal_work(h, r_eff, u)` (d/du of
+/// it is the normal force), and its tangential force one at a frozen stiffness and limit
+/// (`tangential_frozen(f_n)`, `tangential_work(h, k_t, limit, dslip)`): the network solver's
+/// trust region on the contact energy needs them.
+template <class L>
+inline constexpr bool kHasPotential = requires(const L& law, const typename L::History& h, double u,
+                                               const typename Dim<L::kDim>::Tan& s) {
+  { law.normal_work(h, u, u) } -> std::convertible_to<double>;
+  { law.tangential_frozen(u) };
+  { law.tangential_work(h, u, u, s) } -> std::convertible_to<double>;
+};
+
 /// The step of a solver's hot loop: evaluates the law and commits its history in place, returning
 /// the forces. A law may provide `update(History&, const ContactKinematics&, double& f_n,
 /// double& f_t)`, an in-place form of `evaluate` for a hot loop; it must give the same forces and

@@ -88,6 +88,7 @@ struct LudingParams {
   bool frozen_k1 = false;
   /// Throws std::invalid_argument with a one-line message for an invalid value.
   void validate() const;
+  bool frictional() const { return mu > 0.0; }
 };
 
 /// Compile-time feature flags of the evaluation.

@@ -40,6 +40,12 @@ class LudingLaw {
   /// The law with parameters p (held by reference: p must outlive the law) at the material state
   /// k1(T, t) = k1_Tt (ignored without F.thermal).
   LudingLaw(const Params& p, double k1_Tt) : p_(&p), k1_Tt_(k1_Tt) {}
+  /// The law without a temperature (feature sets without F.thermal), as an implicit solver
+  /// builds it from its options (held by reference as above).
+  explicit LudingLaw(const Params& p)
+    requires(!F.thermal)
+      : LudingLaw(p, 0.0) {}
+  LudingLaw() = default;  ///< no parameters: assign a law before evaluating
   const Params& params() const { return *p_; }
   double k1_Tt() const { return k1_Tt_; }
   bool has_history(const History& h) const { return !h.fresh(); }
@@ -106,9 +112,16 @@ class LudingLaw {
   }
   static constexpr bool kMeanPairTimeStep = true;
 
+  /// The scales of law.hpp kHasReferenceScales: k2 r, k2 and no first-touch force (the spring
+  /// starts at zero overlap).
+  double reference_force(double r) const { return p_->k2 * r; }
+  double reference_stiffness(double /*r*/) const { return p_->k2; }
+  double first_touch_force(double /*r_eff*/) const { return 0.0; }
+
   /// Newton needs a non-negative normal stiffness: on the attractive branch (tangent -k_c, Eq 4)
   /// the iteration matrix gets k_c added (zero normal stiffness). The tangential spring is k_t of
-  /// Eq 23. (No solver runs this law implicitly yet; this re-evaluates the law for its tangent.)
+  /// Eq 23 (re-evaluates the law for its tangent; the network solver runs the linear feature set,
+  /// NetworkSolverLinear).
   IterationStiffness iteration_stiffness(const History& h, const Kin& k, const Response& r) const {
     IterationStiffness s;
     if (!r.loaded) return s;
@@ -181,8 +194,8 @@ class LudingLaw {
   }
 
  private:
-  const Params* p_;
-  double k1_Tt_;
+  const Params* p_ = nullptr;
+  double k1_Tt_ = 0.0;
 };
 static_assert(ContactLaw<LudingLaw<kLudingFull>>);
 static_assert(ContactLaw<LudingLaw<kLudingLinear>>);

@@ -390,6 +390,13 @@ class PlasticIndentationLawT {
   double tangential_work(const History& h, double kt_force, double limit, const Tan& dslip) const {
     return contact::tangential_work<D>(h.f_t, kt_force, limit, dslip);
   }
+  /// The scales of law.hpp kHasReferenceScales: the force sigma_y r (2D, per unit depth; 3D
+  /// sigma_y r^2), the stiffness sigma_y (3D: sigma_y r), the force at the first-touch overlap.
+  double reference_force(double r) const { return D == 2 ? p_.sigma_y * r : p_.sigma_y * r * r; }
+  double reference_stiffness(double r) const { return D == 2 ? p_.sigma_y : p_.sigma_y * r; }
+  double first_touch_force(double r_eff) const {
+    return loading_force<D>(p_, r_eff, first_touch_overlap(p_, r_eff));
+  }
   /// The contact area (2D: width per unit depth) of a normal force at the mean contact pressure
   /// 3 sigma_y (Eq 2); it scales the tangential spring k_t sigma_y A_c.
   double contact_area(double f_n) const { return f_n / (3.0 * p_.sigma_y); }

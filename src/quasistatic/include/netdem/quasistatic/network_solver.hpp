@@ -2,9 +2,10 @@
 // Quasi-static implicit network solver (Redanz & Fleck, Acta Mater. 49 (2001) 4325, sections 2.3-2.4).
 //
 // Each particle is a node with Dim<D>::kNodeDofs DOFs ((u1, u2, theta) for disks, (u1, u2, u3) and
-// a rotation vector for spheres); each contact a plastic-indentation element from src/contact
-// (6x6 or 12x12, contact/element.hpp). The dimension is the template parameter of NetworkSolverT<D>
-// (NetworkSolver = NetworkSolverT<2>, used by the tools; NetworkSolver3 = NetworkSolverT<3>).
+// a rotation vector for spheres); each contact an element of the contact law from src/contact
+// (6x6 or 12x12, contact/element.hpp). The dimension and the law are the template parameters of
+// NetworkSolverT<D, Law> (NetworkSolver = NetworkSolverT<2>, the plastic-indentation law, used by
+// the tools; NetworkSolver3 = NetworkSolverT<3>; NetworkSolverLinear(3): the linear spring).
 // The walls mode (BoundaryMode::Walls), the state file and the measures of StateMeasures (strain,
 // Figs 7-8 deviations) are 2D only for now; stress() gives the Eq 13 and contact stresses in both. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
 // coordinates) on the prescribed particles (the peripheral layer in die mode, every centre in
@@ -44,11 +45,13 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "netdem/contact/dim.hpp"
+#include "netdem/contact/luding_law.hpp"
 #include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/packing/periodic.hpp"
@@ -168,7 +171,7 @@ using PairAux = PairAuxT<2>;
 /// Everything a solver in dimension D needs to continue a run (the 3D layout; the 2D one below
 /// keeps the fields of the 2D state file): the particles, the contact table with its committed
 /// history, the committed forces and the predictor of the next increment. Plain data.
-template <int D>
+template <int D, class History = contact::PlasticIndentationHistoryT<D>>
 struct NetworkStateT {
   using Mat = Eigen::Matrix<double, D, D>;
   using Tan = typename contact::Dim<D>::Tan;
@@ -180,7 +183,7 @@ struct NetworkStateT {
   Mat box_deformation = Mat::Identity();
   Mat strain = Mat::Zero();
   std::vector<int> pair_i, pair_j;
-  std::vector<contact::PlasticIndentationHistoryT<D>> history;
+  std::vector<History> history;
   std::vector<PairAuxT<D>> aux;
   std::vector<double> f_n;
   std::vector<Tan> f_t;
@@ -191,7 +194,7 @@ struct NetworkStateT {
   std::vector<double> du_prev;
   Mat dE_prev = Mat::Zero();
   SolverTimings timings;
-  std::vector<contact::PlasticIndentationHistoryT<D>> wall_history;  ///< empty (walls are 2D)
+  std::vector<History> wall_history;  ///< empty (walls are 2D)
   std::vector<double> wall_f_n;
   /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
   /// the box's edges), each row's image of j (empty in other modes), the particle whose
@@ -205,12 +208,13 @@ struct NetworkStateT {
   void validate() const;
 };
 
-/// The 2D state: the fields of the 2D state file (save_state, load_state).
+/// The 2D state of the plastic-indentation law: the fields of the 2D state file (save_state,
+/// load_state).
 /// Everything a solver needs to continue a run: the particles, the contact table with its
 /// committed history, the committed forces and the predictor of the next increment. Plain data:
 /// copy it, save it (save_state), restore it (NetworkSolver(state, options)).
 template <>
-struct NetworkStateT<2> {
+struct NetworkStateT<2, contact::PlasticIndentationHistory> {
   std::vector<double> x, y, theta, r;
   std::vector<std::uint8_t> peripheral;
   double solid_area = 0, initial_density = 0, box_area0 = 0;
@@ -259,26 +263,38 @@ NetworkState load_state(const std::string& path);
 NetworkState load_state(std::istream& in, const std::string& source);
 NetworkState load_state_text(std::string_view text, const std::string& source);
 
-template <int D>
+/// The network solver in dimension D with the contact law Law (law.hpp's interface, chosen at
+/// compile time). The tools use the plastic-indentation law of Redanz & Fleck, the default.
+template <int D, class Law = contact::PlasticIndentationLawT<D>>
 class NetworkSolverT {
  public:
   static constexpr int kDim = D;
   using Mat = Eigen::Matrix<double, D, D>;
-  using State = NetworkStateT<D>;
+  using LawType = Law;
+  using Options = SolverOptionsT<typename Law::Params>;
+  using State = NetworkStateT<D, typename Law::History>;
+  /// The plastic-indentation law: the jammed state both solvers share, the section 3.4 unloading
+  /// branch (set_reversible_normal) and the 2D state file are this law's (the members compile for
+  /// it only: a static_assert, not a constraint, because clang 14 cannot match an out-of-line
+  /// definition's constraint on a class member).
+  static constexpr bool kPlastic = std::is_same_v<Law, contact::PlasticIndentationLawT<D>>;
+  /// The state has the 2D state file's layout (NetworkState: the plastic law in 2D); any other
+  /// law and dimension, the generic layout of NetworkStateT.
+  static constexpr bool kFileLayout = std::is_same_v<State, NetworkStateT<2>>;
 
   /// Throws std::invalid_argument on invalid options or packing (a packing of another dimension;
   /// in 3D the walls mode).
-  NetworkSolverT(const packing::Packing& packing, const SolverOptions& options);
+  NetworkSolverT(const packing::Packing& packing, const Options& options);
   /// Continues from a state (bit-identical to the solver it was taken from when `options` are
   /// that solver's). The boundary mode may differ; throws std::invalid_argument on a bad state.
-  NetworkSolverT(const State& state, const SolverOptions& options);
+  NetworkSolverT(const State& state, const Options& options);
   /// Starts from a jammed state (netdem/system/jammed_state.hpp, the state both solvers share):
   /// its particles in its box (the run's initial box, box deformation I), its strain, its
   /// histories (jammed.cpp); the committed forces are the law's on these histories at these
   /// positions (no Newton iteration: the state is taken as it is). options.law is the run's (the
   /// caller checks it against the state's: sys::law_difference). Throws std::invalid_argument on a
   /// bad state or wall contacts without the walls mode.
-  NetworkSolverT(const sys::JammedStateT<D>& state, const SolverOptions& options);
+  NetworkSolverT(const sys::JammedStateT<D>& state, const Options& options);
   /// The committed state as a jammed state: the rows and wall contacts with a history. Throws
   /// std::invalid_argument for a sheared box (the jammed state's box is axis-aligned).
   sys::JammedStateT<D> jammed_state() const;
@@ -297,7 +313,7 @@ class NetworkSolverT {
   void set_reversible_normal(bool reversible);
 
   State state() const;
-  const SolverOptions& options() const;
+  const Options& options() const;
   StateMeasures measures() const
     requires(D == 2);
   /// The Eq 13 and contact stresses (both dimensions; not in the walls mode, whose reactions are
@@ -337,5 +353,15 @@ using NetworkSolver = NetworkSolverT<2>;
 using NetworkSolver3 = NetworkSolverT<3>;
 extern template class NetworkSolverT<2>;
 extern template class NetworkSolverT<3>;
+
+/// The linear spring of Luding et al. (the Luding law's linear feature set: f_n = k2 u, the
+/// tangential spring alpha k2 capped at mu f_n), the law of demsolve's linear model: the network
+/// core on a second law (tests/quasistatic/test_network_law.cpp).
+template <int D>
+using LinearLawT = contact::LudingLaw<contact::kLudingLinear, D>;
+using NetworkSolverLinear = NetworkSolverT<2, LinearLawT<2>>;
+using NetworkSolverLinear3 = NetworkSolverT<3, LinearLawT<3>>;
+extern template class NetworkSolverT<2, LinearLawT<2>>;
+extern template class NetworkSolverT<3, LinearLawT<3>>;
 
 }  // namespace netdem::qs

@@ -12,6 +12,7 @@
 // continuation, kink freezing, pair relaxation, the geometric stiffness) are gone from the code;
 // their findings and the commit in which the code last existed are in docs/quasistatic.md.
 #include <limits>
+#include <type_traits>
 
 #include "netdem/contact/plastic_indentation.hpp"
 
@@ -38,10 +39,10 @@ enum class BoundaryMode { Die, Affine, Walls, Periodic };
 ///    solver before issue 28; its answers contain the drag). Kept to reproduce earlier results.
 enum class Iteration { PseudoTransient, LegacyDrag };
 
-struct SolverOptions {
+/// What the network solver's iteration takes, whatever its contact law.
+struct IterationOptions {
   BoundaryMode mode = BoundaryMode::Die;
   bool rotations = true;  ///< false: forbid every particle rotation
-  contact::PlasticIndentationParams law;
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
   int max_newton = 10;             ///< Newton iterations per increment (then the residual is carried)
   double residual_tol = 1e-3;      ///< converged when RMS(residual) <= tol * mean normal contact force ...
@@ -112,6 +113,18 @@ struct SolverOptions {
   bool verbose = false;  ///< print every Newton iteration on stderr
 
   void validate() const;  ///< throws std::invalid_argument (one line)
+};
+
+/// The network solver's options for a contact law with parameters LawParams (the law of
+/// NetworkSolverT<D, Law>: LawParams = Law::Params). LawParams gives validate() and frictional().
+template <class LawParams>
+struct SolverOptionsT : IterationOptions {
+  LawParams law;
+
+  void validate() const {  ///< throws std::invalid_argument (one line)
+    law.validate();
+    IterationOptions::validate();
+  }
   /// Whether an increment runs the trust region on the energy: the pseudo-transient iteration with
   /// energy_merit and a frictionless law.
   bool uses_energy_merit() const {
@@ -122,16 +135,23 @@ struct SolverOptions {
     return uses_energy_merit() ? (law.frictional() ? "energy-friction" : "energy") : "residual";
   }
 
+  // ---- the presets of the tools (the plastic-indentation law of Redanz & Fleck; they compile for
+  // it only) ----
+  static constexpr bool kPlastic = std::is_same_v<LawParams, contact::PlasticIndentationParams>;
   /// `netsolve compact`: sticking, reversible Eq 2, drag per unit strain (viscosity 0.01 at
   /// |dE| = 3.57e-4, the increment of the 100-increment default run), tolerance 3e-3, three
   /// chord steps, GMRES to 0.3 of the Newton residual, line search 1, 1/2, 1/4.
-  static SolverOptions compact();
+  static SolverOptionsT compact();
   /// `netsolve yield` precompaction: the same as compact().
-  static SolverOptions yield_precompaction();
+  static SolverOptionsT yield_precompaction();
   /// `netsolve yield` unloading and probes: SolverOptions{} (per-increment drag 0.01, tolerance
   /// 1e-3, full Newton, GMRES 1e-2, five backtracks) with sticking friction on the section 3.4
   /// elastic unloading branch (law.reversible = false).
-  static SolverOptions yield_probe();
+  static SolverOptionsT yield_probe();
 };
+
+/// The options of the tools' network solver: the plastic-indentation law.
+using SolverOptions = SolverOptionsT<contact::PlasticIndentationParams>;
+extern template struct SolverOptionsT<contact::PlasticIndentationParams>;
 
 }  // namespace netdem::qs
