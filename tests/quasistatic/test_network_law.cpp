@@ -21,31 +21,34 @@
 
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "network_test_util.hpp"
+#include "periodic_lattices.hpp"
 
 namespace {
 
 namespace qs = netdem::qs;
 using netdem::packing::Packing;
 
-/// m^D particles of radius r on the square (cubic) lattice of spacing 2r (touching), centres
-/// jittered by up to `jitter` and radii grown by up to `grow` (seeded); box [0, 2 r m]^D.
+/// m^D touching particles of radius r on the square (cubic) lattice of spacing 2r, box
+/// [0, 2 r m]^D (the shared test lattices), their centres jittered by up to `jitter` and their radii
+/// grown by up to `grow` (seeded).
 template <int D>
 Packing lattice(int m, double r, double jitter = 0.0, double grow = 0.0, unsigned seed = 1) {
+  Packing pk;
+  if constexpr (D == 2) {
+    pk = netdem::test::square_lattice(m, m, r);
+  } else {
+    pk = netdem::test::cubic_lattice(m, r);
+    pk.periodic = false;  // a box with a die or affine boundary
+  }
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  Packing pk;
-  pk.dim = D;
-  const int mz = D == 3 ? m : 1;
-  for (int k = 0; k < mz; ++k)
-    for (int j = 0; j < m; ++j)
-      for (int i = 0; i < m; ++i) {
-        pk.x.push_back((2 * i + 1) * r + jitter * (2 * u(rng) - 1));
-        pk.y.push_back((2 * j + 1) * r + jitter * (2 * u(rng) - 1));
-        if (D == 3) pk.z.push_back((2 * k + 1) * r + jitter * (2 * u(rng) - 1));
-        pk.r.push_back(r + grow * u(rng));
-      }
-  const double L = 2 * r * m;
-  pk.box = D == 3 ? netdem::packing::Box{0.0, 0.0, L, L, 0.0, L} : netdem::packing::Box{0.0, 0.0, L, L};
+  for (std::size_t p = 0; p < pk.size(); ++p) {
+    pk.x[p] += jitter * (2 * u(rng) - 1);
+    pk.y[p] += jitter * (2 * u(rng) - 1);
+    if (D == 3) pk.z[p] += jitter * (2 * u(rng) - 1);
+    pk.r[p] += grow * u(rng);
+  }
   return pk;
 }
 
