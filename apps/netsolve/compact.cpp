@@ -229,7 +229,8 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["final"] = {{"D", last.density},       {"S11", last.S11 / sy},        {"S22", last.S22 / sy},
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
-                {"E22", last.E22},          {"E12", last.E12}};
+                {"E22", last.E22},          {"E12", last.E12},
+                {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone}};
   j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
                  {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
                  {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
@@ -278,7 +279,7 @@ struct CompactRows {
     csv += "E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
            "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
            "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,"
-           "unconverged_substeps\n";
+           "unconverged_substeps,rattlers,Z_backbone\n";
     conv.tol = so.residual_tol;
     if (so.iteration == qs::Iteration::PseudoTransient) conv.max_unconverged_fraction = 0.0;
     growth.tol = so.residual_tol;
@@ -289,14 +290,15 @@ struct CompactRows {
     csv += fmt::format("{}", row.increment);
     if (legs) csv += fmt::format(",{}", row.leg);
     csv += fmt::format(",{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{},{},{:.6g}\n",
                        m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
                        m.dev_tangential_rotations, m.affine_tangential, row.report.residual, row.report.residual_rms, row.report.newton_residual,
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0,
                        m.net_force_ratio, m.eq13_vs_contacts, row.report.substeps, row.report.instability ? 1 : 0,
-                       qs::drag_work_fraction(row.report), row.report.unconverged_substeps);
+                       qs::drag_work_fraction(row.report), row.report.unconverged_substeps, m.rattlers,
+                       m.Z_backbone);
     if (row.increment > 0) {
       instabilities += row.report.instability;
       unjammed += row.report.unjammed;

@@ -15,6 +15,7 @@
 #include "netdem/dynamic/solver.hpp"
 #include "netdem/field_error.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "netdem/system/rattlers.hpp"
 
 namespace netdem::dem {
 
@@ -149,10 +150,8 @@ void measure(const DynamicSolverT<D>& s, PeriodicPackSummary& m, double r_mean, 
   std::vector<ContactInfo> cs;
   s.contacts(cs);
   const std::size_t n = s.particles().size();
-  std::vector<int> deg(n, 0);
   double sum_ov = 0.0, max_ov = 0.0, sum_f = 0.0;
   for (const auto& c : cs) {
-    ++deg[c.i], ++deg[c.j];
     sum_ov += c.overlap;
     max_ov = std::max(max_ov, c.overlap);
     sum_f += c.f_n;
@@ -162,24 +161,11 @@ void measure(const DynamicSolverT<D>& s, PeriodicPackSummary& m, double r_mean, 
   m.mean_overlap = cs.empty() ? 0.0 : sum_ov / static_cast<double>(cs.size()) / r_mean;
   m.max_overlap = max_ov / r_mean;
   // rattlers: fewer than D + 1 contacts (frictional: fewer than D), removed until none is left
-  const int need = friction ? D : D + 1;
-  std::vector<std::vector<std::uint32_t>> adj(n);
-  for (const auto& c : cs) adj[c.i].push_back(c.j), adj[c.j].push_back(c.i);
-  std::vector<std::uint8_t> gone(n, 0);
-  std::vector<std::uint32_t> stack;
-  for (std::size_t i = 0; i < n; ++i)
-    if (deg[i] < need) gone[i] = 1, stack.push_back(static_cast<std::uint32_t>(i));
-  while (!stack.empty()) {
-    const std::uint32_t i = stack.back();
-    stack.pop_back();
-    for (std::uint32_t j : adj[i])
-      if (!gone[j] && --deg[j] < need) gone[j] = 1, stack.push_back(j);
-  }
-  std::size_t kept = 0, kept_contacts = 0;
-  for (std::size_t i = 0; i < n; ++i) kept += !gone[i];
-  for (const auto& c : cs) kept_contacts += !gone[c.i] && !gone[c.j];
-  m.rattler_fraction = static_cast<double>(n - kept) / static_cast<double>(n);
-  m.Z_backbone = kept > 0 ? 2.0 * static_cast<double>(kept_contacts) / static_cast<double>(kept) : 0.0;
+  std::vector<int> pi, pj;
+  for (const auto& c : cs) pi.push_back(static_cast<int>(c.i)), pj.push_back(static_cast<int>(c.j));
+  const sys::Backbone bb = sys::prune_rattlers(n, pi, pj, {}, friction ? D : D + 1);
+  m.rattler_fraction = static_cast<double>(bb.rattlers) / static_cast<double>(n);
+  m.Z_backbone = bb.Z;
   if constexpr (D == 2) {  // hexatic order over each particle's contacts
     std::vector<std::complex<double>> psi(n, 0.0);
     std::vector<int> cnt(n, 0);

@@ -12,6 +12,7 @@
 #include <Eigen/LU>
 
 #include "netdem/system/affine_deviation.hpp"
+#include "netdem/system/rattlers.hpp"
 #include "solver_impl.hpp"
 
 namespace netdem::qs {
@@ -93,6 +94,18 @@ StateMeasures NetworkSolverT<D, L>::measures() const
     sum_tr += std::fabs(s.aux[k].slip - a.tangential);
   }
   SC += SW;
+  {  // rattlers (issue 28 item 4): fewer than D + 1 load-bearing contacts, walls included, recursively
+    std::vector<int> bi, bj, wall;
+    for (std::size_t k = 0; k < s.pi.size(); ++k)
+      if (s.fn_c[k] > 0.0) bi.push_back(s.pi[k]), bj.push_back(s.pj[k]);
+    if (s.walls() && s.wfn_c.size() == 4 * static_cast<std::size_t>(s.n)) {
+      wall.assign(static_cast<std::size_t>(s.n), 0);
+      for (std::size_t q = 0; q < s.wfn_c.size(); ++q) wall[q / 4] += s.wfn_c[q] > 0.0;
+    }
+    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, wall, 3);
+    m.rattlers = static_cast<int>(bb.rattlers);
+    m.Z_backbone = bb.Z;
+  }
   SC /= V;
   m.S11_contacts = SC(0, 0);
   m.S22_contacts = SC(1, 1);

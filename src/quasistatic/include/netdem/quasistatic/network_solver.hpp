@@ -120,6 +120,11 @@ struct StateMeasures {
   double eq13_vs_contacts = 0;
   double Z = 0;                      ///< 2 x load-bearing contacts / N
   int contacts = 0, sliding = 0;
+  /// Rattlers: particles left out when every particle with fewer than D + 1 load-bearing contacts
+  /// (walls included) is removed, recursively (sys::prune_rattlers); Z_backbone = 2 x contacts
+  /// among the others / their number.
+  int rattlers = 0;
+  double Z_backbone = 0;
   double mean_normal_force = 0;
   // Fig 7 / Fig 8 affine-deviation measures (section 3.3)
   double dev_normal_mean_ratio = 0;  ///< < |u_N - u_N^A| / u_N^A >
