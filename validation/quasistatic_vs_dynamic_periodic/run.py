@@ -304,22 +304,29 @@ def evaluate(R, mode, runs):
                         note = ""
                     row.update(verdict=verdict, note="; ".join(t for t in (dist, note, unconv) if t))
                 rows.append(row)
-            # the regularisation: netsolve's answer at the scales 0.1, 1, 10
-            col = "Sdev" if pk == "shear" else "S22"
-            vals = [value(nets[s], col, x, pk, d0) if nets[s] is not None else float("nan") for s in SCALES]
-            uas = [unaccepted(nets[s]) if nets[s] is not None else None for s in SCALES]
-            if d0 is None or any(nets[s] is None or not nets[s].ok for s in SCALES):
-                v, note = f"{MISSING} (netsolve runs at {len(SCALES)} scales not all there)", ""
-            elif not all(np.isfinite(vals)) or not np.isfinite(scale):
-                v, note = "invalid", "point not reached or no DEM scale"
-            else:
-                spread = max(vals) - min(vals)
-                conv = all(u is not None and u[0] == 0 for u in uas)
-                v = "PASS" if spread <= DRAG_BAND * scale and conv else "FAIL"
-                note = f"{100 * spread / scale:.3f} % of scale" + ("" if conv else "; unaccepted increments: " + " / ".join(
-                    str(u[0]) if u else "?" for u in uas))
-            drag_rows.append(dict(case=name, x=x, col=col, vals=vals, verdict=v, note=note))
+            drag_rows += drag_rows_of(R, mode, runs, name, c, x, scale, d0)
     return rows, drag_rows
+
+
+def drag_rows_of(R, mode, runs, name, c, x, scale, d0):
+    """The regularisation lines of combination c at the point x: netsolve's S22 (Sdev in shear) at the
+    scales 0.1, 1, 10 must lie within DRAG_BAND of the scale, every increment accepted."""
+    pk = c["pk"]
+    nets = {s: R.get(f"net/{name}/x{s:g}") for s in SCALES}
+    col = "Sdev" if pk == "shear" else "S22"
+    vals = [value(nets[s], col, x, pk, d0) if nets[s] is not None else float("nan") for s in SCALES]
+    uas = [unaccepted(nets[s]) if nets[s] is not None else None for s in SCALES]
+    if d0 is None or any(nets[s] is None or not nets[s].ok for s in SCALES):
+        v, note = f"{MISSING} (netsolve runs at {len(SCALES)} scales not all there)", ""
+    elif not all(np.isfinite(vals)) or not np.isfinite(scale):
+        v, note = "invalid", "point not reached or no DEM scale"
+    else:
+        spread = max(vals) - min(vals)
+        conv = all(u is not None and u[0] == 0 for u in uas)
+        v = "PASS" if spread <= DRAG_BAND * scale and conv else "FAIL"
+        note = f"{100 * spread / scale:.3f} % of scale" + ("" if conv else "; unaccepted increments: " + " / ".join(
+            str(u[0]) if u else "?" for u in uas))
+    return [dict(case=name, x=x, col=col, vals=vals, verdict=v, note=note)]
 
 
 def evaluate_yield(R, mode):
@@ -408,15 +415,17 @@ def unaccepted_substeps(r):
 
 
 def run_table(R, names):
-    lines = ["| run | status | wall time [s] | unaccepted increments | unaccepted sub-increments |",
-             "|---|---|---|---|---|"]
+    lines = ["| run | status | wall time [s] | unaccepted increments | unaccepted sub-increments | instability events |",
+             "|---|---|---|---|---|---|"]
     for n in names:
         r = R[n]
         ua = unaccepted(r) if r.tool == "netsolve" else None
         us = unaccepted_substeps(r) if r.tool == "netsolve" else None
+        ev = int(np.sum(r.h["instability"][1:] > 0.5)) if r.tool == "netsolve" and r.ok and "instability" in r.h else None
         wall = r.meta.get("wall_s")
         lines.append(f"| `{n}` | {r.status if r.ok else 'missing'} | {fmt(wall, 1) if wall is not None else '—'} | "
-                     f"{'—' if ua is None else f'{ua[0]} of {ua[1]}'} | {'—' if us is None else us} |")
+                     f"{'—' if ua is None else f'{ua[0]} of {ua[1]}'} | {'—' if us is None else us} | "
+                     f"{'—' if ev is None else ev} |")
     return lines
 
 
@@ -459,6 +468,18 @@ def report_head(mode, packs):
     return L
 
 
+
+def drag_section(drag_rows):
+    """The regularisation table's lines."""
+    L = ["", "## The regularisation does not move netsolve's answer", "",
+         f"netsolve at `--regularisation-scale` {' / '.join(f'{s:g}' for s in SCALES)}; band: spread ≤ "
+         f"{100 * DRAG_BAND:g} % of the scale, every increment accepted (set with the case, before its first run).", "",
+         "| case | point | quantity | ×1 / ×0.1 / ×10 | result | note |", "|---|---|---|---|---|---|"]
+    for d in drag_rows:
+        L.append(f"| {d['case']} | {d['x']:g} | {d['col']} | {' / '.join(fmt(v) for v in d['vals'])} | "
+                 f"{d['verdict']} | {d['note']} |")
+    return L
+
 def write_report(R, mode, runs, out, binaries, packs):
     rows, drag_rows = evaluate(R, mode, runs)
     figs = make_figures(R, mode, runs, out)
@@ -469,13 +490,7 @@ def write_report(R, mode, runs, out, binaries, packs):
         pt = f"E = {r['x']:g}" if r["c"]["pk"] == "shear" else f"D − D0 = {r['x']:g}"
         L.append(f"| {r['case']} | {pt} | {r['label']} | {fmt(r['net'])} | {fmt(r['s0'])} ± {fmt(r['se'])} | "
                  f"{fmt(r['scale'])} | {r['verdict']} | {r['note']} |")
-    L += ["", "## The regularisation does not move netsolve's answer", "",
-          f"netsolve at `--regularisation-scale` {' / '.join(f'{s:g}' for s in SCALES)}; band: spread ≤ "
-          f"{100 * DRAG_BAND:g} % of the scale, every increment accepted (set with the case, before its first run).", "",
-          "| case | point | quantity | ×1 / ×0.1 / ×10 | result | note |", "|---|---|---|---|---|---|"]
-    for d in drag_rows:
-        L.append(f"| {d['case']} | {d['x']:g} | {d['col']} | {' / '.join(fmt(v) for v in d['vals'])} | "
-                 f"{d['verdict']} | {d['note']} |")
+    L += drag_section(drag_rows)
     ylines, yverdicts = yield_section(R, mode)
     L += ylines
     c = tally([r["verdict"] for r in rows] + [d["verdict"] for d in drag_rows] + yverdicts)
