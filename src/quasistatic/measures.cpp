@@ -48,7 +48,10 @@ StateMeasures NetworkSolverT<D, L>::measures() const
   // BoundaryMode::Walls: the reactions are the walls' forces, applied at the contact points on the
   // faces (the same Eq 13 with the walls as the boundary); they also enter the contact stress below
   Eigen::Matrix2d SW = Eigen::Matrix2d::Zero();  // wall contacts' share of the contact stress
+  // the load-bearing contacts per particle with the walls, and the load-bearing pairs (rattlers)
+  std::vector<int> wall_contacts, bi, bj;
   if (s.walls() && s.wfn_c.size() == 4 * static_cast<std::size_t>(s.n)) {
+    wall_contacts.assign(static_cast<std::size_t>(s.n), 0);
     const double faces[4] = {s.Fbox(0, 0) * s.box0.x_min, s.Fbox(0, 0) * s.box0.x_max, s.Fbox(1, 1) * s.box0.y_min,
                              s.Fbox(1, 1) * s.box0.y_max};
     const Eigen::Vector2d normal[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};  // inward
@@ -56,6 +59,7 @@ StateMeasures NetworkSolverT<D, L>::measures() const
       for (int w = 0; w < 4; ++w) {
         const double fn = s.wfn_c[4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
         if (!(fn > 0.0)) continue;
+        ++wall_contacts[static_cast<std::size_t>(p)];
         const Eigen::Vector2d xp = s.at(p);
         const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], xp.y()) : Eigen::Vector2d(xp.x(), faces[w]);
         const Eigen::Vector2d Fapp = fn * normal[w];
@@ -81,6 +85,8 @@ StateMeasures NetworkSolverT<D, L>::measures() const
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
+    bi.push_back(i);
+    bj.push_back(j);
     const auto g = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]);
     const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
     SC -= fj * (g.L * g.n).transpose();
@@ -95,14 +101,7 @@ StateMeasures NetworkSolverT<D, L>::measures() const
   }
   SC += SW;
   {  // rattlers (issue 28 item 4): fewer than D + 1 load-bearing contacts, walls included, recursively
-    std::vector<int> bi, bj, wall;
-    for (std::size_t k = 0; k < s.pi.size(); ++k)
-      if (s.fn_c[k] > 0.0) bi.push_back(s.pi[k]), bj.push_back(s.pj[k]);
-    if (s.walls() && s.wfn_c.size() == 4 * static_cast<std::size_t>(s.n)) {
-      wall.assign(static_cast<std::size_t>(s.n), 0);
-      for (std::size_t q = 0; q < s.wfn_c.size(); ++q) wall[q / 4] += s.wfn_c[q] > 0.0;
-    }
-    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, wall, 3);
+    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, wall_contacts, D + 1);
     m.rattlers = static_cast<int>(bb.rattlers);
     m.Z_backbone = bb.Z;
   }
