@@ -32,6 +32,8 @@ void DynamicSolverT<D>::set_strain_rate(double e11, double e22, double e12) {
   edot_[1] = e22;
   edot_[2] = e12;
   sheared_ = sheared_ || e12 != 0.0;
+  W_[0][1] = W_[1][0] = 0.0;  // a symmetric L (set_velocity_gradient sets the spin after this)
+  spun_ = false;
 }
 
 template <int D>
@@ -50,6 +52,8 @@ void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33, dou
     edot3_[0] = e11;
     edot3_[1] = e22;
     edot3_[2] = e33;
+    for (auto& row : W_) row[0] = row[1] = row[2] = 0.0;  // a symmetric L (set_velocity_gradient: the spin after)
+    spun_ = false;
     const double L[3][3] = {{e11, e12, e13}, {e12, e22, e23}, {e13, e23, e33}};
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) L3_[a][b] = L[a][b];
@@ -69,8 +73,9 @@ void DynamicSolverT<D>::set_strain_rate3(double e11, double e22, double e33, dou
 
 template <int D>
 void DynamicSolverT<D>::set_affine_velocities() {
-  if (periodic_) {  // the velocities are the fluctuations about the affine field
-    for (auto* v : {&P_.vel, &P_.spin}) std::fill(v->begin(), v->end(), 0.0);
+  if (periodic_) {  // the velocities are the fluctuations about the affine field, the spins its spin
+    std::fill(P_.vel.begin(), P_.vel.end(), 0.0);
+    for (std::size_t i = 0; i < P_.spin.size(); ++i) P_.spin[i] = affine_spin(static_cast<int>(i % ParticlesT<D>::kRot));
     return;
   }
   if constexpr (D == 3) {
@@ -196,6 +201,10 @@ std::array<double, 4> expm1_sym2(double a, double b, double c, double t) {
 
 template <int D>
 void DynamicSolverT<D>::impose_affine_motion(double dt) {
+  if (spun_) {  // a general velocity gradient (periodic cells only)
+    impose_general_motion(dt);
+    return;
+  }
   if constexpr (D == 3) {  // x_0 + exp(L dt)(x - x_0) exactly (set_strain_rate3)
     double g[3], md[3];
     for (int a = 0; a < 3; ++a) {
@@ -324,7 +333,8 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
         const double r = P_.r[i], I = P_.inertia[i];
         const double* const t = &P_.torque[D * i];  // (kRot = D)
         const double* const w = &P_.spin[D * i];
-        const double mx = (t[0] + c * I * w[0]) / r, my = (t[1] + c * I * w[1]) / r, mz = (t[2] + c * I * w[2]) / r;
+        const double mx = (t[0] + c * I * (w[0] - affine_spin(0))) / r, my = (t[1] + c * I * (w[1] - affine_spin(1))) / r,
+                     mz = (t[2] + c * I * (w[2] - affine_spin(2))) / r;
         sum += mx * mx + my * my + mz * mz;
         ++n;
       }
@@ -361,7 +371,7 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
     double ax = edot_[0] * dx + edot_[2] * dy, ay = edot_[1] * dy + edot_[2] * dx;
     if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
     const double fx = f[0] + c * P_.mass[i] * (v[0] - ax), fy = f[1] + c * P_.mass[i] * (v[1] - ay);
-    const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * P_.spin[i]) / P_.r[i] : 0.0;
+    const double m = rotations_ ? (P_.torque[i] + c * P_.inertia[i] * (P_.spin[i] - affine_spin(0))) / P_.r[i] : 0.0;
     sum += fx * fx + fy * fy + m * m;
     ++n;
   }
@@ -375,7 +385,7 @@ void DynamicSolverT<D>::apply_affine_drag() {
     for (std::size_t i = 0; i < P_.size(); ++i) {
       const bool pres = !is_prescribed_.empty() && is_prescribed_[i];
       if (!(pres && spin_held_[i])) {
-        for (int k = 0; k < 3; ++k) P_.torque[D * i + k] -= c * P_.inertia[i] * P_.spin[D * i + k];  // (kRot = D)
+        for (int k = 0; k < 3; ++k) P_.torque[D * i + k] -= c * P_.inertia[i] * (P_.spin[D * i + k] - affine_spin(k));  // (kRot = D)
       }
       if (pres) continue;
       double a[3];
@@ -399,7 +409,7 @@ void DynamicSolverT<D>::apply_affine_drag() {
     if (periodic_) ax = ay = 0.0;  // the velocities are the fluctuations
     P_.force[D * i] -= c * P_.mass[i] * (P_.vel[D * i] - ax);
     P_.force[D * i + 1] -= c * P_.mass[i] * (P_.vel[D * i + 1] - ay);
-    P_.torque[i] -= c * P_.inertia[i] * P_.spin[i];
+    P_.torque[i] -= c * P_.inertia[i] * (P_.spin[i] - affine_spin(0));
   }
 }
 

@@ -164,6 +164,7 @@ void DynamicSolverT<D>::build_table_periodic() {
   double rmax = 0.0;
   for (double r : P_.r) rmax = std::max(rmax, r);
   range_max_ = 2.0 * rmax + skin_;
+  reduce_cell();
   if (n >= 2 && !(cell_.min_width() >= 2.0 * range_max_))
     breach("cell",
            fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "

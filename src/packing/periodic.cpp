@@ -30,6 +30,16 @@ PeriodicCellT<D> periodic_cell(const Packing& p) {
       throw std::invalid_argument(fmt::format("periodic cell: {} cell numbers, expected {}", p.cell.size(), D * D));
     for (int a = 0; a < D; ++a)  // vector a is column a
       for (int b = 0; b < D; ++b) c.h(b, a) = p.cell[static_cast<std::size_t>(D * a + b)];
+    // the box is the cell's bounding box: the first corner sits above the box's lower corner by
+    // the most negative corner offset along each axis (zero unless a vector has a negative component)
+    typename PeriodicCellT<D>::Vec low = PeriodicCellT<D>::Vec::Zero();
+    for (int k = 1; k < (1 << D); ++k) {
+      typename PeriodicCellT<D>::Vec corner = PeriodicCellT<D>::Vec::Zero();
+      for (int a = 0; a < D; ++a)
+        if (k & (1 << a)) corner += c.h.col(a);
+      low = low.cwiseMin(corner);
+    }
+    c.origin -= low;
   }
   return c;
 }
@@ -177,11 +187,12 @@ void validate_periodic_d(const Packing& p) {
     }
     const double b_hi[3] = {p.box.x_max, p.box.y_max, p.box.z_max};
     const double scale = c.h.cwiseAbs().maxCoeff();
+    const double b_lo[3] = {p.box.x_min, p.box.y_min, p.box.z_min};
     for (int a = 0; a < D; ++a)
-      if (!(std::abs(lo[a] - c.origin[a]) <= 1e-9 * scale && std::abs(hi[a] - b_hi[a]) <= 1e-9 * scale))
+      if (!(std::abs(lo[a] - b_lo[a]) <= 1e-9 * scale && std::abs(hi[a] - b_hi[a]) <= 1e-9 * scale))
         fail(fmt::format("the box is not the bounding box of the periodic cell along axis {} (cell from {:.9g} to "
-                         "{:.9g}, box from {:.9g} to {:.9g}); the cell's first corner is the box's lower corner",
-                         a, lo[a], hi[a], c.origin[a], b_hi[a]));
+                         "{:.9g}, box from {:.9g} to {:.9g})",
+                         a, lo[a], hi[a], b_lo[a], b_hi[a]));
   }
   const typename Cell::Mat hinv = c.h.inverse();
   double rmax = 0.0;

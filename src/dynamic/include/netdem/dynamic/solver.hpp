@@ -175,6 +175,9 @@ struct DynamicOptions {
   /// friction of the walls (flat, R* = r_i).
   contact::PlasticIndentationParams plastic;
   double plastic_wall_mu = 0.0;
+  /// Periodic cells: re-map the cell to its reduced (least tilted) equivalent at the table builds
+  /// (Lees-Edwards; DynamicSolverT::cell_remaps()). false: the cell keeps its vectors (tests).
+  bool cell_remap = true;
   /// Throws std::invalid_argument with one line for an invalid value.
   void validate() const;
 };
@@ -389,6 +392,16 @@ class DynamicSolverT {
                  const packing::PeriodicCellT<D>& cell, const DynamicOptions& options);
   /// A periodic cell (the constructors above).
   bool periodic() const { return periodic_; }
+  /// Periodic cells only (issue 29): a general velocity gradient L (row a, column b: d v_a / d x_b),
+  /// not necessarily symmetric: simple shear [[0, g], [0, 0]], a rigid spin. The cell follows
+  /// h <- exp(L dt) h; the symmetric part is the strain rate (strain_rate_*), W = (L - L^T) / 2 the
+  /// spin, the affine angular velocity of the particles (set_affine_velocities(), the affine drag
+  /// on the spins). set_strain_rate() and set_strain_rate3() set a symmetric L (W = 0).
+  void set_velocity_gradient(const Eigen::Matrix<double, D, D>& L);
+  /// The Lees-Edwards re-mappings of the cell so far (docs/dynamic.md "Periodic cell"): at a table
+  /// build a cell vector b is replaced by b - k a (k the nearest integer to b.a / a.a) when its
+  /// projection on another vector a exceeds half of a's length, until no vector does.
+  std::size_t cell_remaps() const { return cell_remaps_; }
   /// The periodic cell now (periodic() only; its h the initial one deformed by the strain so far).
   const packing::PeriodicCellT<D>& cell() const { return cell_; }
   /// The periodic packing of the current state: every centre wrapped into the cell, the radii, the
@@ -640,6 +653,12 @@ class DynamicSolverT {
   packing::PeriodicCellT<D> cell_;
   Eigen::Matrix<double, D, D> F_build_ = Eigen::Matrix<double, D, D>::Identity();
   double range_max_ = 0.0;  ///< 2 r_max + skin at the last build
+  double W_[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  ///< the spin of set_velocity_gradient (zeros beyond D)
+  bool spun_ = false;                                     ///< W_ != 0
+  std::size_t cell_remaps_ = 0;
+  void reduce_cell();                   ///< the Lees-Edwards re-mapping (cell_remaps())
+  void impose_general_motion(double dt);  ///< periodic with a spin: x <- x + (exp(L dt) - I)(x - origin)
+  double affine_spin(int k) const;      ///< component k of the particles' affine angular velocity
   void build_table_periodic();
   void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
   void remove_mean_velocity();
