@@ -111,6 +111,8 @@ template <int D>
 void check_boundary(const DemCompactArgs& a, bool walls) {
   if (walls && a.affine) throw UsageError("--affine and --boundary walls exclude each other (affine prescribes every centre)");
   const bool periodic = a.boundary == "periodic";
+  if (a.simple_shear && !periodic)
+    throw UsageError("--simple-shear needs --boundary periodic (walls and the peripheral layer stay axis-aligned)");
   if (periodic) {
     if (a.affine)
       throw UsageError("--affine and --boundary periodic exclude each other (in a periodic cell the cell follows the strain "
@@ -223,6 +225,7 @@ nlohmann::json compact_summary(const std::string& command, const DemCompactArgs&
   j["prescribed"] = prescribed;
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", path.name}};
+  if (a.boundary == "periodic") j["simple_shear"] = a.simple_shear;
   j["strain_rate"] = {{"gamma_dot", rate.gamma_dot}};
   for (std::size_t k = 0; k < lab.size(); ++k) {
     j["path"][std::string("E") + lab[k]] = path.E[k];
@@ -264,6 +267,7 @@ void add_results(nlohmann::json& j, const CompactionSummaryT<D>& r, const Dynami
     for (int c = 0; c < D; ++c)
       for (int r = 0; r < D; ++r) cell.push_back(s.cell().h(r, c));
     fin["cell"] = cell;
+    fin["cell_remaps"] = s.cell_remaps();
   }
   j["final"] = fin;
   if (walls) {
@@ -385,6 +389,7 @@ CompactionOptions compaction_options(const DemCompactArgs& a) {
   co.target_density = a.to_density;
   co.target_strain = a.to_strain;
   co.precompact_density = a.precompact_density;
+  co.simple_shear = a.simple_shear;
   co.precompact_increments = a.precompact_increments;
   co.inertial_number = a.inertial_number;
   co.increments = a.increments;
@@ -487,7 +492,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   DynamicSolverT<D> s = jammed      ? solver_from_jammed(*jammed, 1.0, box, o)
                         : periodic  ? DynamicSolverT<D>(std::move(P), o.plastic, packing::periodic_cell<D>(pk), o)
                                     : DynamicSolverT<D>(std::move(P), o.plastic, box, o);
-  set_strain_rate(s, legs.front().rate.rate);
+  set_strain_rate(s, legs.front().rate.rate, co.simple_shear);
   s.set_affine_velocities();
   const std::vector<std::uint32_t> pre = prescribe(s, pk, a, walls, periodic);
   s.set_rotations(!a.no_rotation);

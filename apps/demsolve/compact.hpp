@@ -20,6 +20,7 @@ struct DemCompactArgs {
   std::string normal_unloading = netdem::app::netsolve::LawArgs{}.normal_unloading;
   std::vector<double> snapshots = {0.82, 0.84, 0.85};  ///< densities, a set: sorted before use
   bool affine = false, no_rotation = false, quiet = false, overwrite = false;
+  bool simple_shear = false;  ///< --boundary periodic: the path's shear rates as simple shear
   double to_density = 0.85;
   double to_strain = 0.0;  ///< > 0: run --path to the equivalent strain |E| = to_strain instead
   /// > 0: a hydrostatic precompaction to this density first (history.csv column `leg`)

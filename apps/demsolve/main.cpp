@@ -140,6 +140,8 @@ DemCompactCli add_dem_compact(CLI::App& app, DemCompactArgs& dc, std::string& ou
   dcomp->add_option("--boundary", dc.boundary, "layer: netsolve's die mode (peripheral layer prescribed); walls: four rigid "
                                                "frictionless walls driven along the path; periodic: a periodic cell "
                                                "following the path (--packing of netsolve pack --periodic)")->capture_default_str();
+  dcomp->add_flag("--simple-shear", dc.simple_shear, "--boundary periodic: the path's shear rates as simple shear (x moves "
+                                                     "with y, L12 = 2 E12): the cell tilts and is re-mapped (Lees-Edwards)");
   dcomp->add_option("--normal-unloading", dc.normal_unloading, "reversible (Eq 2 retraced) | elastic (section 3.4 branch)")
       ->check(CLI::IsMember({"reversible", "elastic"}))
       ->capture_default_str();

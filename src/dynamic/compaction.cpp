@@ -259,7 +259,16 @@ std::vector<CompactionLegT<D>> compaction_legs(const sys::StrainPathT<D>& path, 
 }
 
 template <int D>
-void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& e) {
+void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& e, bool simple_shear) {
+  if (simple_shear) {
+    Eigen::Matrix<double, D, D> L = Eigen::Matrix<double, D, D>::Zero();
+    for (int k = 0; k < kVoigt<D>; ++k) {
+      const int a = sys::voigt_row<D>(k), b = sys::voigt_col<D>(k);
+      L(std::min(a, b), std::max(a, b)) = a == b ? e[static_cast<std::size_t>(k)] : 2.0 * e[static_cast<std::size_t>(k)];
+    }
+    s.set_velocity_gradient(L);  // refuses a solver without a periodic cell
+    return;
+  }
   if constexpr (D == 2) {
     s.set_strain_rate(e[0], e[1], e[2]);
   } else {
@@ -279,6 +288,8 @@ void CompactionOptions::check_numbers() const {
 template <int D>
 void CompactionOptions::validate(const sys::StrainPathT<D>& path, double initial_density) const {
   check_numbers();
+  if (simple_shear && !path.shear())
+    throw FieldError("simple_shear", fmt::format("simple shear needs a path with a shear rate, {} has none", path.name));
   double start = initial_density;
   const char* from = "current density";
   if (precompacts()) {
@@ -394,7 +405,7 @@ class LegRunner {
       const auto kk = static_cast<std::size_t>(k);
       dL(sys::voigt_row<D>(k), sys::voigt_col<D>(k)) = dL(sys::voigt_col<D>(k), sys::voigt_row<D>(k)) = to[kk] - from[kk];
     }
-    set_strain_rate(s_, to);
+    set_strain_rate(s_, to, o_.simple_shear);
     s_.shift_affine_velocities(dL);
     t_start_ = s_.time();
   }
@@ -533,7 +544,7 @@ CompactionSummaryT<D> run_compaction(DynamicSolverT<D>& s, const CompactionRateT
   template CompactionRateT<D> compaction_rate_to_strain<D>(const sys::StrainPathT<D>&, double, double, double);        \
   template std::vector<CompactionLegT<D>> compaction_legs<D>(const sys::StrainPathT<D>&, const CompactionOptions&,     \
                                                              double);                                                  \
-  template void set_strain_rate<D>(DynamicSolverT<D>&, const Voigt<D>&);                                               \
+  template void set_strain_rate<D>(DynamicSolverT<D>&, const Voigt<D>&, bool);                                               \
   template void CompactionOptions::validate<D>(const sys::StrainPathT<D>&, double) const;                              \
   template CompactionSummaryT<D> run_compaction<D>(DynamicSolverT<D>&, const CompactionRateT<D>&,                      \
                                                    const CompactionOptions&, CompactionObserverT<D>&);                \

@@ -3,7 +3,8 @@
 # its seed, summary.json with density, coordination, psi6 and overlaps), deterministically;
 # demsolve compact --boundary periodic runs it (history.csv with the kinetic stress apart, the
 # cell drawn in cell_*.vtp); both tools run it with --precompact-density and --to-strain (issue 29's
-# pure-shear path: the legs in history.csv, |E| of the shear leg = the target to 1e-9); the options' bad values and the commands that cannot use a periodic
+# pure-shear path: the legs in history.csv, |E| of the shear leg = the target to 1e-9); demsolve
+# compact --simple-shear re-maps the cell (Lees-Edwards); the options' bad values and the commands that cannot use a periodic
 # packing are refused with one line and exit 2, nothing written.
 # usage: test_dem_periodic.sh PATH/TO/netsolve PATH/TO/demsolve
 set -u
@@ -97,6 +98,24 @@ last = list(csv.DictReader(lines))[-1]
 e = math.sqrt(float(last["E11"]) ** 2 + float(last["E22"]) ** 2 + 2 * float(last["E12"]) ** 2)
 sys.exit(0 if lines[0].startswith("increment,E11,") and abs(e - 0.01) < 1e-9 else 1)
 PY
+# simple shear (issue 29, Lees-Edwards): the shear rate as L12 = 2 E12, to |E| = 0.5 (gamma = 0.71):
+# the cell's tilt passes half its width once and the cell is re-mapped; E12 of the rows is the
+# symmetric part, to the target
+"$ds" compact --boundary periodic --packing "$p" --path 0,0,1 --simple-shear --to-strain 0.5 --increments 5 \
+  --inertial-number 1e-2 --quiet --out "$tmp/ds_simple" >/dev/null 2>&1
+ok ds_simple_exit [ $? -eq 0 ]
+ok ds_simple_remapped /usr/bin/python3 - "$tmp/ds_simple" <<'PY'
+import csv, json, sys
+d = sys.argv[1]
+s = json.load(open(d + "/summary.json"))
+last = list(csv.DictReader(open(d + "/history.csv")))[-1]
+h = s["final"]["cell"]  # vector a at [D a, D a + D)
+q = (h[2] * h[0] + h[3] * h[1]) / (h[0] ** 2 + h[1] ** 2)
+ok = s["simple_shear"] is True and s["final"]["cell_remaps"] == 1 and abs(q) < 0.6 and h[1] == 0.0
+ok = ok and abs(float(last["E12"]) - 0.5 / 2 ** 0.5) < 1e-9 and float(last["E11"]) == 0.0 and s["status"] == "ok"
+print(f"simple shear: cell {h}, projection {q:.3f}, remaps {s['final']['cell_remaps']}, E12 {last['E12']}")
+sys.exit(0 if ok else 1)
+PY
 # refusals of the legs' options, both tools: one line, exit 2, nothing written
 for t in "$ns" "$ds"; do
   tool="$t"
@@ -130,6 +149,8 @@ bad2 compact_walls "run it with --boundary periodic" compact --boundary walls --
 bad2 compact_walled "needs a periodic packing" compact --boundary periodic --packing "$tmp/w/packing.csv"
 bad2 compact_no_packing "needs --packing" compact --boundary periodic
 bad2 compact_affine "exclude each other" compact --boundary periodic --affine --packing "$p"
+bad2 compact_simple_walls "--simple-shear needs --boundary periodic" compact --boundary walls --path 0,0,1 --simple-shear
+bad2 compact_simple_hydro "--simple-shear: simple shear needs a path with a shear rate" compact --boundary periodic --packing "$p" --simple-shear --to-density 0.86
 bad2 compact_save "--save-state" compact --boundary periodic --save-state --packing "$p"
 bad2 compact_boundary "is not 'layer', 'walls' or 'periodic'" compact --boundary torus --packing "$p"
 bad2 yield_periodic_needs_periodic_bc "run it with --compact-bc periodic" yield --packing "$p"

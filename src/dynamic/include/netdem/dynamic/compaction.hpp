@@ -81,9 +81,13 @@ template <int D>
 CompactionRateT<D> compaction_rate_to_strain(const sys::StrainPathT<D>& path, double inertial_number,
                                              double initial_density, double target_strain);
 
-/// Sets the solver's affine strain rate (Voigt).
+/// Sets the solver's affine strain rate (Voigt). simple_shear (a periodic cell only): the shear
+/// rates as simple shear, the velocity gradient L_ab = 2 E'_ab for a < b and L_ba = 0 (x moves
+/// with y; 3D: also x with z and y with z), whose symmetric part is E' and whose antisymmetric
+/// part is the spin (DynamicSolverT::set_velocity_gradient): the cell tilts and is re-mapped
+/// (Lees-Edwards) instead of stretching along the diagonal.
 template <int D>
-void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& rate);
+void set_strain_rate(DynamicSolverT<D>& s, const Voigt<D>& rate, bool simple_shear = false);
 
 struct CompactionOptions {
   double target_density = 0.85;
@@ -103,6 +107,9 @@ struct CompactionOptions {
   double precompact_density = 0.0;
   int precompact_increments = 20;
   bool precompacts() const { return precompact_density != 0.0; }
+  /// A periodic cell's shear rates as simple shear (set_strain_rate); the strain measures (|E|,
+  /// the rows' E) are those of the symmetric part.
+  bool simple_shear = false;
   /// The numbers alone (inertial number, increments, step limit), before any packing is built.
   void check_numbers() const;
   /// Validates every field; the density checks against the initial density (the precompaction
