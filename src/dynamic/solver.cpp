@@ -137,7 +137,7 @@ void DynamicSolverT<D>::hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const
   for (int r = 0; r < D; ++r)
     for (int c = 0; c < D; ++c) {
       hc[r][c] = cell_.h(r, c);
-      Lr[r][c] = (D == 2 ? (r == c ? edot_[r] : edot_[2]) : L3_[r][c]) + W_[r][c];
+      Lr[r][c] = velocity_gradient(r, c);
     }
 }
 

@@ -29,18 +29,6 @@ void DynamicSolverT<D>::set_velocity_gradient(const Eigen::Matrix<double, D, D>&
     }
 }
 
-// The particles' affine angular velocity: the spin W as a rotation rate (2D: k = 0, W_21; 3D: the
-// axial vector (W_32, W_13, W_21)). Zero without a spin.
-template <int D>
-double DynamicSolverT<D>::affine_spin(int k) const {
-  if constexpr (D == 2) {
-    (void)k;
-    return W_[1][0];
-  } else {
-    return k == 0 ? W_[2][1] : k == 1 ? W_[0][2] : W_[1][0];
-  }
-}
-
 // One step of the affine motion with a spin (periodic cells only): G = exp(L dt) - I by its series
 // (|L dt| is small; a simple shear's L is nilpotent and the series ends), the positions and the cell
 // advected by G, and the accumulated map F <- (I + G) F.
@@ -49,7 +37,7 @@ void DynamicSolverT<D>::impose_general_motion(double dt) {
   using Mat = Eigen::Matrix<double, D, D>;
   Mat L;
   for (int a = 0; a < D; ++a)
-    for (int b = 0; b < D; ++b) L(a, b) = (D == 2 ? (a == b ? edot_[a] : edot_[2]) : L3_[a][b]) + W_[a][b];
+    for (int b = 0; b < D; ++b) L(a, b) = velocity_gradient(a, b);
   const Mat A = L * dt;
   Mat G = A, term = A;
   for (int k = 2; k <= 20; ++k) {
@@ -102,8 +90,6 @@ void DynamicSolverT<D>::reduce_cell() {
 
 template void DynamicSolverT<2>::set_velocity_gradient(const Eigen::Matrix2d& L);
 template void DynamicSolverT<3>::set_velocity_gradient(const Eigen::Matrix3d& L);
-template double DynamicSolverT<2>::affine_spin(int k) const;
-template double DynamicSolverT<3>::affine_spin(int k) const;
 template void DynamicSolverT<2>::impose_general_motion(double dt);
 template void DynamicSolverT<3>::impose_general_motion(double dt);
 template void DynamicSolverT<2>::reduce_cell();

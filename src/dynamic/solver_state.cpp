@@ -445,7 +445,7 @@ void DynamicSolverT<D>::contacts(std::vector<ContactInfo>& out) const {
       }
     for (int a = 0; a < D; ++a)
       for (int b = 0; b < D; ++b)
-        frame_storage.L[3 * a + b] = (D == 2 ? (a == b ? edot_[a] : edot_[2]) : L3_[a][b]) + W_[a][b];
+        frame_storage.L[3 * a + b] = velocity_gradient(a, b);
     frame = &frame_storage;
   }
   if (const HistoryTable<PlasticHist>* t = table_if<PlasticHist>()) {

@@ -658,7 +658,16 @@ class DynamicSolverT {
   std::size_t cell_remaps_ = 0;
   void reduce_cell();                   ///< the Lees-Edwards re-mapping (cell_remaps())
   void impose_general_motion(double dt);  ///< periodic with a spin: x <- x + (exp(L dt) - I)(x - origin)
-  double affine_spin(int k) const;      ///< component k of the particles' affine angular velocity
+  /// Component k of the particles' affine angular velocity: W as a rotation rate (2D: W_21; 3D: the
+  /// axial vector (W_32, W_13, W_21)); zero without a spin.
+  double affine_spin(int k) const {
+    if constexpr (D == 2) return W_[1][0];
+    return k == 0 ? W_[2][1] : k == 1 ? W_[0][2] : W_[1][0];
+  }
+  /// Component (a, b) of the velocity gradient: the strain rate plus the spin.
+  double velocity_gradient(int a, int b) const {
+    return (D == 2 ? (a == b ? edot_[a] : edot_[2]) : L3_[a][b]) + W_[a][b];
+  }
   void build_table_periodic();
   void advect_periodic(const Eigen::Matrix<double, D, D>& G);  ///< x <- x + G (x - origin), h <- (I + G) h
   void remove_mean_velocity();
