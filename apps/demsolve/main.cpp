@@ -193,7 +193,7 @@ CLI::App* add_dem_yield(CLI::App& app, DemYieldArgs& dy, std::string& out_dyield
   dyield->add_option("--to-density", dy.to_density, "precompaction density D")->capture_default_str();
   dyield->add_option("--increments", dy.increments, "precompaction output windows (netsolve's increments)")->capture_default_str();
   dyield->add_option("--compact-bc", dy.compact_bc, "affine | die (the peripheral layer prescribed) | periodic (a periodic --packing in a cell that follows the strain)")->capture_default_str();
-  dyield->add_option("--probe-bc", dy.probe_bc, "affine | die | periodic during unloading and probing (must equal --compact-bc)");
+  dyield->add_option("--probe-bc", dy.probe_bc, "affine | die | periodic during unloading and probing (must equal --compact-bc; or affine with --compact-bc periodic: every centre follows the cell, the spins free)");
   dyield->add_option("--friction", dy.friction, "Coulomb coefficient mu, or inf for sticking")->capture_default_str();
   dyield->add_option("--normal-unloading", dy.normal_unloading, "the law during the precompaction: reversible | elastic")
       ->check(CLI::IsMember({"reversible", "elastic"}))

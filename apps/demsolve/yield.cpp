@@ -73,7 +73,7 @@ std::vector<int> select_probes(const DemYieldArgs& a) {
 /// The values at the door: every option checked before anything is written.
 struct YieldDoor {
   std::string compact_bc, probe_bc;
-  bool affine = false, periodic = false;
+  bool affine = false, periodic = false, affine_probe = false;
   double mu = 0.0;
   std::vector<int> selection;
 };
@@ -90,9 +90,12 @@ YieldDoor check_yield_args(const DemYieldArgs& a) {
   };
   d.compact_bc = bc(a.compact_bc, "--compact-bc");
   d.probe_bc = bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
-  if (d.probe_bc != d.compact_bc)
+  // a periodic state probed affinely: every centre held on the cell's motion from the unloading on
+  d.affine_probe = d.compact_bc == "periodic" && d.probe_bc == "affine";
+  if (d.probe_bc != d.compact_bc && !d.affine_probe)
     throw UsageError("--probe-bc differs from --compact-bc: demsolve yield probes with the boundary mode of the "
-                     "precompaction (netsolve's frictionless hand-over is not implemented in the explicit solver)");
+                     "precompaction, or a periodic one affinely (netsolve's frictionless hand-over is not implemented "
+                     "in the explicit solver)");
   d.affine = d.compact_bc == "affine";
   d.periodic = d.compact_bc == "periodic";
   for (const auto& [v, name, lo, hi] : {std::tuple{a.inertial_number, "--inertial-number", 0.0, 1.0},
@@ -346,6 +349,11 @@ void YieldRun::record_setup() {
 }
 
 void YieldRun::unload_phase() {
+  if (d_.affine_probe) {  // every centre follows the cell from here on, the spins free (netsolve's affine_centres)
+    std::vector<std::uint32_t> all(s_->particles().size());
+    for (std::size_t p = 0; p < all.size(); ++p) all[p] = static_cast<std::uint32_t>(p);
+    s_->set_prescribed(all, false);
+  }
   // unloading on the elastic branch: netsolve's secant steps along -E', each a ramp at the probe
   // rate and a hold with the relaxation drag until the state is at rest
   relax_.drag = a_.relax_drag;

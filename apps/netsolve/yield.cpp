@@ -145,6 +145,10 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   pre.validate();
   probe = qs::SolverOptions::yield_probe();
   probe.mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
+  if (pre.mode == qs::BoundaryMode::Periodic && probe.mode == qs::BoundaryMode::Affine) {
+    probe.mode = qs::BoundaryMode::Periodic;  // affine probing of the periodic state: every centre
+    probe.affine_centres = true;              // prescribed, the histories kept
+  }
   probe.law = pre.law;  // unloading switches it to the elastic branch (set_reversible_normal)
   probe.iteration = pre.iteration;  // the iteration and its regularisation knob cover the probes too
   probe.regularisation_scale = pre.regularisation_scale;
@@ -154,7 +158,8 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
   if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
-    throw std::invalid_argument("--compact-bc and --probe-bc: a periodic cell is probed periodic (both 'periodic' or neither)");
+    throw std::invalid_argument("--compact-bc and --probe-bc: a periodic cell is probed periodic or affine (--probe-bc "
+                                "periodic or affine with --compact-bc periodic, neither without)");
 }
 
 /// The compacted state of --from-state; its strain must lie along --precompact's path.
@@ -335,7 +340,8 @@ void YieldRun::open_input() {
   if (!a.quiet)
     std::fprintf(stderr, "netsolve yield: %zu particles, D0 = %.4f (%s); %s %s-%s, friction %s, %zu of %d probes, %d jobs\n",
                  solver_ ? solver_->size() : pk_.size(), solver_ ? solver_->initial_density() : pk_.density(), source_.c_str(),
-                 a.precompact.c_str(), bc_name(so_.mode), bc_name(po_.mode), a.law.friction.c_str(), selection_.size(),
+                 a.precompact.c_str(), bc_name(so_.mode), po_.affine_centres ? "affine" : bc_name(po_.mode),
+                 a.law.friction.c_str(), selection_.size(),
                  a.directions, jobs_);
 }
 
@@ -425,7 +431,7 @@ void YieldRun::make_setup() {
   setup["normal_unloading"] = a.law.normal_unloading;
   setup["first_touch"] = a.law.first_touch;
   setup["compact_bc"] = bc_name(so_.mode);
-  setup["probe_bc"] = bc_name(po_.mode);
+  setup["probe_bc"] = po_.affine_centres ? "affine" : bc_name(po_.mode);
   setup["directions"] = a.directions;
   setup["packing"] = source_;
   setup["particles"] = solver_->size();
@@ -659,7 +665,8 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--compact-bc", a.compact_bc,
                    "affine | die (local relaxation) | periodic (a '# periodic' --packing) during precompaction")
         ->capture_default_str();
-    app.add_option("--probe-bc", a.probe_bc, "affine | die | periodic during unloading and probing (default: --compact-bc)");
+    app.add_option("--probe-bc", a.probe_bc, "affine | die | periodic during unloading and probing (default: --compact-bc; "
+                                             "with --compact-bc periodic: periodic, or affine: every centre follows the cell)");
     app.add_option("--directions", a.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
     app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays)");
     netdem::app::netsolve::add_list_option(app, "--probes", a.probe_list, "run only these probe indices, e.g. 0,3,5");

@@ -637,6 +637,7 @@ template <int D>
 void DynamicSolverT<D>::advance(bool full) {
   const std::size_t n = P_.size();
   impose_affine_motion(ts_.dt);
+  if (periodic_ && !prescribed_.empty()) hold_prescribed_fluctuations();
   const bool checking = opt_.check_every > 0;
   if (checking && full && !last_good_) last_good_ = std::make_shared<const SolverState>(state());
   const bool check = checking && ++since_check_ >= opt_.check_every;

@@ -292,6 +292,19 @@ void DynamicSolverT<D>::impose_affine_motion(double dt) {
   if (box_.top.mode == WallMode::Affine) wall_v_[1] = gy * (box_.y_max - box_.y_min);
 }
 
+// A periodic cell carries the affine motion (advect_periodic) and the velocities are the
+// fluctuations about it: a prescribed particle has none, and a held spin is the cell's (zero
+// without a velocity gradient's spin).
+template <int D>
+void DynamicSolverT<D>::hold_prescribed_fluctuations() {
+  constexpr int R = ParticlesT<D>::kRot;
+  for (std::uint32_t p : prescribed_) {
+    std::fill_n(&P_.vel[D * static_cast<std::size_t>(p)], D, 0.0);
+    if (spin_held_[p])
+      for (int k = 0; k < R; ++k) P_.spin[R * static_cast<std::size_t>(p) + static_cast<std::size_t>(k)] = affine_spin(k);
+  }
+}
+
 // 3D: the affine velocity L (x_i - x_0) of particle i (diagonal L: the products of before the shear rates)
 template <int D>
 void DynamicSolverT<D>::affine_velocity3(std::size_t i, double* a) const {
@@ -518,6 +531,7 @@ template void DynamicSolverT<2>::set_plastic_law(const contact::PlasticIndentati
 template void DynamicSolverT<2>::set_rotations(bool free);
 template void DynamicSolverT<2>::hold_spins(const std::vector<std::uint32_t>& particles);
 template void DynamicSolverT<2>::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins);
+template void DynamicSolverT<2>::hold_prescribed_fluctuations();
 template void DynamicSolverT<2>::impose_affine_motion(double dt);
 template void DynamicSolverT<2>::affine_velocity3(std::size_t i, double* a) const;
 template void DynamicSolverT<2>::set_affine_drag(double drag);
@@ -533,6 +547,7 @@ template void DynamicSolverT<3>::set_plastic_law(const contact::PlasticIndentati
 template void DynamicSolverT<3>::set_rotations(bool free);
 template void DynamicSolverT<3>::hold_spins(const std::vector<std::uint32_t>& particles);
 template void DynamicSolverT<3>::set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins);
+template void DynamicSolverT<3>::hold_prescribed_fluctuations();
 template void DynamicSolverT<3>::impose_affine_motion(double dt);
 template void DynamicSolverT<3>::affine_velocity3(std::size_t i, double* a) const;
 template void DynamicSolverT<3>::set_affine_drag(double drag);

@@ -5,15 +5,16 @@
 namespace netdem::qs {
 
 void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free,
-                   const std::vector<std::uint8_t>& periph, int pinned) {
+                   const std::vector<std::uint8_t>& periph, int pinned, bool affine_centres) {
   const int n = static_cast<int>(periph.size()), kn = dim + rot_dofs;
   dof.assign(static_cast<std::size_t>(kn) * n, -1);
   nfree = 0;
   for (int p = 0; p < n; ++p) {
-    // walls: nothing prescribed; periodic: only the pinned particle's translations
+    // walls: nothing prescribed; periodic: only the pinned particle's translations (affine_centres:
+    // every particle's)
     const bool walls = mode == BoundaryMode::Walls || mode == BoundaryMode::Periodic;
     const bool translations_free =
-        (walls && p != pinned) || (mode == BoundaryMode::Die && !periph[p]);
+        (walls && p != pinned && !affine_centres) || (mode == BoundaryMode::Die && !periph[p]);
     if (translations_free)
       for (int a = 0; a < dim; ++a) dof[kn * p + a] = nfree++;
     // peripheral rotations are always held (section 2.4); interior ones are unknowns in both modes

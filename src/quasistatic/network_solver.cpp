@@ -24,7 +24,8 @@ void NetworkSolverT<D, L>::Impl::init_linear_solver() {
   lin = LinearSolver(lo);
   r_mean = std::accumulate(ps.r.begin(), ps.r.end(), 0.0) / n;
   r_max = *std::max_element(ps.r.begin(), ps.r.end());
-  DofMap::build(D, kR, opt.mode, opt.rotations && opt.law.frictional(), periph, pinned);
+  DofMap::build(D, kR, opt.mode, opt.rotations && opt.law.frictional(), periph, pinned,
+                opt.mode == BoundaryMode::Periodic && opt.affine_centres);
   std::vector<int> particle_of_dof(static_cast<std::size_t>(nfree));
   for (int q = 0; q < kN * n; ++q)
     if (dof[q] >= 0) particle_of_dof[dof[q]] = q / kN;

@@ -185,7 +185,10 @@ double NetworkSolverT<D, L>::Impl::drag_work(const std::vector<double>& before) 
 }
 
 /// Work of the contact forces over the increment, trapezoidal in the committed and the trial
-/// forces: normal force on the overlap change, tangential force on the slip increment.
+/// forces: the normal force on the overlap change while in contact (a pair that closes or opens
+/// carries force from or to zero overlap), the tangential force against the slip increment (the
+/// law's f_t opposes the slip: f_t = f_t0 - k dslip), and the wall contacts' normal forces. For a
+/// quasi-static increment without drag it equals the boundary's work, V S:dE.
 template <int D, class L>
 double NetworkSolverT<D, L>::Impl::contact_work() const {
   double w = 0.0;
@@ -194,13 +197,14 @@ double NetworkSolverT<D, L>::Impl::contact_work() const {
     if (!t.loaded && fn_c[k] <= 0.0) continue;
     const int i = pi[k], j = pj[k];
     const double u1 = ct::pair_geometry(moved(i), moved_j(k), ps.r[i], ps.r[j]).overlap;
-    w += 0.5 * (fn_c[k] + t.f_n) * (u1 - g0[k].overlap);
+    w += 0.5 * (fn_c[k] + t.f_n) * (std::max(u1, 0.0) - std::max(g0[k].overlap, 0.0));
     if constexpr (D == 2) {
-      w += 0.5 * (ft_c[k] + t.f_t) * trial_slip[k];
+      w -= 0.5 * (ft_c[k] + t.f_t) * trial_slip[k];
     } else {
-      w += 0.5 * (ft_c[k] + t.f_t).dot(trial_slip[k]);
+      w -= 0.5 * (ft_c[k] + t.f_t).dot(trial_slip[k]);
     }
   }
+  if constexpr (D == 2) w += wall_work();
   return w;
 }
 

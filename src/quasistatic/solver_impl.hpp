@@ -71,7 +71,7 @@ struct DofMap {
   std::vector<int> dof;
   int nfree = 0;
   void build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free, const std::vector<std::uint8_t>& periph,
-             int pinned = -1);
+             int pinned = -1, bool affine_centres = false);
 };
 
 /// BoundaryMode::Walls (2D): the contacts of every particle with the four walls (slot 4 p + w;
@@ -312,6 +312,7 @@ struct NetworkSolverT<D, L>::Impl : ContactTableT<D, L>, DofMap, WallTableT<D, L
   void wall_forces();                      ///< every wall contact: trial state, forces into f
   void wall_stiffness();                   ///< the wall contacts' stiffness into K and M
   void commit_walls();
+  double wall_work() const;  ///< the wall contacts' share of contact_work()
   // relaxation.cpp
   void local_eval(const int* group, int m, Eigen::VectorXd& res, Eigen::MatrixXd& Kl) const;
   void relax_set(const int* group, int m, double fbar);

@@ -18,6 +18,8 @@ void require(bool ok, const std::string& msg) {
 }  // namespace
 
 void IterationOptions::validate() const {
+  require(!affine_centres || mode == BoundaryMode::Periodic,
+          "solver: affine_centres (every centre prescribed) is an option of the periodic boundary mode");
   require(std::isfinite(skin) && skin > 0.0, fmt::format("solver: skin must be positive, got {}", skin));
   require(max_newton >= 0 && max_newton <= 1000, fmt::format("solver: max_newton must be in [0, 1000], got {}", max_newton));
   require(!std::isnan(max_residual_tol) && max_residual_tol > 0.0,

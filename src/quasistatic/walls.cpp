@@ -106,6 +106,24 @@ void NetworkSolverT<D, L>::Impl::commit_walls() {
   }
 }
 
+// The work of the wall contacts' normal forces over the increment, trapezoidal in the committed
+// and trial forces on the overlap change while in contact (as contact_work() for the pairs).
+template <int D, class L>
+double NetworkSolverT<D, L>::Impl::wall_work() const {
+  if (!walls() || wtrial.size() != wfn_c.size()) return 0.0;
+  double w = 0.0;
+  for (int p = 0; p < n; ++p)
+    for (int c = 0; c < 4; ++c) {
+      const std::size_t s = 4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(c);
+      if (!wtrial[s].loaded && wfn_c[s] <= 0.0) continue;
+      const double u0 = ps.r[p] - distance(c, ps.pos[2 * p], ps.pos[2 * p + 1], face(Fbox, box0, c));
+      const double u1 =
+          ps.r[p] - distance(c, ps.pos[2 * p] + du[3 * p], ps.pos[2 * p + 1] + du[3 * p + 1], face(Fbox_trial, box0, c));
+      w += 0.5 * (wfn_c[s] + wtrial[s].f_n) * (std::max(u1, 0.0) - std::max(u0, 0.0));
+    }
+  return w;
+}
+
 // 2D only: the 3D solver refuses the walls mode (network_solver.cpp) and never calls these
 template struct NetworkSolverT<2>::Impl;
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;

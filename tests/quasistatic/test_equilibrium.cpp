@@ -135,6 +135,28 @@ TEST(Equilibrium, TwoDisksBetweenWallsMatchClosedFormForEveryDrag) {
   EXPECT_GT(std::fabs(legacy.force - F), 1e-3 * F);
 }
 
+// The contact work of the increments (IncrementReport::contact_work, the wall contacts included)
+// sums to the work of the walls on the two disks: with F = sqrt(72 delta / S) (the closed form
+// above, delta the box's shortening) it is the integral of F d delta = 2/3 F delta. 40 increments:
+// the trapezoidal rule's error on the square root's first increment is 0.1 %.
+TEST(Equilibrium, ContactWorkIsTheWallsWork) {
+  const double E11 = -0.02;
+  const int n = 40;
+  const double delta = (2 * 1.0 + 2 * 0.6) * (1.0 - std::exp(E11));
+  const double W = 2.0 / 3.0 * two_disks_closed_form(E11).F * delta;
+  qs::NetworkSolver s(two_disks_between_walls(), pseudo_transient(two_disk_options(), 1.0));
+  Eigen::Matrix2d dE = Eigen::Matrix2d::Zero();
+  dE(0, 0) = E11 / n;
+  double work = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const auto rep = s.increment(dE);
+    ASSERT_TRUE(rep.converged) << k;
+    work += rep.contact_work;
+  }
+  std::printf("contact work %.9f, closed form %.9f\n", work, W);
+  EXPECT_NEAR(work, W, 5e-3 * W);
+}
+
 // The cut-back: with too few iterations per increment, the increment is redone in halves and
 // still ends on the same equilibrium (the reversible law makes the answer independent of the path
 // along this monotonic loading). The first-touch chord keeps the stiffness at touch finite.

@@ -378,3 +378,84 @@ TEST(PeriodicNetwork, EnergyIterationLatticeAndUnjammedPair) {
     EXPECT_LT(force, 1e-9) << scale;
   }
 }
+
+// Affine probing of a periodic state (issue 29; netsolve yield --compact-bc periodic --probe-bc
+// affine): a solver restored from a sticking periodic state with affine_centres keeps the state's
+// stress (the histories) and moves every centre with the cell, x -> exp(dE) x within 1e-12 R; the
+// rotations stay unknowns and converge. On a Bravais lattice, which follows the affine motion
+// anyway, it gives the free solver's stress (within 10 x the free solver's tolerance). On a
+// disordered packing the affine probe is the stiffer (the Voigt bound: from the same state, the
+// stress increment's work dS:dE is at least the relaxed one's, which minimises over more
+// unknowns). The increment's contact work (IncrementReport::contact_work) equals the boundary's
+// work V S:dE (trapezoidal; a sign error in its tangential part is what this caught). Refused
+// outside the periodic mode.
+TEST(PeriodicNetwork, AffineCentresProbeThePeriodicState) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  packing::Packing dis = triangular_lattice(6, 6);
+  for (std::size_t i = 0; i < dis.size(); ++i) {  // jittered centres and radii: a disordered packing
+    dis.x[i] = std::fmod(dis.x[i] + 0.08 * U(rng) + dis.box.width(), dis.box.width());
+    dis.r[i] = 1.0 + 0.02 * U(rng);
+  }
+  Eigen::Matrix2d hydro, probe;
+  hydro << -3e-3, 0, 0, -3e-3;
+  probe << 1.5e-3, 4e-4, 4e-4, -1e-3;
+  auto work = [&](const Eigen::Matrix2d& S) { return (S.cwiseProduct(probe)).sum(); };  // S:dE
+  for (const bool lattice : {false, true}) {
+    const packing::Packing p = lattice ? shifted(triangular_lattice(6, 6), 1.3, 0.4) : dis;
+    qs::SolverOptions so = exact_options(kInf);
+    so.iteration = qs::Iteration::PseudoTransient;  // the disordered packing rearranges
+    so.residual_tol = 1e-8;
+    so.max_residual_tol = 1e-7;
+    so.max_newton = 100;
+    qs::NetworkSolver pre(p, so);
+    for (int k = 0; k < 8; ++k) pre.increment(hydro);
+    ASSERT_GT(pre.stress().Z, 3.0) << "lattice " << lattice;
+    // the probes: the pseudo-transient iteration with its drag (a particle whose contacts all
+    // slide has no rotational stiffness but the drag's), to 1e-5 of the mean contact force
+    qs::SolverOptions po = so;
+    po.viscosity = qs::SolverOptions{}.viscosity;
+    po.residual_tol = lattice ? 1e-8 : 1e-5;
+    po.max_newton = 200;
+    qs::SolverOptions aff = po;
+    aff.affine_centres = true;
+    qs::NetworkSolver a(pre.state(), aff), f(pre.state(), po);
+    const Eigen::Matrix2d S0 = pre.stress().contacts;
+    a.increment(Eigen::Matrix2d::Zero());
+    EXPECT_LE((a.stress().contacts - S0).cwiseAbs().maxCoeff(), 1e-12 * S0.cwiseAbs().maxCoeff()) << "the histories kept";
+    // exp(dE) - I by its series (|dE| ~ 1e-3: five terms are exact to rounding)
+    const Eigen::Matrix2d G = probe + probe * probe / 2 + probe * probe * probe / 6 + probe * probe * probe * probe / 24;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Matrix2d Sa0 = a.stress().contacts;
+      const double V0 = a.periodic_cell()->measure();
+      const auto before = a.particles();
+      const auto ra = a.increment(probe);
+      const auto rf = f.increment(probe);
+      EXPECT_TRUE(ra.converged) << "lattice " << lattice << " increment " << k << " residual " << ra.residual << " rms "
+                                << ra.residual_rms << " newton " << ra.newton_iterations;
+      EXPECT_TRUE(rf.converged) << "lattice " << lattice << " increment " << k;
+      const Eigen::Matrix2d Sa1 = a.stress().contacts;
+      const double boundary = 0.5 * (V0 + a.periodic_cell()->measure()) * work(0.5 * (Sa0 + Sa1));
+      EXPECT_NEAR(ra.contact_work, boundary, 5e-3 * std::fabs(boundary)) << "lattice " << lattice << " increment " << k;
+      if (k == 0 && !lattice) {  // the same start state: the Voigt bound
+        EXPECT_GT(work(Sa1 - S0), work(f.stress().contacts - S0)) << "the affine probe is the stiffer";
+      }
+      const auto after = a.particles();
+      double worst = 0.0;
+      for (std::size_t i = 0; i < before.size(); ++i) {
+        const Eigen::Vector2d xb = before.position(i);
+        const Eigen::Vector2d expect = xb + G * xb;  // Eqs 14-15 on current coordinates
+        worst = std::max(worst, (after.position(i) - expect).cwiseAbs().maxCoeff());
+      }
+      EXPECT_LT(worst, 1e-12) << "every centre follows the cell, lattice " << lattice;
+    }
+    if (lattice) {
+      EXPECT_LT((a.stress().contacts - f.stress().contacts).cwiseAbs().maxCoeff(),
+                10.0 * po.residual_tol * S0.cwiseAbs().maxCoeff());
+    }
+  }
+  qs::SolverOptions bad = exact_options(kInf);
+  bad.mode = qs::BoundaryMode::Die;
+  bad.affine_centres = true;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -134,13 +134,19 @@ def net_args(c, start, d0, scale):
                                   "--snapshots", "", "--allow-unconverged", "--quiet"])
 
 
-def yield_args(tool, pack, d0):
+def yield_args(tool, pack, d0, probing="periodic"):
     """Yield after periodic hydrostatic precompaction to D0 + DD, sticking, seed 1; netsolve probes with
-    its pseudo-transient iteration (the periodic probing of the issue)."""
+    its pseudo-transient iteration. probing: "periodic" (the cell relaxed) or "affine" (every centre
+    follows the cell from the unloading on, the spins free: --probe-bc affine)."""
     a = ["yield", "--packing", pack, "--compact-bc", "periodic", "--to-density", f"{target(d0):.6f}",
          "--directions", str(YIELD_DIRECTIONS), "--probes", ",".join(map(str, YIELD_PROBES)), "--quiet",
          "--allow-unconverged"]
+    if probing == "affine":
+        a += ["--probe-bc", "affine"]
     return a + (["--jobs", "1"] if tool == "demsolve" else ["--iteration", "pseudo-transient"])
+
+
+YIELD_PROBINGS = ("periodic", "affine")
 
 
 def yield_runs(mode, runs):
@@ -149,7 +155,8 @@ def yield_runs(mode, runs):
     if d0 is None:
         return []
     pack = os.path.join(pack_dir(runs, seed), "packing.csv")
-    return [(f"yield/{t[:3]}_periodic", t, yield_args(t, pack, d0), (0, k)) for k, t in enumerate(("demsolve", "netsolve"))]
+    return [(f"yield/{t[:3]}_{pr}", t, yield_args(t, pack, d0, pr), (0, 2 * j + k))
+            for j, pr in enumerate(YIELD_PROBINGS) for k, t in enumerate(("demsolve", "netsolve"))]
 
 
 def pack_dir(runs, seed):
@@ -330,31 +337,30 @@ def drag_rows_of(R, mode, runs, name, c, x, scale, d0):
 
 
 def evaluate_yield(R, mode):
-    """Rows of the yield table: per probe and definition, the distance of the two solvers' points
-    relative to netsolve's loading stress; affine probing of a periodic state: MISSING (not built)."""
+    """Rows of the yield table: per probing (periodic, affine), probe and definition, the distance of the
+    two solvers' points relative to netsolve's loading stress."""
     rows = []
-    rd, rn = R.get("yield/dem_periodic"), R.get("yield/net_periodic")
-    yd = _qvd.read_yield(rd.dir) if rd is not None and rd.ok else {}
-    yn = _qvd.read_yield(rn.dir) if rn is not None and rn.ok else {}
-    ln = rn.summary.get("precompaction", {}) if rn is not None and rn.ok else {}
-    scale = math.hypot(_qvd.num(ln.get("S11")), _qvd.num(ln.get("S22")))
-    for k in YIELD_PROBES:
-        for kind, sfx in (("curvature", ""), ("offset", "_offset")):
-            a = tuple(_qvd.num(yd.get(k, {}).get(c + sfx)) for c in ("S11", "S22"))
-            b = tuple(_qvd.num(yn.get(k, {}).get(c + sfx)) for c in ("S11", "S22"))
-            dist = math.hypot(a[0] - b[0], a[1] - b[1]) / scale if all(map(np.isfinite, a + b + (scale,))) else float("nan")
-            if not (yd and yn):
-                v = f"{MISSING} (yield runs not there)"
-            elif not np.isfinite(dist):
-                v = "invalid"
-            else:
-                v = "PASS" if dist <= YIELD_BAND else "FAIL"
-            rows.append(dict(probe=k, theta=360.0 * k / YIELD_DIRECTIONS, kind=kind, probing="periodic", dem=a, net=b,
-                             dist=dist, verdict=v, st=(yd.get(k, {}).get("status", "—"), yn.get(k, {}).get("status", "—"))))
-    for k in YIELD_PROBES:
-        rows.append(dict(probe=k, theta=360.0 * k / YIELD_DIRECTIONS, kind="both", probing="affine", dem=(np.nan,) * 2,
-                         net=(np.nan,) * 2, dist=np.nan, st=("—", "—"),
-                         verdict=f"{MISSING} (affine probing of a periodic state is in neither solver yet)"))
+    for probing in YIELD_PROBINGS:
+        rd, rn = R.get(f"yield/dem_{probing}"), R.get(f"yield/net_{probing}")
+        yd = _qvd.read_yield(rd.dir) if rd is not None and rd.ok else {}
+        yn = _qvd.read_yield(rn.dir) if rn is not None and rn.ok else {}
+        ln = rn.summary.get("precompaction", {}) if rn is not None and rn.ok else {}
+        scale = math.hypot(_qvd.num(ln.get("S11")), _qvd.num(ln.get("S22")))
+        for k in YIELD_PROBES:
+            for kind, sfx in (("curvature", ""), ("offset", "_offset")):
+                a = tuple(_qvd.num(yd.get(k, {}).get(c + sfx)) for c in ("S11", "S22"))
+                b = tuple(_qvd.num(yn.get(k, {}).get(c + sfx)) for c in ("S11", "S22"))
+                dist = (math.hypot(a[0] - b[0], a[1] - b[1]) / scale if all(map(np.isfinite, a + b + (scale,)))
+                        else float("nan"))
+                if not (yd and yn):
+                    v = f"{MISSING} ({probing} yield runs not there)"
+                elif not np.isfinite(dist):
+                    v = "invalid"
+                else:
+                    v = "PASS" if dist <= YIELD_BAND else "FAIL"
+                rows.append(dict(probe=k, theta=360.0 * k / YIELD_DIRECTIONS, kind=kind, probing=probing, dem=a, net=b,
+                                 dist=dist, verdict=v,
+                                 st=(yd.get(k, {}).get("status", "—"), yn.get(k, {}).get("status", "—"))))
     return rows
 
 
@@ -435,7 +441,9 @@ def yield_section(R, mode):
     L = ["", "## Yield in the periodic cell", "",
           f"Seed {mode['seeds'][0]}, sticking, hydrostatic precompaction to D0 + {DD:g}, probes "
           f"{', '.join(map(str, YIELD_PROBES))} of {YIELD_DIRECTIONS}: `demsolve yield --compact-bc periodic` (its "
-          "defaults) and `netsolve yield --compact-bc periodic --iteration pseudo-transient`. Band: the distance of "
+          "defaults) and `netsolve yield --compact-bc periodic --iteration pseudo-transient`; probing periodic "
+          "(the cell relaxed) or affine (`--probe-bc affine`: every centre follows the cell from the unloading on, "
+          "the spins free). Band: the distance of "
           f"the two points ≤ {100 * YIELD_BAND:g} % of netsolve's loading stress |Σ|.", "",
           "| probe | θ [°] | probing | definition | DEM (Σ11, Σ22) | netsolve (Σ11, Σ22) | distance | status DEM / net | result |",
           "|---|---|---|---|---|---|---|---|---|"]

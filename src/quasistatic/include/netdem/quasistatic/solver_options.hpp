@@ -42,6 +42,10 @@ enum class Iteration { PseudoTransient, LegacyDrag };
 /// What the network solver's iteration takes, whatever its contact law.
 struct IterationOptions {
   BoundaryMode mode = BoundaryMode::Die;
+  /// BoundaryMode::Periodic only: every centre follows the affine field of the cell (affine
+  /// probing of a periodic state, netsolve yield --compact-bc periodic --probe-bc affine); the
+  /// rotations stay unknowns. A solver restored from a periodic state with it keeps the histories.
+  bool affine_centres = false;
   bool rotations = true;  ///< false: forbid every particle rotation
   double skin = 0.2;               ///< neighbour-list skin, in units of the mean radius
   int max_newton = 10;             ///< Newton iterations per increment (then the residual is carried)
