@@ -164,12 +164,11 @@ YieldPoint fabric_affine_point(const NetworkSolver& solver, double theta, double
   if (!(std::isfinite(theta) && std::isfinite(sigma_y) && sigma_y > 0.0))
     throw std::invalid_argument(fmt::format("fabric_affine_point: need a finite theta and sigma_y > 0, got {} and {}", theta, sigma_y));
   const double e11 = std::cos(theta), e22 = std::sin(theta);
-  const auto& x = solver.x();
-  const auto& y = solver.y();
   const double area = solver.box_deformation().determinant() * solver.solid_area() / solver.initial_density();
   double s11 = 0.0, s22 = 0.0;
   for (const auto& c : solver.contacts()) {
-    const double dx = x[c.j] - x[c.i], dy = y[c.j] - y[c.i];
+    // the branch to j's image in a periodic cell (x_j - x_i across a face would be the cell's width)
+    const double dx = c.l[0], dy = c.l[1];
     const double L = std::hypot(dx, dy);
     if (!(L > 0.0)) continue;
     const double nx = dx / L, ny = dy / L;

@@ -18,6 +18,7 @@
 
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/periodic.hpp"
+#include "netdem/quasistatic/yield_probe.hpp"
 #include "periodic_lattices.hpp"
 #include "network_test_util.hpp"
 
@@ -377,6 +378,28 @@ TEST(PeriodicNetwork, EnergyIterationLatticeAndUnjammedPair) {
     EXPECT_EQ(unjammed, 3) << scale;
     EXPECT_LT(force, 1e-9) << scale;
   }
+}
+
+// The fabric-resolved affine bound (netsolve yield's `S*_fabric`) in a periodic cell takes each
+// contact's branch to the image of j: on a triangular lattice shifted so that contacts cross the
+// faces, under hydrostatic strain (no tangential force by symmetry), the bound along the loading
+// direction is the contact stress, as in the die (YieldProbe.FabricAffineBound). With x_j - x_i
+// across a face (the cell's width instead of 2R) it came out 1.6-2 times too large.
+TEST(PeriodicNetwork, FabricBoundTakesTheImageBranch) {
+  const packing::Packing p = shifted(triangular_lattice(6, 6), 1.3, 0.4);
+  qs::NetworkSolver s(p, exact_options(kInf));
+  Eigen::Matrix2d hydro;
+  hydro << -3e-3, 0, 0, -3e-3;
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE(s.increment(hydro).converged);
+  int across = 0;
+  for (const auto& c : s.contacts()) across += std::hypot(c.l[0], c.l[1]) > 3.0 ? 0 : (std::fabs(s.x()[c.j] - s.x()[c.i]) > 3.0 || std::fabs(s.y()[c.j] - s.y()[c.i]) > 3.0);
+  ASSERT_GT(across, 0) << "some contacts cross a face";
+  const auto m = s.measures();
+  // (the bound in units of sigma_y, the measures absolute)
+  const double sy = exact_options(kInf).law.sigma_y;
+  const auto h = qs::fabric_affine_point(s, 1.25 * std::numbers::pi, sy);
+  EXPECT_NEAR(h.S11 * sy, m.S11_contacts, 1e-9 * std::fabs(m.S11_contacts));
+  EXPECT_NEAR(h.S22 * sy, m.S22_contacts, 1e-9 * std::fabs(m.S22_contacts));
 }
 
 // Affine probing of a periodic state (issue 29; netsolve yield --compact-bc periodic --probe-bc
