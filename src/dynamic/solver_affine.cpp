@@ -166,6 +166,7 @@ void DynamicSolverT<D>::hold_spins(const std::vector<std::uint32_t>& particles) 
     for (int c = 0; c < ParticlesT<D>::kRot; ++c) P_.spin[ParticlesT<D>::kRot * p + c] = 0.0;
   }
   inv_mass_.clear();  // the kicks' inverse inertias are refilled
+  if (periodic_) hold_prescribed_fluctuations();  // a held spin is the cell's
 }
 
 template <int D>
@@ -181,6 +182,7 @@ void DynamicSolverT<D>::set_prescribed(const std::vector<std::uint32_t>& particl
   for (std::uint32_t p = 0; p < P_.size(); ++p)
     if (is_prescribed_[p]) prescribed_.push_back(p);
   inv_mass_.clear();  // the kicks' inverse masses are refilled (zero for the prescribed)
+  if (periodic_) hold_prescribed_fluctuations();  // at once, not at the next step
 }
 
 // Over the coming step of length dt: the prescribed particles and the Affine walls get the
@@ -371,7 +373,7 @@ double DynamicSolverT<D>::unbalanced_force_rms() const {
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
       if (!spin_held_[i] && rotations_) {  // a prescribed centre with a free spin: its torque
-        const double m = (P_.torque[i] + c * P_.inertia[i] * P_.spin[i]) / P_.r[i];
+        const double m = (P_.torque[i] + c * P_.inertia[i] * (P_.spin[i] - affine_spin(0))) / P_.r[i];
         sum += m * m;
         ++n;
       }
@@ -410,7 +412,7 @@ void DynamicSolverT<D>::apply_affine_drag() {
   const double c = opt_.affine_drag;
   for (std::size_t i = 0; i < P_.size(); ++i) {
     if (!is_prescribed_.empty() && is_prescribed_[i]) {
-      if (!spin_held_[i]) P_.torque[i] -= c * P_.inertia[i] * P_.spin[i];  // a free spin
+      if (!spin_held_[i]) P_.torque[i] -= c * P_.inertia[i] * (P_.spin[i] - affine_spin(0));  // a free spin
       continue;
     }
     const double dx = P_.pos[D * i] - box_.x_min, dy = P_.pos[D * i + 1] - box_.y_min;

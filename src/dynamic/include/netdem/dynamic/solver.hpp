@@ -519,7 +519,8 @@ class DynamicSolverT {
   /// With hold_spins = false only the centres are prescribed and their spins stay free (netsolve's
   /// affine mode: every centre affine, the rotations unknowns). In a periodic cell the cell carries
   /// the affine motion and the velocities are the fluctuations: a prescribed particle's is held at
-  /// zero (its centre follows the cell exactly; affine probing of a periodic state).
+  /// zero from this call on (its centre follows the cell exactly; affine probing of a periodic
+  /// state), a held spin at the cell's spin, and a free spin's affine drag acts relative to it.
   void set_prescribed(const std::vector<std::uint32_t>& particles, bool hold_spins = true);
   /// Holds the spins of these prescribed particles as well (after set_prescribed(..., false)): e.g.
   /// netsolve's and Redanz & Fleck's affine mode, every centre prescribed and the peripheral layer's
@@ -713,7 +714,8 @@ class DynamicSolverT {
   bool rotations_ = true;
   bool walls_active() const { return box_.enabled && box_.contact_walls; }
   void impose_affine_motion(double dt);
-  void hold_prescribed_fluctuations();  ///< periodic: the prescribed particles' velocities (and held spins) zero
+  /// periodic: the prescribed particles' velocities zero, their held spins the cell's spin
+  void hold_prescribed_fluctuations();
   void apply_affine_drag();
   void affine_velocity3(std::size_t i, double* a) const;  ///< 3D: L (x_i - x_0)
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
