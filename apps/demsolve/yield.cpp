@@ -349,11 +349,8 @@ void YieldRun::record_setup() {
 }
 
 void YieldRun::unload_phase() {
-  if (d_.affine_probe) {  // every centre follows the cell from here on, the spins free (netsolve's affine_centres)
-    std::vector<std::uint32_t> all(s_->particles().size());
-    for (std::size_t p = 0; p < all.size(); ++p) all[p] = static_cast<std::uint32_t>(p);
-    s_->set_prescribed(all, false);
-  }
+  // every centre follows the cell from here on, the spins free (netsolve's affine_centres)
+  if (d_.affine_probe) s_->set_prescribed(prescribed_particles(pk_, true, false), false);
   // unloading on the elastic branch: netsolve's secant steps along -E', each a ramp at the probe
   // rate and a hold with the relaxation drag until the state is at rest
   relax_.drag = a_.relax_drag;
