@@ -69,6 +69,8 @@ template <class T>
 inline T tan_zero() {
   if constexpr (std::is_same_v<T, double>) {
     return 0.0;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return T(0.0, 0.0, 0.0);  // (from scalars: Zero() is a chain of calls where it is not inlined, law.hpp Transport)
   } else {
     return T::Zero();
   }

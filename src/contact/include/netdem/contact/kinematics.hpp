@@ -246,11 +246,9 @@ inline IncrementJacobian3 increment_jacobian(const PairGeometry3& g0, const Pair
 /// rescale it, which is this rotation to first order without the twist). A rigid rotation at w
 /// carries the spring with the pair to O((w dt)^3) per step.
 inline Transport<3> step_transport(const Eigen::Vector3d& n, const Eigen::Vector3d& theta) {
-  Transport<3> t;
-  t.n = n;
-  t.theta = theta;
-  t.small = true;
-  return t;
+  // (copy-constructed members, not assigned: where Eigen is not inlined, as under the sanitizers,
+  // an assignment is a chain of calls, and this runs per contact and step; law.hpp Transport)
+  return Transport<3>{.n = n, .theta = theta, .small = true};  // (R: its default, the identity)
 }
 
 /// The quasi-static 3D kinematics of the increment g0 -> g1 (no rates, no time step).
