@@ -107,12 +107,11 @@ NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
     std::fill(P_.torque.begin(), P_.torque.end(), 0.0);
   }
   forces_initialised_ = false;
-  if (periodic_) {  // (the 3D stress sums per contact, through the images)
+  if (periodic_)  // (3D: the rows across the faces add their f (x) h n to a.s3)
     pair_forces<Law, InPlace, true>(pair_law, a);
-  } else {
+  else
     pair_forces<Law, InPlace, false>(pair_law, a);
-    if constexpr (D == 3) pair_stress_3d(a);
-  }
+  if constexpr (D == 3) pair_stress_3d(a);
   if (walls_active()) {
     if constexpr (D == 2)
       wall_forces_2d<Law, InPlace>(wall_law, a);
@@ -142,19 +141,66 @@ void DynamicSolverT<D>::hoist_cell(double (&hc)[3][3], double (&Lr)[3][3]) const
 }
 
 namespace {
-// The offset h n of the image n (D integers) added to the branch (dx, dy, dz).
+// Whether the image n (D integers) is not the cell itself.
 template <int D>
-inline void add_image(const int* n, const double (&hc)[3][3], double& dx, double& dy, double& dz) {
-  if (!(n[0] | n[1] | (D == 3 ? n[D - 1] : 0))) return;
+inline bool is_image(const int* n) {
+  return (n[0] | n[1] | (D == 3 ? n[D - 1] : 0)) != 0;
+}
+// The offset o = h n of the image n (D integers), o[2] = 0 in 2D.
+template <int D>
+inline void image_offset(const int* n, const double (&hc)[3][3], double (&o)[3]) {
   const double n0 = n[0], n1 = n[1], n2 = D == 3 ? n[D - 1] : 0;
-  dx += hc[0][0] * n0 + hc[0][1] * n1 + hc[0][2] * n2;
-  dy += hc[1][0] * n0 + hc[1][1] * n1 + hc[1][2] * n2;
-  dz += hc[2][0] * n0 + hc[2][1] * n1 + hc[2][2] * n2;
+  for (int r = 0; r < 3; ++r) o[r] = hc[r][0] * n0 + hc[r][1] * n1 + hc[r][2] * n2;
+}
+// b += A h n for a row across a face (image n); nothing for a row inside the cell. With A = 1: the
+// branch to j's image; with A = L: the affine velocity of the image's offset.
+template <int D>
+inline void add_image(const int* n, const double (&hc)[3][3], const double (&A)[3][3], bool identity, double& b0,
+                      double& b1, double& b2) {
+  if (!is_image<D>(n)) [[likely]]
+    return;
+  double o[3];
+  image_offset<D>(n, hc, o);
+  if (identity) {
+    b0 += o[0], b1 += o[1], b2 += o[2];
+    return;
+  }
+  b0 += A[0][0] * o[0] + A[0][1] * o[1] + A[0][2] * o[2];
+  b1 += A[1][0] * o[0] + A[1][1] * o[1] + A[1][2] * o[2];
+  b2 += A[2][0] * o[0] + A[2][1] * o[1] + A[2][2] * o[2];
+}
+// s += f (x) h n for a row across a face (image n): its part of the periodic stress sum.
+template <int D>
+inline void add_image_stress(const int* n, const double (&hc)[3][3], const double (&f)[3], double (&s)[3][3]) {
+  if (!is_image<D>(n)) [[likely]]
+    return;
+  double o[3];
+  image_offset<D>(n, hc, o);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) s[r][c] += f[r] * o[c];
 }
 }  // namespace
 
+// Periodic 3D: the velocities plus the affine field's L x, D per particle, into vel_abs_.
+template <int D>
+void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
+  if constexpr (D == 3) {
+    vel_abs_.resize(P_.vel.size());  // (allocates only when the particle count grows)
+    const double *const p_x = P_.pos.data(), *const p_v = P_.vel.data();
+    for (std::size_t i = 0, n = P_.size(); i < n; ++i) {
+      const double* const x = p_x + 3 * i;
+      for (int r = 0; r < 3; ++r)
+        vel_abs_[3 * i + r] = p_v[3 * i + r] + (Lr[r][0] * x[0] + Lr[r][1] * x[1] + Lr[r][2] * x[2]);
+    }
+  }
+}
+
 // Periodic (issue 29): the branch to the image of j, x_j + h n - x_i, and the velocities are the
 // fluctuations about the affine field, so that the relative velocity adds L times the branch.
+// 3D: as L (x_j - x_i) + L h n, with v + L x per particle (vel_abs_, one pass) and L h n only on
+// the rows across a face, and the stress as the walled loop's sum over the particles plus f (x) h n
+// on those rows: the loop keeps no 3 x 3 in registers (the 3 x 3 L, h and the stress sums made it
+// spill: docs/performance.md "The 3D periodic force loop").
 template <int D>
 template <class Law, bool InPlace, bool Periodic>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
@@ -178,8 +224,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
   const int* const p_i = rows_.pi.data();  // the rows' particles and images
   const int* const p_j = rows_.pj.data();
   const auto* const shift = rows_.shift.data();
+  const double* p_vr = p_v;  // the velocities the loop takes differences of (periodic 3D: v + L x)
   if constexpr (Periodic) hoist_cell(hc, Lr);
-  double s3p[3][3] = {};  // Periodic, 3D: the stress sums per contact
+  if constexpr (Periodic && D == 3) {
+    fill_absolute_velocities(Lr);
+    p_vr = vel_abs_.data();
+  }
+  double s3p[3][3] = {};  // Periodic, 3D: f (x) h n over the rows across a face
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const auto i = static_cast<std::size_t>(p_i[k]);
     const auto j = static_cast<std::size_t>(p_j[k]);
@@ -189,7 +240,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
     if constexpr (D == 3) dz = xj[2] - xi[2];
-    if constexpr (Periodic) add_image<D>(shift[k].data(), hc, dx, dy, dz);
+    if constexpr (Periodic) add_image<D>(shift[k].data(), hc, hc, true, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
@@ -246,30 +297,33 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       syy += fy * dy;
       if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     } else {
+      // (in scalars, Eigen vectors only for the law: docs/performance.md "The 3D periodic force loop")
       const double L = std::sqrt(L2), iL = 1.0 / L;
-      const Eigen::Vector3d n(dx * iL, dy * iL, dz * iL);  // from i to j
+      const double n0 = dx * iL, n1 = dy * iL, n2 = dz * iL;  // n from i to j
       const double q = (ri * ri - rj * rj) * (0.5 * iL);
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
-      const double *const vi = p_v + D * i, *const vj = p_v + D * j;
-      Eigen::Vector3d vrel(vj[0] - vi[0], vj[1] - vi[1], vj[2] - vi[2]);
-      if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
-        const double br[3] = {dx, dy, dz};
-        for (int r = 0; r < 3; ++r) vrel(r) += Lr[r][0] * br[0] + Lr[r][1] * br[1] + Lr[r][2] * br[2];
-      }
+      const double *const vi = p_vr + D * i, *const vj = p_vr + D * j;
+      double v0 = vj[0] - vi[0], v1 = vj[1] - vi[1], v2 = vj[2] - vi[2];  // v_j - v_i (periodic: + L (x_j - x_i))
+      if constexpr (Periodic) add_image<D>(shift[k].data(), hc, Lr, false, v0, v1, v2);  // the image's L h n
       const double *const oi = p_w + D * i, *const oj = p_w + D * j;  // (kRot = D)
-      const Eigen::Vector3d wi(oi[0], oi[1], oi[2]), wj(oj[0], oj[1], oj[2]);
-      const Eigen::Vector3d W = di * wi + dj * wj;  // L x the pair's rotation rate (kinematics.hpp)
+      // W = d_i w_i + d_j w_j: L x the pair's rotation rate (kinematics.hpp)
+      const double W0 = di * oi[0] + dj * oj[0], W1 = di * oi[1] + dj * oj[1], W2 = di * oi[2] + dj * oj[2];
       // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
-      const double vn = vrel.dot(n);
-      const Eigen::Vector3d vc = vrel - W.cross(n);
-      const Eigen::Vector3d vt = vc - n * vc.dot(n);
+      const double vn = v0 * n0 + v1 * n1 + v2 * n2;
+      const double c0 = v0 - (W1 * n2 - W2 * n1), c1 = v1 - (W2 * n0 - W0 * n2), c2 = v2 - (W0 * n1 - W1 * n0);
+      const double cn = c0 * n0 + c1 * n1 + c2 * n2;
+      const double t0 = c0 - n0 * cn, t1 = c1 - n1 * cn, t2 = c2 - n2 * cn;  // the tangential part
+      // the step's rotation: (n x v_rel + (W . n) n) dt / L
+      const double Wn = W0 * n0 + W1 * n1 + W2 * n2, sc = iL * dt;
+      const double th0 = (n1 * v2 - n2 * v1 + Wn * n0) * sc, th1 = (n2 * v0 - n0 * v2 + Wn * n1) * sc,
+                   th2 = (n0 * v1 - n1 * v0 + Wn * n2) * sc;
       contact::Kinematics<3> in;
       in.overlap = s - L;
       in.v_n = -vn;
-      in.v_t = vt;
-      in.dslip = vt * dt;
+      in.v_t = Eigen::Vector3d(t0, t1, t2);
+      in.dslip = Eigen::Vector3d(t0 * dt, t1 * dt, t2 * dt);
       in.dt = dt;
-      in.transport = contact::step_transport(n, (n.cross(vrel) + W.dot(n) * n) * (iL * dt));
+      in.transport = contact::step_transport(Eigen::Vector3d(n0, n1, n2), Eigen::Vector3d(th0, th1, th2));
       if constexpr (contact::kReadsPairProperties<Law>) {
         in.overlap_start = in.overlap - in.v_n * dt;
         in.r_eff = ri * rj / s;
@@ -280,27 +334,18 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
-      const Eigen::Vector3d f = f_n * n + f_t;  // on j
+      const double ft0 = f_t.x(), ft1 = f_t.y(), ft2 = f_t.z();
+      const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
       double *const fi = p_f + D * i, *const fj = p_f + D * j;
-      fj[0] += f.x();
-      fj[1] += f.y();
-      fj[2] += f.z();
-      fi[0] -= f.x();
-      fi[1] -= f.y();
-      fi[2] -= f.z();
-      const Eigen::Vector3d m = n.cross(f_t);  // M_i = -d_i n x f_t, M_j = -d_j n x f_t
+      fj[0] += f0, fj[1] += f1, fj[2] += f2;
+      fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
+      // M_i = -d_i n x f_t, M_j = -d_j n x f_t
+      const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
       double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
-      ti[0] -= di * m.x();
-      ti[1] -= di * m.y();
-      ti[2] -= di * m.z();
-      tj[0] -= dj * m.x();
-      tj[1] -= dj * m.y();
-      tj[2] -= dj * m.z();
-      if constexpr (Periodic) {  // Sigma V = sum f (x) l, l the branch to the image
-        const double br[3] = {dx, dy, dz};
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) s3p[r][c] += f(r) * br[c];
-      }
+      ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
+      tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;
+      // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
+      if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
       if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
     }
   }
@@ -332,9 +377,9 @@ void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
     s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
     s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
   }
-  s3[0][0] = s00, s3[0][1] = s01, s3[0][2] = s02;
-  s3[1][0] = s10, s3[1][1] = s11, s3[1][2] = s12;
-  s3[2][0] = s20, s3[2][1] = s21, s3[2][2] = s22;
+  s3[0][0] += s00, s3[0][1] += s01, s3[0][2] += s02;
+  s3[1][0] += s10, s3[1][1] += s11, s3[1][2] += s12;
+  s3[2][0] += s20, s3[2][1] += s21, s3[2][2] += s22;
 }
 
 // The particle-wall contacts, 2D: the pair (wall, particle), n from the wall into the box.

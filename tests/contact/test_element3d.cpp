@@ -177,14 +177,14 @@ TEST(Element3D, IncrementJacobianMatchesFiniteDifferences) {
       return pair_increment(g0, s.g1(q), V3(q.segment<3>(3)), V3(q.segment<3>(9)));
     };
     Eigen::Matrix<double, 3, 12> dslip, spin, dn;
-    const M3 R0 = inc(s.q).transport.R;
+    const M3 R0 = inc(s.q).transport.R();
     for (int c = 0; c < 12; ++c) {
       Vec12 qp = s.q, qm = s.q;
       qp(c) += kJacStep;
       qm(c) -= kJacStep;
       const PairIncrement3 ip = inc(qp), im = inc(qm);
       dslip.col(c) = (ip.dslip - im.dslip) / (2.0 * kJacStep);
-      const M3 W = (ip.transport.R - im.transport.R) / (2.0 * kJacStep) * R0.transpose();
+      const M3 W = (ip.transport.R() - im.transport.R()) / (2.0 * kJacStep) * R0.transpose();
       spin.col(c) = 0.5 * V3(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1));
       EXPECT_LT((W + W.transpose()).norm(), 1e-6) << "dR R^T is skew";
       dn.col(c) = (s.g1(qp).n - s.g1(qm).n) / (2.0 * kJacStep);

@@ -289,7 +289,7 @@ std::vector<typename Fx::Kin> load_path(unsigned seed, int n) {
       const Eigen::Vector3d w(0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
       normal = (rotation_of(w) * normal).normalized();
       if (i % 2 == 0) {  // a quasi-static increment's finite rotation
-        k.transport.R = rotation_of(w);
+        k.transport.set_R(rotation_of(w));
         k.transport.n = normal;
       } else {  // an explicit step's small rotation (the DEM's transport, law.hpp transport_small)
         k.transport = step_transport(normal, w);

@@ -166,9 +166,9 @@ inline PairIncrement3 pair_increment(const PairGeometry3& g0, const PairGeometry
     const double psi = std::atan2(sn, n0r.dot(g1.n));
     const Eigen::Vector3d e = c / sn;
     out.dslip = (L * psi) * e.cross(g1.n);
-    out.transport.R = Eigen::AngleAxisd(psi, e).toRotationMatrix() * Q;
+    out.transport.set_R(Eigen::AngleAxisd(psi, e).toRotationMatrix() * Q);
   } else {
-    out.transport.R = Q;
+    out.transport.set_R(Q);
   }
   return out;
 }

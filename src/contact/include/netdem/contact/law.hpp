@@ -32,6 +32,7 @@
 // template is instantiated for both (dim.hpp).
 #include <cmath>
 #include <concepts>
+#include <algorithm>
 #include <cstdint>
 
 #include <Eigen/Core>
@@ -58,11 +59,16 @@ template <>
 struct Transport<3> {
   // (the initialisers from scalars: Eigen's Identity() and Zero() expressions are chains of calls
   // in a build that does not inline them, and the explicit loops construct a Transport per contact
-  // and step: half of the run time of a 3D DEM test under the sanitizers)
-  Eigen::Matrix3d R{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};  ///< the finite rotation (small = false)
+  // and step: half of the run time of a 3D DEM test under the sanitizers. R is a plain array: the
+  // nested-list constructor of an Eigen matrix is a loop over the rows even at -O3, 10 % of the 3D
+  // periodic force loop's samples; docs/performance.md "Transport's R")
+  double r[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};  ///< R, column-major
   Eigen::Vector3d n{0.0, 0.0, 1.0};      ///< the current normal
   Eigen::Vector3d theta{0.0, 0.0, 0.0};  ///< the rotation vector of one step (small = true)
   bool small = false;
+  /// The finite rotation (small = false); the identity by default.
+  Eigen::Map<const Eigen::Matrix3d> R() const { return Eigen::Map<const Eigen::Matrix3d>(r); }
+  void set_R(const Eigen::Matrix3d& m) { std::copy(m.data(), m.data() + 9, r); }
   Eigen::Vector3d apply(const Eigen::Vector3d& v) const;
 };
 
@@ -88,7 +94,7 @@ inline Eigen::Vector3d Transport<3>::apply(const Eigen::Vector3d& v) const {
     transport_small(theta.x(), theta.y(), theta.z(), n.x(), n.y(), n.z(), w0, w1, w2);
     return Eigen::Vector3d(w0, w1, w2);
   }
-  Eigen::Vector3d w = R * v;
+  Eigen::Vector3d w = R() * v;
   w -= n * n.dot(w);
   return w;
 }

@@ -580,7 +580,8 @@ class DynamicSolverT {
   };
   template <class L, bool InPlace, bool Periodic>
   void pair_forces(const L& pair_law, ForceSums& a);
-  void pair_stress_3d(ForceSums& a) const;
+  void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
+  void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
   void wall_forces_2d(const L& wall_law, ForceSums& a);
   template <class L, bool InPlace>
@@ -721,6 +722,7 @@ class DynamicSolverT {
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
+  std::vector<double> vel_abs_;  ///< periodic 3D force loop: v_i + L x_i (D per particle), per evaluation
   std::vector<double> pos_build_;  ///< D per particle: the centres at the last table build
   /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
   /// evaluation). A table build sets all four bits of the wall candidates and resets the wall
