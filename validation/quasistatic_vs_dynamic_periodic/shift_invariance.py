@@ -27,6 +27,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(REPO, "validation", "quasistatic_vs_dynamic"))
+from run import fit as dem_limit_fit  # noqa: E402 (the cross-check's least-squares line)
 INERTIAL = (4e-4, 2e-4, 1e-4)
 SHIFT = (0.377, 0.613)
 DD, INC = 0.03, 30
@@ -69,16 +71,9 @@ def last_row(path):
 
 
 def fit(points):
-    """sigma = s0 + a I by least squares; returns (s0, se(s0))."""
-    n = len(points)
-    mi = sum(i for i, _ in points) / n
-    ms = sum(s for _, s in points) / n
-    sxx = sum((i - mi) ** 2 for i, _ in points)
-    a = sum((i - mi) * (s - ms) for i, s in points) / sxx
-    s0 = ms - a * mi
-    res = sum((s - s0 - a * i) ** 2 for i, s in points)
-    var = res / (n - 2) if n > 2 else float("nan")
-    return s0, math.sqrt(var * (1.0 / n + mi * mi / sxx))
+    """sigma = s0 + a I by least squares over [(I, sigma)]: (s0, se(s0)), the validation cases' fit."""
+    s0, se, _, _ = dem_limit_fit([i for i, _ in points], [v for _, v in points])
+    return s0, se
 
 
 def study(a, mu, pack, shifted, to, lines):
