@@ -115,8 +115,15 @@ void run(const Args& a) {
   PeriodicPackSummary ps;
   const bool cached = !a.cache.empty() && std::filesystem::exists(a.cache);
   const packing::Packing pk = cached ? packing::read_packing_csv(a.cache) : make_periodic_packing(D, po, ps, {});
-  if (cached) ps.status = "cached";
-  else if (!a.cache.empty()) packing::write_packing_csv(pk, a.cache);
+  if (cached) {  // (a packing of another --dim or --n is refused; its density is the file's)
+    if (pk.size() != a.n || pk.dim != D)
+      throw std::invalid_argument("--packing-cache " + a.cache + " holds another packing (not " +
+                                  std::to_string(D) + "D with " + std::to_string(a.n) + " particles)");
+    ps.status = "cached";
+    ps.density = pk.density();
+  } else if (!a.cache.empty()) {
+    packing::write_packing_csv(pk, a.cache);
+  }
   const long steps = std::max<long>(a.min_steps, static_cast<long>(a.psteps / static_cast<double>(a.n)));
   std::printf(
       "dim,n,rep,mode,steps,cpu_s,particle_steps_per_cpu_s,contacts,table_builds,packing_density,packing_status\n");
