@@ -19,15 +19,17 @@ error below the front's range gets the most accurate DEM run's time (a lower bou
 it, the front is extrapolated from its two fastest points (flagged). Also t_DEM at 1 % error.
 
     /usr/bin/python3 bench/time_vs_error_walls.py [--seeds 1,2,3] [--paths hydrostatic,closed-die]
-        [--frictions inf] [--slow] [--workdir /tmp/netdem-bench/tve_walls] [--reuse]
+        [--frictions inf] [--slow] [--workdir DIR] [--reuse]
 
---reuse takes a run whose folder in --workdir already holds summary.json and history.csv as it is
+--workdir defaults to netdem-bench/tve_walls in the system's temporary folder. --reuse takes a run
+whose folder in --workdir already holds summary.json and history.csv as it is
 (the same binaries are assumed: say so when you use it).
 
 Writes bench/results/time_vs_error_walls.{csv,md}.
 """
 import argparse
 import csv
+import importlib.util
 import json
 import math
 import os
@@ -37,8 +39,6 @@ import sys
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(REPO, "validation", "quasistatic_vs_dynamic"))
-from run import fit as dem_limit_fit  # noqa: E402 (the cross-check's least-squares line)
 JAM = os.path.join(REPO, "validation", "quasistatic_vs_dynamic_walls", "runs", "jam")
 INERTIAL = (8e-4, 4e-4, 2e-4, 1e-4)
 NET_RUNS = (("20 inc", ["--increments", "20"]), ("40 inc", ["--increments", "40"]),
@@ -63,9 +63,21 @@ def launch(cmd, out):
         raise SystemExit(f"time_vs_error_walls: exit {r.returncode}: {' '.join(cmd)}: {r.stderr.strip()}")
 
 
+def _layer_case():
+    """validation/quasistatic_vs_dynamic/run.py as a module: its least-squares fit of the DEM's limit."""
+    spec = importlib.util.spec_from_file_location(
+        "qvd_layer", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))
+    m = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(m)
+    return m
+
+
+_qvd = _layer_case()
+
+
 def fit(points):
     """sigma = s0 + a I by least squares over [(I, sigma)]: (s0, se(s0)), the validation cases' fit."""
-    s0, se, _, _ = dem_limit_fit([i for i, _ in points], [v for _, v in points])
+    s0, se, _, _ = _qvd.fit([i for i, _ in points], [v for _, v in points])
     return s0, se
 
 

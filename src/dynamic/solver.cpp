@@ -152,22 +152,26 @@ inline void image_offset(const int* n, const double (&hc)[3][3], double (&o)[3])
   const double n0 = n[0], n1 = n[1], n2 = D == 3 ? n[D - 1] : 0;
   for (int r = 0; r < 3; ++r) o[r] = hc[r][0] * n0 + hc[r][1] * n1 + hc[r][2] * n2;
 }
-// b += A h n for a row across a face (image n); nothing for a row inside the cell. With A = 1: the
-// branch to j's image; with A = L: the affine velocity of the image's offset.
+// b += h n for a row across a face (image n): the branch to j's image; nothing inside the cell.
 template <int D>
-inline void add_image(const int* n, const double (&hc)[3][3], const double (&A)[3][3], bool identity, double& b0,
-                      double& b1, double& b2) {
+inline void add_image(const int* n, const double (&hc)[3][3], double& b0, double& b1, double& b2) {
   if (!is_image<D>(n)) [[likely]]
     return;
   double o[3];
   image_offset<D>(n, hc, o);
-  if (identity) {
-    b0 += o[0], b1 += o[1], b2 += o[2];
+  b0 += o[0], b1 += o[1], b2 += o[2];
+}
+// v += L h n for a row across a face (image n): the affine velocity of the image's offset.
+template <int D>
+inline void add_image_velocity(const int* n, const double (&hc)[3][3], const double (&L)[3][3], double& v0,
+                               double& v1, double& v2) {
+  if (!is_image<D>(n)) [[likely]]
     return;
-  }
-  b0 += A[0][0] * o[0] + A[0][1] * o[1] + A[0][2] * o[2];
-  b1 += A[1][0] * o[0] + A[1][1] * o[1] + A[1][2] * o[2];
-  b2 += A[2][0] * o[0] + A[2][1] * o[1] + A[2][2] * o[2];
+  double o[3];
+  image_offset<D>(n, hc, o);
+  v0 += L[0][0] * o[0] + L[0][1] * o[1] + L[0][2] * o[2];
+  v1 += L[1][0] * o[0] + L[1][1] * o[1] + L[1][2] * o[2];
+  v2 += L[2][0] * o[0] + L[2][1] * o[1] + L[2][2] * o[2];
 }
 // s += f (x) h n for a row across a face (image n): its part of the periodic stress sum.
 template <int D>
@@ -240,7 +244,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
     const double ri = p_radius[i], rj = p_radius[j];
     double dz = 0.0;
     if constexpr (D == 3) dz = xj[2] - xi[2];
-    if constexpr (Periodic) add_image<D>(shift[k].data(), hc, hc, true, dx, dy, dz);
+    if constexpr (Periodic) add_image<D>(shift[k].data(), hc, dx, dy, dz);
     const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
@@ -304,7 +308,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
       const double *const vi = p_vr + D * i, *const vj = p_vr + D * j;
       double v0 = vj[0] - vi[0], v1 = vj[1] - vi[1], v2 = vj[2] - vi[2];  // v_j - v_i (periodic: + L (x_j - x_i))
-      if constexpr (Periodic) add_image<D>(shift[k].data(), hc, Lr, false, v0, v1, v2);  // the image's L h n
+      if constexpr (Periodic) add_image_velocity<D>(shift[k].data(), hc, Lr, v0, v1, v2);  // L h n
       const double *const oi = p_w + D * i, *const oj = p_w + D * j;  // (kRot = D)
       // W = d_i w_i + d_j w_j: L x the pair's rotation rate (kinematics.hpp)
       const double W0 = di * oi[0] + dj * oj[0], W1 = di * oi[1] + dj * oj[1], W2 = di * oi[2] + dj * oj[2];

@@ -13,7 +13,8 @@ I = 4e-4, 2e-4, 1e-4, and S11, S22 at the end fitted to sigma = sigma0 + a I (le
 standard error of sigma0 from the residuals, one degree of freedom). The line passes when the two
 sigma0 differ by at most the combined standard error sqrt(se_a^2 + se_b^2) (the issue: "sigma0
 equal within its standard error"); the difference of each pair of runs at one I is listed too.
-Writes shift_invariance.md next to this script; runs in --runs (default /tmp/netdem-shift-invariance).
+Writes shift_invariance.md next to this script; runs in --runs (default: netdem-shift-invariance in the
+system's temporary folder).
 """
 import argparse
 import csv
@@ -23,12 +24,12 @@ import os
 import random
 import subprocess
 import sys
+import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(REPO, "validation", "quasistatic_vs_dynamic"))
-from run import fit as dem_limit_fit  # noqa: E402 (the cross-check's least-squares line)
+from run import fit as dem_limit_fit  # noqa: E402 (this case's least-squares line, the layer case's fit)
 INERTIAL = (4e-4, 2e-4, 1e-4)
 SHIFT = (0.377, 0.613)
 DD, INC = 0.03, 30
@@ -127,7 +128,7 @@ def main():
     ap.add_argument("--frictions", default="inf,0.1")
     ap.add_argument("--path", default="hydrostatic")
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--runs", default="/tmp/netdem-shift-invariance")
+    ap.add_argument("--runs", default=os.path.join(tempfile.gettempdir(), "netdem-shift-invariance"))
     a = ap.parse_args()
     os.makedirs(a.runs, exist_ok=True)
     pack = os.path.join(HERE, "runs", "pack", f"s{a.seed}", "packing.csv")

@@ -30,9 +30,9 @@
 // the slip is j's contact point relative to i's (2D: along t = perp(n); 3D: a vector in the
 // tangent plane), forces are on j. A law has a dimension `L::kDim` (2 or 3): the same law
 // template is instantiated for both (dim.hpp).
+#include <algorithm>
 #include <cmath>
 #include <concepts>
-#include <algorithm>
 #include <cstdint>
 
 #include <Eigen/Core>
