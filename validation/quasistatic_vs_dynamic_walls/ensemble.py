@@ -25,7 +25,7 @@ fully accepted runs is shown beside it); also the fraction of single seeds withi
 of d against the RMS of the DEM fits' se (which of the two solvers' path scatter dominates).
 
     /usr/bin/python3 validation/quasistatic_vs_dynamic_walls/ensemble.py [--seeds 1-16]
-        [--frictions 0.1,inf,0:1-8] [--jobs 2] [--runs DIR] [--report-only] [--force]
+        [--frictions 0.1,inf,0] [--jobs 2] [--runs DIR] [--report-only] [--force]
 
 Runs go to runs/ensemble/ (one folder per run, skipped when up to date); writes ensemble.md and
 ensemble.csv beside this script.
@@ -269,7 +269,7 @@ def made_by(R):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", default="1-16")
-    ap.add_argument("--frictions", default="0.1,inf,0:1-8",
+    ap.add_argument("--frictions", default="0.1,inf,0",
                     help="frictions, each with its own seeds after ':' (else --seeds)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--runs", default=os.path.join(HERE, "runs", "ensemble"))
