@@ -29,7 +29,6 @@ Writes bench/results/time_vs_error_walls.{csv,md}.
 """
 import argparse
 import csv
-import importlib.util
 import json
 import math
 import os
@@ -39,6 +38,9 @@ import sys
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
+from report_paths import load_module  # noqa: E402
+
 JAM = os.path.join(REPO, "validation", "quasistatic_vs_dynamic_walls", "runs", "jam")
 INERTIAL = (8e-4, 4e-4, 2e-4, 1e-4)
 NET_RUNS = (("20 inc", ["--increments", "20"]), ("40 inc", ["--increments", "40"]),
@@ -63,16 +65,8 @@ def launch(cmd, out):
         raise SystemExit(f"time_vs_error_walls: exit {r.returncode}: {' '.join(cmd)}: {r.stderr.strip()}")
 
 
-def _layer_case():
-    """validation/quasistatic_vs_dynamic/run.py as a module: its least-squares fit of the DEM's limit."""
-    spec = importlib.util.spec_from_file_location(
-        "qvd_layer", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    return m
-
-
-_qvd = _layer_case()
+# validation/quasistatic_vs_dynamic/run.py as a module: its least-squares fit of the DEM's limit
+_qvd = load_module("qvd_layer", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))
 
 
 def fit(points):

@@ -55,6 +55,15 @@ CASE_SOURCES = {
 }
 
 
+def load_module(name, path):
+    """The Python file `path` (a sibling case's run.py, say) as a module named `name`."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(name, path)
+    m = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(m)
+    return m
+
+
 def shown_path(p, repo):
     """`p` relative to the repository `repo`; a relative `p` as it is; a file outside the
     repository by its name only."""

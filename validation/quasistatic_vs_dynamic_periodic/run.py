@@ -44,20 +44,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
-from report_paths import MISSING, provenance, provenance_lines, shown_path, tally  # noqa: E402
+from report_paths import MISSING, load_module, provenance, provenance_lines, shown_path, tally  # noqa: E402
 
 
-def _layer_case():
-    """The layer/walls case's module (validation/quasistatic_vs_dynamic/run.py): its runner, reader and fit."""
-    import importlib.util
-    spec = importlib.util.spec_from_file_location("qvd_layer", os.path.join(REPO, "validation",
-                                                                            "quasistatic_vs_dynamic", "run.py"))
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    return m
-
-
-_qvd = _layer_case()
+# the layer/walls case's module (validation/quasistatic_vs_dynamic/run.py): its runner, reader and fit
+_qvd = load_module("qvd_layer", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))
 Run, fit, fmt, run_one = _qvd.Run, _qvd.fit, _qvd.fmt, _qvd.run_one
 
 

@@ -32,7 +32,6 @@ ensemble.csv beside this script.
 """
 import argparse
 import csv
-import importlib.util
 import math
 import os
 import sys
@@ -43,18 +42,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
-def _walls_case():
-    spec = importlib.util.spec_from_file_location("qvd_walls", os.path.join(HERE, "run.py"))
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    m.configure()
-    return m
-
-
-W = _walls_case()
-P = W.P
 sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
-from report_paths import provenance, shown_path  # noqa: E402
+from report_paths import load_module, provenance, shown_path  # noqa: E402
+
+W = load_module("qvd_walls", os.path.join(HERE, "run.py"))  # this case's runner, configured as run.py runs it
+W.configure()
+P = W.P
 
 POINTS = (0.01, 0.02)          # D - D0
 BAND, SE_VALID = 0.02, 0.005   # of the scale (the case's)

@@ -23,7 +23,6 @@ never widened): |dSigma_ij| <= 0.02 max(|sigma0_11|, |sigma0_22|); Z within +-0.
 only if se(sigma0) <= 0.005 of the same scale. A netsolve run with unaccepted increments fails its
 lines. The evaluation, figures and runner are the periodic case's (validation/quasistatic_vs_dynamic_periodic/run.py).
 """
-import importlib.util
 import json
 import os
 import sys
@@ -34,15 +33,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
-def _periodic_case():
-    spec = importlib.util.spec_from_file_location(
-        "qvd_periodic", os.path.join(REPO, "validation", "quasistatic_vs_dynamic_periodic", "run.py"))
-    m = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(m)
-    return m
+sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
+from report_paths import load_module  # noqa: E402
 
-
-P = _periodic_case()
+P = load_module("qvd_periodic", os.path.join(REPO, "validation", "quasistatic_vs_dynamic_periodic", "run.py"))
 fmt, MISSING = P.fmt, P.MISSING
 
 JAM_D = 0.83   # the jammed state's density: every wall carries load there (sticking and mu = 0.1)
