@@ -96,8 +96,8 @@ CASES = {
 # cases rerun with --normal-unloading elastic for the comparison of the normal law
 ALT_LAW_CASES = [n for n in CASES if not n.endswith("_2x") and "visc" not in n]
 VISCOSITY_STUDY = (("hydro_mu0", "0.01 (default)", "≤ 10, residual"),
-                   ("hydro_mu0_visc0.003", "0.003", "≤ 20, energy"),
-                   ("hydro_mu0_visc0.001", "0.001", "≤ 20, energy"))
+                   ("hydro_mu0_visc0.003", "0.003", "≤ 20, residual"),
+                   ("hydro_mu0_visc0.001", "0.001", "≤ 20, residual"))
 
 
 
@@ -656,8 +656,9 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
                  "viscous drag that keeps the Newton iteration stable (docs/quasistatic.md) holds the network "
                  "closer to the affine motion. Same case at weaker drag (--viscosity 0.003 and 0.001 instead of 0.01, i.e. "
                  "0.3 and 0.1 times the default drag per unit strain; below 0.01 the default Newton settings "
-                 "lose the network, so these runs use up to 20 iterations and the energy line search; they are "
-                 "information, not findings):\n")
+                 "lose the network, so these runs allow up to 20 Newton iterations per increment (`--max-newton 20`; "
+                 "the default is 10); all three run the default iteration (`--iteration legacy-drag`) with its "
+                 "residual line search (`--backtracks 3`), column 'Newton'; they are information, not findings):\n")
         L += vs
         L.append("\nThe stress falls and the deviation from the affine motion grows as the drag weakens, without "
                  "converging: the frictionless answer depends on the drag that the solver needs (the Newton "
