@@ -1,28 +1,29 @@
 #!/usr/bin/env python3
-"""Redanz & Fleck's frictionless compaction findings (3a, 3b, 6a, 7a/7b; 1c beside them) re-evaluated on
-converged runs with walls and on the DEM limit (issue 28, "Redanz & Fleck's frictionless findings").
+"""Redanz & Fleck's compaction findings between walls: the frictionless ones (3a, 3b, 6a, 7a/7b, 8d; issue 28)
+on the explicit DEM at two rates and on netsolve from a DEM jammed state, and those with friction (1a, 1c, 2,
+4, 6b-6d, 7c, 8a-8c; issue 32, frictional.py) on the DEM.
 
-usage: /usr/bin/python3 validation/redanz_fleck_frictionless/run.py
+usage: /usr/bin/python3 validation/redanz_fleck_walls/run.py
            [--quick] [--netsolve PATH] [--demsolve PATH] [--jobs 2] [--runs DIR] [--force]
            [--only PATTERN,...] [--report-only] [--timeout S]
 
-The paper's die (a prescribed peripheral layer) does not hold a converged frictionless packing: without
-the drag in the answer the disks are extruded through it (docs/quasistatic.md, "Frictionless: the die
-leaks"). This case departs from the paper's boundary: four rigid frictionless walls around the same
-ballistic deposition (W = 80, seeds 1-8; --quick: W = 40, seeds 1-2), driven hydrostatically or as a
-closed die to D = 0.85. Runs per seed:
+The paper's die (a prescribed peripheral layer) does not hold a frictionless packing without the drag in
+the answer: the disks are extruded through it (docs/quasistatic.md, "Frictionless: the die leaks"). This
+case departs from the paper's boundary: four rigid frictionless walls around the same ballistic
+depositions (W = 80, seeds 1-8; --quick: W = 40, seeds 1-2), driven hydrostatically or as a closed die to
+D = 0.85 in the walls' box. Runs per seed:
   * `demsolve compact --boundary walls --friction 0` from the deposition, hydrostatic and closed die, at
-    I = 1.5e-4 (the tool's default) and 5e-5: the DEM limit, with its distance shown by the two rates;
-  * the same, sticking, hydrostatic, at I = 1.5e-4 (finding 1c's reference);
-  * `demsolve compact ... --to-density 0.84 --save-state` (hydrostatic, mu = 0: every wall loaded, Z 3.9)
-    and from its jammed.json `netsolve compact --boundary walls --iteration pseudo-transient` to 0.85:
-    the converged network's answer where the network has one (a frictionless packing below jamming is a
-    mechanism: its quasi-static stress is zero, so netsolve cannot start from the deposition);
+    I = 1.5e-4 (the tool's default) and 5e-5 (graded; the other rate shows how far the rate moves a line);
+  * `demsolve compact ... --to-density 0.84 --save-state` (hydrostatic, mu = 0, I = 1.5e-4: every wall
+    loaded) and from its jammed.json `netsolve compact --boundary walls --iteration pseudo-transient` to
+    0.85 (a frictionless packing below jamming is a mechanism, so netsolve cannot start from the deposition);
   * `netsolve compact --affine --friction 0` from the same deposition (the affine reference of 3a; the
     walls exclude --affine, so it runs in the die's box and is compared at the same strain, its stress
-    scaled to the walls' box area, see the report).
-The findings' definitions and bands are validation/redanz_fleck_compaction/run.py's (never widened);
-each is evaluated per seed, and over the seeds as mean +- standard error, graded on the mean.
+    scaled to the walls' box area);
+  * frictional.py's runs: mu = 0.1, sticking and sticking without rotation, both paths.
+Densities are converted to the die's box at equal strain (the paper's). The findings' definitions and
+bands are validation/redanz_fleck_compaction/run.py's (never widened); each is evaluated per seed and
+graded on the mean over the seeds.
 """
 import argparse
 import math
@@ -39,9 +40,10 @@ from report_paths import (MISSING, load_module, missing_text, provenance, proven
                           tally, verdict)
 
 Q = load_module("qvd", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))
+FR = load_module("rf_walls_frictional", os.path.join(HERE, "frictional.py"))
 PER = load_module("qvd_periodic", os.path.join(REPO, "validation", "quasistatic_vs_dynamic_periodic", "run.py"))
 
-CASE = "redanz_fleck_frictionless"
+CASE = "redanz_fleck_walls"
 TARGET_D = 0.85
 JAM_D = 0.84        # the frictionless jammed state netsolve starts from (as the walls ensemble)
 AFFINE_TO_D = 0.87  # the affine run's end density in the die's box: past the walls' 0.85 at equal strain
@@ -72,7 +74,8 @@ def prep_runs(mode):
         out.append((dem_name(s, "hydro", "inf", INERTIAL[0]), "demsolve",
                     dem_args(mode, s, "hydrostatic", "inf", INERTIAL[0]), (3, s)))
         out.append((f"aff/s{s}", "netsolve", base(mode, s) + [
-            "--affine", "--friction", "0", "--to-density", f"{AFFINE_TO_D:g}", "--increments", "200", "--quiet"], (3, s)))
+            "--affine", "--friction", "0", "--to-density", f"{AFFINE_TO_D:g}", "--increments", "200", "--snapshots", "",
+            "--quiet"], (3, s)))
     return out
 
 
@@ -94,33 +97,39 @@ def net_runs(mode, runs):
 # ---------------------------------------------------------------------------------------- reading
 C = load_module("rf_compaction", os.path.join(REPO, "validation", "redanz_fleck_compaction", "run.py"))
 COMPACTION_REPORT = os.path.join(REPO, "validation", "redanz_fleck_compaction", "report.md")
+# the compaction report's lines this case evaluates again (frictionless here, with friction in frictional.py)
+COMPARED = ("1a", "1c", "2", "3a", "3b", "4", "6a", "6b", "6c", "6d", "7a-hydro", "7b-hydro", "7a-die", "7b-die",
+            "7c-hydro", "7c-die", "8a", "8b", "8c", "8d")
+
+
+def all_runs(mode, runs):
+    return prep_runs(mode) + net_runs(mode, runs) + FR.runs(mode, dem_name, dem_args)
+
+
+def seed_of(name):
+    return int(name.split("/")[1].split("_")[0][1:])
 
 
 def load(mode, runs):
-    """The runs, every walls run's density column converted to the die's box at equal strain (D × k, k =
-    D0 of the affine run / D0 of the walls runs of the same deposition): the paper's box, in which the
-    compaction case's findings and bands are stated. The raw walls density is kept as column D_walls."""
-    R = {}
-    for name, tool, _, _ in prep_runs(mode) + net_runs(mode, runs):
-        R[name] = Q.Run(os.path.join(runs, name), tool)
+    """The runs, and {seed: k}. Every walls run's density column is converted to the die's box at equal
+    strain, D × k with k = D0 (die's box: the affine run's first row) / D0 (walls' box: the first row of
+    a run from the deposition), the paper's box, in which the compaction case's findings and bands are
+    stated; the raw walls density is kept as column D_walls. A seed without k (its affine run or every
+    run from its deposition missing) gets D = nan: its lines drop it, and the report names it."""
+    R = {name: Q.Run(os.path.join(runs, name), tool) for name, tool, _, _ in all_runs(mode, runs)}
+    K = {}
     for s in mode["seeds"]:
-        k = box_factor_of(R, s)
-        if R[f"aff/s{s}"].ok:
-            R[f"aff/s{s}"].k = k  # (box_factor_of reads it from here once the jammed run's D is converted)
+        a = R[f"aff/s{s}"]
+        d0w = next((float(r.h["D"][0]) for n, r in R.items()
+                    if r.ok and n.startswith(("dem/", "jam/")) and seed_of(n) == s), float("nan"))
+        K[s] = float(a.h["D"][0]) / d0w if a.ok else float("nan")
         for name, r in R.items():
-            if r.ok and not name.startswith("aff/") and name.split("/")[1].split("_")[0] == f"s{s}":
-                r.k = k
+            if r.ok and not name.startswith("aff/") and seed_of(name) == s:
+                r.k = K[s]
                 for h in {id(r.h): r.h, id(r.hw): r.hw}.values():
                     h["D_walls"] = h["D"].copy()
-                    h["D"] = h["D"] * k
-    return R
-
-
-def box_factor_of(R, s):
-    a, d = R.get(f"aff/s{s}"), R.get(f"jam/s{s}")
-    if not (a and a.ok and d and d.ok):
-        return float("nan")
-    return getattr(a, "k", None) or float(a.h["D"][0]) / float(d.h["D"][0])
+                    h["D"] = h["D"] * K[s]
+    return R, K
 
 
 def ok(R, name):
@@ -164,20 +173,23 @@ def early_z(r):
 
 
 def peak(r, col):
-    y = r.h[col][1:]
+    """The largest value of a column over increments 1.. up to D = TARGET_D in the die's box (where the
+    compaction case's runs end), and its density."""
+    m = (np.arange(len(r.h["D"])) > 0) & (r.h["D"] <= TARGET_D + 1e-9)
+    y, d = r.h[col][m], r.h["D"][m]
+    if len(y) == 0:
+        return float("nan"), float("nan")
     k = int(np.argmax(y))
-    return float(y[k]), float(r.h["D"][1:][k])
+    return float(y[k]), float(d[k])
 
 
 # --------------------------------------------------------------------------------------- findings
-def measures(mode, R):
-    """The lines: (id, finding, paper, band text, test of a value, the value of a seed at an inertial
-    number, extra: 1c's sticking value of a seed, the deviation column of 7a/7b, or "net" for netsolve's
-    line), and the DEM's and netsolve's 3a ratio functions (for the netsolve line's notes)."""
-    I_lo, I_hi = min(INERTIAL), max(INERTIAL)
-
-    def dem(s, pk, I, fk="mu0"):
-        n = dem_name(s, pk, fk, I)
+def measures(R):
+    """The frictionless lines: (id, finding, paper, band text, test of a value (None: information), the
+    value of a seed at an inertial number (None for netsolve's line), the deviation column of 7a/7b or
+    None), and the DEM's and netsolve's 3a ratio functions (for the netsolve line's notes)."""
+    def dem(s, pk, I):
+        n = dem_name(s, pk, "mu0", I)
         return R[n] if ok(R, n) else None
 
     def ratio(s, I, D):
@@ -186,63 +198,77 @@ def measures(mode, R):
             return float("nan")
         return r.at("S22", D) / Affine(a, r.k).at("S22", D)
 
-    def net_ratio(s, D=None):
-        """netsolve's ratio at D, or at the end of its run (D None)."""
+    def net_ratio(s):
+        """netsolve's ratio at the end of its run, for a run that accepts every increment."""
         n, a = R.get(f"net/s{s}"), R.get(f"aff/s{s}")
         if not (ok(R, f"net/s{s}") and a.ok) or n.summary.get("solver", {}).get("unconverged_increments", 1) != 0:
-            return float("nan")  # only runs that accept every increment: a converged answer
-        D = float(n.h["D"][-1]) if D is None else D
+            return float("nan")
+        D = float(n.h["D"][-1])
         return n.at("S22", D, window=False) / Affine(a, n.k).at("S22", D)
 
-    def aniso(s, I, fk, D):
-        r = dem(s, "hydro", I, fk)
-        return float("nan") if r is None else r.at("S22", D) / r.at("S11", D) - 1
-
-    def up(s, I):
-        r = dem(s, "hydro", I)
-        return float("nan") if r is None else upturn(r)[0]
-
-    def ez(s, I):
-        r = dem(s, "die", I)
-        return float("nan") if r is None else early_z(r)[0]
-
-    def pk_v(s, I, path, col, what):
-        r = dem(s, path, I)
-        if r is None:
-            return float("nan")
-        v, d = peak(r, col)
-        return v if what == "value" else d
+    def of(pk, f):
+        return lambda s, I: float("nan") if dem(s, pk, I) is None else f(dem(s, pk, I))
 
     L = []
-    for D in C.EVAL_D:
-        L.append(("1c", f"hydrostatic, S22/S11 − 1 at D = {D:g}: frictionless (this line) < sticking (beside)",
-                  "difference even smaller for frictionless (3.1)", "below sticking's mean",
-                  None, lambda s, I, D=D: aniso(s, I, "mu0", D), lambda s, D=D: aniso(s, I_hi, "inf", D)))
     for D in C.EVAL_D:
         L.append(("3a", f"hydrostatic S22: frictionless / affine at D = {D:g} (DEM)",
                   "at most half that for affine (3.1, Fig 5a)", "≤ 0.6", lambda v: v <= 0.6,
                   lambda s, I, D=D: ratio(s, I, D), None))
-    L.append(("3a", f"hydrostatic S22: frictionless / affine at the end of netsolve's run from the jammed state "
-                    f"(D = {TARGET_D:g} in the walls' box)", "at most half that for affine (3.1, Fig 5a)", "≤ 0.6",
-              lambda v: v <= 0.6, lambda s, I: net_ratio(s), "net"))
+    L.append(("3a", "hydrostatic S22: frictionless / affine at the end of netsolve's runs from the jammed state "
+                    f"(D = {TARGET_D:g} in the walls' box; information: past the paper's densities)",
+              "at most half that for affine (3.1, Fig 5a)", "≤ 0.6", None, None, None))
     L.append(("3b", "hydrostatic frictionless: up-turn density, first D where d|S22|/dD ≥ half its final value",
-              "sharp up-turn at D = 0.825 (3.1, Fig 5a)", "0.815..0.835", lambda v: 0.815 <= v <= 0.835, up, None))
+              "sharp up-turn at D = 0.825 (3.1, Fig 5a)", "0.815..0.835", lambda v: 0.815 <= v <= 0.835,
+              of("hydro", lambda r: upturn(r)[0]), None))
     L.append(("6a", "closed die frictionless: mean Z over the first 20 % of the D range",
-              "Z about 3.5, frictionless (3.2, Fig 6b)", "3.2..3.8", lambda v: 3.2 <= v <= 3.8, ez, None))
+              "Z about 3.5, frictionless (3.2, Fig 6b)", "3.2..3.8", lambda v: 3.2 <= v <= 3.8,
+              of("die", lambda r: early_z(r)[0]), None))
     for path, where in (("hydro", "hydrostatic"), ("die", "closed die")):
-        for col, sym in (("dev_un_ratio_of_means", "⟨|uN−uNA|⟩/⟨uNA⟩"), ("dev_un_mean_ratio", "⟨|uN−uNA|/uNA⟩")):
+        for col, sym in (("dev_un_mean_ratio", "⟨|uN−uNA|/uNA⟩ (the paper's)"), ("dev_un_ratio_of_means", "⟨|uN−uNA|⟩/⟨uNA⟩")):
             L.append((f"7a-{path}", f"{where} frictionless: peak of {sym}", "> 200 % in the initial stages (3.3, Fig 7)",
-                      "> 2.0", lambda v: v > 2.0, lambda s, I, p=path, c=col: pk_v(s, I, p, c, "value"), col))
+                      "> 2.0", lambda v: v > 2.0, of(path, lambda r, c=col: peak(r, c)[0]), col))
             L.append((f"7b-{path}", f"{where} frictionless: density of the peak of {sym}", "peak at D ~ 0.83 (3.3, Fig 7)",
-                      "0.82..0.84", lambda v: 0.82 <= v <= 0.84, lambda s, I, p=path, c=col: pk_v(s, I, p, c, "density"),
-                      col))
+                      "0.82..0.84", lambda v: 0.82 <= v <= 0.84, of(path, lambda r, c=col: peak(r, c)[1]), col))
     return L, ratio, net_ratio
 
 
-def box_factor(mode, R):
+def net_notes(R, seeds, dem_ratio, net_ratio):
+    """The netsolve line: its value and notes (the runs' iteration record, the DEM at the same density)."""
+    I_lo, I_hi = min(INERTIAL), max(INERTIAL)
+    runs = [(s, R[f"net/s{s}"]) for s in seeds if ok(R, f"net/s{s}")]
+    if not runs:
+        return [], ["no netsolve run finished"]
+    sv = [r.summary.get("solver", {}) for _, r in runs]
+    rng = (lambda k, p=2: f"{min(x.get(k, float('nan')) for x in sv):.{p}g}..{max(x.get(k, float('nan')) for x in sv):.{p}g}")
+    vals = [net_ratio(s) for s in seeds]
+    ends = [float(r.h["D"][-1]) for s, r in runs if math.isfinite(net_ratio(s))]
+    used = [(s, float(r.h["D"][-1])) for s, r in runs if math.isfinite(net_ratio(s))]
+    notes = [f"{sum(1 for x in sv if x.get('unconverged_increments', 1) == 0)} of {len(runs)} runs accept every "
+             f"increment (the others are left out); every increment is an instability event (instability_events "
+             f"{rng('instability_events')}; cut increments {rng('cut_increments')}; unaccepted sub-increments committed "
+             f"{rng('unconverged_substeps')}; drag_work_fraction {rng('drag_work_fraction')}; max_residual "
+             f"{rng('max_residual', 3)} against 10 × tol = 0.03): equilibrium end states on a damped path the drag selects"]
+    if used:
+        for I in (I_lo, I_hi):
+            d = stats([dem_ratio(s, I, D) for s, D in used])
+            diff = stats([net_ratio(s) - dem_ratio(s, I, D) for s, D in used])
+            notes.append(f"the DEM at the same D (I = {I:g}): {fmt_ms(*d)}, netsolve − DEM {fmt_ms(*diff)}")
+        notes.append(f"D = {min(ends):.4f}..{max(ends):.4f} in the die's box; netsolve starts from the DEM's jammed state "
+                     f"at I = {I_hi:g} (walls' box {JAM_D:g}, die's {min(float(r.h['D'][0]) for _, r in runs):.4f}..), "
+                     f"which the I = {I_lo:g} runs reach on their own path")
+    return vals, notes
+
+
+def helpers():
+    """The functions frictional.py evaluates with."""
+    import types
+    return types.SimpleNamespace(dem_name=dem_name, ok=ok, early_z=early_z, peak=peak, stats=stats, fmt_ms=fmt_ms,
+                                 verdict=verdict, missing_text=missing_text, MISSING=MISSING, EVAL_D=C.EVAL_D)
+
+
+def box_factor(K):
     """The mean over the seeds of k = D0 (die's box) / D0 (walls' box) of the same deposition."""
-    k = [box_factor_of(R, s) for s in mode["seeds"]]
-    k = [x for x in k if math.isfinite(x)]
+    k = [x for x in K.values() if math.isfinite(x)]
     return float(np.mean(k)) if k else float("nan")
 
 
@@ -262,75 +288,56 @@ def fmt_ms(m, se, n, p=3):
     return f"{m:.{p}f} ± {se:.{p}f} (n = {n})" if math.isfinite(se) else f"{m:.{p}f} (n = {n})"
 
 
-def ill(extra, mean):
-    return extra == "dev_un_mean_ratio" and math.isfinite(mean) and mean > 100
+def ill(col, mean):
+    return col == "dev_un_mean_ratio" and math.isfinite(mean) and mean > 100
 
 
-def evaluate(mode, R):
-    """Rows: (id, finding, paper, band, at I_lo, at I_hi, seeds in band, verdict, notes) and the
-    per-seed table {id+finding: {seed: (v_lo, v_hi)}}."""
+def evaluate(mode, R, K):
+    """The frictionless rows: (id, finding, paper, band, at I_lo, at I_hi, seeds in band, verdict, notes),
+    and the per-seed table {(id, finding): {seed: value at I_lo}}."""
     I_lo, I_hi = min(INERTIAL), max(INERTIAL)
     seeds = mode["seeds"]
     rows, per_seed, invalid = [], {}, set()
-    lines, dem_ratio, net_ratio = measures(mode, R)
-    for fid, fin, paper, band, test, fn, extra in lines:
-        if extra == "net":
-            lo = [fn(s, None) for s in seeds]
-            hi = [float("nan")] * len(seeds)
+    lines, dem_ratio, net_ratio = measures(R)
+    no_k = [s for s in seeds if not math.isfinite(K.get(s, float("nan")))]
+    for fid, fin, paper, band, test, fn, col in lines:
+        notes = []
+        if fn is None:  # netsolve's line
+            lo, notes = net_notes(R, seeds, dem_ratio, net_ratio)
+            hi = []
         else:
-            lo = [fn(s, I_lo) for s in seeds]
-            hi = [fn(s, I_hi) for s in seeds]
-        per_seed[(fid, fin)] = {s: (a, b) for s, a, b in zip(seeds, lo, hi)}
+            lo, hi = [fn(s, I_lo) for s in seeds], [fn(s, I_hi) for s in seeds]
+        per_seed[(fid, fin)] = dict(zip(seeds, lo))
         m_lo, se_lo, n_lo = stats(lo)
         m_hi, se_hi, n_hi = stats(hi)
         p = 4 if fid in ("3b", "7b-hydro", "7b-die") else 3
-        notes = []
-        if fid == "1c":
-            ref = stats([extra(s) for s in seeds])
-            vd = verdict(m_lo < ref[0]) if n_lo and ref[2] else None
-            inb = sum(1 for s, a in zip(seeds, lo) if math.isfinite(a) and a < extra(s))
-            notes.append(f"sticking (I = {I_hi:g}): {fmt_ms(*ref)}; frictionless at I = {I_hi:g}: {fmt_ms(m_hi, se_hi, n_hi)}")
-        else:
-            vd = verdict(test(m_lo)) if n_lo else None
-            inb = sum(1 for a in lo if math.isfinite(a) and test(a))
-        if extra == "net":
-            un = [R[f"net/s{s}"].summary.get("solver", {}).get("unconverged_increments", -1)
-                  for s in seeds if R.get(f"net/s{s}") and R[f"net/s{s}"].ok]
-            notes.append(f"netsolve runs with unaccepted increments (left out): {sum(1 for u in un if u)} of {len(un)}")
-            ends = [(s, float(R[f"net/s{s}"].h["D"][-1])) for s in seeds if R.get(f"net/s{s}") and R[f"net/s{s}"].ok]
-            if ends:
-                dem_end = stats([dem_ratio(s, I_lo, d) for s, d in ends])
-                diff = stats([net_ratio(s) - dem_ratio(s, I_lo, d) for s, d in ends])
-                notes.append(f"the end is D = {min(d for _, d in ends):.4f}..{max(d for _, d in ends):.4f} in the die's "
-                             f"box, {TARGET_D - JAM_D:g} past the shared jammed state (walls' box {JAM_D:g}), beyond the "
-                             f"paper's 0.85; the DEM there (I = {I_lo:g}): {fmt_ms(*dem_end)}, netsolve − DEM "
-                             f"{fmt_ms(*diff)}; at the paper's 0.85 netsolve has only started (from D = "
-                             f"{min(float(R[f'net/s{s}'].h['D'][0]) for s, _ in ends):.4f}..)")
-        if fid.startswith("7a") and ill(extra, m_lo):
-            invalid.add((fid[3:], extra))
-        if (fid[3:], extra) in invalid:
+        vd = (verdict(test(m_lo)) if test else "n/a") if n_lo else MISSING
+        inb = f"{sum(1 for a in lo if math.isfinite(a) and test(a))} / {n_lo}" if test else "—"
+        if fid.startswith("7a") and ill(col, m_lo):
+            invalid.add((fid[3:], col))
+        if (fid[3:], col) in invalid:
             vd = "INVALID"
             notes.append("ill-conditioned: the mean of ratios is dominated by contacts with uNA near 0 "
                          "(the compaction case's rule)")
-        if fid in ("3b", "7b-hydro", "7b-die") and n_lo:
-            notes.append(f"in the walls' box: D / {box_factor(mode, R):.4f} = {m_lo / box_factor(mode, R):.4f}")
-        if n_lo == 0:
-            vd = MISSING
-            lo_txt = missing_text("runs missing or failed")
-        else:
+        if fid == "3b" and n_lo:
+            notes.append(f"in the walls' own box: {m_lo / box_factor(K):.4f} (D / {box_factor(K):.4f}, mean k): the "
+                         "verdict depends on the box convention")
+        if fid.startswith("7b") and n_lo:
+            notes.append(f"in the walls' box: {m_lo / box_factor(K):.4f}")
+        if no_k and fn is not None:
+            notes.append("seeds without a box factor (left out): " + ", ".join(map(str, no_k)))
+        if n_lo:
             fin_lo = [x for x in lo if math.isfinite(x)]
             lo_txt = fmt_ms(m_lo, se_lo, n_lo, p) + f"; seeds {min(fin_lo):.4g}..{max(fin_lo):.4g}"
-        tag = {"dev_un_ratio_of_means": "rom", "dev_un_mean_ratio": "mor"}.get(extra if isinstance(extra, str) else "", "")
-        label = ("netsolve" if extra == "net" else "DEM") + (f" at {fin.split('at D = ')[1].split()[0].rstrip(':')}"
-                                                              if "at D = " in fin else "")
-        rows.append((fid, fin, paper, band, lo_txt, "—" if extra == "net" else fmt_ms(m_hi, se_hi, n_hi, p),
-                     f"{inb} / {n_lo}", vd if vd is not None else "n/a", "; ".join(notes), tag, label))
+        else:
+            lo_txt = missing_text("runs missing or failed")
+        rows.append((fid, fin, paper, band, lo_txt, fmt_ms(m_hi, se_hi, n_hi, p) if hi else "—", inb, vd,
+                     "; ".join(notes)))
     rows.append(("8d", "closed die frictionless: initial peak of ⟨|uT−uTA|⟩/⟨uNA⟩", "initial peak ~14 (3.3, Fig 8b)",
                  "7..28", missing_text("demsolve writes no tangential deviation column, and netsolve has no "
-                                         "converged frictionless die path from the deposition"),
-                 "—", "—", MISSING, "", "", "DEM"))
+                                       "frictionless die path from the deposition (a mechanism until it jams)"),
+                 "—", "—", MISSING, ""))
     return rows, per_seed
-
 
 
 # ------------------------------------------------------------------------------------------ figures
@@ -410,14 +417,15 @@ def compaction_rows():
         if not (section and ln.startswith("| ")):
             continue
         c = [x.strip() for x in re.split(r"(?<!\\)\|", ln.strip())[1:-1]]
-        if len(c) == 7 and c[0] in ("1c", "3a", "3b", "6a", "7a-hydro", "7b-hydro", "7a-die", "7b-die", "8d"):
+        if len(c) == 7 and c[0] in COMPARED:
             out.setdefault(c[0], []).append((c[1], c[4], c[5].strip("*")))
     return out
 
 
 def run_table(mode, R, runs):
-    L = ["| run | tool | status | D0 → D end | increments not accepted | wall time |", "|---|---|---|---|---|---|"]
-    for name, tool, _, _ in prep_runs(mode) + net_runs(mode, runs):
+    L = ["| run | tool | status | D0 → D end (die's box; affine: its own) | increments not accepted | wall time |",
+         "|---|---|---|---|---|---|"]
+    for name, tool, _, _ in all_runs(mode, runs):
         r = R[name]
         if not r.ok:
             L.append(f"| {name} | {tool} | {r.status} | — | — | — |")
@@ -428,55 +436,80 @@ def run_table(mode, R, runs):
     return L
 
 
-def write_report(mode, R, runs, out, binaries, cmdline):
-    rows, per_seed = evaluate(mode, R)
+def tag_of(fid, fin):
+    """What tells apart the lines of one id: the deviation measure (7x) and the case (7c)."""
+    if not fid.startswith("7"):
+        return ""
+    case = fin.split(":")[0].replace("mu =", "μ =") if fid.startswith("7c") else ""
+    return case + ("rom" if "⟩/⟨uNA⟩" in fin else "mor")
+
+
+def label_of(r):
+    who = "netsolve" if r[1].find("netsolve") >= 0 else "DEM"
+    return who + (f" at {r[1].split('at D = ')[1].split()[0].rstrip(':')}" if "at D = " in r[1] else "")
+
+
+def write_report(mode, R, K, runs, out, binaries, cmdline):
+    rows, per_seed = evaluate(mode, R, K)
+    fr_rows = FR.evaluate(mode, R, helpers())
     figs = make_figures(mode, R, out)
     I_lo, I_hi = min(INERTIAL), max(INERTIAL)
-    c = tally([r[7] for r in rows])
-    L = ["# Redanz & Fleck's frictionless findings on converged runs with walls", "",
-         f"Generated by `{cmdline}`. Issue 28 asks for the paper's frictionless findings (3a, 3b, 6a, 7a) on "
-         "converged runs; validation/redanz_fleck_compaction evaluates them on netsolve in the paper's die, where the "
-         "frictionless runs do not converge (183-200 of 200 increments) and the drag holds the disks in.", "",
-         "**This departs from the paper's boundary.** A converged frictionless packing in the paper's die (the "
-         "peripheral layer prescribed) pours out of it (docs/quasistatic.md, \"Frictionless: the die leaks\"). Here the "
-         f"same ballistic depositions (W = {mode['width']}, r = R[0.9, 1.1], seeds {', '.join(map(str, mode['seeds']))}) "
-         "are compacted between four rigid frictionless walls to D = 0.85:",
-         f"* **the DEM limit**: `demsolve compact --boundary walls --friction 0` from the deposition at I = {I_hi:g} and "
-         f"{I_lo:g}, hydrostatic and closed die. Lines are graded on the mean over the seeds at I = {I_lo:g}; the column "
-         f"at I = {I_hi:g} shows how far the rate still moves them;",
-         f"* **the converged network**: netsolve cannot start from the deposition (a frictionless packing below jamming "
-         "is a mechanism, its quasi-static stress is zero), so it starts from the DEM's jammed state at D = "
-         f"{JAM_D:g} (hydrostatic, every wall loaded) and runs to {TARGET_D:g} with the pseudo-transient iteration;",
+    c = tally([r[7] for r in rows + fr_rows])
+    ks = [x for x in K.values() if math.isfinite(x)]
+    krange = f"{min(ks):.4f}..{max(ks):.4f} over the seeds" if ks else "none: no seed has its affine run"
+    L = ["# Redanz & Fleck's compaction findings between walls: the DEM at two rates, and netsolve from a jammed state", "",
+         f"Generated by `{cmdline}`. validation/redanz_fleck_compaction evaluates the paper's findings on netsolve in the "
+         "paper's die with the legacy drag; its frictionless runs do not converge (183-200 of 200 increments). Issue 28 "
+         "asks for the frictionless findings (3a, 3b, 6a, 7a) on converged runs and on the DEM limit; issue 32 for the "
+         "unexplained lines with friction on the DEM.", "",
+         "**This departs from the paper's boundary.** Without the drag in the answer a frictionless packing in the paper's "
+         "die (the peripheral layer prescribed) pours out of it (docs/quasistatic.md, \"Frictionless: the die leaks\"). "
+         f"Here the same ballistic depositions (W = {mode['width']}, r = R[0.9, 1.1], seeds "
+         f"{', '.join(map(str, mode['seeds']))}) are compacted between four rigid frictionless walls to D = {TARGET_D:g} in "
+         "the walls' box:",
+         f"* **the DEM**: `demsolve compact --boundary walls --friction 0` from the deposition at I = {I_hi:g} and "
+         f"{I_lo:g}, hydrostatic and closed die. The frictionless lines are graded on the mean over the seeds at "
+         f"I = {I_lo:g}; the column at I = {I_hi:g} shows how far the rate still moves them (several lines still move: "
+         "they are the DEM at these rates, not an extrapolated limit);",
+         "* **netsolve** cannot start from the deposition (a frictionless packing below jamming is a mechanism), so it "
+         f"starts from the DEM's jammed state (I = {I_hi:g}, walls' box D = {JAM_D:g}, every wall loaded) and runs to "
+         f"{TARGET_D:g} in the walls' box with the pseudo-transient iteration: past the paper's densities, so its line is "
+         "information;",
          "* **the affine reference** of 3a: netsolve --affine from the same deposition in the die's box (the walls "
-         "exclude --affine), taken at the same strain (equal D / D0) and its stress scaled to the walls' box area "
-         "(× D0_walls / D0_die, the same disks).", "",
-         "Definitions and bands are the compaction case's (validation/redanz_fleck_compaction/run.py), never widened: "
-         "Z counts loaded disk-disk contacts; the up-turn is the first window (±0.0025 in D) whose least-squares slope "
-         "of |S22| reaches half the final slope (last 0.005); the deviation measures accumulate since each contact "
-         "formed (Eq 16). Densities are the walls' box's; the die's box at the same strain is denser by the factor in "
-         "the notes. A DEM row is the mean over its output window; a netsolve row the state at the increment's end.", "",
-         f"## Findings: {c['PASS']} pass, {c['FAIL']} fail, {c[MISSING]} missing, {c['other']} other", "",
+         "exclude --affine), compared at the same strain, its stress scaled to the walls' box area (÷ k). Between walls "
+         "an affine motion would also press the disks touching the walls into them, a few per cent of the stress that "
+         "this reference leaves out.", "",
+         "**Densities are the die's box's** (the paper's: the cylinders' area over the container's): every walls run's D "
+         f"is converted at equal strain, D × k with k = D0_die / D0_walls of the same deposition ({krange}); the walls' "
+         "own values are in the notes where a verdict depends on the box. Definitions and bands are the compaction case's (validation/redanz_fleck_compaction/"
+         "run.py), never widened: Z counts loaded disk-disk contacts (the paper's Z also counts the network's unloaded "
+         "elements); the up-turn is the first window (±0.0025 in D) whose least-squares slope of |S22| reaches half the "
+         "final slope (the last 0.005 before D = 0.85); the deviation measures accumulate since each contact formed "
+         "(Eq 16), over loaded contacts, and their peaks are taken up to D = 0.85. A DEM row is the mean over its output "
+         "window; a netsolve row the state at the increment's end. Counts are of lines, not findings (3a has three).", "",
+         f"## Findings: {c['PASS']} pass, {c['FAIL']} fail, {c[MISSING]} missing, {c['other']} other (both tables)", "",
+         "### Without friction (issue 28)", "",
          f"| # | finding | paper | band | measured at I = {I_lo:g}: mean ± se over the seeds | at I = {I_hi:g} | "
          "seeds in band | verdict | notes |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         v = r[7]
         L.append("| " + " | ".join(esc(x) for x in r[:7]) + f" | {'**' + v + '**' if v == 'FAIL' else v} | {esc(r[8])} |")
+    L += FR.section(mode, fr_rows, esc)
     old = compaction_rows()
     L += ["", "## Which verdicts moved", "",
           "The same findings in validation/redanz_fleck_compaction/report.md (netsolve in the paper's die, seed 1, "
-          "with the drag, unconverged) beside the verdicts above (why they moved: the notes below):", "",
+          "legacy drag) beside the verdicts here (why they moved: the notes below):", "",
           "| # | finding (compaction report) | measured there | there | here |", "|---|---|---|---|---|"]
-    for fid in ("1c", "3a", "3b", "6a", "7a-hydro", "7b-hydro", "7a-die", "7b-die", "8d"):
+    for fid in COMPARED:
         for fin, meas, v in old.get(fid, [("—", "—", "—")]):
-            tag = "" if not fid.startswith("7") else ("rom" if "⟩/⟨uNA⟩" in fin else "mor")
-            here = [f"{r[10]}: {r[7]}" for r in rows if r[0] == fid and r[9] == tag]
+            here = [f"{label_of(r)}: {r[7]}" for r in rows + fr_rows if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin)]
             L.append(f"| {fid} | {fin} | {meas} | {v} | {', '.join(here) or '—'} |")
     L += ["", "## Per seed (at I = " + f"{I_lo:g}" + "; netsolve for its line)", ""]
     seeds = mode["seeds"]
     L += ["| # | finding | " + " | ".join(f"s{s}" for s in seeds) + " |", "|---|---|" + "---|" * len(seeds)]
     for (fid, fin), vals in per_seed.items():
-        L.append(f"| {fid} | {esc(fin)} | " + " | ".join("—" if not math.isfinite(vals[s][0]) else f"{vals[s][0]:.4g}"
-                                                       for s in seeds) + " |")
+        L.append(f"| {fid} | {esc(fin)} | " + " | ".join("—" if not math.isfinite(vals.get(s, float("nan")))
+                                                       else f"{vals[s]:.4g}" for s in seeds) + " |")
     L += ["", "## Figures", ""]
     for title, f in figs:
         L += [f"**{title}**", "", f"![{f}]({f})", ""]
@@ -512,10 +545,11 @@ def main():
         for b in bins.values():
             if not os.access(b, os.X_OK):
                 sys.exit(f"error: binary not found: {b} (build first: cmake --build build)")
-        for items in (prep_runs(mode), net_runs(mode, runs)):
+        for items in (prep_runs(mode), net_runs(mode, runs), FR.runs(mode, dem_name, dem_args)):
             PER.run_all(a.jobs, bins, runs, a.force, a.timeout, [r for r in items if PER.selected(r[0], only)])
-    cmdline = "/usr/bin/python3 validation/redanz_fleck_frictionless/run.py" + (" --quick" if a.quick else "")
-    write_report(mode, load(mode, runs), runs, out, [a.netsolve, a.demsolve], cmdline)
+    cmdline = "/usr/bin/python3 validation/redanz_fleck_walls/run.py" + (" --quick" if a.quick else "")
+    R, K = load(mode, runs)
+    write_report(mode, R, K, runs, out, [a.netsolve, a.demsolve], cmdline)
 
 
 if __name__ == "__main__":
