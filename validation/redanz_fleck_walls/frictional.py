@@ -21,6 +21,25 @@ def check_seeds(mode):
     return mode["seeds"][:2]
 
 
+def layer_name(seed, pk, fk):
+    """A DEM run in the paper's die (netsolve's layer mode: the peripheral layer prescribed)."""
+    return f"dem/s{seed}_layer_{pk}_{fk}_I{I_GRADED:g}"
+
+
+def layer_runs(mode, dem_args):
+    """The same frictional DEM runs in the paper's die at I_GRADED: the DEM with the paper's boundary, the
+    compaction case's netsolve runs' own (densities in the same box, no conversion)."""
+    out = []
+    for s in mode["seeds"]:
+        for pk, pv, fk, fv, norot in CONFIGS:
+            a = dem_args(mode, s, pv, fv, I_GRADED)
+            a[a.index("walls")] = "layer"
+            if norot:
+                a = a[:-1] + ["--no-rotation", a[-1]]
+            out.append((layer_name(s, pk, fk), "demsolve", a, (6, s)))
+    return out
+
+
 def runs(mode, dem_name, dem_args):
     """(name, tool, args, priority) of the frictional DEM runs (hydro_inf at I_GRADED is run.py's already)."""
     out = []
@@ -38,11 +57,21 @@ def runs(mode, dem_name, dem_args):
     return out
 
 
-def lines(R, h):
+def layer_ok(R, n):
+    """A run in the paper's die that reached its end: status ok, or "unstable" for disks that left the die
+    between the peripheral disks (the DEM's die leaks: counted in the section, the run is still used)."""
+    r = R.get(n)
+    return r is not None and r.ok and r.status in ("ok", "unstable") and float(r.h["D"][-1]) > 0.849
+
+
+def lines(R, h, layer=False):
     """(id, finding, paper, band, test of a value or None for information, value of a seed at a rate[, (text,
-    value of a seed at a rate) for the notes]).
+    value of a seed at a rate) for the notes]). layer: the runs in the paper's die (I_GRADED only).
     h: run.py's helpers (dem_name, ok, early_z, peak) and the compaction case's EVAL_D."""
     def dem(s, pk, fk, I):
+        if layer:
+            n = layer_name(s, pk, fk)
+            return R[n] if I == I_GRADED and layer_ok(R, n) else None
         n = h.dem_name(s, pk, fk, I)
         return R[n] if h.ok(R, n) else None
 
@@ -101,11 +130,16 @@ MISSING_LINES = (("8a", "hydrostatic, sticking: plateau of ⟨|uT−uTA|⟩/⟨u
                  ("8c", "closed die, sticking: plateau of ⟨|uT−uTA|⟩/⟨uNA⟩", "plateau ~1.5 (3.3, Fig 8b)", "1.0..2.0"))
 
 
-def evaluate(mode, R, h):
-    """Rows (id, finding, paper, band, graded mean, rate check, seeds in band, verdict, notes)."""
-    seeds, chk = mode["seeds"], check_seeds(mode)
+def evaluate(mode, R, h, layer=False):
+    """Rows (id, finding, paper, band, graded mean, rate check, seeds in band, verdict, notes); layer: the
+    runs in the paper's die (no rate check; 1c needs a frictionless run there, which leaks: MISSING)."""
+    seeds, chk = mode["seeds"], ([] if layer else check_seeds(mode))
     rows = []
-    for fid, fin, paper, band, test, fn, *extra in lines(R, h):
+    for fid, fin, paper, band, test, fn, *extra in lines(R, h, layer):
+        if layer and fid == "1c":
+            rows.append((fid, fin, paper, band, h.missing_text("not run: the frictionless DEM pours out of the paper's "
+                                                               "die (docs/quasistatic.md)"), "—", "—", h.MISSING, ""))
+            continue
         v = [fn(s, I_GRADED) for s in seeds]
         m, se, n = h.stats(v)
         lo = [fn(s, I_CHECK) for s in chk]
@@ -135,6 +169,33 @@ def evaluate(mode, R, h):
         rows.append((fid, fin, paper, band, h.missing_text("demsolve writes no tangential deviation column"), "—", "—",
                      h.MISSING, ""))
     return rows
+
+
+def leaks(mode, R):
+    """Text: the disks outside the paper's die at the end of the layer runs, per configuration."""
+    out = []
+    for pk, _, fk, _, _ in CONFIGS:
+        n = [R[layer_name(s, pk, fk)].summary.get("centres_outside_box") for s in mode["seeds"]
+             if layer_ok(R, layer_name(s, pk, fk))]
+        n = [x for x in n if x is not None]
+        if n:
+            out.append(f"{pk} {fk}: {min(n)}..{max(n)} (mean {np.mean(n):.1f}, {len(n)} runs)")
+    return "; ".join(out) or "no run"
+
+
+def layer_section(mode, R, rows, esc):
+    """The report's section of the frictional lines on the DEM in the paper's die."""
+    L = ["", f"### With friction (issue 32): the DEM in the paper's die, I = {I_GRADED:g}", "",
+         "The same depositions and laws, `demsolve compact --boundary layer` (the peripheral layer prescribed, as in the "
+         "paper and in validation/redanz_fleck_compaction's netsolve runs; densities in the same box, no conversion). "
+         "The DEM's die leaks too: disk centres outside the box at the end, " + leaks(mode, R) + ". Such runs end "
+         "\"unstable\" (exit 3) and are used here with that caveat. Graded on the mean over seeds "
+         f"{', '.join(map(str, mode['seeds']))}.", "",
+         "| # | finding | paper | band | measured: mean ± se over the seeds | rate check | seeds in band | verdict | notes |",
+         "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        L.append("| " + " | ".join(esc(x) for x in r[:7]) + f" | {'**' + r[7] + '**' if r[7] == 'FAIL' else r[7]} | {esc(r[8])} |")
+    return L
 
 
 def section(mode, rows, esc):

@@ -103,7 +103,7 @@ COMPARED = ("1a", "1c", "2", "3a", "3b", "4", "6a", "6b", "6c", "6d", "7a-hydro"
 
 
 def all_runs(mode, runs):
-    return prep_runs(mode) + net_runs(mode, runs) + FR.runs(mode, dem_name, dem_args)
+    return prep_runs(mode) + net_runs(mode, runs) + FR.runs(mode, dem_name, dem_args) + FR.layer_runs(mode, dem_args)
 
 
 def seed_of(name):
@@ -121,10 +121,10 @@ def load(mode, runs):
     for s in mode["seeds"]:
         a = R[f"aff/s{s}"]
         d0w = next((float(r.h["D"][0]) for n, r in R.items()
-                    if r.ok and n.startswith(("dem/", "jam/")) and seed_of(n) == s), float("nan"))
+                    if r.ok and n.startswith(("dem/", "jam/")) and "_layer_" not in n and seed_of(n) == s), float("nan"))
         K[s] = float(a.h["D"][0]) / d0w if a.ok else float("nan")
         for name, r in R.items():
-            if r.ok and not name.startswith("aff/") and seed_of(name) == s:
+            if r.ok and not name.startswith("aff/") and "_layer_" not in name and seed_of(name) == s:
                 r.k = K[s]
                 for h in {id(r.h): r.h, id(r.hw): r.hw}.values():
                     h["D_walls"] = h["D"].copy()
@@ -452,9 +452,10 @@ def label_of(r):
 def write_report(mode, R, K, runs, out, binaries, cmdline):
     rows, per_seed = evaluate(mode, R, K)
     fr_rows = FR.evaluate(mode, R, helpers())
+    layer_rows = FR.evaluate(mode, R, helpers(), layer=True)
     figs = make_figures(mode, R, out)
     I_lo, I_hi = min(INERTIAL), max(INERTIAL)
-    c = tally([r[7] for r in rows + fr_rows])
+    c = tally([r[7] for r in rows + fr_rows + layer_rows])
     ks = [x for x in K.values() if math.isfinite(x)]
     krange = f"{min(ks):.4f}..{max(ks):.4f} over the seeds" if ks else "none: no seed has its affine run"
     L = ["# Redanz & Fleck's compaction findings between walls: the DEM at two rates, and netsolve from a jammed state", "",
@@ -487,7 +488,7 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
          "final slope (the last 0.005 before D = 0.85); the deviation measures accumulate since each contact formed "
          "(Eq 16), over loaded contacts, and their peaks are taken up to D = 0.85. A DEM row is the mean over its output "
          "window; a netsolve row the state at the increment's end. Counts are of lines, not findings (3a has three).", "",
-         f"## Findings: {c['PASS']} pass, {c['FAIL']} fail, {c[MISSING]} missing, {c['other']} other (both tables)", "",
+         f"## Findings: {c['PASS']} pass, {c['FAIL']} fail, {c[MISSING]} missing, {c['other']} other (all three tables)", "",
          "### Without friction (issue 28)", "",
          f"| # | finding | paper | band | measured at I = {I_lo:g}: mean ± se over the seeds | at I = {I_hi:g} | "
          "seeds in band | verdict | notes |", "|---|---|---|---|---|---|---|---|---|"]
@@ -495,6 +496,7 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
         v = r[7]
         L.append("| " + " | ".join(esc(x) for x in r[:7]) + f" | {'**' + v + '**' if v == 'FAIL' else v} | {esc(r[8])} |")
     L += FR.section(mode, fr_rows, esc)
+    L += FR.layer_section(mode, R, layer_rows, esc)
     old = compaction_rows()
     L += ["", "## Which verdicts moved", "",
           "The same findings in validation/redanz_fleck_compaction/report.md (netsolve in the paper's die, seed 1, "
@@ -503,6 +505,8 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
     for fid in COMPARED:
         for fin, meas, v in old.get(fid, [("—", "—", "—")]):
             here = [f"{label_of(r)}: {r[7]}" for r in rows + fr_rows if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin)]
+            here += [f"DEM die{label_of(r)[3:]}: {r[7]}" for r in layer_rows
+                     if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin) and r[7] != MISSING]
             L.append(f"| {fid} | {fin} | {meas} | {v} | {', '.join(here) or '—'} |")
     L += ["", "## Per seed (at I = " + f"{I_lo:g}" + "; netsolve for its line)", ""]
     seeds = mode["seeds"]
@@ -545,7 +549,8 @@ def main():
         for b in bins.values():
             if not os.access(b, os.X_OK):
                 sys.exit(f"error: binary not found: {b} (build first: cmake --build build)")
-        for items in (prep_runs(mode), net_runs(mode, runs), FR.runs(mode, dem_name, dem_args)):
+        for items in (prep_runs(mode), net_runs(mode, runs), FR.runs(mode, dem_name, dem_args),
+                      FR.layer_runs(mode, dem_args)):
             PER.run_all(a.jobs, bins, runs, a.force, a.timeout, [r for r in items if PER.selected(r[0], only)])
     cmdline = "/usr/bin/python3 validation/redanz_fleck_walls/run.py" + (" --quick" if a.quick else "")
     R, K = load(mode, runs)
