@@ -60,6 +60,10 @@ FULL = {"width": 80, "increments": 200}
 QUICK = {"width": 40, "increments": 100}
 EVAL_D = (0.84, 0.85)  # densities at which the stress findings are evaluated
 PAPER_D0 = 0.814  # Fig 3(b)
+SEE_ALSO = ("**The same findings on other solutions of the model:** validation/redanz_fleck_walls evaluates the "
+            "frictionless lines (1c, 3a, 3b, 6a, 7a/7b) on the explicit DEM between walls and on netsolve from a "
+            "jammed state, and the lines with friction on the DEM between walls and in this die, with these "
+            "definitions and bands; its table 'Which verdicts moved' maps each line here to its verdicts there.")
 
 # name -> (label, options). Every case: seed 1, default --lid, r = R[0.9, 1.1] unless mono.
 CASES = {
@@ -571,6 +575,7 @@ def write_report(R, rows, figs, out, mode, mode_name, netsolve, cmdline, total_w
              "to the paper's; findings tied to an absolute density (3b, 5, 7b) are the most affected. "
              "A finding resting on a case whose Newton iteration did not converge (column 'notes') is "
              "not a test of the model but of the unconverged solver.\n")
+    L.append(SEE_ALSO + "\n")
 
     c = tally(r[5] for r in rows)
     ninv = sum(1 for r in rows if r[5] == "INVALID")
