@@ -155,7 +155,7 @@ def upturn(r):
     """validation/redanz_fleck_compaction's up-turn density (its definition) of a run's |S22|(D), on the
     run up to D = TARGET_D in the die's box (where the paper's and the compaction case's runs end: the
     final slope is taken over the last 0.005 before it)."""
-    m = r.h["D"] <= TARGET_D + 1e-9
+    m = r.h["D"] <= TARGET_D + FR.END_TOL
     h = {k: v[m] for k, v in r.h.items()}
 
     class H:  # the compaction script's reader reads r.h["D"] and r.mag("S22")
@@ -175,7 +175,7 @@ def early_z(r):
 def peak(r, col):
     """The largest value of a column over increments 1.. up to D = TARGET_D in the die's box (where the
     compaction case's runs end), and its density."""
-    m = (np.arange(len(r.h["D"])) > 0) & (r.h["D"] <= TARGET_D + 1e-9)
+    m = (np.arange(len(r.h["D"])) > 0) & (r.h["D"] <= TARGET_D + FR.END_TOL)
     y, d = r.h[col][m], r.h["D"][m]
     if len(y) == 0:
         return float("nan"), float("nan")
@@ -492,9 +492,7 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
          "### Without friction (issue 28)", "",
          f"| # | finding | paper | band | measured at I = {I_lo:g}: mean ± se over the seeds | at I = {I_hi:g} | "
          "seeds in band | verdict | notes |", "|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        v = r[7]
-        L.append("| " + " | ".join(esc(x) for x in r[:7]) + f" | {'**' + v + '**' if v == 'FAIL' else v} | {esc(r[8])} |")
+    L += FR.table_rows(rows, esc)
     L += FR.section(mode, fr_rows, esc)
     L += FR.layer_section(mode, R, layer_rows, esc)
     old = compaction_rows()
@@ -504,9 +502,12 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
           "| # | finding (compaction report) | measured there | there | here |", "|---|---|---|---|---|"]
     for fid in COMPARED:
         for fin, meas, v in old.get(fid, [("—", "—", "—")]):
-            here = [f"{label_of(r)}: {r[7]}" for r in rows + fr_rows if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin)]
-            here += [f"DEM die{label_of(r)[3:]}: {r[7]}" for r in layer_rows
-                     if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin) and r[7] != MISSING]
+            here = []
+            for rs, who in ((rows, f"I = {I_lo:g}"), (fr_rows, f"walls, I = {FR.I_GRADED:g}"),
+                            (layer_rows, f"die, I = {FR.I_GRADED:g}")):
+                here += [f"{label_of(r)} ({who if 'netsolve' not in r[1] else 'from the jammed state'}): {r[7]}"
+                         for r in rs if r[0] == fid and tag_of(fid, r[1]) == tag_of(fid, fin)
+                         and not (rs is layer_rows and r[7] == MISSING)]
             L.append(f"| {fid} | {fin} | {meas} | {v} | {', '.join(here) or '—'} |")
     L += ["", "## Per seed (at I = " + f"{I_lo:g}" + "; netsolve for its line)", ""]
     seeds = mode["seeds"]
