@@ -518,21 +518,22 @@ def selected(name, only):
     return not only or any(fnmatch.fnmatch(name, p) for p in only)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def parse_case_args(doc, here, only_example):
+    """The command line of a case that runs both tools (this one, redanz_fleck_walls): the parsed arguments,
+    the run folder, the report folder, the --only patterns and the binaries (checked unless --report-only)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--netsolve", default=os.path.join(REPO, "build", "apps", "netsolve"))
     ap.add_argument("--demsolve", default=os.path.join(REPO, "build", "apps", "demsolve"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--runs", default=None, help="run folders (default: runs/ or runs_quick/ beside this script)")
     ap.add_argument("--force", action="store_true")
-    ap.add_argument("--only", default="", help="comma list of run-name patterns (e.g. 'pack/*,*/s1_hydro_*')")
+    ap.add_argument("--only", default="", help=f"comma list of run-name patterns (e.g. '{only_example}')")
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--timeout", type=float, default=7200)
     a = ap.parse_args()
-    mode = QUICK if a.quick else FULL
-    runs = os.path.abspath(a.runs or os.path.join(HERE, "runs_quick" if a.quick else "runs"))
-    out = os.path.join(HERE, "quick") if a.quick else HERE
+    runs = os.path.abspath(a.runs or os.path.join(here, "runs_quick" if a.quick else "runs"))
+    out = os.path.join(here, "quick") if a.quick else here
     os.makedirs(out, exist_ok=True)
     only = [p for p in a.only.split(",") if p]
     bins = {"netsolve": a.netsolve, "demsolve": a.demsolve}
@@ -540,6 +541,13 @@ def main():
         for b in bins.values():
             if not os.access(b, os.X_OK):
                 sys.exit(f"error: binary not found: {b} (build first: cmake --build build)")
+    return a, runs, out, only, bins
+
+
+def main():
+    a, runs, out, only, bins = parse_case_args(__doc__, HERE, "pack/*,*/s1_hydro_*")
+    mode = QUICK if a.quick else FULL
+    if not a.report_only:
         packs = prep_runs(mode)
         run_all(a.jobs, bins, runs, a.force, a.timeout, [p for p in packs if selected(p[0], only)])
         rs = [r for r in yield_runs(mode, runs) + compact_runs(mode, runs) if selected(r[0], only)]

@@ -25,7 +25,6 @@ Densities are converted to the die's box at equal strain (the paper's). The find
 bands are validation/redanz_fleck_compaction/run.py's (never widened); each is evaluated per seed and
 graded on the mean over the seeds.
 """
-import argparse
 import math
 import os
 import re
@@ -529,27 +528,9 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--netsolve", default=os.path.join(REPO, "build", "apps", "netsolve"))
-    ap.add_argument("--demsolve", default=os.path.join(REPO, "build", "apps", "demsolve"))
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--runs", default=None, help="run folders (default: runs/ or runs_quick/ beside this script)")
-    ap.add_argument("--force", action="store_true")
-    ap.add_argument("--only", default="", help="comma list of run-name patterns (e.g. 'dem/*,net/s1')")
-    ap.add_argument("--report-only", action="store_true")
-    ap.add_argument("--timeout", type=float, default=7200)
-    a = ap.parse_args()
+    a, runs, out, only, bins = PER.parse_case_args(__doc__, HERE, "dem/*,net/s1")
     mode = QUICK if a.quick else FULL
-    runs = os.path.abspath(a.runs or os.path.join(HERE, "runs_quick" if a.quick else "runs"))
-    out = os.path.join(HERE, "quick") if a.quick else HERE
-    os.makedirs(out, exist_ok=True)
-    only = [p for p in a.only.split(",") if p]
-    bins = {"netsolve": a.netsolve, "demsolve": a.demsolve}
     if not a.report_only:
-        for b in bins.values():
-            if not os.access(b, os.X_OK):
-                sys.exit(f"error: binary not found: {b} (build first: cmake --build build)")
         for items in (prep_runs(mode), net_runs(mode, runs), FR.runs(mode, dem_name, dem_args),
                       FR.layer_runs(mode, dem_args)):
             PER.run_all(a.jobs, bins, runs, a.force, a.timeout, [r for r in items if PER.selected(r[0], only)])
