@@ -22,22 +22,25 @@ def check_seeds(mode):
     return mode["seeds"][:2]
 
 
-def layer_name(seed, pk, fk):
+def layer_name(seed, pk, fk, I=I_GRADED):
     """A DEM run in the paper's die (netsolve's layer mode: the peripheral layer prescribed)."""
-    return f"dem/s{seed}_layer_{pk}_{fk}_I{I_GRADED:g}"
+    return f"dem/s{seed}_layer_{pk}_{fk}_I{I:g}"
 
 
 def layer_runs(mode, dem_args):
-    """The same frictional DEM runs in the paper's die at I_GRADED: the DEM with the paper's boundary, the
-    compaction case's netsolve runs' own (densities in the same box, no conversion)."""
+    """The same frictional DEM runs in the paper's die at I_GRADED, and at I_CHECK for the check seeds: the
+    DEM with the paper's boundary, the compaction case's netsolve runs' own (densities in the same box)."""
     out = []
     for s in mode["seeds"]:
-        for pk, pv, fk, fv, norot in CONFIGS:
-            a = dem_args(mode, s, pv, fv, I_GRADED)
-            a[a.index("walls")] = "layer"
-            if norot:
-                a = a[:-1] + ["--no-rotation", a[-1]]
-            out.append((layer_name(s, pk, fk), "demsolve", a, (6, s)))
+        for I in (I_GRADED, I_CHECK):
+            if I == I_CHECK and s not in check_seeds(mode):
+                continue
+            for pk, pv, fk, fv, norot in CONFIGS:
+                a = dem_args(mode, s, pv, fv, I)
+                a[a.index("walls")] = "layer"
+                if norot:
+                    a = a[:-1] + ["--no-rotation", a[-1]]
+                out.append((layer_name(s, pk, fk, I), "demsolve", a, (6 if I == I_GRADED else 7, s)))
     return out
 
 
@@ -81,8 +84,8 @@ def lines(R, h, layer=False):
     h: run.py's helpers (dem_name, ok, early_z, peak) and the compaction case's EVAL_D."""
     def dem(s, pk, fk, I):
         if layer:
-            n = layer_name(s, pk, fk)
-            return R[n] if I == I_GRADED and layer_ok(R, n) else None
+            n = layer_name(s, pk, fk, I)
+            return R[n] if layer_ok(R, n) else None
         n = h.dem_name(s, pk, fk, I)
         return R[n] if h.ok(R, n) else None
 
@@ -151,7 +154,7 @@ MISSING_LINES = (("8a", "hydrostatic, sticking: plateau of ⟨|uT−uTA|⟩/⟨u
 def evaluate(mode, R, h, layer=False):
     """Rows (id, finding, paper, band, graded mean, rate check, seeds in band, verdict, notes); layer: the
     runs in the paper's die (no rate check; 1c needs a frictionless run there, which leaks: MISSING)."""
-    seeds, chk = mode["seeds"], ([] if layer else check_seeds(mode))
+    seeds, chk = mode["seeds"], check_seeds(mode)
     rows = []
     for fid, fin, paper, band, test, fn, note, col in lines(R, h, layer):
         if layer and fid == "1c":
@@ -218,7 +221,8 @@ def layer_section(mode, R, rows, esc):
          "paper and in validation/redanz_fleck_compaction's netsolve runs; densities in the same box, no conversion). "
          "The DEM's die leaks too: disk centres outside the box at the end, " + leaks(mode, R) + ". Such runs end "
          "\"unstable\" (exit 3) and are used here with that caveat. Graded on the mean over seeds "
-         f"{', '.join(map(str, mode['seeds']))}.", "",
+         f"{', '.join(map(str, mode['seeds']))} at I = {I_GRADED:g}; the rate check gives seeds "
+         f"{', '.join(map(str, check_seeds(mode)))} at I = {I_CHECK:g} beside their own values at {I_GRADED:g}.", "",
          "| # | finding | paper | band | measured: mean ± se over the seeds | rate check | seeds in band | verdict | notes |",
          "|---|---|---|---|---|---|---|---|---|"]
     return L + table_rows(rows, esc)
