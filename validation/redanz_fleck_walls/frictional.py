@@ -27,38 +27,33 @@ def layer_name(seed, pk, fk, I=I_GRADED):
     return f"dem/s{seed}_layer_{pk}_{fk}_I{I:g}"
 
 
-def layer_runs(mode, dem_args):
-    """The same frictional DEM runs in the paper's die at I_GRADED, and at I_CHECK for the check seeds: the
-    DEM with the paper's boundary, the compaction case's netsolve runs' own (densities in the same box)."""
-    out = []
+def _runs(mode, dem_args, boundary):
+    """(seed, rate, path key, friction key, args) of the frictional DEM runs with the given --boundary: every
+    configuration at I_GRADED, and at I_CHECK for the check seeds."""
     for s in mode["seeds"]:
         for I in (I_GRADED, I_CHECK):
             if I == I_CHECK and s not in check_seeds(mode):
                 continue
             for pk, pv, fk, fv, norot in CONFIGS:
                 a = dem_args(mode, s, pv, fv, I)
-                a[a.index("walls")] = "layer"
+                a[a.index("walls")] = boundary
                 if norot:
                     a = a[:-1] + ["--no-rotation", a[-1]]
-                out.append((layer_name(s, pk, fk, I), "demsolve", a, (6 if I == I_GRADED else 7, s)))
-    return out
+                yield s, I, pk, fk, a
+
+
+def layer_runs(mode, dem_args):
+    """The frictional DEM runs in the paper's die: the DEM with the paper's boundary, the compaction case's
+    netsolve runs' own (densities in the same box)."""
+    return [(layer_name(s, pk, fk, I), "demsolve", a, (6 if I == I_GRADED else 7, s))
+            for s, I, pk, fk, a in _runs(mode, dem_args, "layer")]
 
 
 def runs(mode, dem_name, dem_args):
-    """(name, tool, args, priority) of the frictional DEM runs (hydro_inf at I_GRADED is run.py's already)."""
-    out = []
-    for s in mode["seeds"]:
-        for I in (I_GRADED, I_CHECK):
-            if I == I_CHECK and s not in check_seeds(mode):
-                continue
-            for pk, pv, fk, fv, norot in CONFIGS:
-                if (pk, fk, I) == ("hydro", "inf", I_GRADED):
-                    continue
-                a = dem_args(mode, s, pv, fv, I)
-                if norot:
-                    a = a[:-1] + ["--no-rotation", a[-1]]
-                out.append((dem_name(s, pk, fk, I), "demsolve", a, (4 if I == I_CHECK else 5, s)))
-    return out
+    """(name, tool, args, priority) of the frictional DEM runs between walls (hydro_inf at I_GRADED is
+    run.py's already)."""
+    return [(dem_name(s, pk, fk, I), "demsolve", a, (4 if I == I_CHECK else 5, s))
+            for s, I, pk, fk, a in _runs(mode, dem_args, "walls") if (pk, fk, I) != ("hydro", "inf", I_GRADED)]
 
 
 END_TOL = 1e-6  # a run "reaches" D = 0.85 when its last row is within this (the DEM stops at 0.85000012)
