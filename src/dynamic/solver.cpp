@@ -107,10 +107,16 @@ NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
     std::fill(P_.torque.begin(), P_.torque.end(), 0.0);
   }
   forces_initialised_ = false;
-  if (periodic_)  // (3D: the rows across the faces add their f (x) h n to a.s3)
+  if constexpr (D == 2) {
+    if (periodic_)
+      pair_forces_2d<Law, InPlace, true>(pair_law, a);
+    else
+      pair_forces_2d<Law, InPlace, false>(pair_law, a);
+  } else if (periodic_) {  // (the rows across the faces add their f (x) h n to a.s3)
     pair_forces<Law, InPlace, true>(pair_law, a);
-  else
+  } else {
     pair_forces<Law, InPlace, false>(pair_law, a);
+  }
   if constexpr (D == 3) pair_stress_3d(a);
   if (walls_active()) {
     if constexpr (D == 2)
@@ -185,6 +191,8 @@ inline void add_image_stress(const int* n, const double (&hc)[3][3], const doubl
 }
 }  // namespace
 
+#include "solver_pairs_2d.hpp"  // (inside this namespace: it uses add_image and NETDEM_FLATTEN)
+
 // Periodic 3D: the velocities plus the affine field's L x, D per particle, into vel_abs_.
 template <int D>
 void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
@@ -204,33 +212,35 @@ void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
 // 3D: as L (x_j - x_i) + L h n, with v + L x per particle (vel_abs_, one pass) and L h n only on
 // the rows across a face, and the stress as the walled loop's sum over the particles plus f (x) h n
 // on those rows: the loop keeps no 3 x 3 in registers (the 3 x 3 L, h and the stress sums made it
-// spill: docs/performance.md "The 3D periodic force loop").
+// spill: docs/performance.md "The 3D periodic force loop"). The 2D loop is pair_forces_2d
+// (solver_pairs_2d.hpp).
 template <int D>
 template <class Law, bool InPlace, bool Periodic>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
+  static_assert(D == 3);
   using H = typename Law::History;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
-  double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
+  double el = 0, fn_max = 0;
   // particle-particle contacts from the Verlet table
   const std::size_t n_pairs = rows_.pairs();
   if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
-  // (positions, velocities and forces D per particle; spins and torques kRot: 2D omega, 3D (x, y, z))
+  // (positions, velocities, forces, spins and torques D per particle)
   const double* const p_x = P_.pos.data();
   const double* const p_v = P_.vel.data();
   const double* const p_w = P_.spin.data();
   const double* const p_radius = P_.r.data();
   double* const p_f = P_.force.data();
   double* const p_t = P_.torque.data();
-  // the cell and the strain rate (Periodic), hoisted: 3 x 3 with zeros beyond D
+  // the cell and the strain rate (Periodic), hoisted
   double hc[3][3] = {}, Lr[3][3] = {};
   const int* const p_i = rows_.pi.data();  // the rows' particles and images
   const int* const p_j = rows_.pj.data();
   const auto* const shift = rows_.shift.data();
   const double* p_vr = p_v;  // the velocities the loop takes differences of (periodic 3D: v + L x)
   if constexpr (Periodic) hoist_cell(hc, Lr);
-  if constexpr (Periodic && D == 3) {
+  if constexpr (Periodic) {
     fill_absolute_velocities(Lr);
     p_vr = vel_abs_.data();
   }
@@ -240,12 +250,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
     const auto j = static_cast<std::size_t>(p_j[k]);
     const double* const xi = p_x + D * i;  // the centres of i and j
     const double* const xj = p_x + D * j;
-    double dx = xj[0] - xi[0], dy = xj[1] - xi[1];
+    double dx = xj[0] - xi[0], dy = xj[1] - xi[1], dz = xj[2] - xi[2];
     const double ri = p_radius[i], rj = p_radius[j];
-    double dz = 0.0;
-    if constexpr (D == 3) dz = xj[2] - xi[2];
     if constexpr (Periodic) add_image<D>(shift[k].data(), hc, dx, dy, dz);
-    const double L2 = D == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz, s = ri + rj;
+    const double L2 = dx * dx + dy * dy + dz * dz, s = ri + rj;
     if (!(L2 < s * s)) {
       if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
         if (pair_live_[k]) {
@@ -258,103 +266,59 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       }
     }
     pair_live_[k] = 1;
-    if constexpr (D == 2) {
-      const double L = std::sqrt(L2), iL = 1.0 / L;
-      const double nx = dx * iL, ny = dy * iL, tx = -ny, ty = nx;  // n from i to j, t = perp(n)
-      const double q = (ri * ri - rj * rj) * (0.5 * iL);
-      const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-chord distances (kinematics.hpp)
-      // velocity of j's contact point relative to i's: v_j - w_j d_j t - (v_i + w_i d_i t)
-      const double *const vi = p_v + D * i, *const vj = p_v + D * j;
-      double rvx = vj[0] - vi[0], rvy = vj[1] - vi[1];
-      if constexpr (Periodic) {  // the affine field's part: L (x_j + h n - x_i)
-        rvx += Lr[0][0] * dx + Lr[0][1] * dy;
-        rvy += Lr[1][0] * dx + Lr[1][1] * dy;
-      }
-      const double vn = rvx * nx + rvy * ny;
-      const double vt = rvx * tx + rvy * ty - p_w[i] * di - p_w[j] * dj;
-      contact::ContactKinematics in;
-      in.overlap = s - L;
-      in.v_n = -vn;
-      in.v_t = vt;
-      in.dslip = vt * dt;
-      in.dt = dt;
-      if constexpr (contact::kReadsPairProperties<Law>) {  // (the Luding law reads neither)
-        in.overlap_start = in.overlap - in.v_n * dt;
-        in.r_eff = ri * rj / s;
-        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);  // (not hoisted: one register less)
-      }
-      double f_n, f_t;
-      contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
-      if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
-      if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
-      const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-      double *const fi = p_f + D * i, *const fj = p_f + D * j;
-      fj[0] += fx;
-      fj[1] += fy;
-      fi[0] -= fx;
-      fi[1] -= fy;
-      p_t[i] -= di * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-      p_t[j] -= dj * f_t;
-      sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
-      sxy += fx * dy;
-      syx += fy * dx;
-      syy += fy * dy;
-      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
-    } else {
-      // (in scalars, Eigen vectors only for the law: docs/performance.md "The 3D periodic force loop")
-      const double L = std::sqrt(L2), iL = 1.0 / L;
-      const double n0 = dx * iL, n1 = dy * iL, n2 = dz * iL;  // n from i to j
-      const double q = (ri * ri - rj * rj) * (0.5 * iL);
-      const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
-      const double *const vi = p_vr + D * i, *const vj = p_vr + D * j;
-      double v0 = vj[0] - vi[0], v1 = vj[1] - vi[1], v2 = vj[2] - vi[2];  // v_j - v_i (periodic: + L (x_j - x_i))
-      if constexpr (Periodic) add_image_velocity<D>(shift[k].data(), hc, Lr, v0, v1, v2);  // L h n
-      const double *const oi = p_w + D * i, *const oj = p_w + D * j;  // (kRot = D)
-      // W = d_i w_i + d_j w_j: L x the pair's rotation rate (kinematics.hpp)
-      const double W0 = di * oi[0] + dj * oj[0], W1 = di * oi[1] + dj * oj[1], W2 = di * oi[2] + dj * oj[2];
-      // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
-      const double vn = v0 * n0 + v1 * n1 + v2 * n2;
-      const double c0 = v0 - (W1 * n2 - W2 * n1), c1 = v1 - (W2 * n0 - W0 * n2), c2 = v2 - (W0 * n1 - W1 * n0);
-      const double cn = c0 * n0 + c1 * n1 + c2 * n2;
-      const double t0 = c0 - n0 * cn, t1 = c1 - n1 * cn, t2 = c2 - n2 * cn;  // the tangential part
-      // the step's rotation: (n x v_rel + (W . n) n) dt / L
-      const double Wn = W0 * n0 + W1 * n1 + W2 * n2, sc = iL * dt;
-      const double th0 = (n1 * v2 - n2 * v1 + Wn * n0) * sc, th1 = (n2 * v0 - n0 * v2 + Wn * n1) * sc,
-                   th2 = (n0 * v1 - n1 * v0 + Wn * n2) * sc;
-      contact::Kinematics<3> in;
-      in.overlap = s - L;
-      in.v_n = -vn;
-      in.v_t = Eigen::Vector3d(t0, t1, t2);
-      in.dslip = Eigen::Vector3d(t0 * dt, t1 * dt, t2 * dt);
-      in.dt = dt;
-      in.transport = contact::step_transport(Eigen::Vector3d(n0, n1, n2), Eigen::Vector3d(th0, th1, th2));
-      if constexpr (contact::kReadsPairProperties<Law>) {
-        in.overlap_start = in.overlap - in.v_n * dt;
-        in.r_eff = ri * rj / s;
-        in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);  // (not hoisted: one register less)
-      }
-      double f_n;
-      Eigen::Vector3d f_t;
-      contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
-      if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
-      if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
-      const double ft0 = f_t.x(), ft1 = f_t.y(), ft2 = f_t.z();
-      const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
-      double *const fi = p_f + D * i, *const fj = p_f + D * j;
-      fj[0] += f0, fj[1] += f1, fj[2] += f2;
-      fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
-      // M_i = -d_i n x f_t, M_j = -d_j n x f_t
-      const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
-      double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
-      ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
-      tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;
-      // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
-      if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
-      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
+    // (in scalars, Eigen vectors only for the law: docs/performance.md "The 3D periodic force loop")
+    const double L = std::sqrt(L2), iL = 1.0 / L;
+    const double n0 = dx * iL, n1 = dy * iL, n2 = dz * iL;  // n from i to j
+    const double q = (ri * ri - rj * rj) * (0.5 * iL);
+    const double di = 0.5 * L + q, dj = 0.5 * L - q;  // centre-to-contact-plane distances
+    const double *const vi = p_vr + D * i, *const vj = p_vr + D * j;
+    double v0 = vj[0] - vi[0], v1 = vj[1] - vi[1], v2 = vj[2] - vi[2];  // v_j - v_i (periodic: + L (x_j - x_i))
+    if constexpr (Periodic) add_image_velocity<D>(shift[k].data(), hc, Lr, v0, v1, v2);  // L h n
+    const double *const oi = p_w + D * i, *const oj = p_w + D * j;  // (kRot = D)
+    // W = d_i w_i + d_j w_j: L x the pair's rotation rate (kinematics.hpp)
+    const double W0 = di * oi[0] + dj * oj[0], W1 = di * oi[1] + dj * oj[1], W2 = di * oi[2] + dj * oj[2];
+    // velocity of j's contact point relative to i's: v_j - v_i - (d_i w_i + d_j w_j) x n
+    const double vn = v0 * n0 + v1 * n1 + v2 * n2;
+    const double c0 = v0 - (W1 * n2 - W2 * n1), c1 = v1 - (W2 * n0 - W0 * n2), c2 = v2 - (W0 * n1 - W1 * n0);
+    const double cn = c0 * n0 + c1 * n1 + c2 * n2;
+    const double t0 = c0 - n0 * cn, t1 = c1 - n1 * cn, t2 = c2 - n2 * cn;  // the tangential part
+    // the step's rotation: (n x v_rel + (W . n) n) dt / L
+    const double Wn = W0 * n0 + W1 * n1 + W2 * n2, sc = iL * dt;
+    const double th0 = (n1 * v2 - n2 * v1 + Wn * n0) * sc, th1 = (n2 * v0 - n0 * v2 + Wn * n1) * sc,
+                 th2 = (n0 * v1 - n1 * v0 + Wn * n2) * sc;
+    contact::Kinematics<3> in;
+    in.overlap = s - L;
+    in.v_n = -vn;
+    in.v_t = Eigen::Vector3d(t0, t1, t2);
+    in.dslip = Eigen::Vector3d(t0 * dt, t1 * dt, t2 * dt);
+    in.dt = dt;
+    in.transport = contact::step_transport(Eigen::Vector3d(n0, n1, n2), Eigen::Vector3d(th0, th1, th2));
+    if constexpr (contact::kReadsPairProperties<Law>) {
+      in.overlap_start = in.overlap - in.v_n * dt;
+      in.r_eff = ri * rj / s;
+      in.m_eff = P_.mass[i] * P_.mass[j] / (P_.mass[i] + P_.mass[j]);  // (not hoisted: one register less)
     }
+    double f_n;
+    Eigen::Vector3d f_t;
+    contact::update_contact<InPlace>(pair_law, pair_hist[k], in, f_n, f_t);
+    if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
+    if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
+    const double ft0 = f_t.x(), ft1 = f_t.y(), ft2 = f_t.z();
+    const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
+    double *const fi = p_f + D * i, *const fj = p_f + D * j;
+    fj[0] += f0, fj[1] += f1, fj[2] += f2;
+    fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
+    // M_i = -d_i n x f_t, M_j = -d_j n x f_t
+    const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
+    double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
+    ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
+    tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;
+    // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
+    if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
+    if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
   }
-  a.sxx = sxx, a.sxy = sxy, a.syx = syx, a.syy = syy, a.el = el, a.fn_max = fn_max;
-  if constexpr (Periodic && D == 3) std::copy(&s3p[0][0], &s3p[0][0] + 9, &a.s3[0][0]);
+  a.el = el, a.fn_max = fn_max;
+  if constexpr (Periodic) std::copy(&s3p[0][0], &s3p[0][0] + 9, &a.s3[0][0]);
 }
 
 template <int D>

@@ -165,6 +165,39 @@ struct LudingResultT {
 };
 using LudingResult = LudingResultT<2>;
 
+/// The constants of one step of the law: functions of the parameters and of the material state
+/// k1(T, t) only. luding_evaluate(p, h, in) computes them per call; a force loop computes them once
+/// per step (LudingLaw) and passes them in, with the same operations, so that both give the same
+/// results to the last bit (tests/contact/test_law_conformance.cpp) without a division per contact
+/// for what is the same for every contact (docs/performance.md "Issue 31").
+struct LudingStep {
+  double k1c = 0.0;      ///< the cold k1 (Eq 4)
+  double k1 = 0.0;       ///< k1(T, t) the step evaluates with (Eq 11-12; the cold k1 without F.thermal)
+  double k2 = 0.0;       ///< k2
+  double k2_k1c = 0.0;   ///< k2 - k1 (cold), Eq 7
+  double dmf = 0.0;      ///< delta_max^fluid (section 3.1.3)
+  double dk2 = 0.0;      ///< dk2/d delta_max of Eq 7 below delta_max^fluid
+  double dfluid = 0.0;   ///< delta_fluid
+  double c = 0.0;        ///< k_c / k2' (Eq 13)
+  double mu = 0.0;       ///< Eq 24
+};
+
+/// The step constants of feature set F at the material state k1_Tt.
+template <LudingFeatures F>
+inline LudingStep luding_step(const LudingParams& p, double k1_Tt) {
+  LudingStep s;
+  s.k1c = p.k1();
+  s.k1 = F.thermal && !p.frozen_k1 ? k1_Tt : s.k1c;  // k1(T, t), Eq 11-12
+  s.k2 = p.k2;
+  s.k2_k1c = p.k2 - p.k1();
+  s.dmf = p.delta_max_fluid();
+  s.dk2 = s.k2_k1c / s.dmf;
+  s.dfluid = p.delta_fluid();
+  if constexpr (F.cohesion) s.c = (s.k1 / s.k1c) * p.kc() / p.k2;  // k_c = c k2', LMM05 Eq 13
+  s.mu = F.thermal ? (s.k1 / s.k1c) * p.mu : p.mu;                 // LMM05 Eq 24
+  return s;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Temperature (sections 3.2-3.4)
 
@@ -220,29 +253,32 @@ inline LudingThermalState luding_advance_thermal(const LudingParams& p, const Lu
 // ---------------------------------------------------------------------------------------------
 // Normal and tangential law
 
-/// Eq 7: k2(delta_max), using the constant cold k1 (section 3.3), capped at k2.
+/// Eq 7: k2(delta_max), using the constant cold k1 (section 3.3), capped at k2 (s: the step's
+/// constants, luding_step).
+inline double luding_k2_of(const LudingParams& p, const LudingStep& s, double delta_max) {
+  if (!p.stiffness_growth) return s.k2;
+  if (!(delta_max < s.dmf)) return s.k2;                                 // LMM05 Eq 7, fluid
+  return s.k1c + s.k2_k1c * delta_max / s.dmf;                          // LMM05 Eq 7
+}
 inline double luding_k2_of(const LudingParams& p, double delta_max) {
-  if (!p.stiffness_growth) return p.k2;
-  const double dmf = p.delta_max_fluid();
-  if (!(delta_max < dmf)) return p.k2;                                   // LMM05 Eq 7, fluid
-  return p.k1() + (p.k2 - p.k1()) * delta_max / dmf;                    // LMM05 Eq 7
+  return luding_k2_of(p, luding_step<kLudingFull>(p, p.k1()), delta_max);
 }
 /// dk2(delta_max)/d delta_max of Eq 7.
-inline double luding_dk2_of(const LudingParams& p, double delta_max) {
+inline double luding_dk2_of(const LudingParams& p, const LudingStep& s, double delta_max) {
   if (!p.stiffness_growth) return 0.0;
-  const double dmf = p.delta_max_fluid();
-  return delta_max < dmf ? (p.k2 - p.k1()) / dmf : 0.0;
+  return delta_max < s.dmf ? s.dk2 : 0.0;
 }
 
 /// Section 3.3.2 with Eq 7: the delta_max that solves delta_max (1 - k1_Tt / k2(delta_max)) =
 /// delta_0 (delta_0 fixed, k2(.) of Eq 7 evaluated at the solution). Below delta_max^fluid Eq 7 is
 /// k2(d) = A + B d (A = cold k1, B = (k2 - k1)/delta_max^fluid), so B d^2 + (A - k - B delta_0) d
 /// - A delta_0 = 0; beyond it k2(d) = k2 and d = k2 delta_0 / (k2 - k). Needs k1_Tt < k2.
-inline double luding_delta_max_cooling(const LudingParams& p, double delta0, double k1_Tt) {
-  const double A = p.k1(), dmf = p.delta_max_fluid();
+inline double luding_delta_max_cooling(const LudingParams& p, const LudingStep& s, double delta0,
+                                        double k1_Tt) {
+  const double A = s.k1c, dmf = s.dmf;
   if (!p.stiffness_growth || !(dmf < std::numeric_limits<double>::infinity()))
     return p.k2 * delta0 / (p.k2 - k1_Tt);
-  const double B = (p.k2 - A) / dmf;
+  const double B = s.dk2;
   const double b = A - k1_Tt - B * delta0, c4 = 4.0 * B * A * delta0;
   const double root = std::sqrt(b * b + c4);
   // the positive root, written without cancellation for either sign of b
@@ -250,54 +286,114 @@ inline double luding_delta_max_cooling(const LudingParams& p, double delta0, dou
   if (d < dmf) return d;
   return p.k2 * delta0 / (p.k2 - k1_Tt);  // LMM05 Eq 7 capped: k2(d) = k2
 }
+inline double luding_delta_max_cooling(const LudingParams& p, double delta0, double k1_Tt) {
+  return luding_delta_max_cooling(p, luding_step<kLudingFull>(p, k1_Tt), delta0, k1_Tt);
+}
 
-/// Section 3.3 delta rules, keyed on k1(T, t) (not on dT/dt): while k1(T, t) falls, delta_max
-/// stays and delta_0 grows (Fig 5 left), frozen at delta_fluid (fluid limit); while it rises,
-/// delta_0 stays and delta_max grows on the same k2' line (Fig 5 right).
+/// Section 3.3 delta rules, keyed on k1(T, t) (not on dT/dt), on the history h in place: while
+/// k1(T, t) falls, delta_max stays and delta_0 grows (Fig 5 left), frozen at delta_fluid (fluid
+/// limit); while it rises, delta_0 stays and delta_max grows on the same k2' line (Fig 5 right).
 template <int D>
-inline LudingHistoryT<D> luding_thermal_update(const LudingParams& p, const LudingHistoryT<D>& h,
-                                               double k1_Tt) {
-  LudingHistoryT<D> r = h;
-  r.k1_seen = k1_Tt;
-  if (h.delta_max <= 0.0 || h.fluid) return r;  // fresh contact, or fluid: delta_0 frozen
+inline void luding_thermal_update(const LudingParams& p, const LudingStep& s, LudingHistoryT<D>& h,
+                                  double k1_Tt) {
+  const double seen = h.k1_seen;
+  h.k1_seen = k1_Tt;
+  if (h.delta_max <= 0.0 || h.fluid) return;  // fresh contact, or fluid: delta_0 frozen
   const double k2l = h.k2_line;
-  if (k1_Tt < h.k1_seen) {
-    r.delta0 = (1.0 - k1_Tt / k2l) * h.delta_max;  // LMM05 section 3.3.1: delta_0^+(T)
-    if (r.delta0 >= p.delta_fluid()) {              // LMM05 section 3.1.3: fluid limit
-      r.delta0 = p.delta_fluid();
-      r.fluid = 1;
+  if (k1_Tt < seen) {
+    h.delta0 = (1.0 - k1_Tt / k2l) * h.delta_max;  // LMM05 section 3.3.1: delta_0^+(T)
+    if (h.delta0 >= s.dfluid) {                     // LMM05 section 3.1.3: fluid limit
+      h.delta0 = s.dfluid;
+      h.fluid = 1;
     }
-  } else if (k1_Tt > h.k1_seen && h.delta0 > 0.0) {
+  } else if (k1_Tt > seen && h.delta0 > 0.0) {
     if (p.cooling_stiffness_update && p.stiffness_growth) {
       if (k1_Tt < p.k2) {  // (k1 = k2: no plastic range left, delta_max stays)
         // LMM05 section 3.3.2 with Eq 7 re-evaluated: delta_max^- = delta_0 / (1 - k1(T)/k2(dmax^-))
-        r.delta_max = fmax_of(h.delta_max, luding_delta_max_cooling(p, h.delta0, k1_Tt));
-        r.k2_line = luding_k2_of(p, r.delta_max);  // "also the stiffness is increased accordingly"
+        h.delta_max = fmax_of(h.delta_max, luding_delta_max_cooling(p, s, h.delta0, k1_Tt));
+        h.k2_line = luding_k2_of(p, s, h.delta_max);  // "also the stiffness is increased accordingly"
       }
     } else if (k1_Tt < k2l) {
-      r.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
+      h.delta_max = k2l * h.delta0 / (k2l - k1_Tt);  // LMM05 section 3.3.2: delta_max^-(T)
     }
   }
-  return r;
 }
 
-/// One step of the law (see LudingInput). Pure: the new history is returned, not stored. In 3D
-/// the history's spring must already be in the current tangent plane (LudingLaw does that).
-template <LudingFeatures F = kLudingFull, int D>
-inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHistoryT<D>& h0,
-                                        const LudingInputT<D>& in) {
+/// The normal spring of luding_update (Eq 4 with Fig 2/3, Eq 7, the fluid limit of section 3.1.3)
+/// on the history h in place: the spring force f, its slope kn and the branch; Tangent: also
+/// d(delta_0)/d delta and d(k2')/d delta on the loading branch.
+template <LudingFeatures F, bool Tangent, int D>
+inline void luding_normal_spring(const LudingParams& p, const LudingStep& s, LudingHistoryT<D>& h, double delta,
+                                 double& f, double& kn, double& ddelta0, double& dk2l, LudingBranch& branch) {
+  (void)p;  // (read on the hysteretic branches only)
+  const double k1 = s.k1;
+  if constexpr (!F.hysteresis) {
+    f = s.k2 * delta;  // LMM05 Eq 4 with k1 = k2: linear spring
+    kn = s.k2;
+    h.delta_max = fmax_of(h.delta_max, delta);
+    h.k2_line = s.k2;
+  } else {
+    if (h.fluid) {
+      h.delta_max = fmax_of(h.delta_max, delta);
+      f = h.k2_line * (delta - h.delta0);  // LMM05 Fig 3: liquid branch, slope k2, delta_0 fixed
+      kn = h.k2_line;
+      branch = LudingBranch::Fluid;
+    } else if (delta >= h.delta_max) {  // loading on k1
+      h.delta_max = delta;
+      h.k2_line = luding_k2_of(p, s, delta);              // LMM05 Eq 7
+      h.delta0 = (1.0 - k1 / h.k2_line) * delta;          // LMM05 Eq 4: delta_0
+      if constexpr (Tangent) {
+        dk2l = luding_dk2_of(p, s, delta);
+        ddelta0 = (1.0 - k1 / h.k2_line) + delta * k1 * dk2l / (h.k2_line * h.k2_line);
+      }
+      if (h.delta0 >= s.dfluid) {                         // LMM05 section 3.1.3: fluid limit
+        // The liquid branch (Fig 3) starts through the current loading point, so the force stays
+        // continuous: slope k1 delta/(delta - delta_fluid) <= k2(delta_max) <= k2 (our choice;
+        // = k2 when the limit is met exactly at delta_max^fluid with the cold k1).
+        const double df = s.dfluid;
+        h.delta0 = df;
+        h.fluid = 1;
+        h.k2_line = k1 * delta / (delta - df);
+        if constexpr (Tangent) {
+          dk2l = -k1 * df / ((delta - df) * (delta - df));
+          ddelta0 = 0.0;
+        }
+        f = k1 * delta;                                   // = k2' (delta - delta_fluid)
+        kn = k1;
+        branch = LudingBranch::Fluid;
+      } else {
+        f = k1 * delta;                                   // LMM05 Eq 4: loading
+        kn = k1;
+        branch = LudingBranch::Loading;
+      }
+    } else {
+      f = h.k2_line * (delta - h.delta0);                 // LMM05 Eq 4: un/reloading
+      kn = h.k2_line;
+    }
+  }
+}
+
+/// One step of the law (see LudingInput) on the history h in place (h becomes the history to
+/// commit), with the step's constants s = luding_step<F>(p, in.k1_Tt) (in.k1_Tt itself is not
+/// read): the forces in f_n_out and f_t_out. Tangent: also the tangent and the state of the step
+/// in *r (luding_evaluate); without it nothing but the forces and the history is computed (the
+/// force loops). In 3D the history's spring must already be in the current tangent plane.
+template <LudingFeatures F, bool Tangent, int D>
+inline void luding_update(const LudingParams& p, const LudingStep& s, LudingHistoryT<D>& h,
+                          const LudingInputT<D>& in, double& f_n_out, typename Dim<D>::Tan& f_t_out,
+                          LudingResultT<D>* r) {
   using Tan = typename Dim<D>::Tan;
-  LudingResultT<D> r;
   const double delta = in.delta;
   if (!(delta > 0.0)) {  // open: no force; the history is reset (docs/luding.md)
-    r.history = LudingHistoryT<D>{};
-    return r;
+    h = LudingHistoryT<D>{};
+    f_n_out = 0.0;
+    f_t_out = tan_zero<Tan>();
+    if constexpr (Tangent) *r = LudingResultT<D>{};
+    return;
   }
-  const double k1c = p.k1();
-  const double k1 = F.thermal && !p.frozen_k1 ? in.k1_Tt : k1c;  // k1(T, t), Eq 11-12
-  LudingHistoryT<D> h = h0;
+  const double k1 = s.k1;  // k1(T, t), Eq 11-12
   if constexpr (F.thermal && F.hysteresis) {
-    h = luding_thermal_update(p, h0, k1);
+    luding_thermal_update(p, s, h, k1);
   } else {
     h.k1_seen = k1;
   }
@@ -305,54 +401,14 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
   // ---- normal spring, Eq 4 with Fig 2/3 ----
   double f = 0.0, kn = 0.0;
   double ddelta0 = 0.0, dk2l = 0.0;  // d(delta_0)/d delta, d(k2')/d delta (loading only)
-  if constexpr (!F.hysteresis) {
-    f = p.k2 * delta;  // LMM05 Eq 4 with k1 = k2: linear spring
-    kn = p.k2;
-    h.delta_max = fmax_of(h.delta_max, delta);
-    h.k2_line = p.k2;
-    r.branch = LudingBranch::Line;
-  } else {
-    if (h.fluid) {
-      h.delta_max = fmax_of(h.delta_max, delta);
-      f = h.k2_line * (delta - h.delta0);  // LMM05 Fig 3: liquid branch, slope k2, delta_0 fixed
-      kn = h.k2_line;
-      r.branch = LudingBranch::Fluid;
-    } else if (delta >= h.delta_max) {  // loading on k1
-      h.delta_max = delta;
-      h.k2_line = luding_k2_of(p, delta);                 // LMM05 Eq 7
-      dk2l = luding_dk2_of(p, delta);
-      h.delta0 = (1.0 - k1 / h.k2_line) * delta;          // LMM05 Eq 4: delta_0
-      ddelta0 = (1.0 - k1 / h.k2_line) + delta * k1 * dk2l / (h.k2_line * h.k2_line);
-      if (h.delta0 >= p.delta_fluid()) {                  // LMM05 section 3.1.3: fluid limit
-        // The liquid branch (Fig 3) starts through the current loading point, so the force stays
-        // continuous: slope k1 delta/(delta - delta_fluid) <= k2(delta_max) <= k2 (our choice;
-        // = k2 when the limit is met exactly at delta_max^fluid with the cold k1).
-        const double df = p.delta_fluid();
-        h.delta0 = df;
-        h.fluid = 1;
-        h.k2_line = k1 * delta / (delta - df);
-        dk2l = -k1 * df / ((delta - df) * (delta - df));
-        ddelta0 = 0.0;
-        f = k1 * delta;                                   // = k2' (delta - delta_fluid)
-        kn = k1;
-        r.branch = LudingBranch::Fluid;
-      } else {
-        f = k1 * delta;                                   // LMM05 Eq 4: loading
-        kn = k1;
-        r.branch = LudingBranch::Loading;
-      }
-    } else {
-      f = h.k2_line * (delta - h.delta0);                 // LMM05 Eq 4: un/reloading
-      kn = h.k2_line;
-      r.branch = LudingBranch::Line;
-    }
-  }
+  LudingBranch branch = LudingBranch::Line;
+  luding_normal_spring<F, Tangent>(p, s, h, delta, f, kn, ddelta0, dk2l, branch);
 
   // ---- cohesion, Eq 13 and 15 ----
   double kc = 0.0, fmin = 0.0, dfmin = 0.0;
   double c = 0.0;
   if constexpr (F.cohesion) {
-    c = (k1 / k1c) * p.kc() / p.k2;  // k_c = c k2', LMM05 Eq 13
+    c = s.c;  // k_c = c k2', LMM05 Eq 13
     kc = c * h.k2_line;
   }
   if constexpr (F.hysteresis) {
@@ -360,7 +416,7 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
       f = -kc * delta;
       kn = -kc;
       dk2l = 0.0;
-      r.branch = LudingBranch::Cohesive;
+      branch = LudingBranch::Cohesive;
     }
   }
   if constexpr (F.cohesion) {
@@ -368,14 +424,12 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
       // f_min = -k_c delta_min, the line/limit intersection; = Eq 15 when delta_0 = (1-k1/k2')dmax
       fmin = -kc * h.k2_line * h.delta0 / (h.k2_line + kc);  // LMM05 Eq 15
       // d f_min / d delta on the loading branch (k2' and delta_0 move with delta_max = delta)
-      if (dk2l != 0.0 || ddelta0 != 0.0) {
+      if (Tangent && (dk2l != 0.0 || ddelta0 != 0.0)) {
         const double g = h.delta0 / (1.0 + c);  // = delta_min, since k_c = c k2'
         dfmin = -(c * dk2l * g + kc * ddelta0 / (1.0 + c));
       }
     }
   }
-  r.k_c = kc;
-  r.f_min = fmin;
 
   // ---- damping, Eq 5 ----
   double fn = f + p.gamma_n * in.delta_dot;  // LMM05 Eq 5
@@ -383,35 +437,38 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
 
   // ---- tangential, Eq 14, 16-24 (2D: xi is a scalar along t, Eq 16 is implicit; 3D: vectors in
   // the tangent plane, Eq 16 applied to the history before the call) ----
-  const double mu = F.thermal ? (k1 / k1c) * p.mu : p.mu;  // LMM05 Eq 24
+  const double mu = s.mu;                                  // LMM05 Eq 24
   const double kt = p.alpha * h.k2_line;                   // LMM05 Eq 23
   const double dkt = p.alpha * dk2l;
-  r.mu = mu;
-  r.k_t = kt;
   const double fc = F.friction ? mu * (fn - fmin) : 0.0;  // LMM05 Eq 14: f_C = mu (f_n - f_min)
+  Tan ft = tan_zero<Tan>();
+  bool sliding = false;
   if (F.friction && fc > 0.0) {
     const Tan xi_trial = h.xi + in.dxi;                     // LMM05 Eq 20
     const Tan ft0 = -kt * xi_trial - p.gamma_t * in.xi_dot;  // LMM05 Eq 19
     const double ft0_norm = tan_norm(ft0);
     if (ft0_norm <= fc) {                                   // static friction
-      r.f_t = ft0;
+      ft = ft0;
       h.xi = xi_trial;
-      r.dft_dxi = tan_identity<D>(-kt);
-      r.dft_ddelta = -dkt * xi_trial;
-      r.sliding = false;
-    } else {                                                   // sliding friction
-      const Tan s = tan_direction(ft0);
-      r.f_t = s * fc;                                          // LMM05 Eq 22
-      h.xi = -(fc * s + p.gamma_t * in.xi_dot) / kt;           // LMM05 Eq 21
-      r.dft_ddelta = s * mu * (dfn - dfmin);
-      if constexpr (D == 3) {  // the direction s = ft0/|ft0| turns with ft0
-        const Eigen::Matrix3d P = (fc / ft0_norm) * (Eigen::Matrix3d::Identity() - s * s.transpose());
-        r.dft_dxi = -kt * P;
-        r.dft_ddelta += P * (-dkt * xi_trial);
-      } else {
-        r.dft_dxi = 0.0;
+      if constexpr (Tangent) {
+        r->dft_dxi = tan_identity<D>(-kt);
+        r->dft_ddelta = -dkt * xi_trial;
       }
-      r.sliding = true;
+    } else {                                                   // sliding friction
+      const Tan sd = tan_direction(ft0);
+      ft = sd * fc;                                            // LMM05 Eq 22
+      h.xi = -(fc * sd + p.gamma_t * in.xi_dot) / kt;          // LMM05 Eq 21
+      if constexpr (Tangent) {
+        r->dft_ddelta = sd * mu * (dfn - dfmin);
+        if constexpr (D == 3) {  // the direction sd = ft0/|ft0| turns with ft0
+          const Eigen::Matrix3d P = (fc / ft0_norm) * (Eigen::Matrix3d::Identity() - sd * sd.transpose());
+          r->dft_dxi = -kt * P;
+          r->dft_ddelta += P * (-dkt * xi_trial);
+        } else {
+          r->dft_dxi = 0.0;
+        }
+      }
+      sliding = true;
       if (p.sliding_breaks_cohesion && fn < 0.0) {             // LMM05 footnote 5: f_n >= 0
         fn = 0.0;
         dfn = 0.0;
@@ -419,15 +476,48 @@ inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHisto
     }
   } else {  // f_n <= f_min: no tangential force, the spring is released
     h.xi = tan_zero<Tan>();
+    if constexpr (Tangent) {
+      r->dft_dxi = tan_identity<D>(0.0);
+      r->dft_ddelta = tan_zero<Tan>();
+    }
   }
-  h.sliding = r.sliding ? 1 : 0;
-  r.f_n = fn;
-  r.dfn_ddelta = dfn;
-  r.dfn_dxi = tan_zero<Tan>();
-  // Rolling resistance (not in LMM05): a rolling sub-model would add its moment to r.m_roll here
-  // from a rolling-spring history slot; none is modelled, r.m_roll = 0.
-  r.history = h;
+  h.sliding = sliding ? 1 : 0;
+  f_n_out = fn;
+  f_t_out = ft;
+  if constexpr (Tangent) {
+    r->f_n = fn;
+    r->f_t = ft;
+    r->m_roll = tan_zero<Tan>();  // rolling resistance (not in LMM05): none is modelled
+    r->f_min = fmin;
+    r->k_c = kc;
+    r->k_t = kt;
+    r->mu = mu;
+    r->dfn_ddelta = dfn;
+    r->dfn_dxi = tan_zero<Tan>();
+    r->branch = branch;
+    r->sliding = sliding;
+    r->history = h;
+  }
+}
+
+/// One step of the law (see LudingInput) with the step's constants s = luding_step<F>(p,
+/// in.k1_Tt). Pure: the new history is returned, not stored. In 3D the history's spring must
+/// already be in the current tangent plane (LudingLaw does that).
+template <LudingFeatures F = kLudingFull, int D>
+inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingStep& s, const LudingHistoryT<D>& h0,
+                                        const LudingInputT<D>& in) {
+  LudingResultT<D> r;
+  LudingHistoryT<D> h = h0;
+  double fn;
+  typename Dim<D>::Tan ft;
+  luding_update<F, true, D>(p, s, h, in, fn, ft, &r);
   return r;
+}
+/// One step of the law at the material state in.k1_Tt (the step's constants computed here).
+template <LudingFeatures F = kLudingFull, int D>
+inline LudingResultT<D> luding_evaluate(const LudingParams& p, const LudingHistoryT<D>& h0,
+                                        const LudingInputT<D>& in) {
+  return luding_evaluate<F>(p, luding_step<F>(p, in.k1_Tt), h0, in);
 }
 
 }  // namespace netdem::contact

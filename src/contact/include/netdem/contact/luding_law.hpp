@@ -10,19 +10,6 @@
 
 namespace netdem::contact {
 
-/// Field-by-field copy of a history (GCC expanded the struct assignment of the law's result into
-/// overlapping 16-byte moves through the stack, which stall on store forwarding).
-template <int D>
-inline void store_luding_history(LudingHistoryT<D>& dst, const LudingHistoryT<D>& src) {
-  dst.delta_max = src.delta_max;
-  dst.delta0 = src.delta0;
-  dst.k2_line = src.k2_line;
-  dst.k1_seen = src.k1_seen;
-  dst.xi = src.xi;
-  dst.fluid = src.fluid;
-  dst.sliding = src.sliding;
-}
-
 /// D = 3: the spring is a vector in the tangent plane, carried into the current plane by the
 /// step's Transport (LMM05 Eq 16 generalised to a rotation, law.hpp) before the step.
 template <LudingFeatures F = kLudingFull, int D = 2>
@@ -39,7 +26,7 @@ class LudingLaw {
 
   /// The law with parameters p (held by reference: p must outlive the law) at the material state
   /// k1(T, t) = k1_Tt (ignored without F.thermal).
-  LudingLaw(const Params& p, double k1_Tt) : p_(&p), k1_Tt_(k1_Tt) {}
+  LudingLaw(const Params& p, double k1_Tt) : p_(&p), k1_Tt_(k1_Tt), s_(luding_step<F>(p, k1_Tt)) {}
   /// The law without a temperature (feature sets without F.thermal), as an implicit solver
   /// builds it from its options (held by reference as above).
   explicit LudingLaw(const Params& p)
@@ -77,7 +64,7 @@ class LudingLaw {
 
   Response evaluate(const History& h, const Kin& k, Tangent<D>* t) const {
     History buf;
-    const LudingResultT<D> r = luding_evaluate<F>(*p_, transported(h, k, buf), input(k));
+    const LudingResultT<D> r = luding_evaluate<F>(*p_, s_, transported(h, k, buf), input(k));
     Response out;
     out.f_n = r.f_n;
     out.f_t = r.f_t;
@@ -135,8 +122,9 @@ class LudingLaw {
   /// In-place form of evaluate() for a hot loop (law.hpp update_contact): the same forces and
   /// history to the last bit (tests/contact/test_law_conformance.cpp). For the linear feature sets
   /// (no hysteresis, cohesion or temperature) it is luding_evaluate<F> written out for the linear
-  /// spring-dashpot with the Cundall-Strack spring, operation for operation, without the tangent
-  /// and the result struct (3D: the spring transported first, as evaluate()).
+  /// spring-dashpot with the Cundall-Strack spring, operation for operation; otherwise it is
+  /// luding_update<F> without the tangent on the table's history. Neither builds the result struct
+  /// (3D: the spring transported first, as evaluate()).
   void update(History& h, const Kin& k, double& f_n, Tan& f_t) const {
     const Params& p = *p_;
     if constexpr (!F.hysteresis && !F.cohesion && !F.thermal) {
@@ -184,18 +172,16 @@ class LudingLaw {
       h.sliding = sliding;
       f_n = fn;
       f_t = ft;
-    } else {
-      History buf;
-      const LudingResultT<D> r = luding_evaluate<F>(p, transported(h, k, buf), input(k));
-      store_luding_history(h, r.history);
-      f_n = r.f_n;
-      f_t = r.f_t;
+    } else {  // the law on the table's history in place, without the tangent (luding_update)
+      if constexpr (D == 3) h.xi = k.transport.apply(h.xi);
+      luding_update<F, false, D>(p, s_, h, input(k), f_n, f_t, nullptr);
     }
   }
 
  private:
   const Params* p_ = nullptr;
   double k1_Tt_ = 0.0;
+  LudingStep s_;  ///< the constants of the step at k1_Tt_ (luding_step)
 };
 static_assert(ContactLaw<LudingLaw<kLudingFull>>);
 static_assert(ContactLaw<LudingLaw<kLudingLinear>>);

@@ -579,7 +579,9 @@ class DynamicSolverT {
     double wf[6] = {0, 0, 0, 0, 0, 0};
   };
   template <class L, bool InPlace, bool Periodic>
-  void pair_forces(const L& pair_law, ForceSums& a);
+  void pair_forces(const L& pair_law, ForceSums& a);  ///< 3D
+  template <class L, bool InPlace, bool Periodic>
+  void pair_forces_2d(const L& pair_law, ForceSums& a);  ///< 2D (solver_pairs_2d.hpp)
   void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
   void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
