@@ -412,16 +412,20 @@ def main3(a):
         return statistics.median(rs) if rs else float("nan")
 
     has_full = "full" in models
+    has_base = bool(a.baseline)
     head = ("| N | LAMMPS gran/hooke/history (Mp-steps/CPU-s) | netdem Linear | ratio Linear/LAMMPS (median of "
             "ratio of medians / of per-rep ratios) |" + (" netdem Full (Table 1, 80 °C) | ratio Full/LAMMPS |"
-                                                         if has_full else ""))
-    lines = [head, "|---|---|---|---|" + ("---|---|" if has_full else "")]
+                                                         if has_full else "")
+            + (" baseline Linear | ratio baseline Linear/LAMMPS |" if has_base else ""))
+    lines = [head, "|---|---|---|---|" + ("---|---|" if has_full else "") + ("---|---|" if has_base else "")]
     for n in ns:
         lm = med("lammps_hooke_history", n)
         line = (f"| {n} | {cell('lammps_hooke_history', n)} | {cell('demsolve_linear', n)} | "
                 f"**{med('demsolve_linear', n) / lm:.2f}** / {ratio('demsolve_linear', n):.2f} |")
         if has_full:
             line += f" {cell('demsolve_full', n)} | {med('demsolve_full', n) / lm:.2f} |"
+        if has_base:
+            line += f" {cell('baseline_linear', n)} | {med('baseline_linear', n) / lm:.2f} |"
         lines.append(line)
     table = "\n".join(lines)
     check = ["| N | contacts/particle LAMMPS (pairs) | netdem Linear (pairs) | listed pairs/particle LAMMPS "
