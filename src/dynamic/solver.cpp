@@ -189,6 +189,30 @@ inline void add_image_stress(const int* n, const double (&hc)[3][3], const doubl
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s[r][c] += f[r] * o[c];
 }
+// The pair loops' handling of a row that does not touch: whether the law sees row k (touching, or a
+// history that outlives separation: pass 1a's count), and pass 2's test, which resets the history
+// of a separated row where the law clears it (docs/luding.md) and returns true when the row is
+// skipped (apart, and no history to keep).
+template <class Law>
+inline bool law_sees(bool touch, std::uint8_t live) {
+  if constexpr (Law::kHistoryOutlivesSeparation)
+    return touch || live;
+  else
+    return touch;
+}
+template <class Law, class H>
+inline bool skip_row(bool touch, std::uint8_t& live, H& hist) {
+  if (touch) return false;
+  if constexpr (!Law::kHistoryOutlivesSeparation) {
+    if (live) {
+      hist = H{};
+      live = 0;
+    }
+    return true;
+  } else {
+    return !live;  // apart and no history: no force, nothing to keep
+  }
+}
 }  // namespace
 
 #include "solver_pairs_2d.hpp"  // (inside this namespace: it uses add_image and NETDEM_FLATTEN)

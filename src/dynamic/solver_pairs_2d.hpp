@@ -67,10 +67,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       // (stored at mt whatever the row; kept, mt + 1, when the law will see it: no branch)
       g_dx[mt] = dx, g_dy[mt] = dy, g_L2[mt] = L2, g_s[mt] = s, g_r2[mt] = ri * ri - rj * rj;
       g_vx[mt] = rvx, g_vy[mt] = rvy, g_wi[mt] = p_w[i], g_wj[mt] = p_w[j];
-      if constexpr (Law::kHistoryOutlivesSeparation)
-        mt += touch || pair_live_[k] ? 1 : 0;
-      else
-        mt += touch ? 1 : 0;
+      mt += law_sees<Law>(touch, pair_live_[k]) ? 1 : 0;
     }
     for (std::size_t t = 0; t < mt; ++t) {  // pass 1b
       const double L = std::sqrt(g_L2[t]), iL = 1.0 / L;
@@ -86,17 +83,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
     std::size_t t = 0;  // the next row the law sees
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
-      if (!g_touch[c]) {
-        if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
-          if (pair_live_[k]) {
-            pair_hist[k] = H{};
-            pair_live_[k] = 0;
-          }
-          continue;
-        } else if (!pair_live_[k]) {
-          continue;  // apart and no history: no force, nothing to keep
-        }
-      }
+      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) continue;
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);

@@ -72,10 +72,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
       g_d[0][mt] = dx, g_d[1][mt] = dy, g_d[2][mt] = dz, g_L2[mt] = L2, g_s[mt] = s, g_r2[mt] = ri * ri - rj * rj;
       g_v[0][mt] = v0, g_v[1][mt] = v1, g_v[2][mt] = v2;
       for (int r = 0; r < 3; ++r) g_wi[r][mt] = oi[r], g_wj[r][mt] = oj[r];
-      if constexpr (Law::kHistoryOutlivesSeparation)
-        mt += touch || pair_live_[k] ? 1 : 0;
-      else
-        mt += touch ? 1 : 0;
+      mt += law_sees<Law>(touch, pair_live_[k]) ? 1 : 0;
     }
     for (std::size_t t = 0; t < mt; ++t) {  // pass 1b
       const double L = std::sqrt(g_L2[t]), iL = 1.0 / L;
@@ -102,17 +99,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSum
     std::size_t t = 0;  // the next row the law sees
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
-      if (!g_touch[c]) {
-        if constexpr (!Law::kHistoryOutlivesSeparation) {  // the law clears the history (docs/luding.md)
-          if (pair_live_[k]) {
-            pair_hist[k] = H{};
-            pair_live_[k] = 0;
-          }
-          continue;
-        } else if (!pair_live_[k]) {
-          continue;  // apart and no history: no force, nothing to keep
-        }
-      }
+      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) continue;
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);
