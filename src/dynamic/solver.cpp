@@ -113,9 +113,9 @@ NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
     else
       pair_forces_2d<Law, InPlace, false>(pair_law, a);
   } else if (periodic_) {  // (the rows across the faces add their f (x) h n to a.s3)
-    pair_forces<Law, InPlace, true>(pair_law, a);
+    pair_forces_3d<Law, InPlace, true>(pair_law, a);
   } else {
-    pair_forces<Law, InPlace, false>(pair_law, a);
+    pair_forces_3d<Law, InPlace, false>(pair_law, a);
   }
   if constexpr (D == 3) pair_stress_3d(a);
   if (walls_active()) {

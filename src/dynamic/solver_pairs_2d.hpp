@@ -2,13 +2,15 @@
 // The 2D particle-particle force loop of DynamicSolverT<2>. Included by solver.cpp only, inside its
 // namespace netdem::dem, where NETDEM_FLATTEN and the helper add_image are defined.
 //
-// The rows of the Verlet table are taken in chunks of kRowChunk. A first pass computes, for every
-// row of the chunk, the branch, the contact normal, the overlap and the relative velocity of the
-// contact points (the rows are independent: the square root and the division of one row overlap
-// those of the next in the processor, where one pass waited for them before the law of each row);
-// a second pass runs the law and the sums over the touching rows. Every row sees the same
-// operations in the same order as in one pass, so the results are the same to the last bit
-// (docs/performance.md "Issue 31"). The chunk's arrays (10 doubles per row) stay in L1.
+// The rows of the Verlet table are taken in chunks of kRowChunk. Pass 1a gathers, per row, the
+// branch, the touching test, the relative velocity and the spins (stored for the rows the law will
+// see, in row order, without a branch); pass 1b is one flat loop over those (the square root, the
+// division, n, the overlap and the relative velocity of the contact points: the rows are
+// independent, so the square root and division of one row overlap those of the next, where one
+// pass waited for them before the law of each row); pass 2 runs the law and the sums in row order.
+// Every row sees the same operations in the same order as in one pass, so the results are the same
+// to the last bit (docs/performance.md "Issue 31"). The chunk's arrays (16 doubles per row, 16 KB)
+// stay in L1.
 
 template <int D>
 template <class Law, bool InPlace, bool Periodic>

@@ -16,7 +16,7 @@
 // f (x) h n on those rows (docs/performance.md "The 3D periodic force loop").
 template <int D>
 template <class Law, bool InPlace, bool Periodic>
-NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
+NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, ForceSums& a) {
   static_assert(D == 3);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 64;

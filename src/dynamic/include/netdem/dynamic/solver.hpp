@@ -579,7 +579,7 @@ class DynamicSolverT {
     double wf[6] = {0, 0, 0, 0, 0, 0};
   };
   template <class L, bool InPlace, bool Periodic>
-  void pair_forces(const L& pair_law, ForceSums& a);  ///< 3D
+  void pair_forces_3d(const L& pair_law, ForceSums& a);  ///< 3D (solver_pairs_3d.hpp)
   template <class L, bool InPlace, bool Periodic>
   void pair_forces_2d(const L& pair_law, ForceSums& a);  ///< 2D (solver_pairs_2d.hpp)
   void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
