@@ -102,28 +102,6 @@ void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem
                                             co.path.E12));
 }
 
-/// The jammed state of --state, checked against the command line (walls, law).
-std::optional<netdem::sys::JammedStateT<2>> input_state(const CompactArgs& a, const netdem::qs::SolverOptions& so) {
-  namespace sys = netdem::sys;
-  if (a.state_file.empty()) return std::nullopt;
-  if (!a.packing_file.empty()) throw netdem::app::UsageError("--state and --packing exclude each other");
-  const std::string text = sys::read_text_file(a.state_file, "jammed state file");
-  if (const int dim = sys::jammed_state_dim(text, a.state_file); dim != 2)
-    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; netsolve compact is 2D",
-                                              netdem::packing::quote_input(a.state_file), dim));
-  sys::JammedStateT<2> j = sys::parse_jammed_state<2>(text, a.state_file);
-  const bool walls = so.mode == netdem::qs::BoundaryMode::Walls;
-  if (j.walls != walls)
-    throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} --boundary walls",
-                                              netdem::packing::quote_input(a.state_file), j.walls ? "with" : "without",
-                                              j.walls ? "with" : "without"));
-  if (const std::string d = sys::law_difference(j.law, so.law); !d.empty())
-    throw netdem::app::UsageError(fmt::format("--state {}: its contact law is not the command line's ({}; state vs command "
-                                              "line): give the state's --friction, --k-t, --first-touch and --normal-unloading",
-                                              netdem::packing::quote_input(a.state_file), d));
-  return j;
-}
-
 /// Disk centres outside the initial box: die mode prescribes only the peripheral layer, and a
 /// (frictionless) packing can squeeze disks out of the box between peripheral disks
 /// (docs/quasistatic.md).
@@ -259,7 +237,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
   j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
   const bool saved = a.save_state && stopped.empty();
-  j["state"] = saved && so.mode != qs::BoundaryMode::Walls ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  j["state"] = saved ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
     j["jammed_state"] = {{"from", a.state_file},
                          {"saved", saved && so.mode != qs::BoundaryMode::Periodic ? "jammed.json" : ""}};
@@ -353,7 +331,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const std::string input = a.state_file.empty() ? a.packing_file : a.state_file;
   check_run_dir(out, run_dir_options(ra, input));
   std::string source;
-  const auto jammed = input_state(a, so);
+  const auto jammed = jammed_input(a.state_file, a.packing_file, so);
   if (input.empty()) check_deposition_size(pa, true);
   activity() = input.empty() ? "building the ballistic deposition" : "reading " + input;
   const bool periodic = so.mode == qs::BoundaryMode::Periodic;
@@ -389,7 +367,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   write_file_atomic(out / "history.csv", rows.csv);
   if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
     write_snapshot(solver, out, "final");
-    if (a.save_state && so.mode != qs::BoundaryMode::Walls) qs::save_state(solver.state(), (out / "state.txt").string());
+    if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
     if (a.save_state && !periodic) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
   }
   // die mode prescribes only the peripheral layer: a (frictionless) packing can squeeze disks out
@@ -426,6 +404,27 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
 }
 
 }  // namespace
+
+std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, const std::string& packing_file,
+                                                 const qs::SolverOptions& so) {
+  if (state_file.empty()) return std::nullopt;
+  if (!packing_file.empty()) throw netdem::app::UsageError("--state and --packing exclude each other");
+  const std::string text = sys::read_text_file(state_file, "jammed state file");
+  if (const int dim = sys::jammed_state_dim(text, state_file); dim != 2)
+    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; netsolve is 2D",
+                                              netdem::packing::quote_input(state_file), dim));
+  sys::JammedStateT<2> j = sys::parse_jammed_state<2>(text, state_file);
+  const bool walls = so.mode == netdem::qs::BoundaryMode::Walls;
+  if (j.walls != walls)
+    throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} --boundary walls",
+                                              netdem::packing::quote_input(state_file), j.walls ? "with" : "without",
+                                              j.walls ? "with" : "without"));
+  if (const std::string d = sys::law_difference(j.law, so.law); !d.empty())
+    throw netdem::app::UsageError(fmt::format("--state {}: its contact law is not the command line's ({}; state vs command "
+                                              "line): give the state's --friction, --k-t, --first-touch and --normal-unloading",
+                                              netdem::packing::quote_input(state_file), d));
+  return j;
+}
 
 CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std::string& out) {
   CompactCli cli;
@@ -471,7 +470,7 @@ CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std
                   "normal law on unloading: 'reversible' retraces Eq 2 (the paper's compaction, sections 2-3.3), "
                   "'elastic' follows the 10^3 stiffer unloading line of section 3.4");
   comp->add_flag("--save-state", ca.save_state, "write the final state: jammed.json (the jammed state netsolve and demsolve compact --state start from) "
-                 "and, except with --boundary walls, state.txt (exact; netsolve yield --from-state continues from it)");
+                 "and state.txt (exact; netsolve yield --from-state continues from it)");
   comp->add_option("--state", ca.state_file, "a jammed state (jammed.json of netsolve or demsolve compact --save-state) instead of "
                    "a packing: its disks, box, walls and contact histories")
       ->check(non_empty_file("a jammed state file"));

@@ -3,16 +3,24 @@
 // path to a density or an equivalent strain, optionally after a hydrostatic precompaction
 // (--precompact-density; issue 29), with its files (README.md "netsolve", docs/quasistatic.md).
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "netdem/quasistatic/solver_options.hpp"
+#include "netdem/system/jammed_state.hpp"
 #include "output.hpp"
 #include "setup.hpp"
 
 namespace netdem::app::netsolve {
+
+/// The jammed state of --state (none if `state_file` is empty), checked against the options: it
+/// excludes a packing file, is 2D, has walls exactly when `so.mode` is walls, and has the options'
+/// contact law. UsageError (one line) otherwise.
+std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, const std::string& packing_file,
+                                                 const qs::SolverOptions& so);
 
 /// Options of every run that writes a folder.
 struct RunArgs {

@@ -2,7 +2,7 @@
 // Acta Mater. 49 (2001) 4325, section 3.4, Figs 9-10). Algorithm and outputs: docs/yield.md.
 //
 //   netsolve yield [--precompact hydrostatic|closed-die] [--to-density 0.85] [--friction MU|inf]
-//                  [--compact-bc affine|die] [--probe-bc affine|die] [--directions N]
+//                  [--compact-bc affine|die|walls|periodic] [--probe-bc ...] [--directions N]
 //                  [--probe i/N | --probes LIST] [--jobs J] [--out DIR]
 //   netsolve yield-merge DIR... [--out DIR]
 //
@@ -23,6 +23,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -40,6 +41,7 @@
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/quasistatic/yield_driver.hpp"
 #include "netdem/quasistatic/yield_probe.hpp"
+#include "compact.hpp"
 #include "output.hpp"
 #include "parse.hpp"
 #include "setup.hpp"
@@ -69,7 +71,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 struct YieldArgs {
   // packing
   netdem::app::netsolve::PackArgs pack;  // a new deposition (lid: centre)
-  std::string packing_file, from_state;
+  std::string packing_file, from_state, state_file;  // state_file: a jammed state (--state)
   // precompaction
   std::string precompact = "hydrostatic", compact_bc = "die", probe_bc;
   double to_density = 0.85;
@@ -94,11 +96,16 @@ qs::BoundaryMode parse_bc(const std::string& s, const char* opt) {
   if (s == "affine") return qs::BoundaryMode::Affine;
   if (s == "die" || s == "lr" || s == "l.r.") return qs::BoundaryMode::Die;
   if (s == "periodic") return qs::BoundaryMode::Periodic;
-  throw std::invalid_argument(fmt::format("{} '{}' is not 'affine', 'die' (local relaxation) or 'periodic'", opt, s));
+  if (s == "walls") return qs::BoundaryMode::Walls;
+  throw std::invalid_argument(
+      fmt::format("{} '{}' is not 'affine', 'die' (local relaxation), 'walls' or 'periodic'", opt, s));
 }
 
 const char* bc_name(qs::BoundaryMode m) {
-  return m == qs::BoundaryMode::Affine ? "affine" : m == qs::BoundaryMode::Periodic ? "periodic" : "die";
+  return m == qs::BoundaryMode::Affine     ? "affine"
+         : m == qs::BoundaryMode::Periodic ? "periodic"
+         : m == qs::BoundaryMode::Walls    ? "walls"
+                                           : "die";
 }
 
 /// Probe indices of this run: all, a job-array slice "i/N" (indices k with k mod N == i) or a list.
@@ -160,6 +167,12 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
     throw std::invalid_argument("--compact-bc and --probe-bc: a periodic cell is probed periodic or affine (--probe-bc "
                                 "periodic or affine with --compact-bc periodic, neither without)");
+  if (probe.mode == qs::BoundaryMode::Walls && pre.mode != qs::BoundaryMode::Walls)
+    throw std::invalid_argument("--compact-bc and --probe-bc: walls probe a state compacted between the same walls "
+                                "(--probe-bc walls needs --compact-bc walls)");
+  if (pre.mode == qs::BoundaryMode::Walls && probe.mode == qs::BoundaryMode::Die)
+    throw std::invalid_argument("--compact-bc and --probe-bc: a state compacted between walls is probed between them or "
+                                "affine (--probe-bc walls or affine)");
 }
 
 /// The compacted state of --from-state; its strain must lie along --precompact's path.
@@ -255,6 +268,7 @@ class YieldRun {
   int jobs_ = 1;
   std::string source_;
   netdem::packing::Packing pk_;
+  std::optional<netdem::sys::JammedStateT<2>> jammed_;  ///< --state: the precompaction starts from it
   std::unique_ptr<qs::NetworkSolver> solver_;
   fs::path out_;
   double sy_ = 0.0;
@@ -297,9 +311,12 @@ void YieldRun::validate() {
   jobs_ = a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
   if (!a.from_state.empty() && !a.packing_file.empty()) throw std::invalid_argument("--from-state and --packing exclude each other");
+  if (!a.from_state.empty() && !a.state_file.empty()) throw std::invalid_argument("--from-state and --state exclude each other");
+  if (so_.mode == qs::BoundaryMode::Walls && co_.path.E12 != 0.0)
+    throw std::invalid_argument("--compact-bc walls: the walls stay axis-parallel, so the path needs E12 = 0");
   app::RunDirOptions rdo;
   rdo.overwrite = a.overwrite;
-  rdo.inputs = {a.packing_file, a.from_state};
+  rdo.inputs = {a.packing_file, a.from_state, a.state_file};
   app::check_run_dir(a.out, rdo);  // before any work: a refused folder is exit 2, nothing touched
   if (!a.from_state.empty() && fs::is_directory(a.from_state))
     throw app::UsageError(fmt::format("--from-state '{}' is a folder, not a state file (netsolve compact --save-state writes "
@@ -311,13 +328,20 @@ void YieldRun::validate() {
 void YieldRun::open_input() {
   using namespace netdem;
   const YieldArgs& a = a_;
-  if (a.from_state.empty()) {
+  if (const auto jammed = app::netsolve::jammed_input(a.state_file, a.packing_file, so_)) {
+    jammed_ = jammed;  // the precompaction starts from it (at rest: its box is the run's initial box)
+    pk_ = jammed->packing();
+    source_ = "jammed state " + a.state_file;
+    co_.validate(pk_.density());
+  } else if (a.from_state.empty()) {
     if (a.packing_file.empty()) app::netsolve::check_deposition_size(a.pack, true);
     app::netsolve::activity() = a.packing_file.empty() ? "building the ballistic deposition" : "reading the packing " + a.packing_file;
     pk_ = app::netsolve::input_packing(a.packing_file, a.pack, source_, "netsolve yield",
                                        so_.mode == qs::BoundaryMode::Periodic ? app::netsolve::PeriodicInput::Require
                                                                               : app::netsolve::PeriodicInput::Refuse,
                                        "--compact-bc periodic");
+    // the walls enclose every disk at the start (as in netsolve compact --boundary walls)
+    if (so_.mode == qs::BoundaryMode::Walls) pk_.box = app::netsolve::walls_box(pk_);
     co_.validate(pk_.density());
   } else {
     solver_ = restore_compacted(a, co_.path, so_);
@@ -326,7 +350,7 @@ void YieldRun::open_input() {
   out_ = a.out;
   app::RunDirOptions rdo;
   rdo.overwrite = a.overwrite;
-  rdo.inputs = {a.packing_file, a.from_state};
+  rdo.inputs = {a.packing_file, a.from_state, a.state_file};
   app::open_run_dir(out_, command_, rdo);
   app::make_output_dir(out_ / "probes");
   // probe files of an earlier run in this folder would mix into yield-merge: remove them
@@ -359,7 +383,7 @@ bool YieldRun::precompact() {
     t_compact_ = seconds_since(t0);
     return true;
   }
-  solver_ = std::make_unique<qs::NetworkSolver>(pk_, so_);
+  solver_ = jammed_ ? std::make_unique<qs::NetworkSolver>(*jammed_, so_) : std::make_unique<qs::NetworkSolver>(pk_, so_);
   const double sy = sy_;
   std::string hist = "increment,E11,E22,D,S11,S22,S12,Z,contacts,residual,newton,converged,net_force_ratio,eq13_vs_contacts\n";
   app::Progress progress("precompact", co_.increments, a_.quiet);
@@ -573,6 +597,7 @@ int YieldRun::finish() {
                         {"E22", loaded_.E22},   {"contacts", loaded_.contacts}, {"unconverged_increments", unconverged_},
                         {"increments", co_.increments}, {"max_newton_residual", conv_.max_newton_residual},
                         {"last_increment_converged", conv_.last_converged}};
+  if (!a.state_file.empty()) j["precompaction"]["jammed_state"] = a.state_file;
   if (!a.from_state.empty()) {
     j["precompaction"]["from_state"] = a.from_state;
     j["precompaction"]["unconverged_increments"] = nullptr;  // not known from the state
@@ -662,11 +687,17 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--precompact", a.precompact, "hydrostatic | closed-die")->capture_default_str();
     app.add_option("--to-density", a.to_density, "precompaction density D")->capture_default_str();
     app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();
+    app.add_option("--state", a.state_file,
+                   "precompact from a jammed state (jammed.json of netsolve or demsolve compact --save-state; its law must be "
+                   "the command line's) instead of a packing: walls with --compact-bc walls, a layer with die")
+        ->check(non_empty_file("a jammed state file"));
     app.add_option("--compact-bc", a.compact_bc,
-                   "affine | die (local relaxation) | periodic (a '# periodic' --packing) during precompaction")
+                   "affine | die (local relaxation) | walls (four rigid frictionless walls, nothing prescribed) | periodic "
+                   "(a '# periodic' --packing) during precompaction")
         ->capture_default_str();
-    app.add_option("--probe-bc", a.probe_bc, "affine | die | periodic during unloading and probing (default: --compact-bc; "
-                                             "with --compact-bc periodic: periodic, or affine: every centre follows the cell)");
+    app.add_option("--probe-bc", a.probe_bc, "affine | die | walls | periodic during unloading and probing (default: "
+                                             "--compact-bc; with --compact-bc periodic: periodic, or affine: every centre follows "
+                                             "the cell; with walls: walls, or affine)");
     app.add_option("--directions", a.directions, "probes, theta_k = 360 k / N degrees, (E11dot, E22dot) = (cos, sin)")->capture_default_str();
     app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays)");
     netdem::app::netsolve::add_list_option(app, "--probes", a.probe_list, "run only these probe indices, e.g. 0,3,5");

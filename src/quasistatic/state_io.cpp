@@ -87,6 +87,11 @@ Json state_json(const NetworkState& s) {
     for (const auto& n : s.shift) shift.push_back(Json::array({n[0], n[1]}));
     j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
   }
+  if (!s.wall_history.empty()) {  // BoundaryMode::Walls: 4 slots per particle (left, right, bottom, top)
+    Json hist = Json::array();
+    for (const auto& h : s.wall_history) hist.push_back(h);
+    j["walls"] = Json{{"history", hist}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
+  }
   const auto& t = s.timings;
   j["timings"] = Json{{"assemble", real_json(t.assemble, "timing")},     {"analyse", real_json(t.analyse, "timing")},
                       {"factorise", real_json(t.factorise, "timing")},   {"solve", real_json(t.solve, "timing")},
@@ -187,6 +192,18 @@ void read_periodic(const Field& root, NetworkState& s) {
   s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(s.x.size()) - 1));
 }
 
+/// The optional wall contacts (absent: no walls, or walls that no disk has touched yet).
+void read_walls(const Field& root, NetworkState& s) {
+  if (!root.has("walls")) return;
+  const Field w = root["walls"];
+  w.object({"history", "f_n"});
+  const std::size_t n = 4 * s.x.size();
+  w["history"].array(n);
+  s.wall_history.resize(n);
+  for (std::size_t k = 0; k < n; ++k) s.wall_history[k] = w["history"][k].get<contact::PlasticIndentationHistory>();
+  s.wall_f_n = reals(w["f_n"], n, 0.0, kMax);
+}
+
 void read_timings(const Field& root, SolverTimings& T) {
   const Field t = root["timings"];
   t.object({"assemble", "analyse", "factorise", "solve", "neighbours", "total", "analyses", "factorisations", "solves",
@@ -209,8 +226,6 @@ void read_timings(const Field& root, SolverTimings& T) {
 
 void save_state(const NetworkState& s, const std::string& path) {
   s.validate();
-  if (!s.wall_history.empty())
-    throw std::invalid_argument("the state file does not hold wall contacts (the walls boundary) yet");
   sys::write_text_file(path, sys::dump_archive(state_json(s)), "state file");
 }
 
@@ -229,12 +244,13 @@ NetworkState load_state_text(std::string_view text, const std::string& path) {
   const Field root(j, path);
   sys::check_header(root, "network", kNetworkStateVersion);
   root.object({"format", "kind", "version", "particles", "solid_area", "initial_density", "box_area0", "box0", "seed",
-               "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "periodic", "timings"});
+               "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "periodic", "walls", "timings"});
   NetworkState s;
   read_particles(root, s);
   read_globals(root, s);
   read_pairs(root, s);
   read_periodic(root, s);
+  read_walls(root, s);
   read_timings(root, s.timings);
   try {
     s.validate();

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The jammed state both solvers share (issue 28 item 6; docs/quasistatic.md "Jammed state"):
-# netsolve compact --boundary walls --save-state writes jammed.json (and no state.txt: the network
-# state file holds no wall contacts); demsolve compact --state starts from it and saves its own;
+# netsolve compact --boundary walls --save-state writes jammed.json and state.txt (the network state
+# file, with the wall contacts since 2026-12-06); demsolve compact --state starts from it and saves its own;
 # netsolve compact --state starts from the DEM's at its density with its Z (the DEM's history row is a
 # window mean, its stresses are not compared here). Bad states
 # and mismatched options exit 2 with one line, nothing written. The per-contact forces and the
@@ -17,7 +17,7 @@ ok() { if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: $*
 "$ns" compact --width 16 --boundary walls --to-density 0.80 --increments 20 --save-state --quiet --allow-unconverged \
   --out "$tmp/n1" >/dev/null 2>&1
 ok test -s "$tmp/n1/jammed.json"
-ok test ! -e "$tmp/n1/state.txt"
+ok test -s "$tmp/n1/state.txt"
 "$dm" compact --state "$tmp/n1/jammed.json" --boundary walls --to-density 0.82 --inertial-number 1e-3 --increments 10 \
   --save-state --quiet --out "$tmp/d1" >/dev/null 2>&1
 ok test $? -eq 0

@@ -4,9 +4,11 @@
 // fail).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 
 #include "network_test_util.hpp"
 #include "netdem/packing/packing.hpp"
@@ -382,3 +384,46 @@ TEST(Equilibrium, EnergyTrustRegionEndsOnTheFrictionlessEquilibria) {
   }
 }
 
+
+// The state file holds the wall contacts (issue 28: `netsolve yield --compact-bc walls` probes from
+// a saved state): a walls-mode solver restored from the file continues bit-identically to the
+// uninterrupted run, and the same state without its wall histories does not (the wall contacts'
+// plastic flats are part of the state: with the elastic unloading branch, a wall contact that
+// rearrangement relieves unloads along its flat).
+TEST(Equilibrium, WallsStateFileContinuesBitIdentically) {
+  packing::Packing pk = netdem::test::random_packing(12.0, 4);
+  for (std::size_t i = 0; i < pk.size(); ++i) {  // the walls enclose every disk
+    pk.box.y_max = std::max(pk.box.y_max, pk.y[i] + pk.r[i]);
+    pk.box.y_min = std::min(pk.box.y_min, pk.y[i] - pk.r[i]);
+  }
+  qs::SolverOptions so = qs::SolverOptions::compact();
+  so.mode = qs::BoundaryMode::Walls;
+  so.law.reversible = false;  // the elastic unloading branch: an unloading contact reads its flat (u_max)
+  const Eigen::Matrix2d dE = -4e-3 * Eigen::Matrix2d::Identity();
+  qs::NetworkSolver ref(pk, so), first(pk, so);
+  for (int k = 0; k < 10; ++k) ref.increment(dE);
+  for (int k = 0; k < 6; ++k) ref.increment(dE);
+  for (int k = 0; k < 10; ++k) first.increment(dE);
+  const auto st = first.state();
+  int loaded = 0;
+  for (double f : st.wall_f_n) loaded += f > 0.0;
+  ASSERT_GT(loaded, 3) << "the walls must carry load when the state is saved";
+  const std::string file = testing::TempDir() + "/netdem_walls_state.txt";
+  qs::save_state(st, file);
+  const auto back = qs::load_state(file);
+  std::remove(file.c_str());
+  EXPECT_EQ(back.wall_f_n, st.wall_f_n);
+  qs::NetworkSolver restored(back, so);
+  auto bare = back;
+  bare.wall_history.clear();
+  bare.wall_f_n.clear();
+  qs::NetworkSolver forgetful(bare, so);
+  for (int k = 0; k < 6; ++k) {
+    restored.increment(dE);
+    forgetful.increment(dE);
+  }
+  netdem::test::expect_same_state(ref, restored);
+  std::printf("walls state: %d loaded wall contacts saved; S22 %.9g restored, %.9g without the wall histories\n", loaded,
+              restored.measures().S22, forgetful.measures().S22);
+  EXPECT_NE(forgetful.measures().S22, ref.measures().S22);
+}
