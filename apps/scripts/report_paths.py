@@ -31,8 +31,8 @@ VERDICT_HEADERS = ("result", "pass/fail", "verdict")
 COMMON_SOURCES = ("CMakeLists.txt", "src", "apps/CMakeLists.txt", "apps/common", "apps/scripts/report_paths.py")
 CASE_SOURCES = {
     "redanz_fleck_compaction": ("apps/netsolve", "validation/redanz_fleck_compaction/run.py"),
-    "redanz_fleck_yield": ("apps/netsolve", "validation/redanz_fleck_yield/run.py",
-                           "validation/redanz_fleck_yield/analytic_surface.py"),
+    "redanz_fleck_yield": ("apps/netsolve", "apps/demsolve", "validation/redanz_fleck_yield/run.py",
+                           "validation/redanz_fleck_yield/analytic_surface.py", "validation/redanz_fleck_yield/walls.py"),
     "luding_sintering": ("apps/demsolve", "validation/luding_sintering/run.py", "validation/luding_sintering/study.py",
                          "validation/luding_sintering/analysis.py", "validation/luding_sintering/figures.py"),
     "sintering_pair": ("apps/netsolve", "validation/sintering_pair/run.py",

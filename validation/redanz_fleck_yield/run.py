@@ -33,11 +33,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "apps", "scripts"))
-from report_paths import (MISSING, missing_text, provenance, provenance_lines, tally,  # noqa: E402
+from report_paths import (MISSING, load_module, missing_text, provenance, provenance_lines, tally,  # noqa: E402
                           totals_text, verdict)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
+WL = load_module("rf_yield_walls", os.path.join(HERE, "walls.py"))  # the frictionless lines between walls (issue 28)
 
 FULL = {"width": 80, "increments": 100, "directions": 24}
 QUICK = {"width": 40, "increments": 50, "directions": 12}
@@ -291,14 +292,16 @@ def fig_curves(runs, outdir):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--demsolve", default=None, help="ignored (accepted for validation/run_all.sh)")
+    ap.add_argument("--demsolve", default=os.path.join(REPO, "build", "apps", "demsolve"),
+                    help="the DEM that jams the packings of the walls cases (walls.py)")
     ap.add_argument("--netsolve", default=os.path.join(REPO, "build", "apps", "netsolve"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=None, help="figures and report (default: this folder, or quick/ with --quick)")
     ap.add_argument("--runs", default=None,
                     help="simulation folders (default: results/validation/redanz_fleck_yield[_quick], git-ignored)")
     ap.add_argument("--force", action="store_true")
-    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated subset")
+    ap.add_argument("--cases", default=",".join(list(CASES) + ["walls"]),
+                    help="comma-separated subset; 'walls': the cases between walls (walls.py)")
     a = ap.parse_args()
     scale = QUICK if a.quick else FULL
     outdir = a.out or (os.path.join(HERE, "quick") if a.quick else HERE)
@@ -307,7 +310,10 @@ def main():
     names = [n for n in a.cases.split(",") if n]
     t0 = time.time()
     for n in names:
-        run_case(os.path.abspath(a.netsolve), n, scale, runs, a.jobs, a.force)
+        if n != "walls":
+            run_case(os.path.abspath(a.netsolve), n, scale, runs, a.jobs, a.force)
+    if "walls" in names:
+        WL.run_all(os.path.abspath(a.netsolve), os.path.abspath(a.demsolve), scale, runs, a.jobs, a.force)
     have = {n for n in CASES if os.path.exists(os.path.join(runs, n, "yield_points.csv"))}
 
     if {"hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"} <= have:
@@ -431,8 +437,25 @@ def main():
             else:
                 miss(fin, "0.4-0.6", ("hydro_AA_mu0", n))
 
+    # ---- the same lines between walls (walls.py), a table of their own
+    W = WL.load_all(sys.modules[__name__], runs, scale["directions"])
+    wrows = []
+
+    def wadd(finding, measured, band, ok, note=""):
+        wrows.append((finding, measured, band, verdict(ok), note))
+
+    def wmiss(finding, band, why_text, note=""):
+        wrows.append((finding, missing_text(why_text)[:400], band, MISSING, note))
+
+    def wreason(*names):
+        return "; ".join(f"no yield points for {n}: {no_points_reason(runs, n)}" for n in names if n not in C and n not in W)
+
+    WL.findings(sys.modules[__name__], C, W, wadd, wmiss, wreason)
+    wfigs = [f for pre, f in (("hydro", "fig_walls_hydrostatic.png"), ("die", "fig_walls_closed_die.png"))
+             if WL.fig(sys.modules[__name__], runs, C, W, pre, f, outdir)]
+
     # ---- report
-    counts = tally(r[3] for r in rows)
+    counts = tally(r[3] for r in rows + wrows)
     lines = ["# netsolve yield vs Redanz & Fleck (2001) section 3.4, Figs 9-10", "",
              f"Generated {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by "
              f"`validation/redanz_fleck_yield/run.py{' --quick' if a.quick else ''}`: "
@@ -445,6 +468,14 @@ def main():
              "", "| finding | measured | band | result | note |", "|---|---|---|---|---|"]
     for r in rows:
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in r) + " |")
+    lines += ["", "## Between walls (issue 28)", "", WL.__doc__.split("\n\n", 1)[1].strip(), "",
+              f"Probes: {min(WL.DIRECTIONS, scale['directions'])} directions, paired with the affine-affine probes at "
+              "the same angle. Totals above count both tables.", "",
+              "| finding | measured | band | result | note |", "|---|---|---|---|---|"]
+    for r in wrows:
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in r) + " |")
+    lines += WL.runs_table(runs, W, sys.modules[__name__])
+    lines += [""] + [f"![{f_}]({f_})" for f_ in wfigs]
     lines += ["", "## Runs", "", "| case | D | Z | loading point S11, S22 | unloading | probes ok | time total (compaction / unloading / probes) s |",
               "|---|---|---|---|---|---|---|"]
     for n in CASES:
@@ -487,7 +518,7 @@ def main():
             lines.append(f"![{f_}]({f_})")
     lines.append("")
     lines.append(f"Total time of this script: {time.time() - t0:.0f} s.")
-    lines += provenance_lines(provenance(REPO, "redanz_fleck_yield", [a.netsolve]), counts)
+    lines += provenance_lines(provenance(REPO, "redanz_fleck_yield", [a.netsolve, a.demsolve]), counts)
     open(os.path.join(outdir, "report.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines[:len(rows) + 10]))
 
