@@ -331,7 +331,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const std::string input = a.state_file.empty() ? a.packing_file : a.state_file;
   check_run_dir(out, run_dir_options(ra, input));
   std::string source;
-  const auto jammed = jammed_input(a.state_file, a.packing_file, so);
+  const auto jammed = jammed_input(a.state_file, a.packing_file, so, "netsolve compact", "--boundary walls");
   if (input.empty()) check_deposition_size(pa, true);
   activity() = input.empty() ? "building the ballistic deposition" : "reading " + input;
   const bool periodic = so.mode == qs::BoundaryMode::Periodic;
@@ -406,19 +406,20 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
 }  // namespace
 
 std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, const std::string& packing_file,
-                                                 const qs::SolverOptions& so) {
+                                                 const qs::SolverOptions& so, const char* command,
+                                                 const char* walls_option) {
   if (state_file.empty()) return std::nullopt;
   if (!packing_file.empty()) throw netdem::app::UsageError("--state and --packing exclude each other");
   const std::string text = sys::read_text_file(state_file, "jammed state file");
   if (const int dim = sys::jammed_state_dim(text, state_file); dim != 2)
-    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; netsolve is 2D",
-                                              netdem::packing::quote_input(state_file), dim));
+    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; {} is 2D",
+                                              netdem::packing::quote_input(state_file), dim, command));
   sys::JammedStateT<2> j = sys::parse_jammed_state<2>(text, state_file);
   const bool walls = so.mode == netdem::qs::BoundaryMode::Walls;
   if (j.walls != walls)
-    throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} --boundary walls",
+    throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} {}",
                                               netdem::packing::quote_input(state_file), j.walls ? "with" : "without",
-                                              j.walls ? "with" : "without"));
+                                              j.walls ? "with" : "without", walls_option));
   if (const std::string d = sys::law_difference(j.law, so.law); !d.empty())
     throw netdem::app::UsageError(fmt::format("--state {}: its contact law is not the command line's ({}; state vs command "
                                               "line): give the state's --friction, --k-t, --first-touch and --normal-unloading",

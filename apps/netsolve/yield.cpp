@@ -179,6 +179,10 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
 std::unique_ptr<qs::NetworkSolver> restore_compacted(const YieldArgs& a, const qs::StrainPath& path,
                                                      const qs::SolverOptions& pre) {
   const qs::NetworkState st = qs::load_state(a.from_state);
+  const bool walls = pre.mode == qs::BoundaryMode::Walls;
+  if (st.wall_history.empty() == walls)
+    throw std::invalid_argument(fmt::format("--from-state {}: the state has {} wall contacts: run it {} --compact-bc walls",
+                                            a.from_state, walls ? "no" : "", walls ? "without" : "with"));
   const Eigen::Matrix2d E = st.strain, R = path.rate();
   const double cosine = (E.array() * R.array()).sum() / (E.norm() * R.norm());
   if (!(E.norm() > 0.0) || !(cosine > 1.0 - 1e-9))
@@ -186,6 +190,14 @@ std::unique_ptr<qs::NetworkSolver> restore_compacted(const YieldArgs& a, const q
                                             "lie along --precompact {}",
                                             a.from_state, E(0, 0), E(1, 1), E(0, 1), path.name));
   return std::make_unique<qs::NetworkSolver>(st, pre);
+}
+
+/// The density at zero strain, D exp(E11 + E22) (the box area scales with det exp(E)), where the
+/// solver's own initial density is not (a run from a jammed state starts at the jammed density but
+/// carries the strain that led there); else the solver's initial density, bit for bit.
+double density_at_zero_strain(const qs::StateMeasures& m, double initial_density) {
+  const double d0 = m.density * std::exp(m.E11 + m.E22);
+  return std::fabs(d0 - initial_density) > 1e-9 * initial_density ? d0 : initial_density;
 }
 
 /// The probe settings of the command line, with the fine step and the loading stress of the run.
@@ -312,6 +324,8 @@ void YieldRun::validate() {
   if (a.jobs < 0) throw std::invalid_argument(fmt::format("--jobs must be >= 1 (0: number of cores), got {}", a.jobs));
   if (!a.from_state.empty() && !a.packing_file.empty()) throw std::invalid_argument("--from-state and --packing exclude each other");
   if (!a.from_state.empty() && !a.state_file.empty()) throw std::invalid_argument("--from-state and --state exclude each other");
+  if (!a.state_file.empty() && so_.mode == qs::BoundaryMode::Periodic)
+    throw std::invalid_argument("--state: a jammed state has walls or a layer, not a periodic cell (--compact-bc periodic)");
   if (so_.mode == qs::BoundaryMode::Walls && co_.path.E12 != 0.0)
     throw std::invalid_argument("--compact-bc walls: the walls stay axis-parallel, so the path needs E12 = 0");
   app::RunDirOptions rdo;
@@ -328,7 +342,8 @@ void YieldRun::validate() {
 void YieldRun::open_input() {
   using namespace netdem;
   const YieldArgs& a = a_;
-  if (const auto jammed = app::netsolve::jammed_input(a.state_file, a.packing_file, so_)) {
+  if (const auto jammed = app::netsolve::jammed_input(a.state_file, a.packing_file, so_, "netsolve yield",
+                                                               "--compact-bc walls")) {
     jammed_ = jammed;  // the precompaction starts from it (at rest: its box is the run's initial box)
     pk_ = jammed->packing();
     source_ = "jammed state " + a.state_file;
@@ -379,7 +394,7 @@ bool YieldRun::precompact() {
   app::netsolve::activity() = "precompacting";
   if (solver_) {
     loaded_ = solver_->measures();
-    D0_ = solver_->initial_density();
+    D0_ = density_at_zero_strain(loaded_, solver_->initial_density());
     t_compact_ = seconds_since(t0);
     return true;
   }
@@ -421,7 +436,7 @@ bool YieldRun::precompact() {
     stopped_summary(stopped, done);
     return false;
   }
-  D0_ = solver_->initial_density();
+  D0_ = density_at_zero_strain(loaded_, solver_->initial_density());
   t_compact_ = seconds_since(t0);
   return true;
 }
@@ -438,6 +453,7 @@ void YieldRun::stopped_summary(const std::string& stopped, int done) {
   j["allow_unconverged"] = a_.allow_unconverged;
   j["precompaction"] = {{"increments_done", done}, {"increments", co_.increments}, {"unconverged_increments", unconverged_},
                         {"max_newton_residual", conv_.max_newton_residual}, {"D", loaded_.density}, {"Z", loaded_.Z}};
+  if (!a_.state_file.empty()) j["precompaction"]["jammed_state"] = a_.state_file;
   app::write_file_atomic(out_ / "summary.json", j.dump(2) + "\n");
   app::close_run_dir(out_);
   std::fprintf(stderr, "netsolve yield: error: unstable: precompaction: %s (history.csv keeps increments 0..%d)\n",

@@ -448,7 +448,8 @@ def main():
         wrows.append((finding, missing_text(why_text)[:400], band, MISSING, note))
 
     def wreason(*names):
-        return "; ".join(f"no yield points for {n}: {no_points_reason(runs, n)}" for n in names if n not in C and n not in W)
+        return "; ".join(f"no yield points for {n}: {(WL.not_runnable(runs, n) if n in WL.WCASES else '') or no_points_reason(runs, n)}"
+                         for n in names if n not in C and n not in W)
 
     WL.findings(sys.modules[__name__], C, W, wadd, wmiss, wreason)
     wfigs = [f for pre, f in (("hydro", "fig_walls_hydrostatic.png"), ("die", "fig_walls_closed_die.png"))

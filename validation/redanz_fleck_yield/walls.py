@@ -25,14 +25,16 @@ import math
 import os
 import shlex
 import subprocess
-import sys
 import time
 
 JAM_D = 0.835      # the walls' box; below the target 0.85 / k (0.8408 for seed 1) and above frictionless jamming
 TARGET_DIE = 0.85  # the paper's density, in the die's box
 INCREMENTS = 20    # netsolve's precompaction from JAM_D to the target
-DIRECTIONS = 12    # probes every 30 degrees (run.py's 24 every 15): a frictionless walls probe takes ~6 min
-                   # (W = 80, about 50 increments of thousands of pseudo-transient iterations each)
+DIRECTIONS = 8     # probes every 45 degrees, among them both loading directions (225 and 270 degrees) and a
+                   # subset of run.py's 24: a frictionless walls probe takes ~6 min (W = 80, about 50
+                   # increments of thousands of pseudo-transient iterations each)
+MARGIN = 0.004     # the jammed state's density below the target: JAM_D or lower (the quick scale's box
+                   # differs more from the die's: k = 1.011 at W = 80, about 1.02 at W = 40)
 PATHS = {"hydro": "hydrostatic", "die": "closed-die"}
 
 # name -> (label, precompact, probe-bc, friction, jammed state)
@@ -51,13 +53,43 @@ STYLE = {
 LAW = ["--normal-unloading", "reversible"]  # run.py's precompaction law; the jammed state must carry it
 
 
-def jam_args(scale, pre, mu):
+def jam_density(runs):
+    """JAM_D, or MARGIN below the target where the walls' box makes the target lower (k from the
+    deposition: run.py's hydro_AA_mu0 and the walls' box that encloses its disks); None without it."""
+    k = deposition_factor(runs)
+    return None if k is None else round(min(JAM_D, TARGET_DIE / k - MARGIN), 4)
+
+
+def jam_args(scale, pre, mu, jam_d):
     return ["compact", "--width", str(scale["width"]), "--seed", "1", "--boundary", "walls", "--friction", mu,
-            "--path", PATHS[pre], "--to-density", f"{JAM_D:g}", "--save-state", "--snapshots", "", "--quiet"] + LAW
+            "--path", PATHS[pre], "--to-density", f"{jam_d:g}", "--save-state", "--snapshots", "", "--quiet"] + LAW
 
 
 def _rows(path):
     return list(csv.DictReader(line for line in open(path) if not line.startswith("#")))
+
+
+def deposition_factor(runs):
+    """k = D0_die / D0_walls of the deposition: the die's box is the deposition's, the walls' box
+    encloses every disk (apps/common/setup.hpp walls_box: the disks above the lid stick out); from
+    run.py's hydro_AA_mu0 (its packing.csv), None without it."""
+    f = os.path.join(runs, "hydro_AA_mu0", "packing.csv")
+    if not os.path.exists(f):
+        return None
+    box, disks = None, []
+    for line in open(f):
+        if line.startswith("# box"):
+            box = [float(v) for v in line.split()[2:6]]
+        elif line[:1].isdigit():
+            _, x, y, r = (float(v) for v in line.split(",")[:4])
+            disks.append((x, y, r))
+    if box is None or not disks:
+        return None
+    lo_x = min([box[0]] + [x - r for x, _, r in disks])
+    lo_y = min([box[1]] + [y - r for _, y, r in disks])
+    hi_x = max([box[2]] + [x + r for x, _, r in disks])
+    hi_y = max([box[3]] + [y + r for _, y, r in disks])
+    return (hi_x - lo_x) * (hi_y - lo_y) / ((box[2] - box[0]) * (box[3] - box[1]))
 
 
 def box_factor(runs, jam):
@@ -70,28 +102,42 @@ def box_factor(runs, jam):
     return json.load(open(aa))["initial_density"] / float(_rows(h)[0]["D"])
 
 
+def not_runnable(runs, name):
+    """Why a walls yield case cannot run (its jammed state missing, or at or past the target), or ""."""
+    jam = WCASES[name][4]
+    k = box_factor(runs, jam)
+    if k is None or not os.path.exists(os.path.join(runs, jam, "jammed.json")):
+        return f"no jammed state {jam} (or no hydro_AA_mu0 for the box factor)"
+    d = float(_rows(os.path.join(runs, jam, "history.csv"))[-1]["D"])
+    if not d < TARGET_DIE / k - 1e-4:
+        return f"the jammed state {jam} (D = {d:.4f}) is not below the target {TARGET_DIE / k:.4f} in the walls' box"
+    return ""
+
+
 def yield_args(name, scale, runs, jobs):
     _, pre, pbc, mu, jam = WCASES[name]
     k = box_factor(runs, jam)
-    if k is None:
-        return None
     return ["yield", "--state", os.path.join(runs, jam, "jammed.json"), "--compact-bc", "walls", "--probe-bc", pbc,
             "--precompact", pre, "--friction", mu, "--to-density", f"{TARGET_DIE / k:.6f}", "--increments",
             str(INCREMENTS), "--iteration", "pseudo-transient", "--directions", str(min(DIRECTIONS, scale["directions"])),
             "--jobs", str(jobs), "--allow-unconverged", "--quiet"] + LAW
 
 
-def run_one(binary, name, args, runs, force):
+def run_one(binary, name, args, runs, force, after=None):
     """Runs `binary args --out runs/name` unless that folder holds a finished run of the same
-    arguments; exit 3 (finished, untrustworthy) is kept and shown by the report."""
+    arguments newer than the file `after` (its input); exit 3 (finished, untrustworthy) is kept and
+    shown by the report. Returns "" or why the run failed (the report's MISSING line says it)."""
     out = os.path.join(runs, name)
     cmd_file = os.path.join(out, "command.txt")
-    done = os.path.exists(os.path.join(out, "summary.json")) and not os.path.exists(os.path.join(out, ".incomplete"))
+    summ = os.path.join(out, "summary.json")
+    done = os.path.exists(summ) and not os.path.exists(os.path.join(out, ".incomplete"))
+    if done and after and os.path.exists(after) and os.path.getmtime(after) > os.path.getmtime(summ):
+        done = False  # its input was made again
     if not force and done and os.path.exists(cmd_file):
         old = [w for w in open(cmd_file).read().split()[1:] if w != "--overwrite"]
         if old[:-2] == [shlex.quote(a) for a in args] or old[:-2] == args:
             print(f"  {name}: up to date")
-            return
+            return ""
     t0 = time.time()
     exists = any(os.path.exists(os.path.join(out, f)) for f in ("command.txt", "summary.json", ".incomplete"))
     cmd = ["nice", "-n", "10", binary] + args + (["--overwrite"] if exists else []) + ["--out", out]
@@ -100,22 +146,30 @@ def run_one(binary, name, args, runs, force):
     if r.returncode == 3:
         print(f"    {name}: exit 3 (finished, untrustworthy): {r.stderr.strip()[-300:]}", flush=True)
     elif r.returncode != 0:
-        sys.exit(f"{name} failed: {r.stderr.strip()}")
+        why = f"exit {r.returncode}: {r.stderr.strip()[-300:]}"
+        print(f"    {name} failed: {why}", flush=True)
+        return why
     print(f"    {r.stdout.strip()} ({time.time() - t0:.0f} s)", flush=True)
+    return ""
 
 
 def run_all(netsolve, demsolve, scale, runs, jobs, force):
     """The DEM's jammed states, then netsolve's yield surfaces from them (run.py's hydro_AA_mu0 first:
     its deposition density gives k)."""
+    jam_d = jam_density(runs)
+    if jam_d is None:
+        print("  walls cases: skipped (they need run.py's hydro_AA_mu0 for the box factor)")
+        return
     for pre in PATHS:
         for mu in ("0", "inf"):
-            run_one(demsolve, f"jam_{pre}_{'mu0' if mu == '0' else 'inf'}", jam_args(scale, pre, mu), runs, force)
+            run_one(demsolve, f"jam_{pre}_{'mu0' if mu == '0' else 'inf'}", jam_args(scale, pre, mu, jam_d), runs, force)
     for name in WCASES:
-        args = yield_args(name, scale, runs, jobs)
-        if args is None:
-            print(f"  {name}: skipped (needs hydro_AA_mu0 and {WCASES[name][4]})")
+        why = not_runnable(runs, name)
+        if why:
+            print(f"  {name}: skipped ({why})")
             continue
-        run_one(netsolve, name, args, runs, force)
+        run_one(netsolve, name, yield_args(name, scale, runs, jobs), runs, force,
+                after=os.path.join(runs, WCASES[name][4], "jammed.json"))
 
 
 def have(runs):
@@ -128,9 +182,20 @@ def load_all(R, runs, directions):
     W = {}
     for n in have(runs):
         c = R.load(runs, n)
-        c["points"] = {round(p["theta"] * directions / 360.0) % directions: p for p in c["points"].values()}
+        keyed = {}
+        for p in c["points"].values():
+            k = p["theta"] * directions / 360.0
+            if abs(k - round(k)) > 1e-6:
+                raise ValueError(f"{n}: probe angle {p['theta']} is not one of the {directions} reference directions")
+            keyed[round(k) % directions] = p
+        c["points"] = keyed
         W[n] = c
     return W
+
+
+def subset(C, keys):
+    """C with only the probes `keys` (the reference on the walls runs' directions)."""
+    return dict(C, points={k: p for k, p in C["points"].items() if k in keys})
 
 
 def findings(R, C, W, add, miss, reason):
@@ -153,8 +218,9 @@ def findings(R, C, W, add, miss, reason):
         for kind, kl in R.KINDS:
             fin = (f"{pname}, between walls: kink angle at the loading point, affine-affine vs walls-walls μ=0 ({kl})")
             note = "the paper: a vertex for affine-affine, rounded for l.r.-l.r. (smaller angle = smoother)"
-            if aa and ww:
-                add(fin, f"{R.kink_angle(aa, kind):.0f}° vs {R.kink_angle(ww, kind):.0f}°", "-", None, note)
+            if aa and ww:  # the reference on the same directions: secants of equal span
+                add(fin, f"{R.kink_angle(subset(aa, ww['points'].keys()), kind):.0f}° vs {R.kink_angle(ww, kind):.0f}°",
+                    "-", None, note + f"; both on the walls runs' {len(ww['points'])} directions")
             else:
                 miss(fin, "-", reason(f"{pre}_AA_mu0", f"{pre}_WW_mu0"), note)
         for kind, kl in R.KINDS:
@@ -210,8 +276,9 @@ def runs_table(runs, W, R):
              "|---|---|---|---|---|---|---|---|"]
     for n, (lab, pre, _, mu, jam) in WCASES.items():
         k = box_factor(runs, jam)
-        if n not in W:
-            lines.append(f"| {n} ({lab}, {pre}) | {jam} | no yield points: {R.no_points_reason(runs, n)} | | | | | |")
+        if n not in W or k is None:
+            why = not_runnable(runs, n) or R.no_points_reason(runs, n)
+            lines.append(f"| {n} ({lab}, {pre}) | {jam} | no yield points: {why} | | | | | |")
             continue
         s = W[n]["summary"]
         p = s["precompaction"]
