@@ -20,6 +20,7 @@
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/compaction.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/law_json.hpp"
 
 using namespace netdem;
 
@@ -582,6 +583,20 @@ TEST(NetworkSolverState, FileRoundTripAndBadFiles) {
   expect_error(edit("\"peripheral\":[", "\"peripheral\":[2,"), ": /particles/peripheral: expected");
   expect_error(edit("\"u_max\":", "\"u_max\":-1.0,\"zz\":"), ": /pairs/history/0/zz: unknown member");
   expect_error(edit("\"seed\":", "\"seed\":-3,\"zz\":"), ": /zz: unknown member");
+  {  // the wall contacts (walls mode): 4 per particle, forces not negative, histories checked
+    const std::size_t n4 = 4 * st.x.size();
+    nlohmann::json hist = nlohmann::json::array();
+    for (std::size_t k = 0; k < n4; ++k) hist.push_back(contact::PlasticIndentationHistory{});
+    const nlohmann::json fn(n4, 0.0);
+    auto fewer = hist;
+    fewer.erase(fewer.end() - 1);
+    expect_error(set("/walls", {{"history", fewer}, {"f_n", fn}}), ": /walls/history: expected " + std::to_string(n4) + " elements");
+    auto neg = fn;
+    neg[3] = -1.0;
+    expect_error(set("/walls", {{"history", hist}, {"f_n", neg}}), ": /walls/f_n/3: -1.0 is below 0");
+    hist[1]["u_max"] = -1.0;
+    expect_error(set("/walls", {{"history", hist}, {"f_n", fn}}), ": /walls/history/1/u_max: -1.0 is below 0");
+  }
   EXPECT_THROW(qs::load_state(testing::TempDir() + "/does_not_exist.txt"), std::invalid_argument);
   std::remove(file.c_str());
 }
