@@ -2,7 +2,8 @@
 """Validation of `netsolve yield` against Redanz & Fleck, Acta Mater. 49 (2001) 4325, section 3.4, Figs 9-10.
 
 usage: /usr/bin/python3 validation/redanz_fleck_yield/run.py
-           [--quick] [--netsolve PATH] [--jobs 2] [--out DIR] [--runs DIR] [--force]
+           [--quick] [--netsolve PATH] [--demsolve PATH] [--jobs 2] [--out DIR] [--runs DIR] [--force]
+           [--cases LIST] [--report-only]
 
 Runs the yield-surface cases with `netsolve yield` (polydisperse ballistic packing r = R[0.9, 1.1],
 W = 80R, seed 1, precompaction to D = 0.85 in 100 increments, 24 probe directions; --quick: W = 40R,
@@ -300,6 +301,8 @@ def main():
     ap.add_argument("--runs", default=None,
                     help="simulation folders (default: results/validation/redanz_fleck_yield[_quick], git-ignored)")
     ap.add_argument("--force", action="store_true")
+    ap.add_argument("--report-only", action="store_true",
+                    help="run nothing: the figures and report.md from the runs there are (a missing run is a MISSING line)")
     ap.add_argument("--cases", default=",".join(list(CASES) + ["walls"]),
                     help="comma-separated subset; 'walls': the cases between walls (walls.py)")
     a = ap.parse_args()
@@ -310,9 +313,9 @@ def main():
     names = [n for n in a.cases.split(",") if n]
     t0 = time.time()
     for n in names:
-        if n != "walls":
+        if n != "walls" and not a.report_only:
             run_case(os.path.abspath(a.netsolve), n, scale, runs, a.jobs, a.force)
-    if "walls" in names:
+    if "walls" in names and not a.report_only:
         WL.run_all(os.path.abspath(a.netsolve), os.path.abspath(a.demsolve), scale, runs, a.jobs, a.force)
     have = {n for n in CASES if os.path.exists(os.path.join(runs, n, "yield_points.csv"))}
 

@@ -7,7 +7,8 @@ between four rigid frictionless walls (nothing prescribed), as validation/redanz
 for the compaction findings:
 
 * the DEM jams it (`demsolve compact --boundary walls --save-state`, μ = 0 and sticking, each path,
-  to JAM_D in the walls' box), since a packing below jamming is a mechanism;
+  to D = 0.835 in the walls' box, or 0.004 below the target where the walls' box needs it), since a
+  packing below jamming is a mechanism;
 * `netsolve yield --state jammed.json --compact-bc walls --iteration pseudo-transient` precompacts
   from there to D = 0.85 / k in the walls' box, i.e. D = 0.85 in the die's box at equal strain
   (k = D0_die / D0_walls of the deposition: the walls enclose the disks that stick out of the
