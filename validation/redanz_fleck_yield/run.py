@@ -521,7 +521,8 @@ def main():
         if os.path.exists(os.path.join(outdir, f_)):
             lines.append(f"![{f_}]({f_})")
     lines.append("")
-    lines.append(f"Total time of this script: {time.time() - t0:.0f} s.")
+    lines.append("Written with --report-only from the runs there were (each run's time is in the tables above)."
+                 if a.report_only else f"Total time of this script: {time.time() - t0:.0f} s.")
     lines += provenance_lines(provenance(REPO, "redanz_fleck_yield", [a.netsolve, a.demsolve]), counts)
     open(os.path.join(outdir, "report.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines[:len(rows) + 10]))
