@@ -206,16 +206,21 @@ def findings(R, C, W, add, miss, reason):
         p = c["summary"]["precompaction"]
         return math.hypot(p["S11"], p["S22"])
 
+    def ratio(finding, A, B, names, lo, hi, note="", unit=""):
+        """The size ratio A / B for both yield-point definitions (`finding` has a {kl} field)."""
+        band = f"{lo:g}-{hi:g}"
+        for kind, kl in R.KINDS:
+            if A and B:
+                r, n = R.size_ratio(A, B, kind)
+                add(finding.format(kl=kl), f"{r:.2f} (median of {n}{unit})", band, lo <= r <= hi, note)
+            else:
+                miss(finding.format(kl=kl), band, reason(*names), note)
+
     for pre in PATHS:
         pname = "hydrostatic" if pre == "hydro" else "closed die"
         aa, ww, wi = C.get(f"{pre}_AA_mu0"), W.get(f"{pre}_WW_mu0"), W.get(f"{pre}_WW_inf")
-        for kind, kl in R.KINDS:
-            fin = f"{pname}, between walls: walls-walls μ=0 surface / affine-affine size ({kl}; the paper's l.r.-l.r. line)"
-            if aa and ww:
-                r, n = R.size_ratio(ww, aa, kind)
-                add(fin, f"{r:.2f} (median of {n} directions)", "0.4-0.6", 0.4 <= r <= 0.6)
-            else:
-                miss(fin, "0.4-0.6", reason(f"{pre}_AA_mu0", f"{pre}_WW_mu0"))
+        ratio(pname + ", between walls: walls-walls μ=0 surface / affine-affine size ({kl}; the paper's l.r.-l.r. line)",
+              ww, aa, (f"{pre}_AA_mu0", f"{pre}_WW_mu0"), 0.4, 0.6, unit=" directions")
         for kind, kl in R.KINDS:
             fin = (f"{pname}, between walls: kink angle at the loading point, affine-affine vs walls-walls μ=0 ({kl})")
             note = "the paper: a vertex for affine-affine, rounded for l.r.-l.r. (smaller angle = smoother)"
@@ -224,21 +229,11 @@ def findings(R, C, W, add, miss, reason):
                     "-", None, note + f"; both on the walls runs' {len(ww['points'])} directions")
             else:
                 miss(fin, "-", reason(f"{pre}_AA_mu0", f"{pre}_WW_mu0"), note)
-        for kind, kl in R.KINDS:
-            fin = f"{pname}, between walls: sticking / frictionless size, walls-walls ({kl})"
-            if ww and wi:
-                r, n = R.size_ratio(wi, ww, kind)
-                add(fin, f"{r:.2f} (median of {n})", "1.6-2.4", 1.6 <= r <= 2.4)
-            else:
-                miss(fin, "1.6-2.4", reason(f"{pre}_WW_mu0", f"{pre}_WW_inf"))
-        note = "band chosen here (run.py's): the issue says 'close to affine size'"
-        for kind, kl in R.KINDS:
-            fin = f"{pname}, between walls: sticking walls-walls / affine-affine size ({kl})"
-            if wi and aa:
-                r, n = R.size_ratio(wi, aa, kind)
-                add(fin, f"{r:.2f} (median of {n})", "0.8-1.2", 0.8 <= r <= 1.2, note)
-            else:
-                miss(fin, "0.8-1.2", reason(f"{pre}_WW_inf", f"{pre}_AA_mu0"), note)
+        ratio(pname + ", between walls: sticking / frictionless size, walls-walls ({kl})", wi, ww,
+              (f"{pre}_WW_mu0", f"{pre}_WW_inf"), 1.6, 2.4)
+        ratio(pname + ", between walls: sticking walls-walls / affine-affine size ({kl})", wi, aa,
+              (f"{pre}_WW_inf", f"{pre}_AA_mu0"), 0.8, 1.2,
+              note="band chosen here (run.py's): the issue says 'close to affine size'")
         fin = f"{pname}, between walls: loading-point |Σ| ratios walls μ=0 / affine, sticking / μ=0 (information)"
         note = "the yield-surface ratios above follow these precompaction ratios (validation/redanz_fleck_walls: 3a, 2)"
         if aa and ww and wi:
@@ -246,13 +241,8 @@ def findings(R, C, W, add, miss, reason):
         else:
             miss(fin, "-", reason(f"{pre}_AA_mu0", f"{pre}_WW_mu0", f"{pre}_WW_inf"), note)
     aa, wa = C.get("hydro_AA_mu0"), W.get("hydro_WA_mu0")
-    for kind, kl in R.KINDS:
-        fin = f"Fig 10, between walls: walls-affine / affine-affine size, hydrostatic μ=0 ({kl}; the paper's l.r.-affine)"
-        if aa and wa:
-            r, m = R.size_ratio(wa, aa, kind)
-            add(fin, f"{r:.2f} (median of {m})", "0.4-0.6", 0.4 <= r <= 0.6)
-        else:
-            miss(fin, "0.4-0.6", reason("hydro_AA_mu0", "hydro_WA_mu0"))
+    ratio("Fig 10, between walls: walls-affine / affine-affine size, hydrostatic μ=0 ({kl}; the paper's l.r.-affine)",
+          wa, aa, ("hydro_AA_mu0", "hydro_WA_mu0"), 0.4, 0.6)
     for kind, kl in R.KINDS:
         miss(f"Fig 10, between walls: affine-walls / affine-affine size, hydrostatic μ=0 ({kl}; the paper's affine-l.r.)",
              "0.4-0.6", "not run: an affinely compacted state has no walls to be probed between (netsolve yield "
