@@ -22,8 +22,6 @@ import datetime
 import json
 import math
 import os
-import shlex
-import subprocess
 import sys
 import time
 
@@ -80,30 +78,12 @@ def case_args(name, scale, jobs):
     return a
 
 
-def holds_run(out):
-    return any(os.path.exists(os.path.join(out, f)) for f in ("command.txt", "summary.json", ".incomplete"))
-
-
 def run_case(binary, name, scale, runs, jobs, force):
-    out = os.path.join(runs, name)
-    args = case_args(name, scale, jobs)
-    cmd_file = os.path.join(out, "command.txt")
-    finished = os.path.exists(os.path.join(out, "summary.json")) and not os.path.exists(os.path.join(out, ".incomplete"))
-    if not force and finished and os.path.exists(cmd_file):
-        old = [w for w in open(cmd_file).read().split()[1:] if w != "--overwrite"]
-        if old[:-2] == args:  # the output folder may have moved
-            print(f"  {name}: up to date")
-            return
-    t0 = time.time()
-    rerun = ["--overwrite"] if holds_run(out) else []  # a rerun replaces the old run's files
-    cmd = ["nice", "-n", "10", binary] + args + rerun + ["--out", out]
-    print("  " + " ".join(shlex.quote(c) for c in cmd), flush=True)
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode == 3:  # finished but untrustworthy: the report shows summary.json's status
-        print(f"    {name}: exit 3 (finished, untrustworthy): {r.stderr.strip()[-300:]}", flush=True)
-    elif r.returncode != 0:
-        sys.exit(f"{name} failed: {r.stderr.strip()}")
-    print(f"    {r.stdout.strip()} ({time.time() - t0:.0f} s)", flush=True)
+    """One case (walls.run_one: skipped when its folder holds a finished run of the same arguments);
+    a failed case stops the script."""
+    why = WL.run_one(binary, name, case_args(name, scale, jobs), runs, force)
+    if why:
+        sys.exit(f"{name} failed: {why}")
 
 
 def load(runs, name):
@@ -485,8 +465,8 @@ def main():
     for n in CASES:
         if n not in C:
             # a case without yield points: say why (its summary.json status), not a silent gap
-            why = no_points_reason(runs, n)
-            lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | no yield points: {why} | | | | | |")
+            reason_text = no_points_reason(runs, n)
+            lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | no yield points: {reason_text} | | | | | |")
             continue
         s = C[n]["summary"]
         p = s["precompaction"]

@@ -21,7 +21,6 @@ This departs from the paper's boundary: the verdicts are the paper's statements 
 that is not held by a prescribed layer. Bands are run.py's, never widened.
 """
 import csv
-import json
 import math
 import os
 import shlex
@@ -93,20 +92,10 @@ def deposition_factor(runs):
     return (hi_x - lo_x) * (hi_y - lo_y) / ((box[2] - box[0]) * (box[3] - box[1]))
 
 
-def box_factor(runs, jam):
-    """k = D0_die / D0_walls: the die's deposition density (run.py's hydro_AA_mu0) over the walls'
-    start density (the jam run's first row); None if either run is missing."""
-    aa = os.path.join(runs, "hydro_AA_mu0", "summary.json")
-    h = os.path.join(runs, jam, "history.csv")
-    if not (os.path.exists(aa) and os.path.exists(h)):
-        return None
-    return json.load(open(aa))["initial_density"] / float(_rows(h)[0]["D"])
-
-
 def not_runnable(runs, name):
     """Why a walls yield case cannot run (its jammed state missing, or at or past the target), or ""."""
     jam = WCASES[name][4]
-    k = box_factor(runs, jam)
+    k = deposition_factor(runs)
     if k is None or not os.path.exists(os.path.join(runs, jam, "jammed.json")):
         return f"no jammed state {jam} (or no hydro_AA_mu0 for the box factor)"
     d = float(_rows(os.path.join(runs, jam, "history.csv"))[-1]["D"])
@@ -117,7 +106,7 @@ def not_runnable(runs, name):
 
 def yield_args(name, scale, runs, jobs):
     _, pre, pbc, mu, jam = WCASES[name]
-    k = box_factor(runs, jam)
+    k = deposition_factor(runs)
     return ["yield", "--state", os.path.join(runs, jam, "jammed.json"), "--compact-bc", "walls", "--probe-bc", pbc,
             "--precompact", pre, "--friction", mu, "--to-density", f"{TARGET_DIE / k:.6f}", "--increments",
             str(INCREMENTS), "--iteration", "pseudo-transient", "--directions", str(min(DIRECTIONS, scale["directions"])),
@@ -266,7 +255,7 @@ def runs_table(runs, W, R):
              "| case | start | D walls (die) | Z | loading point S11, S22 | precompaction / probes | probes ok | status |",
              "|---|---|---|---|---|---|---|---|"]
     for n, (lab, pre, _, mu, jam) in WCASES.items():
-        k = box_factor(runs, jam)
+        k = deposition_factor(runs)
         if n not in W or k is None:
             why = not_runnable(runs, n) or R.no_points_reason(runs, n)
             lines.append(f"| {n} ({lab}, {pre}) | {jam} | no yield points: {why} | | | | | |")
