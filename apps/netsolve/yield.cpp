@@ -181,8 +181,8 @@ std::unique_ptr<qs::NetworkSolver> restore_compacted(const YieldArgs& a, const q
   const qs::NetworkState st = qs::load_state(a.from_state);
   const bool walls = pre.mode == qs::BoundaryMode::Walls;
   if (st.wall_history.empty() == walls)
-    throw std::invalid_argument(fmt::format("--from-state {}: the state has {} wall contacts: run it {} --compact-bc walls",
-                                            a.from_state, walls ? "no" : "", walls ? "without" : "with"));
+    throw std::invalid_argument(fmt::format("--from-state {}: the state has {}wall contacts: run it {} --compact-bc walls",
+                                            a.from_state, walls ? "no " : "", walls ? "without" : "with"));
   const Eigen::Matrix2d E = st.strain, R = path.rate();
   const double cosine = (E.array() * R.array()).sum() / (E.norm() * R.norm());
   if (!(E.norm() > 0.0) || !(cosine > 1.0 - 1e-9))
@@ -326,8 +326,6 @@ void YieldRun::validate() {
   if (!a.from_state.empty() && !a.state_file.empty()) throw std::invalid_argument("--from-state and --state exclude each other");
   if (!a.state_file.empty() && so_.mode == qs::BoundaryMode::Periodic)
     throw std::invalid_argument("--state: a jammed state has walls or a layer, not a periodic cell (--compact-bc periodic)");
-  if (so_.mode == qs::BoundaryMode::Walls && co_.path.E12 != 0.0)
-    throw std::invalid_argument("--compact-bc walls: the walls stay axis-parallel, so the path needs E12 = 0");
   app::RunDirOptions rdo;
   rdo.overwrite = a.overwrite;
   rdo.inputs = {a.packing_file, a.from_state, a.state_file};
@@ -342,10 +340,10 @@ void YieldRun::validate() {
 void YieldRun::open_input() {
   using namespace netdem;
   const YieldArgs& a = a_;
-  if (const auto jammed = app::netsolve::jammed_input(a.state_file, a.packing_file, so_, "netsolve yield",
-                                                               "--compact-bc walls")) {
-    jammed_ = jammed;  // the precompaction starts from it (at rest: its box is the run's initial box)
-    pk_ = jammed->packing();
+  // a jammed state: the precompaction starts from it (at rest: its box is the run's initial box)
+  jammed_ = app::netsolve::jammed_input(a.state_file, a.packing_file, so_, "netsolve yield", "--compact-bc walls");
+  if (jammed_) {
+    pk_ = jammed_->packing();
     source_ = "jammed state " + a.state_file;
     co_.validate(pk_.density());
   } else if (a.from_state.empty()) {
