@@ -93,8 +93,14 @@ double column_error(const A& K, const B& F) {
 
 V3 random_unit(std::mt19937& rng) {
   std::normal_distribution<double> N(0.0, 1.0);
-  V3 v(N(rng), N(rng), N(rng));
+  const double z = N(rng), y = N(rng), x = N(rng);  // GCC's order (a call's arguments: unspecified)
+  V3 v(x, y, z);
   return v.normalized();
+}
+// three draws of U as a vector (GCC's order of the former V3(U(rng), U(rng), U(rng)))
+V3 uniform3(std::uniform_real_distribution<double>& U, std::mt19937& rng) {
+  const double z = U(rng), y = U(rng), x = U(rng);
+  return V3(x, y, z);
 }
 V3 random_in_plane(const V3& n, std::mt19937& rng) {
   const V3 v = random_unit(rng);
@@ -115,11 +121,11 @@ Scene random_scene(std::mt19937& rng, const Motion& m) {
   s.ri = R(rng);
   s.rj = R(rng);
   const V3 n0 = random_unit(rng);
-  s.xi0 = V3(U(rng), U(rng), U(rng));
+  s.xi0 = uniform3(U, rng);
   s.xj0 = s.xi0 + (s.ri + s.rj - m.u0) * n0;
   const V3 w = m.turn * random_unit(rng);
   const V3 n1 = rotation_of(w) * n0;
-  const V3 xi1 = s.xi0 + 0.3 * V3(U(rng), U(rng), U(rng));
+  const V3 xi1 = s.xi0 + 0.3 * uniform3(U, rng);
   const V3 xj1 = xi1 + (s.ri + s.rj - m.u0 - m.du) * n1 + m.slip * random_in_plane(n1, rng);
   const V3 ti = w + m.spin * random_unit(rng), tj = w + m.spin * random_unit(rng);
   s.q << xi1, ti, xj1, tj;
@@ -354,7 +360,9 @@ TEST(Element3D, TangentMatchesFiniteDifferencesOnRandomStates) {
     } else {
       LudingHistoryT<3> h;
       const PairGeometry3 g = s.g0();
-      h.xi = -U(rng) * lp.mu * lp.k2 * g.overlap / (lp.alpha * lp.k2) * random_in_plane(g.n, rng);
+      const V3 dir = random_in_plane(g.n, rng);  // (GCC's order: the operands' order is unspecified)
+      const double a = U(rng);
+      h.xi = -a * lp.mu * lp.k2 * g.overlap / (lp.alpha * lp.k2) * dir;
       const PairElementT<LudingLaw<kLudingLinear, 3>> e = element_at(luding, h, s, s.q, false);
       if (!e.law.loaded) continue;
       sliding = e.law.sliding;

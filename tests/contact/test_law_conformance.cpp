@@ -286,7 +286,8 @@ std::vector<typename Fx::Kin> load_path(unsigned seed, int n) {
       k.dslip = ds;
       k.v_t = vt;
     } else {
-      const Eigen::Vector3d w(0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
+      const double w2 = 0.01 * u(rng), w1 = 0.01 * u(rng), w0 = 0.01 * u(rng);  // GCC's order of the former
+      const Eigen::Vector3d w(w0, w1, w2);  // constructor arguments (unspecified in C++)
       normal = (rotation_of(w) * normal).normalized();
       if (i % 2 == 0) {  // a quasi-static increment's finite rotation
         k.transport.set_R(rotation_of(w));

@@ -47,8 +47,11 @@ Particles lattice(const LudingParams& p, int nx, int ny, double pitch, double w,
     for (int i = 0; i < nx; ++i) {
       const double r = p.a0 * (1.0 + w * u(rng));
       const double slack = 0.5 * pitch - r;
-      P.add(x0 + (i + 0.5) * pitch + 0.5 * slack * u(rng),
-            y0 + (j + 0.5) * pitch + 0.5 * slack * u(rng), r, p, v * u(rng), v * u(rng), 0.0);
+      // the draws in a fixed order: the order of a call's arguments is unspecified (GCC took them
+      // last to first, clang first to last); this is GCC's, which the tests' numbers were set with
+      const double vy = v * u(rng), vx = v * u(rng);
+      const double y = y0 + (j + 0.5) * pitch + 0.5 * slack * u(rng), x = x0 + (i + 0.5) * pitch + 0.5 * slack * u(rng);
+      P.add(x, y, r, p, vx, vy, 0.0);
     }
   return P;
 }
@@ -354,7 +357,8 @@ TEST(Dynamic, VerletTableExactForRadiusRatio100) {
     const double L = 60.0 * p.a0;
     for (int i = 0; i < 400; ++i) {  // radii log-uniform in a0 [0.02, 2], overlaps allowed
       const double r = i == 0 ? 2.0 * p.a0 : i == 1 ? 0.02 * p.a0 : 0.02 * p.a0 * std::exp(std::log(100.0) * u(rng));
-      P.add(r + (L - 2 * r) * u(rng), r + (L - 2 * r) * u(rng), r, p);
+      const double y = r + (L - 2 * r) * u(rng), x = r + (L - 2 * r) * u(rng);  // (GCC's order, as lattice())
+      P.add(x, y, r, p);
     }
     for (bool walls : {false, true}) {
       Box box;

@@ -143,8 +143,12 @@ static double lattice_energy_error(double steps_per_contact, double duration, in
       for (int c = 0; c < side; ++c) {
         const double r = p.a0 * (1.0 + 0.05 * u(rng));
         const double slack = 0.5 * pitch - r;
-        P.add_sphere((a + 0.5) * pitch + 0.5 * slack * u(rng), (b + 0.5) * pitch + 0.5 * slack * u(rng),
-                     (c + 0.5) * pitch + 0.5 * slack * u(rng), r, kRho, {v * u(rng), v * u(rng), v * u(rng)});
+        // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order;
+        // a braced list is evaluated first to last)
+        const double vx = v * u(rng), vy = v * u(rng), vz = v * u(rng);
+        const double z = (c + 0.5) * pitch + 0.5 * slack * u(rng), y = (b + 0.5) * pitch + 0.5 * slack * u(rng),
+                     x = (a + 0.5) * pitch + 0.5 * slack * u(rng);
+        P.add_sphere(x, y, z, r, kRho, {vx, vy, vz});
       }
   Box box;
   box.x_max = box.y_max = box.z_max = side * pitch;

@@ -143,8 +143,11 @@ TEST(DynamicPlastic, RestartIsBitIdentical) {
   const int side = 6;
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i)
-      P.add_disk(1.02 + 2.04 * i + 0.01 * u(rng), 1.02 + 2.04 * j + 0.01 * u(rng), 1.0 + 0.01 * u(rng), 1.0,
-                 0.05 * u(rng), 0.05 * u(rng));
+    {  // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double vy = 0.05 * u(rng), vx = 0.05 * u(rng), r = 1.0 + 0.01 * u(rng);
+      const double y = 1.02 + 2.04 * j + 0.01 * u(rng), x = 1.02 + 2.04 * i + 0.01 * u(rng);
+      P.add_disk(x, y, r, 1.0, vx, vy);
+    }
   Box box;
   box.x_max = box.y_max = 2.04 * side;
   box.right.mode = box.top.mode = WallMode::Strain;
@@ -187,7 +190,10 @@ DynamicSolver affine_scene(double x0, double y0, bool walls, std::vector<std::ui
   const int side = 7;
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i)
-      P.add_disk(x0 + 1.0 + 2.0 * i + 0.02 * u(rng), y0 + 1.0 + 2.0 * j + 0.02 * u(rng), 1.0 + 0.03 * u(rng), 1.0);
+    {  // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double r = 1.0 + 0.03 * u(rng), y = y0 + 1.0 + 2.0 * j + 0.02 * u(rng), x = x0 + 1.0 + 2.0 * i + 0.02 * u(rng);
+      P.add_disk(x, y, r, 1.0);
+    }
   Box box;
   box.x_min = x0;
   box.y_min = y0;

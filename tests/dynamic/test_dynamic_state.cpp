@@ -33,9 +33,10 @@ Particles dense(const LudingParams& p, int side, unsigned seed) {
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i) {
       const double r = p.a0 * (1.0 + 0.3 * u(rng));
-      P.add((i + 0.5) * pitch + 0.1 * (pitch - 2 * r) * u(rng),
-            (j + 0.5) * pitch + 0.1 * (pitch - 2 * r) * u(rng), r, p, 0.02 * u(rng), 0.02 * u(rng),
-            0.0);
+      // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double vy = 0.02 * u(rng), vx = 0.02 * u(rng);
+      const double y = (j + 0.5) * pitch + 0.1 * (pitch - 2 * r) * u(rng), x = (i + 0.5) * pitch + 0.1 * (pitch - 2 * r) * u(rng);
+      P.add(x, y, r, p, vx, vy, 0.0);
     }
   return P;
 }

@@ -26,7 +26,10 @@ Particles lattice(const LudingParams& p, int n, double v, unsigned seed) {
   const double pitch = 2.02 * 1.2 * p.a0;
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      P.add((i + 0.5) * pitch, (j + 0.5) * pitch, p.a0 * (1.0 + 0.2 * u(rng)), p, v * u(rng), v * u(rng));
+    {  // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double vy = v * u(rng), vx = v * u(rng), r = p.a0 * (1.0 + 0.2 * u(rng));
+      P.add((i + 0.5) * pitch, (j + 0.5) * pitch, r, p, vx, vy);
+    }
   return P;
 }
 

@@ -39,10 +39,16 @@ DynamicSolverT<D> plastic_box(double mu) {
       for (int i = 0; i < side; ++i) {
         const double x = 1.02 + 2.04 * i + 0.01 * u(rng), y = 1.02 + 2.04 * j + 0.01 * u(rng);
         const double r = 1.0 + 0.01 * u(rng);
-        if constexpr (D == 2)
-          P.add_disk(x, y, r, 1.0, 0.05 * u(rng), 0.05 * u(rng));
-        else
-          P.add_sphere(x, y, 1.02 + 2.04 * k + 0.01 * u(rng), r, 1.0, {0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)});
+        // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order;
+        // a braced list is evaluated first to last)
+        if constexpr (D == 2) {
+          const double vy = 0.05 * u(rng), vx = 0.05 * u(rng);
+          P.add_disk(x, y, r, 1.0, vx, vy);
+        } else {
+          const double vx = 0.05 * u(rng), vy = 0.05 * u(rng), vz = 0.05 * u(rng);
+          const double z = 1.02 + 2.04 * k + 0.01 * u(rng);
+          P.add_sphere(x, y, z, r, 1.0, {vx, vy, vz});
+        }
       }
   Box box;
   box.x_max = box.y_max = 2.04 * side;

@@ -211,7 +211,10 @@ TEST(TimeStep, EveryContactOfARunIsResolved) {
   const int side = 6;
   for (int j = 0; j < side; ++j)
     for (int i = 0; i < side; ++i)
-      P.add_disk(1.0 + 2.0 * i + 0.02 * u(rng), 1.0 + 2.0 * j + 0.02 * u(rng), 0.97 + 0.03 * u(rng), 1.0);
+    {  // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double r = 0.97 + 0.03 * u(rng), y = 1.0 + 2.0 * j + 0.02 * u(rng), x = 1.0 + 2.0 * i + 0.02 * u(rng);
+      P.add_disk(x, y, r, 1.0);
+    }
   Box box;
   box.x_max = box.y_max = 2.0 * side;
   box.right.mode = box.top.mode = WallMode::Affine;

@@ -35,7 +35,10 @@ struct Graph {
 Graph random_geometric_graph(int n, double degree, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> U(0.0, 1.0);
   Graph g;
-  for (int i = 0; i < n; ++i) g.x.emplace_back(U(rng), U(rng));
+  for (int i = 0; i < n; ++i) {  // the draws in a fixed order (GCC's: arguments are evaluated in an unspecified order)
+    const double y = U(rng), x = U(rng);
+    g.x.emplace_back(x, y);
+  }
   const double r = std::sqrt(degree / (std::numbers::pi * n));
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j)
@@ -95,7 +98,10 @@ Network friction_network(int nodes, double slide, double mu_lo, double mu_hi, st
     const double kt = sliding ? 0.0 : 0.5 * kn;
     const Eigen::Matrix4d Km = kn * bn * bn.transpose() + kt * bt * bt.transpose();
     Eigen::Matrix4d Ka = Km;
-    if (sliding) Ka += MU(rng) * (U(rng) < 0.5 ? -1.0 : 1.0) * kn * bt * bn.transpose();
+    if (sliding) {  // (the draws in a fixed order: the operands' order is unspecified)
+      const double mu = MU(rng), sign = U(rng) < 0.5 ? -1.0 : 1.0;
+      Ka += mu * sign * kn * bt * bn.transpose();
+    }
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) {
         tm.emplace_back(dof[a], dof[b], Km(a, b));

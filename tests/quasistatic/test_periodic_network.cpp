@@ -91,9 +91,12 @@ TEST(PeriodicPairs, EqualBruteForceOverImages) {
     const int n = static_cast<int>(width * width * 0.5);
     std::vector<double> pos, r;
     for (int p = 0; p < n; ++p) {
-      Eigen::Vector2d s(U(rng), U(rng));
+      // the draws in a fixed order (GCC's: a call's arguments are evaluated in an unspecified order)
+      const double s1 = U(rng), s0 = U(rng);
+      const Eigen::Vector2d s(s0, s1);
       Eigen::Vector2d x = cell.origin + cell.h * s;
-      x += cell.h * Eigen::Vector2d(std::floor(3 * U(rng)) - 1, std::floor(3 * U(rng)) - 1);  // unwrapped
+      const double n1 = std::floor(3 * U(rng)) - 1, n0 = std::floor(3 * U(rng)) - 1;
+      x += cell.h * Eigen::Vector2d(n0, n1);  // unwrapped
       pos.push_back(x.x());
       pos.push_back(x.y());
       r.push_back(0.4 + 0.2 * U(rng));
