@@ -487,15 +487,21 @@ auto DynamicSolverT<D>::boundary_stress() const -> Stress {
 // cell's bounding box.
 template <int D>
 void DynamicSolverT<D>::advect_periodic(const Eigen::Matrix<double, D, D>& G) {
-  const Eigen::Matrix<double, D, 1> o = cell_.origin;
+  // G and the origin as plain numbers: no Eigen accessor is called per particle (a sanitizer build
+  // with clang called them out of line, into the copies of its -O0 translation units)
+  double o[D], Gm[D][D];
+  for (int a = 0; a < D; ++a) {
+    o[a] = cell_.origin(a);
+    for (int b = 0; b < D; ++b) Gm[a][b] = G(a, b);
+  }
   auto move = [&](std::vector<double>& pos) {  // D per particle
     for (std::size_t i = 0; i < pos.size() / D; ++i) {
       double* const x = &pos[D * i];
       double d[D];
-      for (int a = 0; a < D; ++a) d[a] = x[a] - o(a);
+      for (int a = 0; a < D; ++a) d[a] = x[a] - o[a];
       double g[3] = {0.0, 0.0, 0.0};
       for (int a = 0; a < D; ++a)
-        for (int b = 0; b < D; ++b) g[a] += G(a, b) * d[b];
+        for (int b = 0; b < D; ++b) g[a] += Gm[a][b] * d[b];
       for (int a = 0; a < D; ++a) x[a] += g[a];
     }
   };
