@@ -19,7 +19,8 @@
 //
 // prepare (section 4.1): disks with radii uniform in a0[1 - w0, 1 + w0] placed at random (no
 // overlap) in a square box at density 0.35 with random velocities, compressed by the
-// stress-controlled right and top walls (Eq 1) at isotropic pressure p, frictionless, 80 deg C.
+// stress-controlled right and top walls (Eq 1) at isotropic pressure p, frictionless (unless
+// --mu-prepare), 80 deg C.
 // With --packing FILE the disks of a packing CSV (netsolve pack) at rest instead, every length
 // times --length-unit (default: the file's mean radius mapped onto a0).
 // sinter: the whole protocol of section 4.1 (prepare, heat, sinter, cool, relax; Fig 7).
@@ -269,6 +270,9 @@ int main(int argc, char** argv) {
     c->add_option("--mu", run.mu, "particle friction once friction is on (Table 1)")->capture_default_str();
     c->add_option("--mu-wall", run.mu_wall_prepare, "wall friction during preparation (switched off at t_heat)")
         ->capture_default_str();
+    c->add_option("--mu-prepare", run.mu_prepare,
+                  "particle friction during preparation (the paper: 0, frictionless; an investigation option)")
+        ->capture_default_str();
     c->add_option("--steps-per-contact", run.steps_per_contact, "time step t_c/this for the mean pair (Eq 6)")
         ->capture_default_str();
     c->add_option("--param", run.param_overrides, "contact parameter NAME=VALUE (Table 1 names, e.g. k2=2e5, da_T=0)");
@@ -280,7 +284,7 @@ int main(int argc, char** argv) {
                            ->capture_default_str());
     limits(c);
   };
-  auto* prep = app.add_subcommand("prepare", "random disks compressed by stress-controlled walls, frictionless, 80 deg C (section 4.1)");
+  auto* prep = app.add_subcommand("prepare", "random disks compressed by stress-controlled walls, frictionless unless --mu-prepare, 80 deg C (section 4.1)");
   common(prep);
   prep->add_option("--time", prot.t_heat, "simulated preparation time [s] (the paper's t_heat = 0.2)")->capture_default_str();
   prep->add_option("--out", out_prepare, "output folder")->default_val("results/prepare");

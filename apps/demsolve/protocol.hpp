@@ -23,6 +23,7 @@ struct RunArgs {
   bool pressure_given = false;  ///< with a state file: override the state's wall pressure
   double mu = 0.5;          ///< particle friction once friction is on (Table 1)
   double mu_wall_prepare = 0.0;  ///< wall friction during preparation (Table 1: 0); 0 after t_heat
+  double mu_prepare = 0.0;       ///< particle friction during preparation (the paper: 0); mu after t_heat
   double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;  ///< Eq 6 rule, mean pair
   bool quiet = false;
   std::string state_file;  ///< start from this state (its time decides the phase)

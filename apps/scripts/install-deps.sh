@@ -7,7 +7,8 @@ pkgs=(
   libcli11-dev nlohmann-json3-dev libbenchmark-dev
   libboost-dev                       # Boost.Math (Carlson's elliptic integrals), header-only
   libopenblas0-serial                # optimised serial BLAS for CHOLMOD's supernodal factorisation
-  clang libclang-rt-14-dev           # the fuzz build (tests/fuzz, .ci/run): libFuzzer + ASan/UBSan runtimes;
+  clang libclang-rt-14-dev           # the sanitizer build with the fuzz targets (run-tests.sh --sanitize,
+                                     # tests/fuzz, .ci/run): libFuzzer + ASan/UBSan runtimes;
                                      # libclang-rt-14-dev is only a Recommends of clang-14, hence listed
   python3 python3-numpy python3-matplotlib
 )

@@ -264,7 +264,7 @@ PhaseRun run_phases(DynamicSolverT<D>& s, const std::vector<SinterPhase>& phases
     cur_phase = at.phase;
     if (!friction_known || at.friction != friction) {  // LMM05 4.1: mu on and mu_w off at t_heat
       LudingParams q = base;
-      q.mu = at.friction ? fr.mu : 0.0;
+      q.mu = at.friction ? fr.mu : fr.mu_prepare;
       q.mu_wall = at.friction ? 0.0 : fr.mu_wall_prepare;
       s.set_params(q);
       friction = at.friction;

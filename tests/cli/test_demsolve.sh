@@ -56,6 +56,26 @@ good "$tmp/a" && good "$tmp/b" &&
   cmp -s "$tmp/a/state.txt" "$tmp/b/state.txt"
 result good_prepare $?
 
+# particle friction in the preparation (--mu-prepare, an investigation option): the prepared
+# contacts carry tangential forces with it and none without it (the paper's frictionless compression)
+fric() {  # out-dir extra-args...
+  local out="$1"
+  shift
+  "$ds" prepare --n 30 --time 0.01 --seed 7 --quiet --out "$out" "$@" >/dev/null 2>"$tmp/stderr"
+}
+fric "$tmp/f0" && fric "$tmp/f5" --mu-prepare 0.5 && grep -q '"mu_prepare": 0.5' "$tmp/f5/parameters.json" &&
+  /usr/bin/env python3 - "$tmp/f0/contacts_prepare.csv" "$tmp/f5/contacts_prepare.csv" <<'PY' 2>"$tmp/stderr"
+import csv, sys
+def ft(path):
+    rows = list(csv.DictReader(open(path)))
+    return len(rows), max((abs(float(r["f_t"])) for r in rows), default=0.0)
+(n0, t0), (n5, t5) = ft(sys.argv[1]), ft(sys.argv[2])
+print(f"  --mu-prepare: {n0} contacts, max |f_t| {t0:.3g} N without; {n5} contacts, max |f_t| {t5:.3g} N with 0.5")
+sys.exit(0 if n0 > 0 and n5 > 0 and t0 == 0.0 and t5 > 0.0 else 1)
+PY
+result mu_prepare $?
+check_bad negative_mu_prepare "--mu-prepare" prepare --mu-prepare -1
+
 # a short whole protocol, then the same run restarted from its state after preparation
 times=(--t-heat 0.002 --heat-time 0.001 --sinter-time 0.001 --cool-time 0.001 --relax-time 0.001)
 "$ds" sinter --n 25 --seed 3 "${times[@]}" --quiet --out "$tmp/s" >/dev/null 2>"$tmp/stderr" &&

@@ -106,11 +106,13 @@ class PhaseObserverT {
 };
 using PhaseObserver = PhaseObserverT<2>;
 
-/// Friction of the protocol (LMM05 section 4.1): particles frictionless and walls at
-/// mu_wall_prepare before t_heat (the phases with friction = false), mu and frictionless walls after.
+/// Friction of the protocol (LMM05 section 4.1): particles at mu_prepare (the paper: 0,
+/// frictionless) and walls at mu_wall_prepare before t_heat (the phases with friction = false), mu
+/// and frictionless walls after.
 struct PhaseFriction {
   double mu = 0.5;
   double mu_wall_prepare = 0.0;
+  double mu_prepare = 0.0;
 };
 
 struct PhaseRun {
