@@ -176,6 +176,34 @@ def coordination_dips(s, col="C", t0=0.3, t1=None):
     return dips, dt, worst
 
 
+def mu_prepare_rows(F, sims, nb, quick):
+    """Investigation of issue 32: particle friction during the preparation (the paper's text says
+    frictionless; its nu ~ 0.8 and its densifications are those of a looser start)."""
+    n = nb if not quick else 100
+    mu = study.INVESTIGATION_MU_PREPARE
+    densification_band = {100: (0.12, 0.20), 10: (0.03, 0.07)}  # findings 3a, 3b
+    for p in study.GRID_P:
+        inv = sims.get(study.sinter_name(n, p, 1.0, f"_mup{mu:g}"))
+        ref = grid_sims(sims, n, p).get(1.0)
+        lo, hi = densification_band[p]
+        if inv is None or not inv.ok or ref is None:
+            for no in ("1e", "3h"):
+                F.missing(no, f"particle friction mu = {mu:g} during the preparation [investigation], N = {n}, p = {p:g}",
+                          "4.1.2-4.1.3", "", "the run or its reference is missing or failed")
+            continue
+        F.add("1e", f"nu about 0.8 after preparation with particle friction mu = {mu:g} [investigation], N = {n}, "
+                    f"p = {p:g}", "4.1.2, Fig 9", fmt(inv.nu("prepare"), 4), "0.78..0.82",
+              inband(inv.nu("prepare"), 0.78, 0.82),
+              f"frictionless (the paper's text, our default): {ref.nu('prepare'):.4f}; C after the preparation "
+              f"{inv.phases['prepare']['C']:.3f} against {ref.phases['prepare']['C']:.3f}")
+        F.add("3h", f"densification with particle friction mu = {mu:g} in the preparation [investigation], N = {n}, "
+                    f"p = {p:g}, t_s = 1", "4.1.3",
+              f"{100 * inv.densification:.2f} % (nu(t_f) = {inv.nu('final'):.4f}, C(t = 1.3) = "
+              f"{inv.phases['sinter']['C']:.3f})", f"{100 * lo:g}..{100 * hi:g} %", inband(inv.densification, lo, hi),
+              f"frictionless: {100 * ref.densification:.2f} % (nu(t_f) = {ref.nu('final'):.4f}, C(t = 1.3) = "
+              f"{ref.phases['sinter']['C']:.3f})")
+
+
 def issue15_rows(F, sims, nb, quick):
     """The lines issue 15 asks for (force pdf, density, coordination dips, narrowing, controls)."""
     qn = " (quick: N = 100 stands in for N = 300)" if quick and nb != 300 else ""
@@ -626,6 +654,7 @@ def evaluate(sims, tests, nb, ns, quick):
         for no in ("1c", "1d", "3f"):
             F.missing(no, f"wall friction mu_w = {study.INVESTIGATION_MU_WALL:g} during the preparation [investigation], "
                       f"N = {nb}, p = 100", "4.1.2-4.1.3", "", "the run or its reference is missing or failed")
+    mu_prepare_rows(F, sims, nb, quick)
     issue15_rows(F, sims, nb, quick)
     # 9 Fig 8 numbers
     g = grid_sims(sims, nb, 100)

@@ -59,6 +59,7 @@ COMPRESS = {"strain_rate": 1.0, "max_strain": 0.1}
 COMPRESS_SLOW = {"strain_rate": 0.1, "max_strain": 0.06}
 VIBRATE = {"frequency": 100.0, "amplitude": 2e-4, "time": 0.1}
 INVESTIGATION_MU_WALL = 0.5
+INVESTIGATION_MU_PREPARE = 0.5  # particle friction during the preparation (issue 32; the paper: 0)
 
 
 def ts_str(ts):
@@ -133,6 +134,13 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
                                     "--mu-wall", f"{INVESTIGATION_MU_WALL:g}", "--out", d(name), "--quiet"],
                    info=dict(n=ctl_n, p=100, ts=1.0, role="investigation", twin=sinter_name(ctl_n, 100, 1.0),
                              what=f"mu_w = {INVESTIGATION_MU_WALL:g} during the preparation [investigation]")))
+    # investigation (issue 32): particle friction during the preparation, both pressures
+    for p in GRID_P:
+        name = sinter_name(ctl_n, p, 1.0, f"_mup{INVESTIGATION_MU_PREPARE:g}")
+        out.append(Run(name, "sinter", ["sinter", "--n", str(ctl_n), "--pressure", f"{p:g}", "--sinter-time", "1",
+                                        "--mu-prepare", f"{INVESTIGATION_MU_PREPARE:g}", "--out", d(name), "--quiet"],
+                       info=dict(n=ctl_n, p=p, ts=1.0, role="investigation", twin=sinter_name(ctl_n, p, 1.0),
+                                 what=f"mu = {INVESTIGATION_MU_PREPARE:g} during the preparation [investigation]")))
     # experiments of issue 15 (t_s = 1): seeds, size, thermal expansion, footnote 5, wall creep,
     # the cooling stiffness update; the switches branch from the grid's state_heat.txt
     exp_n = ctl_n
