@@ -293,9 +293,14 @@ reference for the current runs.
   implies wall friction during the preparation, while Table 1 gives mu_w = 0; our default follows
   Table 1. The **investigation** run `N300_p100_ts1_muw0.5` (`--mu-wall 0.5` during the preparation,
   not a default) does *not* explain the difference: it prepares slightly denser (0.831), and no jump
-  appears at t_heat (findings 1c, 1d). The source of the paper's lower preparation density stays
-  open (a shorter effective compression, a different density definition or wall treatment; 0.83 is
-  close to random close packing of these polydisperse frictionless disks).
+  appears at t_heat (findings 1c, 1d). Nor do the walls' mass and damping: frictionless, every
+  m_w in [0.001, 0.1] kg and gamma_w in [0.02, 20] gives 0.825-0.835 (README.md). **Particle
+  friction during the preparation** does (issue 32; `--mu-prepare 0.5`, not a default, findings
+  1e and 3h): nu = 0.807 (p = 100) and 0.802 (p = 10) after the preparation, and densifications of
+  14.5 % and 3.7 %, inside the paper's 12-20 % and 3-7 %, with C at the end of sintering inside the
+  bands of 4a. The paper's text prepares frictionless and calls its p = 10 samples near-isostatic
+  (C ~ 4), so this stays an investigation: the frictional start reproduces the paper's numbers, not
+  its stated protocol.
 * **Jump at t_heat (finding 1b).** With mu_w = 0 there is nothing to switch off at t_heat and the
   frictionless packing is already static, so the small jump of Fig 9 is absent by construction
   (nu(0.3) - nu(0.2) < 1e-5); also absent with mu_w = 0.5.
