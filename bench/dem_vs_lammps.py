@@ -158,7 +158,7 @@ def parse_lammps(log):
     for l in lines[idx + 1:]:
         if (c := CPU.match(l)):
             r["cpu_pct"] = float(c.group(1))
-        if (s := SECT.match(l)):
+        if SECT.match(l):
             parts = [p.strip() for p in l.split("|")]
             r["sec_" + parts[0]] = float(parts[2]) if parts[2] else 0.0
         if (b := BENCH.match(l)):

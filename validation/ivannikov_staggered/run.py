@@ -173,7 +173,7 @@ def main():
     t_end = 1000.0 if a.quick else 5000.0
 
     s2, s1, off, pair = R["cu_s2"], R["cu_s1"], R["cu_s2_no_new"], R["pair_cu"]
-    h2, h1, hoff = s2["history"], s1["history"], off["history"]
+    h2, hoff = s2["history"], off["history"]
     pair_s, pair_x = pair_at(pair, t_end)
     fin2, fin1, finoff = s2["summary"]["final"], s1["summary"]["final"], off["summary"]["final"]
 

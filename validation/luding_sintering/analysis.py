@@ -158,7 +158,6 @@ def coordination_dips(s, col="C", t0=0.3, t1=None):
         return 0, float("nan"), float("nan")
     dt = float(np.median(np.diff(t)))
     Cs = np.convolve(C, np.ones(DIP_SMOOTH) / DIP_SMOOTH, mode="valid")
-    ts_ = t[DIP_SMOOTH // 2: DIP_SMOOTH // 2 + len(Cs)]
     nus = nu[DIP_SMOOTH // 2: DIP_SMOOTH // 2 + len(Cs)]
     k = max(1, int(round(DIP_WINDOW / dt)))
     if len(Cs) <= k:
@@ -291,7 +290,7 @@ def issue15_rows(F, sims, nb, quick):
             continue
         r = spearman(tss, wr)
         F.add("15d", f"width (q95 - q05)/mean of f_n at the end of sintering narrows with t_s, N = {nb}, p = {p}",
-              "4.3.2, Fig 15 top; concl. ii", ", ".join(f"{v:.3f}" for v in wr) + f" (t_s = "
+              "4.3.2, Fig 15 top; concl. ii", ", ".join(f"{v:.3f}" for v in wr) + " (t_s = "
               + ", ".join(f"{t:g}" for t in tss) + f"); Spearman {r:+.2f}",
               "width(t_s=1) < width(t_s=1e-4) and Spearman <= -0.8", (wr[-1] < wr[0]) and r <= -0.8, qn.strip())
     # three-particle control without creeping wall contacts (experiment)

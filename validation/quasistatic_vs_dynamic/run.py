@@ -552,7 +552,7 @@ def write_report(R, rows, yrows, figs, out, mode, runs, cmdline, total, netsolve
           f"{r['note']} | {red} |")
     w("")
     w("## Yield points: four probe directions after hydrostatic precompaction (sticking, seed 1)\n")
-    w(f"`demsolve yield` and `netsolve yield` with their defaults on the same packing, probes θ = "
+    w("`demsolve yield` and `netsolve yield` with their defaults on the same packing, probes θ = "
       + ", ".join(f"{360 * k / YIELD_DIRECTIONS:g}°" for k in YIELD_PROBES)
       + f" (--directions {YIELD_DIRECTIONS} --probes {','.join(map(str, YIELD_PROBES))}), both yield-point "
       "definitions (maximum curvature, offset 1e-3). Distance = |S_DEM − S_netsolve| / |S_loading| "

@@ -30,7 +30,6 @@ import fnmatch
 import json
 import math
 import os
-import subprocess
 import sys
 import warnings
 
