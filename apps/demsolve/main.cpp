@@ -270,6 +270,10 @@ int main(int argc, char** argv) {
     c->add_option("--mu", run.mu, "particle friction once friction is on (Table 1)")->capture_default_str();
     c->add_option("--mu-wall", run.mu_wall_prepare, "wall friction during preparation (switched off at t_heat)")
         ->capture_default_str();
+    c->add_option("--samples", run.samples,
+                  "rows of timeseries.csv over the run, equal steps apart (3000: e.g. every 0.5 ms of the default "
+                  "sinter)")
+        ->capture_default_str();
     c->add_option("--mu-prepare", run.mu_prepare,
                   "particle friction during preparation (the paper: 0, frictionless; an investigation option)")
         ->capture_default_str();

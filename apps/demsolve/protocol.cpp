@@ -408,7 +408,7 @@ void run_and_write_phases(DynamicSolverT<D>& s, const std::vector<SinterPhase>& 
                           const fs::path& out, nlohmann::json& summary) {
   const double pressure = s.box().right.pressure > 0.0 ? s.box().right.pressure : a.pressure;
   PhaseWriter<D> writer(s, phases, pressure, out, steps_to_end(s, phases), a.quiet);
-  const PhaseRun run = netdem::dem::run_phases(s, phases, {a.mu, a.mu_wall_prepare, a.mu_prepare}, 3000, writer);
+  const PhaseRun run = netdem::dem::run_phases(s, phases, {a.mu, a.mu_wall_prepare, a.mu_prepare}, a.samples, writer);
   writer.finish(s, run, summary);
 }
 
@@ -496,7 +496,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
   nlohmann::json pj{{"command", command},      {"particles", s->particles().size()},
                     {D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2", pressure}, {"mu", args.mu},
                     {"mu_wall_prepare", args.mu_wall_prepare}, {"mu_prepare", args.mu_prepare},
-                    {"steps_per_contact", args.steps_per_contact},
+                    {"steps_per_contact", args.steps_per_contact}, {"samples", args.samples},
                     {"dt_s", s->dt()},          {"steps_per_contact_lightest_pair", s->time_step().steps_per_contact_lightest},
                     {"contact_params", params}, {"protocol", prot}};
   if (args.state_file.empty()) pj["seed"] = sample.seed;
@@ -541,6 +541,8 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
     throw UsageError("--mu-wall must be in [0, 10]");
   if (!(std::isfinite(args.mu_prepare) && args.mu_prepare >= 0.0 && args.mu_prepare <= 10.0))
     throw UsageError("--mu-prepare must be in [0, 10]");
+  if (args.samples < 1 || args.samples > 10000000)
+    throw UsageError(fmt::format("--samples must be in [1, 1e7], got {}", args.samples));
   if (!(std::isfinite(args.steps_per_contact) && args.steps_per_contact > 0.0 && args.steps_per_contact <= 1e4))
     throw UsageError(fmt::format("--steps-per-contact must be in (0, 1e4], got {}", args.steps_per_contact));
   if (!args.state_file.empty() && args.sample_given)

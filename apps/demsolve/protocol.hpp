@@ -25,6 +25,7 @@ struct RunArgs {
   double mu_wall_prepare = 0.0;  ///< wall friction during preparation (Table 1: 0); 0 after t_heat
   double mu_prepare = 0.0;       ///< particle friction during preparation (the paper: 0); mu after t_heat
   double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;  ///< Eq 6 rule, mean pair
+  std::int64_t samples = 3000;  ///< timeseries.csv rows over the run (equal steps apart)
   bool quiet = false;
   std::string state_file;  ///< start from this state (its time decides the phase)
   std::vector<std::string> param_overrides;  ///< NAME=VALUE for LudingParams

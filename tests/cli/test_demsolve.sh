@@ -75,6 +75,12 @@ sys.exit(0 if n0 > 0 and n5 > 0 and t0 == 0.0 and t5 > 0.0 else 1)
 PY
 result mu_prepare $?
 check_bad negative_mu_prepare "--mu-prepare" prepare --mu-prepare -1
+check_bad zero_samples "--samples" prepare --samples 0
+# --samples: the rows of timeseries.csv (the first at t = 0, then equal steps apart; the last step ends it)
+"$ds" prepare --n 30 --time 0.003 --seed 7 --samples 40 --quiet --out "$tmp/smp" >/dev/null 2>"$tmp/stderr" &&
+  rows=$(($(wc -l <"$tmp/smp/timeseries.csv") - 1)) && [ "$rows" -ge 41 ] && [ "$rows" -le 42 ] &&
+  grep -q '"samples": 40' "$tmp/smp/parameters.json"
+result samples $?
 
 # a short whole protocol, then the same run restarted from its state after preparation
 times=(--t-heat 0.002 --heat-time 0.001 --sinter-time 0.001 --cool-time 0.001 --relax-time 0.001)

@@ -60,6 +60,7 @@ COMPRESS_SLOW = {"strain_rate": 0.1, "max_strain": 0.06}
 VIBRATE = {"frequency": 100.0, "amplitude": 2e-4, "time": 0.1}
 INVESTIGATION_MU_WALL = 0.5
 INVESTIGATION_MU_PREPARE = 0.5  # particle friction during the preparation (issue 32; the paper: 0)
+FINE_SAMPLES = 12000  # rows of the 0.1 ms runs (t = 0.3..1.5 s)
 
 
 def ts_str(ts):
@@ -141,6 +142,15 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
                                         "--mu-prepare", f"{INVESTIGATION_MU_PREPARE:g}", "--out", d(name), "--quiet"],
                        info=dict(n=ctl_n, p=p, ts=1.0, role="investigation", twin=sinter_name(ctl_n, p, 1.0),
                                  what=f"mu = {INVESTIGATION_MU_PREPARE:g} during the preparation [investigation]")))
+    # issue 32: the sintering of the t_s = 1 runs again, sampled every 0.1 ms (12000 rows over
+    # t = 0.3..1.5), branched from the grid's state_heat.txt (bit-identical to the unbranched run)
+    for p in GRID_P:
+        base = sinter_name(ctl_n, p, BASE_TS)
+        name = sinter_name(ctl_n, p, 1.0, "_fine")
+        out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(base), "state_heat.txt"),
+                                        "--sinter-time", "1", "--samples", str(FINE_SAMPLES), "--out", d(name),
+                                        "--quiet"],
+                       deps=[base], info=dict(n=ctl_n, p=p, ts=1.0, role="fine", twin=sinter_name(ctl_n, p, 1.0))))
     # experiments of issue 15 (t_s = 1): seeds, size, thermal expansion, footnote 5, wall creep,
     # the cooling stiffness update; the switches branch from the grid's state_heat.txt
     exp_n = ctl_n
