@@ -222,6 +222,53 @@ def fine_dip_rows(F, sims, nb, quick):
               enrich >= 2.0)
 
 
+def cool_sweep(sims, n, p, m_wall=None):
+    """[(cool-down time, tau_w, attractive fraction after relaxation)] of the issue 32 sweep; the
+    reference (0.1 s, Table 1's wall) included."""
+    pts = []
+    for c in (study.COOL_SWEEP if m_wall is None else study.COOL_LIGHT_SWEEP):
+        s = grid_sims(sims, n, p).get(1.0) if (c == 0.1 and m_wall is None) else sims.get(study.cool_name(n, p, c, m_wall))
+        st = force_stats(s.contacts("relax")) if s is not None and s.ok else None
+        if st is None:
+            continue
+        par = read_json(os.path.join(s.dir, "parameters.json"))["contact_params"]
+        pts.append((c, par["m_wall"] / par["gamma_wall"], st["att"]))
+    return pts
+
+
+def cool_rows(F, sims, nb, quick):
+    """Issue 32: the attractive fraction after cool-down against the cool-down time over the walls'
+    relaxation time tau_w = m_wall / gamma_wall (Eq 1: the time in which a stress-controlled wall
+    reaches the speed its force imbalance drives; the box can follow the thermal contraction of the
+    radii, Eq 9, no faster). Two wall masses test whether tau_w is the time that matters."""
+    n = nb if not quick else 100
+    for p in study.GRID_P:
+        pts = cool_sweep(sims, n, p)
+        what = f"N = {n}, p = {p:g}, t_s = 1"
+        if len(pts) < 4:
+            F.missing("15h", f"attractive fraction falls with the cool-down time ({what})", "concl. iii; issue 32",
+                      "Spearman <= -0.8", f"{len(pts)} of {len(study.COOL_SWEEP)} cool-down runs")
+            continue
+        cs, atts = [q[0] for q in pts], [q[2] for q in pts]
+        r = spearman(cs, atts)
+        F.add("15h", f"attractive fraction after cool-down against the cool-down time ({what}; tau_w = "
+                     f"{1e3 * pts[0][1]:.0f} ms)", "abstract; concl. iii; issue 32",
+              ", ".join(f"{c:g} s: {a:.3f}" for c, _, a in pts) + f"; Spearman {r:+.2f}",
+              "Spearman <= -0.8 (shorter cool-down, more attraction)", r <= -0.8)
+    light = {round(c / tw, 6): a for c, tw, a in cool_sweep(sims, n, 100, study.COOL_LIGHT_WALL)}
+    heavy = {round(c / tw, 6): a for c, tw, a in cool_sweep(sims, n, 100)}
+    common = sorted(set(light) & set(heavy))
+    if not common:
+        F.missing("15i", f"the attractive fraction depends on cool-down / tau_w only (N = {n}, p = 100)", "issue 32",
+                  "|difference| <= 0.05 at equal ratio", "no common ratio of the two wall masses")
+        return
+    worst = max(abs(light[x] - heavy[x]) for x in common)
+    F.add("15i", f"the attractive fraction depends on cool-down / tau_w only (N = {n}, p = 100; m_wall = "
+                 f"{study.COOL_LIGHT_WALL:g} against Table 1's)", "issue 32",
+          "; ".join(f"ratio {x:g}: {light[x]:.3f} against {heavy[x]:.3f}" for x in common),
+          "|difference| <= 0.05 at equal ratio", worst <= 0.05)
+
+
 def mu_prepare_rows(F, sims, nb, quick):
     """Investigation of issue 32: particle friction during the preparation (the paper's text says
     frictionless; its nu ~ 0.8 and its densifications are those of a looser start)."""
@@ -702,6 +749,7 @@ def evaluate(sims, tests, nb, ns, quick):
                       f"N = {nb}, p = 100", "4.1.2-4.1.3", "", "the run or its reference is missing or failed")
     mu_prepare_rows(F, sims, nb, quick)
     fine_dip_rows(F, sims, nb, quick)
+    cool_rows(F, sims, nb, quick)
     issue15_rows(F, sims, nb, quick)
     # 9 Fig 8 numbers
     g = grid_sims(sims, nb, 100)

@@ -8,7 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import study  # noqa: E402
-from analysis import PAPER_K1, grid_sims, read_vtp, test_group  # noqa: E402
+from analysis import PAPER_K1, cool_sweep, grid_sims, read_vtp, test_group  # noqa: E402
 
 def ts_label(ts):
     return f"t_s = {ts:g}"
@@ -308,3 +308,20 @@ def fig_controls(sims, nb, out):
 
 
 # ---------------------------------------------------------------------------------------- findings
+
+
+def fig_cooldown(sims, nb, out):
+    """Issue 32: the attractive fraction after cool-down against cool-down time / tau_w (Eq 1)."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for p, mw, style in ((10, None, "o-"), (100, None, "s-"), (100, study.COOL_LIGHT_WALL, "s--")):
+        pts = cool_sweep(sims, nb, p, mw)
+        if not pts:
+            continue
+        lab = f"p = {p:g}, tau_w = {1e3 * pts[0][1]:.0f} ms" + (f" (m_wall = {mw:g})" if mw is not None else "")
+        ax.plot([c / tw for c, tw, _ in pts], [a for _, _, a in pts], style, label=lab)
+    ax.set_xscale("log")
+    ax.set_xlabel("cool-down time / tau_w (tau_w = m_wall / gamma_wall, Eq 1)")
+    ax.set_ylabel("attractive fraction after relaxation")
+    ax.set_title(f"Attraction after cool-down, N = {nb}, t_s = 1")
+    ax.legend(fontsize=8)
+    return save(fig, out, "fig_cooldown_attraction.png")

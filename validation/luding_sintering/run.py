@@ -121,7 +121,7 @@ class Test:
 
 # ----------------------------------------------------------------------------------------- helpers
 from analysis import branching_check, evaluate, experiment_table, fmt, read_json, read_table  # noqa: E402
-from figures import (fig8, fig9, fig10, fig11, fig_cluster_sizes, fig_compress, fig_controls,  # noqa: E402
+from figures import (fig8, fig9, fig10, fig11, fig_cluster_sizes, fig_compress, fig_controls, fig_cooldown,  # noqa: E402
                      fig_force, fig_overlap, fig_vibrate, fig_vibration_snapshots)
 
 
@@ -425,7 +425,7 @@ def main():
                 figs += [fig_compress(tests, n, "nu", "nu", f1, out, role),
                          fig_compress(tests, n, "szz", "sigma_zz [N/m]", f2, out, role)]
     figs += [fig_vibrate(tests, ns, out), fig_cluster_sizes(tests, nb, out)] + fig_vibration_snapshots(tests, nb, out)
-    figs += [fig_controls(sims, nb, out)]
+    figs += [fig_controls(sims, nb, out), fig_cooldown(sims, nb, out)]
     F = evaluate(sims, tests, nb, ns, a.quick)
     write_report(out, a, runs, sims, tests, figs, F, notes, binary, time.time() - t0, nb, ns)
     for r in F.rows:

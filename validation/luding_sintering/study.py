@@ -61,6 +61,14 @@ VIBRATE = {"frequency": 100.0, "amplitude": 2e-4, "time": 0.1}
 INVESTIGATION_MU_WALL = 0.5
 INVESTIGATION_MU_PREPARE = 0.5  # particle friction during the preparation (issue 32; the paper: 0)
 FINE_SAMPLES = 12000  # rows of the 0.1 ms runs (t = 0.3..1.5 s)
+# issue 32: cool-down times against the walls' relaxation time tau_w = m_wall / gamma_wall (Eq 1)
+COOL_SWEEP = (0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0)
+COOL_LIGHT_WALL = 0.001  # m_wall of the second wall (tau_w = 5 ms against Table 1's 50 ms)
+COOL_LIGHT_SWEEP = (0.001, 0.01, 0.1)
+
+
+def cool_name(n, p, cool, m_wall=None):
+    return sinter_name(n, p, 1.0, (f"_mw{m_wall:g}" if m_wall is not None else "") + f"_cool{cool:g}")
 
 
 def ts_str(ts):
@@ -151,6 +159,21 @@ def build_runs(runs_dir, quick=False, tests=("compress", "vibrate", "compress_sl
                                         "--sinter-time", "1", "--samples", str(FINE_SAMPLES), "--out", d(name),
                                         "--quiet"],
                        deps=[base], info=dict(n=ctl_n, p=p, ts=1.0, role="fine", twin=sinter_name(ctl_n, p, 1.0))))
+    # issue 32: the cool-down time against the walls' relaxation time, from the reference's
+    # state_sinter.txt (t = 1.3); the reference itself is the 0.1 s point of Table 1's wall
+    for p in GRID_P:
+        ref = sinter_name(ctl_n, p, 1.0)
+        sweeps = [(None, c) for c in COOL_SWEEP if c != 0.1]
+        if p == 100:
+            sweeps += [(COOL_LIGHT_WALL, c) for c in COOL_LIGHT_SWEEP]
+        for mw, c in sweeps:
+            name = cool_name(ctl_n, p, c, mw)
+            extra = ["--param", f"m_wall={mw:g}"] if mw is not None else []
+            out.append(Run(name, "sinter", ["sinter", "--state", os.path.join(d(ref), "state_sinter.txt"),
+                                            "--sinter-time", "1", "--cool-time", f"{c:g}", *extra, "--out", d(name),
+                                            "--quiet"],
+                           deps=[ref], info=dict(n=ctl_n, p=p, ts=1.0, role="coolsweep", twin=ref, cool=c,
+                                                 m_wall=mw)))
     # experiments of issue 15 (t_s = 1): seeds, size, thermal expansion, footnote 5, wall creep,
     # the cooling stiffness update; the switches branch from the grid's state_heat.txt
     exp_n = ctl_n
