@@ -299,25 +299,23 @@ def main():
         WL.run_all(os.path.abspath(a.netsolve), os.path.abspath(a.demsolve), scale, runs, a.jobs, a.force)
     have = {n for n in CASES if os.path.exists(os.path.join(runs, n, "yield_points.csv"))}
 
-    figures = {"fig9a_hydrostatic.png": {"hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"},
-               "fig9b_closed_die.png": {"die_AA_mu0", "die_LL_mu0", "die_LL_inf"},
-               "fig10_bc_combinations.png": {"hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"},
-               "reloading_curves.png": {"hydro_AA_mu0", "hydro_LL_mu0"}}
-    drawn = [f_ for f_, need in figures.items() if need <= have]
-    for f_ in set(figures) - set(drawn):  # a figure of an earlier run whose runs are missing now
-        if os.path.exists(os.path.join(outdir, f_)):
-            os.remove(os.path.join(outdir, f_))
-    if {"hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"} <= have:
-        fig(runs, ["hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"], "Fig 9(a): hydrostatic precompaction to D = 0.85",
-            "fig9a_hydrostatic.png", outdir)
-    if {"die_AA_mu0", "die_LL_mu0", "die_LL_inf"} <= have:
-        fig(runs, ["die_AA_mu0", "die_LL_mu0", "die_LL_inf"], "Fig 9(b): closed-die precompaction to D = 0.85",
-            "fig9b_closed_die.png", outdir)
-    if {"hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"} <= have:
-        fig(runs, ["hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"],
-            "Fig 10: hydrostatic, mu = 0, compaction-probing boundary conditions", "fig10_bc_combinations.png", outdir)
-    if {"hydro_AA_mu0", "hydro_LL_mu0"} <= have:
-        fig_curves(runs, outdir)
+    # each figure with the runs it draws (a list: the plot order) and its title (None: fig_curves)
+    figures = {"fig9a_hydrostatic.png": (["hydro_AA_mu0", "hydro_LL_mu0", "hydro_LL_inf"],
+                                         "Fig 9(a): hydrostatic precompaction to D = 0.85"),
+               "fig9b_closed_die.png": (["die_AA_mu0", "die_LL_mu0", "die_LL_inf"],
+                                        "Fig 9(b): closed-die precompaction to D = 0.85"),
+               "fig10_bc_combinations.png": (["hydro_AA_mu0", "hydro_LA_mu0", "hydro_AL_mu0", "hydro_LL_mu0"],
+                                             "Fig 10: hydrostatic, mu = 0, compaction-probing boundary conditions"),
+               "reloading_curves.png": (["hydro_AA_mu0", "hydro_LL_mu0"], None)}
+    drawn = [f_ for f_, (names, _) in figures.items() if set(names) <= have]
+    for f_, (names, title) in figures.items():
+        if f_ not in drawn:  # a figure of an earlier run whose runs are missing now
+            if os.path.exists(os.path.join(outdir, f_)):
+                os.remove(os.path.join(outdir, f_))
+        elif title is None:
+            fig_curves(runs, outdir)
+        else:
+            fig(runs, names, title, f_, outdir)
 
     # ---- findings
     rows = []
