@@ -166,13 +166,17 @@ def coordination_dips(s, col="C", t0=0.3, t1=None):
     hit = (dC <= DIP_DC + 1e-9) & (dnu > 0)  # (1e-9: a fall of exactly 0.02 in floating point)
     rising = dnu > 0
     worst = float(np.min(dC[rising])) if rising.any() else float("nan")
-    # count stretches of consecutive qualifying windows, and windows that overlap count once
-    dips, last = 0, -10 ** 9
+    return stretches(hit, k), dt, worst
+
+
+def stretches(hit, k):
+    """Stretches of qualifying windows of k samples: windows that overlap count once."""
+    count, last = 0, -10 ** 9
     for i in np.nonzero(hit)[0]:
         if i > last + k:
-            dips += 1
+            count += 1
         last = i
-    return dips, dt, worst
+    return count
 
 
 FINE_WINDOW, FINE_STRESS_QUANTILE, FINE_MIN_DIPS = 0.001, 0.95, 5
@@ -199,11 +203,7 @@ def fine_dip_rows(F, sims, nb, quick):
         k = max(1, int(round(FINE_WINDOW / dt)))
         dC, dnu, dS = C[k:] - C[:-k], nu[k:] - nu[:-k], np.abs(sz[k:] - sz[:-k])
         hit = (dC <= -2.0 / n + 1e-9) & (dnu > 0)
-        dips, last = 0, -10 ** 9
-        for i in np.nonzero(hit)[0]:
-            if i > last + k:
-                dips += 1
-            last = i
+        dips = stretches(hit, k)
         F.add("15f", f"coordination dips at 0.1 ms ({what}): raw C sampled every {1e3 * dt:.2f} ms, dip = a fall "
                      f"of at least one contact (2/N) over 1 ms with nu rising",
               "abstract; 4.2, Figs 10-11; concl. i", f"{dips} dips in {len(t)} samples ({int(hit.sum())} of "
