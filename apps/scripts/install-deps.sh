@@ -10,6 +10,8 @@ pkgs=(
   clang libclang-rt-14-dev           # the sanitizer build with the fuzz targets (run-tests.sh --sanitize,
                                      # tests/fuzz, .ci/run): libFuzzer + ASan/UBSan runtimes;
                                      # libclang-rt-14-dev is only a Recommends of clang-14, hence listed
+  libomp-dev                         # clang's OpenMP runtime: find_package(OpenMP) of the clang sanitizer
+                                     # build (clang does not depend on it)
   python3 python3-numpy python3-matplotlib
 )
 missing=()
