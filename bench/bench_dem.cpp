@@ -5,7 +5,10 @@
 // timing loop (CPU time of this thread), CSV on stdout. See bench/README.md, docs/performance.md.
 //
 //   bench_dem [--n 300,3000,30000] [--models linear,full] [--psteps 3e7] [--min-steps 200]
-//             [--warmup 1000] [--cache DIR] [--lammps-data DIR] [--seed 1] [--reps 1]
+//             [--warmup 1000] [--cache DIR] [--lammps-data DIR] [--seed 1] [--reps 1] [--threads 1]
+//
+// --threads N: DynamicOptions::threads for the preparation and the timed runs (the same packing
+// and results for any N); with N > 1 compare the wall-time rates (psteps_per_wall_s).
 //
 // Scene (the same as ../shared/bench/lammps/params.in as far as the solver allows):
 //  * radii uniform in a0 [1 - w0, 1 + w0] = [0.5, 1.5] mm, disks of height h = 6 mm, rho = 2000
@@ -75,6 +78,8 @@ using netdem::packing::Packing;
 using netdem::packing::uniform01;
 
 namespace {
+int g_threads = 1;  // --threads
+
 
 constexpr double kPressure = 100.0;    // N/m (LMM05 section 4.1, params.in Pt)
 constexpr double kSkin = 0.2e-3;       // m (params.in)
@@ -159,6 +164,7 @@ Stage run_stage(Packing& pk, std::vector<double>& vx, std::vector<double>& vy,
       w->damping = gamma_w;
     }
   DynamicOptions o;
+  o.threads = g_threads;
   o.model = ContactModel::Linear;
   o.dt = scene_dt(lp);
   o.skin = kSkin;
@@ -216,6 +222,7 @@ Packing compress(const Packing& start, const LudingParams& lp) {
     w->damping = kPressure * pk.box.x_max / 0.5;
   }
   DynamicOptions o;
+  o.threads = g_threads;
   o.model = ContactModel::Linear;
   o.dt = scene_dt(lp);
   o.skin = kSkin;
@@ -287,6 +294,7 @@ struct Row {
 Row time_model(const Packing& pk, const std::string& model, std::size_t warm, std::size_t steps) {
   LudingParams lp;  // Table 1 (full law)
   DynamicOptions o;
+  o.threads = g_threads;
   if (model == "linear") {
     lp = linear_params();
     o.model = ContactModel::Linear;
@@ -415,6 +423,7 @@ Packing deposit3(int n, std::uint64_t seed, const LudingParams& lp) {
 Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   Packing pk = deposit3(n, seed, lp);
   DynamicOptions o;
+  o.threads = g_threads;
   o.model = ContactModel::Linear;
   o.dt = scene_dt3(lp);
   o.skin = kSkin;
@@ -580,6 +589,7 @@ struct Row3 {
 Row3 time_model3(const Packing& pk, const std::string& model, std::size_t warm, std::size_t steps) {
   LudingParams lp;  // Table 1 (full law)
   DynamicOptions o;
+  o.threads = g_threads;
   if (model == "linear") {
     lp = linear_params();
     o.model = ContactModel::Linear;
@@ -697,6 +707,8 @@ int main(int argc, char** argv) {
         reps = std::stoi(val());
       } else if (a == "--seed") {
         seed = std::stoull(val());
+      } else if (a == "--threads") {
+        g_threads = std::stoi(val());
       } else if (a == "--cache") {
         cache = val();
       } else if (a == "--lammps-data") {
@@ -705,7 +717,7 @@ int main(int argc, char** argv) {
         std::printf(
             "bench_dem [--dim 2|3] [--n 300,3000,30000] [--models linear,full[,full_linparams]]\n"
             "          [--psteps 3e7] [--min-steps 200] [--warmup 1000] [--reps 1] [--seed 1]\n"
-            "          [--cache DIR] [--lammps-data DIR]\n"
+            "          [--cache DIR] [--lammps-data DIR] [--threads 1]\n"
             "--dim 3: spheres; defaults --n 10000,100000 --psteps 2e7 --warmup 300\n"
             "(see the comment at the top of bench/bench_dem.cpp)\n");
         return 0;

@@ -242,6 +242,7 @@ nlohmann::json compact_summary(const std::string& command, const DemCompactArgs&
   j["damping"] = {{"normal", a.damping}, {"tangential", a.damping}};
   j["drag"] = a.drag;
   j["steps_per_contact"] = a.steps_per_contact;
+  j["threads"] = a.threads;
   j["units"] = "sigma_y = 1, R = 1 (lengths of the packing), rho = 1, t* = R sqrt(rho/sigma_y) = 1";
   j["contact_forces"] =
       "Z, mean_fn, sliding, the snapshots' normal_force: the loaded particle contacts, spring force without the dashpot";
@@ -452,8 +453,9 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
   std::sort(snaps.begin(), snaps.end());
   const RunDirOptions rdo =
       check_scene_run_dir(out, a.overwrite, a.state_file.empty() ? a.packing_file : a.state_file, a.pack);
-  const DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
-                                           a.drag, a.steps_per_contact);
+  DynamicOptions o = plastic_options(mu, a.k_t, a.normal_unloading == "reversible", a.first_touch, a.damping,
+                                     a.drag, a.steps_per_contact);
+  o.threads = a.threads;
   const auto jammed = input_state<D>(a, walls, o);
   std::string source = jammed ? "jammed state " + a.state_file : std::string();
   const packing::Packing pk = jammed ? jammed->packing() : input_packing_of<D>(a, source);

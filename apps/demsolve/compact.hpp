@@ -33,6 +33,7 @@ struct DemCompactArgs {
   double damping = 0.5;  ///< damping_n = damping_t, fractions of critical damping of the chord stiffness
   double drag = 0.0;     ///< DynamicOptions::affine_drag [1/t*]
   double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;
+  int threads = 1;  ///< DynamicOptions::threads
   int increments = 100;
   double max_steps = 1e10;
   static constexpr double kDefaultInertialNumber = 1.5e-4;  // docs/dynamic.md "demsolve compact": the fit

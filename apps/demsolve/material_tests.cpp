@@ -70,6 +70,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   check_memory(st.particle_count());
   DynamicOptions opt;
   opt.model = ContactModel::Full;
+  opt.threads = a.threads;
   DynamicSolverT<D> s(st, opt);
   const double z0 = D == 2 ? s.box().y_max - s.box().y_min : s.box().z_max - s.box().z_min, t_start = s.time();
   check_run_limits(s, (a.max_strain / a.strain_rate + 0.5 * a.ramp_time) / s.dt(), a.max_steps, a.allow_long);
@@ -194,6 +195,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   open_box_for_vibration(st);
   DynamicOptions opt;
   opt.model = ContactModel::Full;
+  opt.threads = a.threads;
   DynamicSolver s(st, opt);
   const double w = 2.0 * std::numbers::pi * a.frequency, t_start = s.time();
   check_run_limits(s, a.time / s.dt(), a.max_steps, a.allow_long);

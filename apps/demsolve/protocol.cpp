@@ -422,6 +422,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
   DynamicOptions opt;
   opt.model = ContactModel::Full;
   opt.steps_per_contact = args.steps_per_contact;
+  opt.threads = args.threads;
   opt.temperature = phases.front().T_start;
   std::unique_ptr<DynamicSolverT<D>> s;
   nlohmann::json summary;
@@ -497,6 +498,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
                     {D == 2 ? "pressure_N_per_m" : "pressure_N_per_m2", pressure}, {"mu", args.mu},
                     {"mu_wall_prepare", args.mu_wall_prepare}, {"mu_prepare", args.mu_prepare},
                     {"steps_per_contact", args.steps_per_contact}, {"samples", args.samples},
+                    {"threads", args.threads},
                     {"dt_s", s->dt()},          {"steps_per_contact_lightest_pair", s->time_step().steps_per_contact_lightest},
                     {"contact_params", params}, {"protocol", prot}};
   if (args.state_file.empty()) pj["seed"] = sample.seed;

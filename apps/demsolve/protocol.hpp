@@ -26,6 +26,7 @@ struct RunArgs {
   double mu_prepare = 0.0;       ///< particle friction during preparation (the paper: 0); mu after t_heat
   double steps_per_contact = netdem::dem::DynamicOptions{}.steps_per_contact;  ///< Eq 6 rule, mean pair
   std::int64_t samples = 3000;  ///< timeseries.csv rows over the run (equal steps apart)
+  int threads = 1;              ///< DynamicOptions::threads (the same results for any number)
   bool quiet = false;
   std::string state_file;  ///< start from this state (its time decides the phase)
   std::vector<std::string> param_overrides;  ///< NAME=VALUE for LudingParams
@@ -96,6 +97,7 @@ struct CompressArgs {
   double max_strain = 0.1;
   double ramp_time = 0.005;  ///< the top wall's speed rises smoothly, (1 - cos)/2, over this time [s]
   double pressure = 0.0;     ///< sigma_xx held by the right wall; 0: the state's
+  int threads = 1;
   bool quiet = false;
   std::vector<std::string> param_overrides;
   double max_steps = 1e9;
@@ -111,6 +113,7 @@ struct VibrateArgs {
   double amplitude = 2.0e-4;  ///< [m]
   double time = 0.1;          ///< [s]
   double gravity = 9.81;      ///< [m/s^2]
+  int threads = 1;
   bool quiet = false;
   std::vector<std::string> param_overrides;
   double max_steps = 1e9;

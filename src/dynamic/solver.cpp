@@ -107,16 +107,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::compute_forces() {
     std::fill(P_.torque.begin(), P_.torque.end(), 0.0);
   }
   forces_initialised_ = false;
-  if constexpr (D == 2) {
-    if (periodic_)
-      pair_forces_2d<Law, InPlace, true>(pair_law, a);
-    else
-      pair_forces_2d<Law, InPlace, false>(pair_law, a);
-  } else if (periodic_) {  // (the rows across the faces add their f (x) h n to a.s3)
-    pair_forces_3d<Law, InPlace, true>(pair_law, a);
-  } else {
-    pair_forces_3d<Law, InPlace, false>(pair_law, a);
-  }
+  if (periodic_)  // (3D: the rows across the faces add their f (x) h n to a.s3)
+    pair_forces<Law, InPlace, true>(pair_law, a);
+  else
+    pair_forces<Law, InPlace, false>(pair_law, a);
   if constexpr (D == 3) pair_stress_3d(a);
   if (walls_active()) {
     if constexpr (D == 2)
@@ -232,6 +226,7 @@ void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
 }
 
 #include "solver_pairs_3d.hpp"  // (inside this namespace, as solver_pairs_2d.hpp)
+#include "solver_threads.hpp"  // (inside this namespace: the pair loop on threads)
 
 template <int D>
 void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
@@ -455,15 +450,18 @@ double kick_pass_impl(std::size_t n, double h, double* __restrict v, double* __r
       const double* const u = v + D * i;
       double v2 = u[0] * u[0] + u[1] * u[1];
       if constexpr (D == 3) v2 += u[2] * u[2];
-      vmax2 = v2 <= vmax2 ? vmax2 : v2;  // a NaN replaces the maximum and stays
+      vmax2 = v2 > vmax2 || v2 != v2 ? v2 : vmax2;  // a NaN replaces the maximum and stays
     }
   }
   return vmax2;
 }
 // The kicks' inverse masses: D per particle (im) and kRot per particle (iI).
+// Particles [i0, i1).
 template <int D, bool Track>
-double kick_pass(std::size_t n, double h, ParticlesT<D>& P, const double* im, const double* iI) {
-  return kick_pass_impl<D, Track>(n, h, P.vel.data(), P.spin.data(), P.force.data(), P.torque.data(), im, iI);
+double kick_pass(std::size_t i0, std::size_t i1, double h, ParticlesT<D>& P, const double* im, const double* iI) {
+  constexpr std::size_t R = ParticlesT<D>::kRot;
+  return kick_pass_impl<D, Track>(i1 - i0, h, P.vel.data() + D * i0, P.spin.data() + R * i0, P.force.data() + D * i0,
+                                  P.torque.data() + R * i0, im + D * i0, iI + R * i0);
 }
 // First half kick and drift (2D: the angle too); also the table check (displacement since the
 // build xb beyond sqrt(lim2): returns 1) and the reset of the force accumulators to m g for the
@@ -499,10 +497,30 @@ int kick_drift_pass_impl(std::size_t n, double h, double dt, double lim2, double
   return moved;
 }
 template <int D, bool Gravity>
-int kick_drift_pass(std::size_t n, double h, double dt, double lim2, ParticlesT<D>& P, const double* im,
-                    const double* iI, const double* xb, const double (&g)[3]) {
-  return kick_drift_pass_impl<D, Gravity>(n, h, dt, lim2, P.pos.data(), P.rot.data(), P.vel.data(), P.spin.data(),
-                                          P.force.data(), P.torque.data(), P.mass.data(), im, iI, xb, g);
+int kick_drift_pass(std::size_t i0, std::size_t i1, double h, double dt, double lim2, ParticlesT<D>& P,
+                    const double* im, const double* iI, const double* xb, const double (&g)[3]) {
+  constexpr std::size_t R = ParticlesT<D>::kRot;
+  return kick_drift_pass_impl<D, Gravity>(i1 - i0, h, dt, lim2, P.pos.data() + D * i0, P.rot.data() + R * i0,
+                                          P.vel.data() + D * i0, P.spin.data() + R * i0, P.force.data() + D * i0,
+                                          P.torque.data() + R * i0, P.mass.data() + i0, im + D * i0, iI + R * i0,
+                                          xb + D * i0, g);
+}
+// f(i0, i1, t) on the particles [0, n) split into blocks, one per thread of the team (one block
+// below kMinThreadedParticles particles or with one thread); returns the number of blocks.
+constexpr std::size_t kMinThreadedParticles = 2048;
+template <class F>
+int on_blocks(sys::TeamHandle& team, int threads, std::size_t n, F&& f) {
+  if (threads <= 1 || n < kMinThreadedParticles) {
+    f(std::size_t{0}, n, 0);
+    return 1;
+  }
+  auto block = [&](int t, int nt) {
+    const auto ts = static_cast<std::size_t>(t), nts = static_cast<std::size_t>(nt);
+    f(n * ts / nts, n * (ts + 1) / nts, t);
+  };
+  sys::ThreadTeam& members = team.get(threads);
+  members.run(block);
+  return members.size();
 }
 }  // namespace
 
@@ -608,20 +626,25 @@ void DynamicSolverT<D>::advance(bool full) {
   if (periodic_) lim -= 0.5 * (F_build_ - Eigen::Matrix<double, D, D>::Identity()).norm() * range_max_;
   const double lim2 = lim * lim;
   bool far = !(lim > 0.0);
+  const double *const im = inv_mass_.data(), *const iI = inv_inertia_.data();
+  double part[256];  // per block: moved, or max |v|^2 (the blocks' maxima combined in block order)
   auto kick = [&](bool drift) {
     if (drift) {
       const double g[3] = {opt_.gravity_x, opt_.gravity_y, opt_.gravity_z};
       const bool gravity = g[0] != 0.0 || g[1] != 0.0 || (D == 3 && g[2] != 0.0);
-      const int moved = gravity ? kick_drift_pass<D, true>(n, h, dt, lim2, P_, inv_mass_.data(), inv_inertia_.data(),
-                                                           pos_build_.data(), g)
-                                : kick_drift_pass<D, false>(n, h, dt, lim2, P_, inv_mass_.data(),
-                                                            inv_inertia_.data(), pos_build_.data(), g);
-      far = far || moved != 0;
+      const int used = on_blocks(team_, opt_.threads, n, [&](std::size_t i0, std::size_t i1, int t) {
+        part[t] = gravity ? kick_drift_pass<D, true>(i0, i1, h, dt, lim2, P_, im, iI, pos_build_.data(), g)
+                          : kick_drift_pass<D, false>(i0, i1, h, dt, lim2, P_, im, iI, pos_build_.data(), g);
+      });
+      for (int t = 0; t < used; ++t) far = far || part[t] != 0.0;
       forces_initialised_ = true;
     } else if (check) {
-      vmax2 = kick_pass<D, true>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
+      const int used = on_blocks(team_, opt_.threads, n, [&](std::size_t i0, std::size_t i1, int t) {
+        part[t] = kick_pass<D, true>(i0, i1, h, P_, im, iI);
+      });
+      for (int t = 0; t < used; ++t) vmax2 = part[t] > vmax2 || part[t] != part[t] ? part[t] : vmax2;  // (as in one)
     } else {
-      kick_pass<D, false>(n, h, P_, inv_mass_.data(), inv_inertia_.data());
+      on_blocks(team_, opt_.threads, n, [&](std::size_t i0, std::size_t i1, int) { kick_pass<D, false>(i0, i1, h, P_, im, iI); });
     }
     if (box_.enabled) {
       double acc[D];  // (all from the walls' state before the kick)

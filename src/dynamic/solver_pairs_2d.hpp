@@ -13,16 +13,17 @@
 // stay in L1.
 
 template <int D>
-template <class Law, bool InPlace, bool Periodic>
-NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, ForceSums& a) {
+template <class Law, bool InPlace, bool Periodic, bool Threaded>
+NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
+                                                      std::size_t k_end) {
   static_assert(D == 2);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 128;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
-  const std::size_t n_pairs = rows_.pairs();
-  if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
+  if constexpr (!Threaded)  // (threads: the caller)
+    if (pair_live_.size() != rows_.pairs()) pair_live_.assign(rows_.pairs(), 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
   const double* const p_x = P_.pos.data();
   const double* const p_v = P_.vel.data();
@@ -45,8 +46,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
   double g_vx[kRowChunk], g_vy[kRowChunk], g_wi[kRowChunk], g_wj[kRowChunk];
   double g_ov[kRowChunk], g_nx[kRowChunk], g_ny[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk];
   double g_vn[kRowChunk], g_vt[kRowChunk];
-  for (std::size_t k0 = 0; k0 < n_pairs; k0 += kRowChunk) {
-    const std::size_t m = std::min(kRowChunk, n_pairs - k0);
+  double* const row_buf = row_buf_.data();  // (Threaded: 7 per row, solver_threads.cpp)
+  std::uint8_t* const row_seen = row_seen_.data();
+  for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
+    const std::size_t m = std::min(kRowChunk, k_end - k0);
     std::size_t mt = 0;
     for (std::size_t c = 0; c < m; ++c) {  // pass 1a
       const std::size_t k = k0 + c;
@@ -85,7 +88,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
     std::size_t t = 0;  // the next row the law sees
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
-      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) continue;
+      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
+        if constexpr (Threaded) row_seen[k] = 0;
+        continue;
+      }
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);
@@ -108,6 +114,14 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
+      if constexpr (Threaded) {  // the same products, summed per particle and row by row later
+        double* const b = row_buf + 7 * k;
+        b[0] = fx, b[1] = fy, b[2] = g_di[t] * f_t, b[3] = g_dj[t] * f_t, b[4] = dx, b[5] = dy, b[6] = 0.0;
+        if constexpr (contact::kHasElasticEnergy<Law>) b[6] = pair_law.elastic_energy(in);
+        row_seen[k] = 1;
+        ++t;
+        continue;
+      }
       double *const fi = p_f + D * i, *const fj = p_f + D * j;
       fj[0] += fx;
       fj[1] += fy;

@@ -15,16 +15,17 @@
 // across a face, and the stress as the walled loop's sum over the particles (pair_stress_3d) plus
 // f (x) h n on those rows (docs/performance.md "The 3D periodic force loop").
 template <int D>
-template <class Law, bool InPlace, bool Periodic>
-NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, ForceSums& a) {
+template <class Law, bool InPlace, bool Periodic, bool Threaded>
+NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
+                                                      std::size_t k_end) {
   static_assert(D == 3);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 64;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
   double el = 0, fn_max = 0;
-  const std::size_t n_pairs = rows_.pairs();
-  if (pair_live_.size() != n_pairs) pair_live_.assign(n_pairs, 1);
+  if constexpr (!Threaded)  // (threads: the caller, and the caller fills vel_abs_)
+    if (pair_live_.size() != rows_.pairs()) pair_live_.assign(rows_.pairs(), 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
   const double* const p_x = P_.pos.data();
   const double* const p_w = P_.spin.data();
@@ -38,7 +39,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   const double* p_vr = P_.vel.data();  // the velocities the loop takes differences of (periodic: v + L x)
   if constexpr (Periodic) {
     hoist_cell(hc, Lr);
-    fill_absolute_velocities(Lr);
+    if constexpr (!Threaded) fill_absolute_velocities(Lr);
     p_vr = vel_abs_.data();
   }
   double s3p[3][3] = {};  // periodic: f (x) h n over the rows across a face
@@ -49,8 +50,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   // pass 1b: n, overlap, centre-to-plane distances, v_n, the tangential velocity, the step's rotation
   double g_n[3][kRowChunk], g_ov[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk], g_vn[kRowChunk];
   double g_t[3][kRowChunk], g_th[3][kRowChunk];
-  for (std::size_t k0 = 0; k0 < n_pairs; k0 += kRowChunk) {
-    const std::size_t m = std::min(kRowChunk, n_pairs - k0);
+  double* const row_buf = row_buf_.data();  // (Threaded: 10 per row, solver_threads.cpp)
+  std::uint8_t* const row_seen = row_seen_.data();
+  for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
+    const std::size_t m = std::min(kRowChunk, k_end - k0);
     std::size_t mt = 0;
     for (std::size_t c = 0; c < m; ++c) {  // pass 1a
       const std::size_t k = k0 + c;
@@ -99,7 +102,10 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
     std::size_t t = 0;  // the next row the law sees
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
-      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) continue;
+      if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
+        if constexpr (Threaded) row_seen[k] = 0;
+        continue;
+      }
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);
@@ -126,11 +132,20 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double ft0 = f_t.x(), ft1 = f_t.y(), ft2 = f_t.z();
       const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
+      // M_i = -d_i n x f_t, M_j = -d_j n x f_t
+      const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
+      if constexpr (Threaded) {  // the same products, summed per particle and row by row later
+        double* const b = row_buf + 10 * k;
+        b[0] = f0, b[1] = f1, b[2] = f2, b[3] = di * m0, b[4] = di * m1, b[5] = di * m2;
+        b[6] = dj * m0, b[7] = dj * m1, b[8] = dj * m2, b[9] = 0.0;
+        if constexpr (contact::kHasElasticEnergy<Law>) b[9] = pair_law.elastic_energy(in);
+        row_seen[k] = 1;
+        ++t;
+        continue;
+      }
       double *const fi = p_f + D * i, *const fj = p_f + D * j;
       fj[0] += f0, fj[1] += f1, fj[2] += f2;
       fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
-      // M_i = -d_i n x f_t, M_j = -d_j n x f_t
-      const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
       double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
       ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
       tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;

@@ -92,6 +92,7 @@ void DynamicOptions::validate() const {
   if (!(dt >= 0.0)) fail("DynamicOptions: dt must be >= 0 (0 = from the rule)");
   if (!(skin >= 0.0)) fail("DynamicOptions: skin must be >= 0 (0 = 0.3 mean radius)");
   if (check_every < 0) fail("DynamicOptions: check_every must be >= 0 (0 = no instability checks)");
+  if (threads < 1 || threads > 256) fail("DynamicOptions: threads must be in [1, 256]");
 }
 
 double contact_duration(double k2, double gamma0, double m12) {

@@ -145,6 +145,7 @@ void DynamicSolverT<D>::build_table() {
   for (double r : P_.r) rmax = std::max(rmax, r);
   rows_.find(P_, skin_, rmax);
   visit_law([&](const auto& law) { carry_histories(law); });
+  rows_csr_ok_ = false;  // (the threads' row lists follow the new rows)
 }
 
 // The periodic table (issue 29): the pairs within r_i + r_j + skin through the images of the
@@ -172,6 +173,7 @@ void DynamicSolverT<D>::build_table_periodic() {
            "the cell was compressed or sheared too far for its number of particles (a larger packing)");
   rows_.find(P_, skin_, rmax, &cell_);
   visit_law([&](const auto& law) { carry_histories(law); });
+  rows_csr_ok_ = false;
   remove_mean_velocity();
 }
 

@@ -75,6 +75,15 @@ sys.exit(0 if n0 > 0 and n5 > 0 and t0 == 0.0 and t5 > 0.0 else 1)
 PY
 result mu_prepare $?
 check_bad negative_mu_prepare "--mu-prepare" prepare --mu-prepare -1
+check_bad zero_threads "--threads" prepare --threads 0
+# --threads: the pair loop and the integration on two threads give the same run to the last bit
+# (5000 disks: above the thresholds of the threaded loops, docs/dynamic.md "Threads")
+thr() {  # out-dir threads
+  "$ds" prepare --n 5000 --time 0.0003 --seed 7 --quiet --threads "$2" --out "$1" >/dev/null 2>"$tmp/stderr"
+}
+thr "$tmp/t1" 1 && thr "$tmp/t2" 2 && cmp -s "$tmp/t1/state.txt" "$tmp/t2/state.txt" &&
+  cmp -s "$tmp/t1/timeseries.csv" "$tmp/t2/timeseries.csv" && grep -q '"threads": 2' "$tmp/t2/parameters.json"
+result threads_identical $?
 check_bad zero_samples "--samples" prepare --samples 0
 # --samples: the rows of timeseries.csv (the first at t = 0, then equal steps apart; the last step ends it)
 "$ds" prepare --n 30 --time 0.003 --seed 7 --samples 40 --quiet --out "$tmp/smp" >/dev/null 2>"$tmp/stderr" &&

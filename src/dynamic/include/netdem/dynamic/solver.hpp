@@ -39,6 +39,7 @@
 #include "netdem/packing/packing.hpp"
 #include "netdem/packing/periodic.hpp"
 #include "netdem/system/pair_rows.hpp"
+#include "netdem/system/thread_team.hpp"
 
 namespace netdem::dem {
 
@@ -178,6 +179,9 @@ struct DynamicOptions {
   /// Periodic cells: re-map the cell to its reduced (least tilted) equivalent at the table builds
   /// (Lees-Edwards; DynamicSolverT::cell_remaps()). false: the cell keeps its vectors (tests).
   bool cell_remap = true;
+  /// Threads for the pair loop and the integration (sys::ThreadTeam). The results are the same to the last
+  /// bit for any number: the rows' forces are summed per particle in row order, as one thread does.
+  int threads = 1;
   /// Throws std::invalid_argument with one line for an invalid value.
   void validate() const;
 };
@@ -437,6 +441,8 @@ class DynamicSolverT {
   double time() const { return time_; }
   std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
   std::size_t table_size() const { return rows_.pairs(); }
+  /// Threads the last force evaluation's pair loop ran on (1 below its thresholds; DynamicOptions::threads).
+  int threads_used() const { return threads_used_; }
   /// Material thermal state (ContactModel::Full); the temperature schedule is the caller's.
   const contact::LudingThermalState& thermal() const { return thermal_; }
   /// Moves the material to temperature T_new over the time dt with relaxation time t0
@@ -579,9 +585,12 @@ class DynamicSolverT {
     double wf[6] = {0, 0, 0, 0, 0, 0};
   };
   template <class L, bool InPlace, bool Periodic>
-  void pair_forces_3d(const L& pair_law, ForceSums& a);  ///< 3D (solver_pairs_3d.hpp)
-  template <class L, bool InPlace, bool Periodic>
-  void pair_forces_2d(const L& pair_law, ForceSums& a);  ///< 2D (solver_pairs_2d.hpp)
+  void pair_forces(const L& pair_law, ForceSums& a);  ///< on opt_.threads threads (solver_threads.cpp)
+  /// Rows [k0, k1); Threaded: each row's forces into row_buf_, not summed (solver_pairs_{2,3}d.hpp)
+  template <class L, bool InPlace, bool Periodic, bool Threaded>
+  void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
+  template <class L, bool InPlace, bool Periodic, bool Threaded>
+  void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
   void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
   void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
@@ -724,6 +733,14 @@ class DynamicSolverT {
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
+  /// Threads (solver_threads.cpp): per row its forces, torques (and 2D branch, energy), whether the law
+  /// saw it; per particle its rows in increasing order (built after each table build: rows_csr_ok_).
+  std::vector<double> row_buf_;
+  std::vector<std::uint8_t> row_seen_;
+  std::vector<int> row_start_, row_list_;
+  bool rows_csr_ok_ = false;
+  int threads_used_ = 1;
+  sys::TeamHandle team_;  ///< the threads (made at the first threaded step; a copy of the solver has none)
   std::vector<double> vel_abs_;  ///< periodic 3D force loop: v_i + L x_i (D per particle), per evaluation
   std::vector<double> pos_build_;  ///< D per particle: the centres at the last table build
   /// Bit w of wall_touch_[i]: the wall history kWalls i + w may be non-fresh (touching at the last force
