@@ -4,7 +4,7 @@
 //
 // Each thread runs the loop of solver_pairs_{2,3}d.hpp over its block of rows with Threaded = true:
 // a row's force on j, its two torque products (2D: also its branch) and its elastic energy go to
-// row_buf_ instead of into the particles' sums. Then (a second run of the team) each thread sums, for its block of
+// row_buf_ instead of into the particles' sums. After a barrier each thread sums, for its block of
 // particles, the rows of each particle in increasing row order (row_start_, row_list_), starting from
 // the accumulator's value: the same additions in the same order as one thread's loop (which adds row
 // k's force to j and subtracts it from i, then subtracts the torque products from i and j). The
@@ -94,19 +94,22 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   auto rows = [&](int ti, int nti) {
     const auto t = static_cast<std::size_t>(ti), nt = static_cast<std::size_t>(nti);
     ForceSums part;
-    if constexpr (D == 2)
-      pair_forces_2d<Law, InPlace, Periodic, true>(pair_law, part, m * t / nt, m * (t + 1) / nt);
-    else
-      pair_forces_3d<Law, InPlace, Periodic, true>(pair_law, part, m * t / nt, m * (t + 1) / nt);
+    std::exception_ptr failed;  // (a law's error: every member still reaches the barrier)
+    try {
+      if constexpr (D == 2)
+        pair_forces_2d<Law, InPlace, Periodic, true>(pair_law, part, m * t / nt, m * (t + 1) / nt);
+      else
+        pair_forces_3d<Law, InPlace, Periodic, true>(pair_law, part, m * t / nt, m * (t + 1) / nt);
+    } catch (...) {
+      failed = std::current_exception();
+    }
     fn_part[t] = part.fn_max;
-  };
-  team.run(rows);
-  auto gather = [&](int ti, int nti) {
-    const auto t = static_cast<std::size_t>(ti), nt = static_cast<std::size_t>(nti);
+    team.barrier();  // every row written
+    if (failed) std::rethrow_exception(failed);  // (the team rethrows the lowest member's)
     gather_rows<D>(n * t / nt, n * (t + 1) / nt, row_start_.data(), row_list_.data(), rows_.pi.data(), rows_.pj.data(),
                    row_seen_.data(), row_buf_.data(), P_.force.data(), P_.torque.data());
   };
-  team.run(gather);
+  team.run(rows);
   const int used = team.size();
   threads_used_ = used;
   double fn_max = 0.0;

@@ -2,12 +2,13 @@
 // it; both are waited on by spinning for a few microseconds, then sleeping on the atomic.
 #include "netdem/system/thread_team.hpp"
 
+#include <cstdlib>
 #include <stdexcept>
 
 namespace netdem::sys {
 namespace {
 // Spin iterations before sleeping: a few microseconds, about one short force loop's imbalance.
-constexpr int kSpins = 4000;
+static const int kSpins = std::getenv("NETDEM_SPIN") ? std::atoi(std::getenv("NETDEM_SPIN")) : 4000;  // EXPERIMENT
 
 inline void relax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -57,6 +58,18 @@ void ThreadTeam::work(int t) {
     }
     if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) pending_.notify_one();
   }
+}
+
+void ThreadTeam::barrier() {
+  if (n_ == 1) return;
+  const std::uint64_t phase = phase_.load(std::memory_order_acquire);
+  if (arrived_.fetch_add(1, std::memory_order_acq_rel) == n_ - 1) {
+    arrived_.store(0, std::memory_order_relaxed);
+    phase_.fetch_add(1, std::memory_order_release);
+    phase_.notify_all();
+    return;
+  }
+  wait_change(phase_, phase);
 }
 
 void ThreadTeam::run_erased(void (*fn)(void*, int, int), void* ctx) {

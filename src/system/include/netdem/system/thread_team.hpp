@@ -26,6 +26,8 @@ class ThreadTeam {
   ThreadTeam(const ThreadTeam&) = delete;
   ThreadTeam& operator=(const ThreadTeam&) = delete;
   int size() const { return n_; }
+  /// Inside a run: every member waits here until all have arrived (then all go on).
+  void barrier();
   template <class F>
   void run(F& f) {
     run_erased(&call<F>, &f);
@@ -45,6 +47,8 @@ class ThreadTeam {
   std::atomic<std::uint64_t> generation_{0};  ///< one more per run (and at shutdown)
   std::atomic<int> pending_{0};               ///< workers still in the current run
   std::atomic<bool> stop_{false};
+  std::atomic<int> arrived_{0};               ///< members at the barrier
+  std::atomic<std::uint64_t> phase_{0};       ///< one more per completed barrier
   void (*fn_)(void*, int, int) = nullptr;
   void* ctx_ = nullptr;
 };
