@@ -46,8 +46,12 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
   double g_vx[kRowChunk], g_vy[kRowChunk], g_wi[kRowChunk], g_wj[kRowChunk];
   double g_ov[kRowChunk], g_nx[kRowChunk], g_ny[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk];
   double g_vn[kRowChunk], g_vt[kRowChunk];
-  double* const row_buf = row_buf_.data();  // (Threaded: 7 per row, solver_threads.cpp)
+  // Threaded (solver_threads.hpp): per row fx, fy, dx, dy, energy; each particle's signed share
+  // (force, torque: 3 per slot) in the slot of the row in that particle's list
+  double* const row_buf = row_buf_.data();
   std::uint8_t* const row_seen = row_seen_.data();
+  double* const slot_buf = slot_buf_.data();
+  const int* const row_slot = row_slot_.data();
   for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
     const std::size_t m = std::min(kRowChunk, k_end - k0);
     std::size_t mt = 0;
@@ -89,7 +93,11 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) row_seen[k] = 0;
+        if constexpr (Threaded) {  // (adding +0 leaves a sum as it is: no accumulator is -0)
+          row_seen[k] = 0;
+          std::fill_n(slot_buf + 3 * row_slot[2 * k], 3, 0.0);
+          std::fill_n(slot_buf + 3 * row_slot[2 * k + 1], 3, 0.0);
+        }
         continue;
       }
       pair_live_[k] = 1;
@@ -115,10 +123,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
       if constexpr (Threaded) {  // the same products, summed per particle and row by row later
-        double* const b = row_buf + 7 * k;
-        b[0] = fx, b[1] = fy, b[2] = g_di[t] * f_t, b[3] = g_dj[t] * f_t, b[4] = dx, b[5] = dy, b[6] = 0.0;
-        if constexpr (contact::kHasElasticEnergy<Law>) b[6] = pair_law.elastic_energy(in);
+        double* const b = row_buf + 5 * k;
+        b[0] = fx, b[1] = fy, b[2] = dx, b[3] = dy, b[4] = 0.0;
+        if constexpr (contact::kHasElasticEnergy<Law>) b[4] = pair_law.elastic_energy(in);
         row_seen[k] = 1;
+        double *const si = slot_buf + 3 * row_slot[2 * k], *const sj = slot_buf + 3 * row_slot[2 * k + 1];
+        si[0] = -fx, si[1] = -fy, si[2] = -(g_di[t] * f_t);  // (x - y and x + (-y) are the same number)
+        sj[0] = fx, sj[1] = fy, sj[2] = -(g_dj[t] * f_t);
         ++t;
         continue;
       }

@@ -50,8 +50,12 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   // pass 1b: n, overlap, centre-to-plane distances, v_n, the tangential velocity, the step's rotation
   double g_n[3][kRowChunk], g_ov[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk], g_vn[kRowChunk];
   double g_t[3][kRowChunk], g_th[3][kRowChunk];
-  double* const row_buf = row_buf_.data();  // (Threaded: 10 per row, solver_threads.cpp)
+  // Threaded (solver_threads.hpp): per row f, energy; each particle's signed share (force, torque:
+  // 6 per slot) in the slot of the row in that particle's list
+  double* const row_buf = row_buf_.data();
   std::uint8_t* const row_seen = row_seen_.data();
+  double* const slot_buf = slot_buf_.data();
+  const int* const row_slot = row_slot_.data();
   for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
     const std::size_t m = std::min(kRowChunk, k_end - k0);
     std::size_t mt = 0;
@@ -103,7 +107,11 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) row_seen[k] = 0;
+        if constexpr (Threaded) {  // (adding +0 leaves a sum as it is: no accumulator is -0)
+          row_seen[k] = 0;
+          std::fill_n(slot_buf + 6 * row_slot[2 * k], 6, 0.0);
+          std::fill_n(slot_buf + 6 * row_slot[2 * k + 1], 6, 0.0);
+        }
         continue;
       }
       pair_live_[k] = 1;
@@ -135,11 +143,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       // M_i = -d_i n x f_t, M_j = -d_j n x f_t
       const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
       if constexpr (Threaded) {  // the same products, summed per particle and row by row later
-        double* const b = row_buf + 10 * k;
-        b[0] = f0, b[1] = f1, b[2] = f2, b[3] = di * m0, b[4] = di * m1, b[5] = di * m2;
-        b[6] = dj * m0, b[7] = dj * m1, b[8] = dj * m2, b[9] = 0.0;
-        if constexpr (contact::kHasElasticEnergy<Law>) b[9] = pair_law.elastic_energy(in);
+        double* const b = row_buf + 4 * k;
+        b[0] = f0, b[1] = f1, b[2] = f2, b[3] = 0.0;
+        if constexpr (contact::kHasElasticEnergy<Law>) b[3] = pair_law.elastic_energy(in);
         row_seen[k] = 1;
+        double *const si = slot_buf + 6 * row_slot[2 * k], *const sj = slot_buf + 6 * row_slot[2 * k + 1];
+        si[0] = -f0, si[1] = -f1, si[2] = -f2, si[3] = -(di * m0), si[4] = -(di * m1), si[5] = -(di * m2);
+        sj[0] = f0, sj[1] = f1, sj[2] = f2, sj[3] = -(dj * m0), sj[4] = -(dj * m1), sj[5] = -(dj * m2);
         ++t;
         continue;
       }

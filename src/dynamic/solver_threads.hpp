@@ -3,61 +3,53 @@
 // namespace netdem::dem, after solver_pairs_2d.hpp and solver_pairs_3d.hpp.
 //
 // Each thread runs the loop of solver_pairs_{2,3}d.hpp over its block of rows with Threaded = true:
-// a row's force on j, its two torque products (2D: also its branch) and its elastic energy go to
-// row_buf_ instead of into the particles' sums. After a barrier each thread sums, for its block of
-// particles, the rows of each particle in increasing row order (row_start_, row_list_), starting from
-// the accumulator's value: the same additions in the same order as one thread's loop (which adds row
-// k's force to j and subtracts it from i, then subtracts the torque products from i and j). The
-// stress and energy sums then run over the rows in row order on one thread. Every result is the same
-// to the last bit for any number of threads (tests/dynamic/test_dem_threads.cpp).
+// instead of adding a row's force and torques to its two particles, it writes each particle's
+// signed share (+f and -d_j (n x f_t) for j, -f and -d_i (n x f_t) for i) to the row's slot in that
+// particle's list (slot_buf_, row_slot_: each particle's rows in increasing row order), and the
+// force, 2D branch and elastic energy to row_buf_. After a barrier each thread adds, for its block
+// of particles, the slots of each particle in order to the accumulator: the additions one thread's
+// loop makes, in the same order (x - y is x + (-y) to the bit). The stress and energy sums then run
+// over the rows in row order on one thread. Every result is the same to the last bit for any
+// number of threads (tests/dynamic/test_dem_threads.cpp).
 
 namespace {
 constexpr std::size_t kMinThreadedRows = 4096;  // fewer rows: one thread (the same results)
 
-// The rows of each particle in increasing order: start (n + 1 offsets) and list; a row whose two
-// particles are one (a periodic self-image) is listed once. At a table build only.
-void build_row_lists(std::size_t n, const std::vector<int>& pi, const std::vector<int>& pj, std::vector<int>& start,
-                     std::vector<int>& list) {
+// The rows of each particle in increasing order: start (n + 1 offsets) and, per row k, the place of
+// k in the list of its i (slot[2k]) and of its j (slot[2k + 1]). At a table build only. A row of a
+// particle with itself cannot occur (the cell is at least two ranges wide: build_table_periodic).
+void build_row_slots(std::size_t n, const std::vector<int>& pi, const std::vector<int>& pj, std::vector<int>& start,
+                     std::vector<int>& slot) {
   start.assign(n + 1, 0);
   const std::size_t m = pi.size();
   for (std::size_t k = 0; k < m; ++k) {
+    if (pi[k] == pj[k]) throw std::logic_error("DynamicSolverT: a table row of a particle with itself");
     ++start[static_cast<std::size_t>(pi[k]) + 1];
-    if (pj[k] != pi[k]) ++start[static_cast<std::size_t>(pj[k]) + 1];
+    ++start[static_cast<std::size_t>(pj[k]) + 1];
   }
   for (std::size_t p = 0; p < n; ++p) start[p + 1] += start[p];
-  list.resize(static_cast<std::size_t>(start[n]));
+  slot.resize(2 * m);
   std::vector<int> next(start.begin(), start.end() - 1);
   for (std::size_t k = 0; k < m; ++k) {
-    list[static_cast<std::size_t>(next[static_cast<std::size_t>(pi[k])]++)] = static_cast<int>(k);
-    if (pj[k] != pi[k]) list[static_cast<std::size_t>(next[static_cast<std::size_t>(pj[k])]++)] = static_cast<int>(k);
+    slot[2 * k] = next[static_cast<std::size_t>(pi[k])]++;
+    slot[2 * k + 1] = next[static_cast<std::size_t>(pj[k])]++;
   }
 }
 
-// Particles [p0, p1): f += the force on j of each row where p is j, f -= it where p is i, then the
-// torque products, in increasing row order (S doubles per row: D force, R torque on i, R on j, ...).
+// Particles [p0, p1): the accumulators plus their slots in order (S = D + kRot doubles per slot: the
+// signed force, then the torque), i.e. the rows of each particle in increasing row order.
 template <int D>
-void gather_rows(std::size_t p0, std::size_t p1, const int* start, const int* list, const int* pi, const int* pj,
-                 const std::uint8_t* seen, const double* buf, double* f, double* t) {
+void gather_slots(std::size_t p0, std::size_t p1, const int* start, const double* slots, double* f, double* t) {
   constexpr int R = D == 2 ? 1 : 3;
-  constexpr std::size_t S = D == 2 ? 7 : 10;
+  constexpr int S = D + R;
   for (std::size_t p = p0; p < p1; ++p) {
     double fs[D], ts[R];
     for (int c = 0; c < D; ++c) fs[c] = f[D * p + static_cast<std::size_t>(c)];
     for (int c = 0; c < R; ++c) ts[c] = t[R * p + static_cast<std::size_t>(c)];
-    const int me = static_cast<int>(p);
-    for (int q = start[p]; q < start[p + 1]; ++q) {
-      const auto k = static_cast<std::size_t>(list[q]);
-      if (!seen[k]) continue;
-      const double* const b = buf + S * k;
-      const bool is_j = pj[k] == me, is_i = pi[k] == me;
-      if (is_j)
-        for (int c = 0; c < D; ++c) fs[c] += b[c];
-      if (is_i)
-        for (int c = 0; c < D; ++c) fs[c] -= b[c];
-      if (is_i)
-        for (int c = 0; c < R; ++c) ts[c] -= b[D + c];
-      if (is_j)
-        for (int c = 0; c < R; ++c) ts[c] -= b[D + R + c];
+    const double* b = slots + S * static_cast<std::size_t>(start[p]);
+    for (int q = start[p]; q < start[p + 1]; ++q, b += S) {
+      for (int c = 0; c < D; ++c) fs[c] += b[c];
+      for (int c = 0; c < R; ++c) ts[c] += b[D + c];
     }
     for (int c = 0; c < D; ++c) f[D * p + static_cast<std::size_t>(c)] = fs[c];
     for (int c = 0; c < R; ++c) t[R * p + static_cast<std::size_t>(c)] = ts[c];
@@ -80,12 +72,13 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   }
   if (pair_live_.size() != m) pair_live_.assign(m, 1);
   if (!rows_csr_ok_ || row_start_.size() != n + 1) {
-    build_row_lists(n, rows_.pi, rows_.pj, row_start_, row_list_);
+    build_row_slots(n, rows_.pi, rows_.pj, row_start_, row_slot_);
     rows_csr_ok_ = true;
   }
-  constexpr std::size_t S = D == 2 ? 7 : 10;
+  constexpr std::size_t S = D == 2 ? 5 : 4, SS = D == 2 ? 3 : 6;  // per row; per slot
   if (row_buf_.size() < S * m) row_buf_.resize(S * m);  // (grows at table builds only)
   if (row_seen_.size() < m) row_seen_.resize(m);
+  if (slot_buf_.size() < 2 * SS * m) slot_buf_.resize(2 * SS * m);
   double hc[3][3] = {}, Lr[3][3] = {};
   if constexpr (Periodic) hoist_cell(hc, Lr);
   if constexpr (D == 3 && Periodic) fill_absolute_velocities(Lr);
@@ -106,8 +99,8 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
     fn_part[t] = part.fn_max;
     team.barrier();  // every row written
     if (failed) std::rethrow_exception(failed);  // (the team rethrows the lowest member's)
-    gather_rows<D>(n * t / nt, n * (t + 1) / nt, row_start_.data(), row_list_.data(), rows_.pi.data(), rows_.pj.data(),
-                   row_seen_.data(), row_buf_.data(), P_.force.data(), P_.torque.data());
+    gather_slots<D>(n * t / nt, n * (t + 1) / nt, row_start_.data(), slot_buf_.data(), P_.force.data(),
+                    P_.torque.data());
   };
   team.run(rows);
   const int used = team.size();
@@ -121,10 +114,10 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
     if (!row_seen_[k]) continue;
     const double* const b = buf + S * k;
     if constexpr (D == 2) {
-      sxx += b[0] * b[4];
-      sxy += b[0] * b[5];
-      syx += b[1] * b[4];
-      syy += b[1] * b[5];
+      sxx += b[0] * b[2];
+      sxy += b[0] * b[3];
+      syx += b[1] * b[2];
+      syy += b[1] * b[3];
     } else if constexpr (Periodic) {
       add_image_stress<D>(rows_.shift[k].data(), hc, {b[0], b[1], b[2]}, s3p);
     }

@@ -2,13 +2,15 @@
 // it; both are waited on by spinning for a few microseconds, then sleeping on the atomic.
 #include "netdem/system/thread_team.hpp"
 
-#include <cstdlib>
 #include <stdexcept>
 
 namespace netdem::sys {
 namespace {
-// Spin iterations before sleeping: a few microseconds, about one short force loop's imbalance.
-static const int kSpins = std::getenv("NETDEM_SPIN") ? std::atoi(std::getenv("NETDEM_SPIN")) : 4000;  // EXPERIMENT
+// Spin iterations (pause instructions) before sleeping, about 20-40 microseconds. Measured on the
+// 2-core VM (docs/performance.md "Issue 31, part 3"): with another process running, 100 to 1000
+// cost two threads 1.8-2 times one thread's time, 4000 2.4 times, 20000 4.4 times; idle, the
+// values were not resolved by the machine's scatter.
+constexpr int kSpins = 1000;
 
 inline void relax() {
 #if defined(__x86_64__) || defined(__i386__)

@@ -733,11 +733,12 @@ class DynamicSolverT {
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
-  /// Threads (solver_threads.cpp): per row its forces, torques (and 2D branch, energy), whether the law
-  /// saw it; per particle its rows in increasing order (built after each table build: rows_csr_ok_).
-  std::vector<double> row_buf_;
+  /// Threads (solver_threads.hpp): per row its force (2D: branch) and energy, whether the law saw it;
+  /// per particle its rows in increasing order, the slots of a row's two shares (built after each
+  /// table build: rows_csr_ok_), the shares.
+  std::vector<double> row_buf_, slot_buf_;
   std::vector<std::uint8_t> row_seen_;
-  std::vector<int> row_start_, row_list_;
+  std::vector<int> row_start_, row_slot_;
   bool rows_csr_ok_ = false;
   int threads_used_ = 1;
   sys::TeamHandle team_;  ///< the threads (made at the first threaded step; a copy of the solver has none)
