@@ -50,9 +50,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   // pass 1b: n, overlap, centre-to-plane distances, v_n, the tangential velocity, the step's rotation
   double g_n[3][kRowChunk], g_ov[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk], g_vn[kRowChunk];
   double g_t[3][kRowChunk], g_th[3][kRowChunk];
-  // Threaded (solver_threads.hpp): per row f, energy; each particle's signed share (force, torque:
-  // 6 per slot) in the slot of the row in that particle's list
-  double* const row_buf = row_buf_.data();
+  double* const row_buf = row_buf_.data();  // Threaded: f, energy per row; shares per slot (solver_threads.hpp)
   std::uint8_t* const row_seen = row_seen_.data();
   double* const slot_buf = slot_buf_.data();
   const int* const row_slot = row_slot_.data();
@@ -109,8 +107,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
         if constexpr (Threaded) {  // (adding +0 leaves a sum as it is: no accumulator is -0)
           row_seen[k] = 0;
-          std::fill_n(slot_buf + 6 * row_slot[2 * k], 6, 0.0);
-          std::fill_n(slot_buf + 6 * row_slot[2 * k + 1], 6, 0.0);
+          std::fill_n(slot_buf + 6 * row_slot[2 * k], 6, 0.0), std::fill_n(slot_buf + 6 * row_slot[2 * k + 1], 6, 0.0);
         }
         continue;
       }
