@@ -100,12 +100,7 @@ def main():
                     r = run_lammps(a, work, infile, data, n, steps, mode, a.threads)
                 rows.append(dict(code=code, N=n, rep=rep, load_before=la0, load_after=DVL.loadavg(), **r))
                 print(f"rep {rep} N={n} {code}: {r['rate'] / 1e6:.3f} Mp-steps/wall-s", file=sys.stderr)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / f"{a.name}.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    out = DVL.write_rows(a.out, a.name, rows)
 
     def rates(code, n):
         return [r["rate"] for r in rows if r["code"] == code and r["N"] == n]

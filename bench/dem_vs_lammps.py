@@ -146,6 +146,17 @@ NEIGHS = re.compile(r"^Ave neighs/atom = ([\d.eE+-]+)")
 NBUILDS = re.compile(r"^Neighbor list builds = (\d+)")
 
 
+def write_rows(out_dir, name, rows):
+    """OUT_DIR/NAME.csv with one line per run (the keys of the first row as the header); returns OUT_DIR."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / f"{name}.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    return out
+
+
 def loadavg():
     return " ".join(Path("/proc/loadavg").read_text().split()[:3])
 
@@ -259,12 +270,7 @@ def main():
                     print(f"rep {rep} N={n} {prefix}{d['model']}: {float(d['psteps_per_cpu_s']):.4g} "
                           "p-steps/CPU-s", file=sys.stderr)
 
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / f"{a.name}.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    out = write_rows(a.out, a.name, rows)
 
     def med(code, n):
         v = [r["psteps_per_cpu_s"] for r in rows if r["code"] == code and r["N"] == n]
@@ -383,12 +389,7 @@ def main3(a):
                           "p-steps/CPU-s", file=sys.stderr)
     uptime1 = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / f"{a.name}.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    out = write_rows(a.out, a.name, rows)
 
     def vals(code, n, key="psteps_per_cpu_s"):
         return [r[key] for r in rows if r["code"] == code and r["N"] == n and r[key] != ""]

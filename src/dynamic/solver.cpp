@@ -437,6 +437,8 @@ namespace {
 // h tau / I per component). Track (the steps of an instability check only): also returns max
 // |v|^2 after the kick (NaN if a velocity is NaN), so that the check needs no pass of its own
 // over the velocities.
+// max(m, x), except that a NaN x replaces the maximum and stays (associative: blocks may combine).
+inline double nan_keeping_max(double m, double x) { return x > m || x != x ? x : m; }
 template <int D, bool Track>
 double kick_pass_impl(std::size_t n, double h, double* __restrict v, double* __restrict w,
                       const double* __restrict f, const double* __restrict t, const double* __restrict im,
@@ -450,7 +452,7 @@ double kick_pass_impl(std::size_t n, double h, double* __restrict v, double* __r
       const double* const u = v + D * i;
       double v2 = u[0] * u[0] + u[1] * u[1];
       if constexpr (D == 3) v2 += u[2] * u[2];
-      vmax2 = v2 > vmax2 || v2 != v2 ? v2 : vmax2;  // a NaN replaces the maximum and stays
+      vmax2 = nan_keeping_max(vmax2, v2);
     }
   }
   return vmax2;
@@ -642,7 +644,7 @@ void DynamicSolverT<D>::advance(bool full) {
       const int used = on_blocks(team_, opt_.threads, n, [&](std::size_t i0, std::size_t i1, int t) {
         part[t] = kick_pass<D, true>(i0, i1, h, P_, im, iI);
       });
-      for (int t = 0; t < used; ++t) vmax2 = part[t] > vmax2 || part[t] != part[t] ? part[t] : vmax2;  // (as in one)
+      for (int t = 0; t < used; ++t) vmax2 = nan_keeping_max(vmax2, part[t]);  // (the blocks in order: as one)
     } else {
       on_blocks(team_, opt_.threads, n, [&](std::size_t i0, std::size_t i1, int) { kick_pass<D, false>(i0, i1, h, P_, im, iI); });
     }

@@ -585,7 +585,7 @@ class DynamicSolverT {
     double wf[6] = {0, 0, 0, 0, 0, 0};
   };
   template <class L, bool InPlace, bool Periodic>
-  void pair_forces(const L& pair_law, ForceSums& a);  ///< on opt_.threads threads (solver_threads.cpp)
+  void pair_forces(const L& pair_law, ForceSums& a);  ///< on opt_.threads threads (solver_threads.hpp)
   /// Rows [k0, k1); Threaded: each row's forces into row_buf_, not summed (solver_pairs_{2,3}d.hpp)
   template <class L, bool InPlace, bool Periodic, bool Threaded>
   void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
