@@ -42,14 +42,17 @@
 // kinetic energy at the end). Scene: radii uniform in a0 [0.5, 1.5] mm, m = rho 4/3 pi r^3,
 // I = 2/5 m r^2, the same k2, k_t = 0.2 k2, gamma_0, gamma_t, mu = 0.5, frictionless walls, skin
 // 0.2 mm, no gravity; dt = t_c/50 of a pair of two a0 SPHERES (2.893e-7 s); a box with six fixed
-// walls. Preparation (untimed, cached in DIR/pack3d_N<N>_s<seed>.txt: a box line and x y z r per
-// sphere, m, %.17g): a 3D ballistic deposition (ballistic3d.hpp, seed, walls; the first N spheres
-// in deposition order, the lid lowered onto the highest), renumbered in 3D Morton order; then
-// frictionless (mu = 0, so that it compacts quickly) with a global viscous drag 2e3/s: affine
-// isotropic compression at 50/s to a mean contact stress > p/4 (p = 4e4 Pa: a mean contact force
-// of ~0.2 N, delta/a0 ~ 1e-3 as in 2D), stress-controlled right/back/top walls at p (Eq 1, m_w
-// = 0.01 kg, gamma_w = p A / (5/s L)) for up to 30 chunks of 1000 steps; friction on (mu = 0.5),
-// 3 more chunks; walls fixed, 2000 steps with and 2000 steps without the drag (prepare3()).
+// walls. Preparation (untimed, cached in DIR/pack3d_N<N>_s<seed>_v2.txt: a box line and x y z r
+// per sphere, m, %.17g): a 3D ballistic deposition (ballistic3d.hpp, seed, walls; the first N
+// spheres in deposition order, the lid lowered onto the highest), renumbered in 3D Morton order;
+// then on spheres of EQUAL mass (that of an a0 sphere) with steps of t_c/7, frictionless (mu = 0,
+// so that it compacts quickly) with a global viscous drag 2e3/s: affine isotropic compression at
+// 50/s to a mean contact stress > p/4 (p = 4e4 Pa: a mean contact force of ~0.2 N, delta/a0 ~ 1e-3
+// as in 2D), stress-controlled right/back/top walls at p (Eq 1, m_w = 0.01 kg, gamma_w = p A /
+// (25/s L)) in chunks of 0.29 ms for up to 8.7 ms; friction on (mu = 0.5), 3 more chunks; walls
+// fixed, 0.58 ms with and 0.58 ms without the drag (prepare3()). (Before 2026-12-06, night: real
+// masses, steps of t_c/50, walls at 5/s, cache pack3d_N<N>_s<seed>.txt; 542-655 s of CPU at N =
+// 1e5.)
 // Timing: as 2D, on the cached packing at rest (fresh histories).
 #include <algorithm>
 #include <cmath>
@@ -342,8 +345,25 @@ constexpr double kDeposit3Density = 0.56;  // expected solid fraction of the dep
 constexpr double kPressure3 = 4.0e4;       // Pa: a mean contact force of ~0.2 N, delta/a0 ~ 1e-3 (as 2D)
 constexpr double kRate3 = 50.0;            // 1/s: strain rate of the affine compression
 constexpr double kDrag3 = 2.0e3;           // 1/s: global viscous drag of the preparation
-constexpr double kWallRate3 = 5.0;         // 1/s: stress-controlled walls: gamma_w = p A / (rate L)
+constexpr double kWallRate3 = 25.0;        // 1/s: stress-controlled walls: gamma_w = p A / (rate L)
 constexpr std::size_t kSettleDragSteps3 = 2000, kSettleFreeSteps3 = 2000;
+// The preparation's step: kPrepDtFactor3 x the scene's dt, on spheres of equal mass (below), i.e.
+// t_c/7 of every pair's mass; velocity Verlet is stable to about t_c/1.6 for one contact and
+// t_c/(1.6 sqrt(z)) for z equal contacts on one sphere. Checked against a floor of 6 steps.
+constexpr double kPrepDtFactor3 = 50.0 / 7.0;
+constexpr double kPrepMinStepsPerContact = 6.0;
+
+/// The preparation's spheres: every one with the mass of an a0 sphere (rho (a0/r)^3), so that the
+/// lightest pair is the pair dt is set for and the preparation's steps can be longer. Only the
+/// static end state is kept; the timed runs use m = rho 4/3 pi r^3.
+Particles3 equal_mass_spheres(const Packing& pk, const LudingParams& lp) {
+  Particles3 P;
+  for (std::size_t i = 0; i < pk.size(); ++i) {
+    const double s = lp.a0 / pk.r[i];
+    P.add_sphere(pk.x[i], pk.y[i], pk.z[i], pk.r[i], lp.rho_p * s * s * s);
+  }
+  return P;
+}
 
 /// dt of the 3D scene: t_c/50 of a pair of two a0 spheres (LMM05 Eq 6 with sphere masses).
 double scene_dt3(const LudingParams& p) {
@@ -409,31 +429,35 @@ Packing deposit3(int n, std::uint64_t seed, const LudingParams& lp) {
 }
 
 /// The 3D preparation (prints progress on stderr): the deposition, then with the linear law
-/// (walls frictionless) and a global viscous drag -c m v, -c I w (c = kDrag3), FRICTIONLESS first
-/// (mu = 0: the packing reaches a dense jammed state quickly):
+/// (walls frictionless) and a global viscous drag -c m v, -c I w (c = kDrag3), on spheres of equal
+/// mass (equal_mass_spheres) with kPrepDtFactor3 x the scene's step (only the static end state is
+/// kept: the path need not be the real masses' dynamics), FRICTIONLESS first (mu = 0: the packing
+/// reaches a dense jammed state quickly). The stages' lengths are physical times (chunk_steps:
+/// the time of 1000 scene steps):
 /// (a) affine isotropic compression at the strain rate kRate3 (right, back and top walls Affine)
 ///     until the mean contact stress exceeds p/4 (p = kPressure3) at nu > 0.58, or nu >= 0.68;
-/// (b) stress-controlled right, back and top walls (Eq 1, p, m_w = 0.01 kg, gamma_w = p A / (5/s
-///     L), L the cube root of the box volume: the walls move at most at a strain rate of 5/s) in
-///     chunks of 1000 steps until the three wall stresses are within 5 % of p and the density
-///     changed by < 2e-4 over a chunk (at most 30 chunks);
+/// (b) stress-controlled right, back and top walls (Eq 1, p, m_w = 0.01 kg, gamma_w = p A /
+///     (kWallRate3 L), L the cube root of the box volume: the walls move at most at a strain rate
+///     of kWallRate3) in chunks until the three wall stresses are within 5 % of p and the density
+///     changed by < 2e-4 over a chunk (at most the time of 30 chunks of 1000 scene steps);
 /// (c) friction on (mu = 0.5), 3 more chunks of (b);
-/// (d) the walls fixed where they are, kSettleDragSteps3 steps with the drag, kSettleFreeSteps3
-///     steps without.
+/// (d) the walls fixed where they are, kSettleDragSteps3 scene steps' time with the drag,
+///     kSettleFreeSteps3 without.
 Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   Packing pk = deposit3(n, seed, lp);
   DynamicOptions o;
   o.threads = g_threads;
   o.model = ContactModel::Linear;
-  o.dt = scene_dt3(lp);
+  o.dt = kPrepDtFactor3 * scene_dt3(lp);
   o.skin = kSkin;
   o.affine_drag = kDrag3;
+  o.min_steps_per_contact = kPrepMinStepsPerContact;
   Box box(pk.box);
   for (MovingWall* w : {&box.right, &box.back, &box.top}) w->mode = WallMode::Affine;
   const double c0 = cpu_now();
   LudingParams lp0 = lp;
   lp0.mu = 0.0;
-  DynamicSolver3 s(spheres_from(pk, lp.rho_p), lp0, box, o);
+  DynamicSolver3 s(equal_mass_spheres(pk, lp), lp0, box, o);
   std::size_t steps = 0;
   auto report = [&](const char* what) {
     const Stress3 cs = s.contact_stress(), ws = s.wall_stress();
@@ -446,9 +470,10 @@ Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   };
   // (a)
   s.set_strain_rate3(-kRate3, -kRate3, -kRate3);
+  const auto probe_steps = static_cast<std::size_t>(std::lround(200.0 / kPrepDtFactor3));
   for (int chunk = 0;; ++chunk) {
-    s.run(200);
-    steps += 200;
+    s.run(probe_steps);
+    steps += probe_steps;
     const Stress3 cs = s.contact_stress();
     const double pc = (cs.s[0][0] + cs.s[1][1] + cs.s[2][2]) / 3.0;
     if (chunk % 10 == 9) report("affine compression");
@@ -470,9 +495,10 @@ Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   }
   s.set_walls(w[0], w[1], w[2]);
   double nu_prev = s.density();
-  for (int chunk = 0; chunk < 30; ++chunk) {
-    s.run(1000);
-    steps += 1000;
+  const auto chunk_steps = static_cast<std::size_t>(std::lround(1000.0 / kPrepDtFactor3));
+  for (int chunk = 0; chunk < 30 * kPrepDtFactor3; ++chunk) {
+    s.run(chunk_steps);
+    steps += chunk_steps;
     report("stress-controlled walls, mu = 0");
     const Stress3 ws = s.wall_stress();
     const double nu = s.density();
@@ -484,19 +510,19 @@ Packing prepare3(int n, std::uint64_t seed, const LudingParams& lp) {
   // (c)
   s.set_params(lp);
   for (int chunk = 0; chunk < 3; ++chunk) {
-    s.run(1000);
-    steps += 1000;
+    s.run(chunk_steps);
+    steps += chunk_steps;
     report("stress-controlled walls, mu = 0.5");
   }
   // (d)
   const MovingWall fixed;
   s.set_walls(fixed, fixed, fixed);
-  s.run(kSettleDragSteps3);
-  steps += kSettleDragSteps3;
+  s.run(kSettleDragSteps3 * chunk_steps / 1000);
+  steps += kSettleDragSteps3 * chunk_steps / 1000;
   report("walls fixed, drag");
   s.set_affine_drag(0.0);
-  s.run(kSettleFreeSteps3);
-  steps += kSettleFreeSteps3;
+  s.run(kSettleFreeSteps3 * chunk_steps / 1000);
+  steps += kSettleFreeSteps3 * chunk_steps / 1000;
   report("settled (walls fixed, no drag)");
   const Particles3& q = s.particles();
   pk.x = q.axis(0);
@@ -552,7 +578,7 @@ Packing read_cache3(const fs::path& f) {
 }
 
 Packing get_packing3(int n, std::uint64_t seed, const fs::path& cache) {
-  const fs::path f = cache / ("pack3d_N" + std::to_string(n) + "_s" + std::to_string(seed) + ".txt");
+  const fs::path f = cache / ("pack3d_N" + std::to_string(n) + "_s" + std::to_string(seed) + "_v2.txt");
   if (fs::exists(f)) return read_cache3(f);
   const double t0 = cpu_now();
   const Packing pk = prepare3(n, seed, linear_params());
