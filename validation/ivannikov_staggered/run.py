@@ -186,11 +186,31 @@ def main():
     rep = []
     t_end = 1000.0 if a.quick else 5000.0
 
-    s2, s1, off, pair = R["cu_s2"], R["cu_s1"], R["cu_s2_no_new"], R["pair_cu"]
-    h2, hoff = s2["history"], off["history"]
-    pair_s, pair_x = pair_at(pair, t_end)
-    fin2, fin1, finoff = s2["summary"]["final"], s1["summary"]["final"], off["summary"]["final"]
+    green_body_section(R["cu_s2"], F, rep, outdir)
+    ratio_on, ratio_off = cu_section(R, F, rep, outdir, a.quick, t_end)
+    cu_eq44_section(R, F, rep, outdir, t_end)
+    ti_section(R, F, rep, outdir, ratio_on, ratio_off)
+    switch_section(R, F, rep, outdir)
+    rep.append(fig22_and_eq44_ti(R, F, outdir))
+    counts = tally(r[3] for r in F.rows)
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    txt = ("# netsolve sinter: the staggered scheme of Ivannikov et al. against the paper and the two-particle model\n\n"
+           f"Generated {now} by `validation/ivannikov_staggered/run.py{' --quick' if a.quick else ''}`; run folders in "
+           f"`{os.path.relpath(runs_dir, REPO)}`. {totals_text(counts)} (MISSING: a line that could not be evaluated, "
+           "the reason in its measured column).\n\n"
+           "The material data are the documented sets of the two-particle issue (Frost & Ashby Cu; the hpsint Ti set, "
+           "src/contact/materials/), not the paper's Tables 2 and 4, which are not public. The two-particle model is the "
+           "documented reconstruction of docs/sintering_pair.md, not Thomsen et al.'s model. So the paper's curves are "
+           "compared in their trends (the findings it states), not number for number.\n\n"
+           "## Findings\n\n" + F.table() + "\n" + "\n".join(rep)
+           + "\n".join(provenance_lines(provenance(REPO, "ivannikov_staggered", [a.netsolve]), counts)) + "\n")
+    with open(os.path.join(outdir, "report.md"), "w") as f:
+        f.write(txt)
+    print(f"{totals_text(counts)} -> {os.path.join(outdir, 'report.md')}")
 
+
+def green_body_section(s2, F, rep, outdir):
+    """Fig 10: the Cu green body's homogeneity (Eq 48)."""
     # ---- Fig 10: the green body's homogeneity (Eq 48)
     lam = s2.get("laminar")
     gb = s2["summary"].get("green_body", {})
@@ -225,6 +245,15 @@ def main():
     else:
         F.missing("Cu green body: Eq 48 density of the interior laminae (the wall laminae left out), mean per axis",
                   "0.58 ± 0.03 (the box density; Fig 10: uniform, ~0.6)", "cu_s2 wrote no laminar.csv")
+
+
+def cu_section(R, F, rep, outdir, quick, t_end):
+    """Figs 11-13: Cu shrinkage per axis against the pair, the step sizes and run times of both strategies, the mean
+    neck. Returns the packing/pair shrinkage ratios with and without new contacts."""
+    s2, s1, off, pair = R["cu_s2"], R["cu_s1"], R["cu_s2_no_new"], R["pair_cu"]
+    h2, hoff = s2["history"], off["history"]
+    pair_s, pair_x = pair_at(pair, t_end)
+    fin2, fin1, finoff = s2["summary"]["final"], s1["summary"]["final"], off["summary"]["final"]
 
     # ---- Fig 11: shrinkage per axis against the pair, with and without new contacts
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
@@ -289,7 +318,7 @@ def main():
     else:
         F.missing("Cu, strategy 2: Δt_max = 1 s against 10 s", "≤ 1 %", "the run cu_s2_dt1 is not part of this mode")
     w1, w2 = s1["summary"]["timers_s"]["sinter_loop_wall"], s2["summary"]["timers_s"]["sinter_loop_wall"]
-    if not a.quick:
+    if not quick:
         F.add("Cu benchmark run time, strategy 2 (805 spheres, 5000 s; the sintering loop, one core)", f"{w2:.1f} s",
               "< 60 s (the issue; 30 s stretch; the paper: about 1 h)", w2 < 60, "no", "a run time in a report, not a benchmark: "
               "see docs/performance.md for the repeated measurement")
@@ -316,6 +345,12 @@ def main():
     F.add(f"Cu without new contacts: mean neck x/R_min at {t_end:g} s against the pair's x/R",
           f"{finoff['neck_mean']:.4f} vs {pair_x:.4f}", "reported (polydisperse radii, raised x0 of overlapping pairs)", None, "no")
 
+    return ratio_on, ratio_off
+
+
+def cu_eq44_section(R, F, rep, outdir, t_end):
+    """Eq 44 (Fig 20) on Cu at the end of the run, and the report's section 2."""
+    s2 = R["cu_s2"]
     # ---- Eq 44: the distribution of dL_bar
     dl = s2["dL_bar"]["dL_bar_over_L0"]
     mom = s2["summary"]["dL_bar"]["dL_bar_over_L0"]
@@ -364,6 +399,9 @@ def main():
                "![Fig 11](fig11_shrinkage.png)\n\n![Fig 12](fig12_dt.png)\n\n![Fig 13](fig13_neck.png)\n\n"
                "![dL_bar](fig_dL_bar.png)\n\n" + timing_table(R, [k for k in ("cu_s2", "cu_s2_no_new", "cu_s2_dt1", "cu_s1") if k in R]))
 
+
+def ti_section(R, F, rep, outdir, ratio_on, ratio_off):
+    """Section 3: Ti at 1373 K to 10 h, both readings of D_vol0 (MISSING in --quick)."""
     # ---- Ti
     if "ti_stored" in R:
         fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -417,6 +455,10 @@ def main():
             F.missing(f"Ti, {lab}: the packing shrinks less than the pair (new contacts on)",
                       "< 1 (as the paper finds for Cu without new contacts)", why)
             F.missing(f"Ti, {lab}: run time (3619 spheres, 10 h)", "< 600 s (the issue)", why)
+
+
+def switch_section(R, F, rep, outdir):
+    """Section 4: the alpha -> beta switch on the synthetic material and profile."""
     # ---- the alpha -> beta switch (synthetic)
     coarse_jump = None
     for key in ("ti300_two_phase", "ti300_two_phase_fine"):
@@ -469,23 +511,6 @@ def main():
                "in 30 min and held to 2 h (`synthetic_profile.csv`), on a green body of 300 spheres (64 µm ± 10 %, box density 0.55: a sample this small jams below 0.58). This "
                "shows that the scheme switches the rates at the transus, nothing about titanium.\n\n"
                "![switch](fig_ti_switch.png)\n")
-
-    rep.append(fig22_and_eq44_ti(R, F, outdir))
-    counts = tally(r[3] for r in F.rows)
-    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    txt = ("# netsolve sinter: the staggered scheme of Ivannikov et al. against the paper and the two-particle model\n\n"
-           f"Generated {now} by `validation/ivannikov_staggered/run.py{' --quick' if a.quick else ''}`; run folders in "
-           f"`{os.path.relpath(runs_dir, REPO)}`. {totals_text(counts)} (MISSING: a line that could not be evaluated, "
-           "the reason in its measured column).\n\n"
-           "The material data are the documented sets of the two-particle issue (Frost & Ashby Cu; the hpsint Ti set, "
-           "src/contact/materials/), not the paper's Tables 2 and 4, which are not public. The two-particle model is the "
-           "documented reconstruction of docs/sintering_pair.md, not Thomsen et al.'s model. So the paper's curves are "
-           "compared in their trends (the findings it states), not number for number.\n\n"
-           "## Findings\n\n" + F.table() + "\n" + "\n".join(rep)
-           + "\n".join(provenance_lines(provenance(REPO, "ivannikov_staggered", [a.netsolve]), counts)) + "\n")
-    with open(os.path.join(outdir, "report.md"), "w") as f:
-        f.write(txt)
-    print(f"{totals_text(counts)} -> {os.path.join(outdir, 'report.md')}")
 
 
 FULL_ONLY = "full mode only (the 3619-sphere Ti runs are not part of --quick)"
