@@ -9,15 +9,12 @@
 //
 // --threads N: DynamicOptions::threads for the preparation and the timed runs (the same packing
 // and results for any N); with N > 1 compare the wall-time rates (psteps_per_wall_s).
-//
 // Scene (the same as ../shared/bench/lammps/params.in as far as the solver allows):
 //  * radii uniform in a0 [1 - w0, 1 + w0] = [0.5, 1.5] mm, disks of height h = 6 mm, rho = 2000
 //    (LMM05 Table 1); k2 = 2e5 N/m, k_t = 0.2 k2, gamma_0 = 0.2 kg/s, gamma_t = 0.05 kg/s,
 //    mu = 0.5; walls frictionless (mu_w = 0, Table 1); dt = t_c/50 for a pair of two a0 disks
 //    (as params.in: 6.108e-7 s); Verlet skin 0.2 mm (as params.in), rebuilt when a disk moved
-//    more than skin/2.
-//  * square box with four walls (LMM05 Fig 1; the LAMMPS scene of the shared report is periodic,
-//    the solver has no periodic boundaries).
+//    more than skin/2; a square box with four walls (LMM05 Fig 1).
 //  * preparation (untimed, cached in DIR/pack_N<N>_s<seed>.csv, the packing CSV of
 //    netdem/packing/io.hpp in metres): all radii drawn first
 //    (std::mt19937_64(seed), the platform-independent uniform of demsolve), then random sequential
@@ -38,8 +35,9 @@
 //    timed steps; CPU time of this thread (CLOCK_THREAD_CPUTIME_ID) and wall time.
 //
 // --dim 3 (issue 16): DynamicSolver3 on spheres (defaults --n 10000,100000 --psteps 2e7
-// --warmup 300; CSV columns as 2D with wall_contacts, the contact stress sxx/syy/szz in Pa and the
-// kinetic energy at the end). Scene: radii uniform in a0 [0.5, 1.5] mm, m = rho 4/3 pi r^3,
+// --warmup 300; CSV columns as 2D with wall_contacts, the contact stress sxx/syy/szz in Pa, the
+// kinetic energy at the end, and the solver's heap (memory_use(): per particle, per table row, the
+// search's scratch per particle) and the process's resident set after the run). Scene: radii uniform in a0 [0.5, 1.5] mm, m = rho 4/3 pi r^3,
 // I = 2/5 m r^2, the same k2, k_t = 0.2 k2, gamma_0, gamma_t, mu = 0.5, frictionless walls, skin
 // 0.2 mm, no gravity; dt = t_c/50 of a pair of two a0 SPHERES (2.893e-7 s); a box with six fixed
 // walls. Preparation (untimed, cached in DIR/pack3d_N<N>_s<seed>_v2.txt: a box line and x y z r
@@ -59,7 +57,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -83,21 +80,17 @@ using netdem::packing::uniform01;
 namespace {
 int g_threads = 1;  // --threads
 
-
 constexpr double kPressure = 100.0;    // N/m (LMM05 section 4.1, params.in Pt)
 constexpr double kSkin = 0.2e-3;       // m (params.in)
 constexpr double kPlaceDensity = 0.45;  // solid fraction of the random placement
 
-double cpu_now() {
+double clock_now(clockid_t c) {
   timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  clock_gettime(c, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
-double wall_now() {
-  timespec t{};
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
+double cpu_now() { return clock_now(CLOCK_THREAD_CPUTIME_ID); }
+double wall_now() { return clock_now(CLOCK_MONOTONIC); }
 
 /// The linear spring-dashpot parameters (k1 = k2, k_c = 0) of the scene.
 LudingParams linear_params() {
@@ -610,7 +603,18 @@ struct Row3 {
   std::string model;
   std::size_t steps = 0, rebuilds = 0, table = 0, contacts = 0, wall_contacts = 0;
   double cpu = 0, wall = 0, nu = 0, s[3] = {0, 0, 0}, ekin = 0;
+  DynamicSolver3::MemoryUse mem;
+  double rss_mb = 0;
 };
+
+/// The resident set of this process [MB] (/proc/self/status VmRSS; 0 where unavailable).
+double rss_mb() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
+  return 0.0;
+}
 
 Row3 time_model3(const Packing& pk, const std::string& model, std::size_t warm, std::size_t steps) {
   LudingParams lp;  // Table 1 (full law)
@@ -653,6 +657,8 @@ Row3 time_model3(const Packing& pk, const std::string& model, std::size_t warm, 
   const Stress3 cs = s.contact_stress();
   for (int a = 0; a < 3; ++a) r.s[a] = cs.s[a][a];
   r.ekin = s.energies().kinetic;
+  r.mem = s.memory_use();
+  r.rss_mb = rss_mb();
   return r;
 }
 
@@ -660,7 +666,8 @@ int run3(const std::vector<int>& ns, const std::vector<std::string>& models, dou
          std::size_t warm, int reps, std::uint64_t seed, const fs::path& cache, const fs::path& lammps_dir) {
   std::printf(
       "N,model,rep,steps,cpu_s,wall_s,psteps_per_cpu_s,psteps_per_wall_s,rebuilds,"
-      "table_per_particle,contacts_per_particle,wall_contacts,nu,sxx_Pa,syy_Pa,szz_Pa,ekin_J\n");
+      "table_per_particle,contacts_per_particle,wall_contacts,nu,sxx_Pa,syy_Pa,szz_Pa,ekin_J,"
+      "heap_B_per_particle,heap_B_per_row,search_B_per_particle,rss_MB\n");
   std::fflush(stdout);
   for (int n : ns) {
     const Packing pk = get_packing3(n, seed, cache);
@@ -674,10 +681,13 @@ int run3(const std::vector<int>& ns, const std::vector<std::string>& models, dou
         if (m == "none") continue;
         const Row3 r = time_model3(pk, m, warm, steps);
         const double ps = static_cast<double>(r.n) * static_cast<double>(r.steps);
-        std::printf("%d,%s,%d,%zu,%.4f,%.4f,%.6g,%.6g,%zu,%.4f,%.4f,%zu,%.5f,%.6g,%.6g,%.6g,%.4g\n", r.n,
-                    r.model.c_str(), rep, r.steps, r.cpu, r.wall, ps / r.cpu, ps / r.wall, r.rebuilds,
-                    static_cast<double>(r.table) / r.n, 2.0 * static_cast<double>(r.contacts) / r.n,
-                    r.wall_contacts, r.nu, r.s[0], r.s[1], r.s[2], r.ekin);
+        const double nd = r.n;
+        std::printf("%d,%s,%d,%zu,%.4f,%.4f,%.6g,%.6g,%zu,%.4f,%.4f,%zu,%.5f,%.6g,%.6g,%.6g,%.4g,%.1f,%.1f,%.1f,%.1f\n",
+                    r.n, r.model.c_str(), rep, r.steps, r.cpu, r.wall, ps / r.cpu, ps / r.wall, r.rebuilds,
+                    static_cast<double>(r.table) / nd, 2.0 * static_cast<double>(r.contacts) / nd, r.wall_contacts,
+                    r.nu, r.s[0], r.s[1], r.s[2], r.ekin, static_cast<double>(r.mem.particles) / nd,
+                    static_cast<double>(r.mem.rows) / static_cast<double>(r.table),
+                    static_cast<double>(r.mem.search) / nd, r.rss_mb);
         std::fflush(stdout);
       }
   }

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
+#include <variant>
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -303,6 +304,26 @@ Energies DynamicSolverT<D>::energies() const {
   return e;
 }
 
+template <int D>
+auto DynamicSolverT<D>::memory_use() const -> MemoryUse {
+  const auto cap = [](const auto& v) { return v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  MemoryUse m;
+  m.particles = cap(P_.pos) + cap(P_.rot) + cap(P_.r) + cap(P_.vel) + cap(P_.spin) + cap(P_.mass) +
+                cap(P_.inertia) + cap(P_.force) + cap(P_.torque) + cap(radius_ref_) + cap(prescribed_) +
+                cap(is_prescribed_) + cap(spin_held_) + cap(vel_abs_) + cap(pos_build_) + cap(wall_touch_) +
+                cap(wall_list_) + cap(inv_mass_) + cap(inv_inertia_) + cap(blk_p_) + cap(bnd_list_) + cap(bnd_off_);
+  m.rows = rows_.row_bytes() + cap(pair_live_) + cap(row_buf_) + cap(slot_buf_) + cap(row_seen_) +
+           cap(row_start_) + cap(row_slot_) + cap(blk_k_);
+  std::visit(
+      [&](const auto& t) {
+        m.rows += cap(t.pair) + cap(t.next);
+        m.particles += cap(t.wall);
+      },
+      hist_);
+  m.search = rows_.scratch_bytes();
+  return m;
+}
+
 template void DynamicSolverT<2>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
 template void DynamicSolverT<2>::check_health() const;
 template void DynamicSolverT<2>::check_health_with(double vmax2) const;
@@ -314,6 +335,7 @@ template double DynamicSolverT<2>::density() const;
 template Energies DynamicSolverT<2>::energies() const;
 template auto DynamicSolverT<2>::kinetic_stress() const -> Stress;
 template packing::Packing DynamicSolverT<2>::periodic_packing() const;
+template auto DynamicSolverT<2>::memory_use() const -> MemoryUse;
 
 template void DynamicSolverT<3>::breach(const std::string& quantity, const std::string& what, const std::string& cause) const;
 template void DynamicSolverT<3>::check_health() const;
@@ -326,5 +348,6 @@ template double DynamicSolverT<3>::density() const;
 template Energies DynamicSolverT<3>::energies() const;
 template auto DynamicSolverT<3>::kinetic_stress() const -> Stress;
 template packing::Packing DynamicSolverT<3>::periodic_packing() const;
+template auto DynamicSolverT<3>::memory_use() const -> MemoryUse;
 
 }  // namespace netdem::dem

@@ -12,10 +12,32 @@
 // to the last bit (docs/performance.md "Issue 31"). The chunk's arrays (16 doubles per row, 16 KB)
 // stay in L1.
 
+namespace {
+// The threaded loops (solver_threads.hpp): a particle's share of a row (D force components, then R
+// torque components) into its slot if it is a boundary particle (slot >= 0), else added to its
+// accumulators f and t here (adding -x is subtracting x, to the bit).
+template <int D, int R>
+inline void add_share(int slot, double* slot_buf, double* f, double* t, const double (&s)[D + R]) {
+  if (slot >= 0) {
+    std::copy_n(s, D + R, slot_buf + (D + R) * slot);
+    return;
+  }
+  for (int c = 0; c < D; ++c) f[c] += s[c];
+  for (int c = 0; c < R; ++c) t[c] += s[D + c];
+}
+// A row the law does not see: its boundary particles' slots hold zeros (adding +0 leaves a sum as it
+// is: no accumulator is -0).
+template <int S>
+inline void clear_shares(const int* row_slot, std::size_t k, double* slot_buf) {
+  if (row_slot[2 * k] >= 0) std::fill_n(slot_buf + S * row_slot[2 * k], S, 0.0);
+  if (row_slot[2 * k + 1] >= 0) std::fill_n(slot_buf + S * row_slot[2 * k + 1], S, 0.0);
+}
+}  // namespace
+
 template <int D>
 template <class Law, bool InPlace, bool Periodic, bool Threaded>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
-                                                      std::size_t k_end) {
+                                                      std::size_t k_end, bool direct_sums) {
   static_assert(D == 2);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 128;
@@ -46,8 +68,11 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
   double g_vx[kRowChunk], g_vy[kRowChunk], g_wi[kRowChunk], g_wj[kRowChunk];
   double g_ov[kRowChunk], g_nx[kRowChunk], g_ny[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk];
   double g_vn[kRowChunk], g_vt[kRowChunk];
-  // Threaded (solver_threads.hpp): per row fx, fy, dx, dy, energy; each particle's signed share
-  // (force, torque: 3 per slot) in the slot of the row in that particle's list
+  // Threaded (solver_threads.hpp): per row fx, fy, dx, dy, energy (unless direct_sums: the first
+  // block's rows are summed here, as one thread sums them); a boundary particle's signed share
+  // (force, torque: 3 per slot) in the slot of the row in its list (row_slot >= 0), every other
+  // particle's added to its accumulator here
+  (void)direct_sums;
   double* const row_buf = row_buf_.data();
   std::uint8_t* const row_seen = row_seen_.data();
   double* const slot_buf = slot_buf_.data();
@@ -93,11 +118,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) {  // (adding +0 leaves a sum as it is: no accumulator is -0)
-          row_seen[k] = 0;
-          std::fill_n(slot_buf + 3 * row_slot[2 * k], 3, 0.0);
-          std::fill_n(slot_buf + 3 * row_slot[2 * k + 1], 3, 0.0);
-        }
+        if constexpr (Threaded) row_seen[k] = 0, clear_shares<3>(row_slot, k, slot_buf);
         continue;
       }
       pair_live_[k] = 1;
@@ -122,14 +143,18 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-      if constexpr (Threaded) {  // the same products, summed per particle and row by row later
-        double* const b = row_buf + 5 * k;
-        b[0] = fx, b[1] = fy, b[2] = dx, b[3] = dy, b[4] = 0.0;
-        if constexpr (contact::kHasElasticEnergy<Law>) b[4] = pair_law.elastic_energy(in);
-        row_seen[k] = 1;
-        double *const si = slot_buf + 3 * row_slot[2 * k], *const sj = slot_buf + 3 * row_slot[2 * k + 1];
-        si[0] = -fx, si[1] = -fy, si[2] = -(g_di[t] * f_t);  // (x - y and x + (-y) are the same number)
-        sj[0] = fx, sj[1] = fy, sj[2] = -(g_dj[t] * f_t);
+      if constexpr (Threaded) {  // the same products and sums; a boundary particle's later, in row order
+        if (direct_sums) {
+          sxx += fx * dx, sxy += fx * dy, syx += fy * dx, syy += fy * dy;
+          if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
+        } else {
+          double* const b = row_buf + 5 * k;
+          b[0] = fx, b[1] = fy, b[2] = dx, b[3] = dy, b[4] = 0.0;
+          if constexpr (contact::kHasElasticEnergy<Law>) b[4] = pair_law.elastic_energy(in);
+          row_seen[k] = 1;
+        }
+        add_share<2, 1>(row_slot[2 * k + 1], slot_buf, p_f + D * j, p_t + j, {fx, fy, -(g_dj[t] * f_t)});
+        add_share<2, 1>(row_slot[2 * k], slot_buf, p_f + D * i, p_t + i, {-fx, -fy, -(g_di[t] * f_t)});
         ++t;
         continue;
       }

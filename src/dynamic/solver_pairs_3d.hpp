@@ -17,7 +17,7 @@
 template <int D>
 template <class Law, bool InPlace, bool Periodic, bool Threaded>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
-                                                      std::size_t k_end) {
+                                                      std::size_t k_end, bool direct_sums) {
   static_assert(D == 3);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 64;
@@ -50,7 +50,9 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   // pass 1b: n, overlap, centre-to-plane distances, v_n, the tangential velocity, the step's rotation
   double g_n[3][kRowChunk], g_ov[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk], g_vn[kRowChunk];
   double g_t[3][kRowChunk], g_th[3][kRowChunk];
-  double* const row_buf = row_buf_.data();  // Threaded: f, energy per row; shares per slot (solver_threads.hpp)
+  // Threaded: f, energy per row (unless direct_sums); a boundary particle's shares per slot, every
+  // other particle's added here (solver_threads.hpp)
+  double* const row_buf = row_buf_.data();
   std::uint8_t* const row_seen = row_seen_.data();
   double* const slot_buf = slot_buf_.data();
   const int* const row_slot = row_slot_.data();
@@ -105,10 +107,7 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) {  // (adding +0 leaves a sum as it is: no accumulator is -0)
-          row_seen[k] = 0;
-          std::fill_n(slot_buf + 6 * row_slot[2 * k], 6, 0.0), std::fill_n(slot_buf + 6 * row_slot[2 * k + 1], 6, 0.0);
-        }
+        if constexpr (Threaded) row_seen[k] = 0, clear_shares<6>(row_slot, k, slot_buf);
         continue;
       }
       pair_live_[k] = 1;
@@ -139,26 +138,28 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
       // M_i = -d_i n x f_t, M_j = -d_j n x f_t
       const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
-      if constexpr (Threaded) {  // the same products, summed per particle and row by row later
+      if (!Threaded || direct_sums) {  // the sums in row order (threads: the first block's rows)
+        // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
+        if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
+        if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
+      } else {  // the other threads' rows, summed after them in row order
         double* const b = row_buf + 4 * k;
         b[0] = f0, b[1] = f1, b[2] = f2, b[3] = 0.0;
         if constexpr (contact::kHasElasticEnergy<Law>) b[3] = pair_law.elastic_energy(in);
         row_seen[k] = 1;
-        double *const si = slot_buf + 6 * row_slot[2 * k], *const sj = slot_buf + 6 * row_slot[2 * k + 1];
-        si[0] = -f0, si[1] = -f1, si[2] = -f2, si[3] = -(di * m0), si[4] = -(di * m1), si[5] = -(di * m2);
-        sj[0] = f0, sj[1] = f1, sj[2] = f2, sj[3] = -(dj * m0), sj[4] = -(dj * m1), sj[5] = -(dj * m2);
-        ++t;
-        continue;
       }
-      double *const fi = p_f + D * i, *const fj = p_f + D * j;
-      fj[0] += f0, fj[1] += f1, fj[2] += f2;
-      fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
-      double *const ti = p_t + D * i, *const tj = p_t + D * j;  // (kRot = D)
-      ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
-      tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;
-      // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
-      if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
-      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
+      if constexpr (Threaded) {  // the same shares; a boundary particle's later, in row order
+        add_share<3, 3>(row_slot[2 * k + 1], slot_buf, p_f + D * j, p_t + D * j,
+                        {f0, f1, f2, -(dj * m0), -(dj * m1), -(dj * m2)});
+        add_share<3, 3>(row_slot[2 * k], slot_buf, p_f + D * i, p_t + D * i,
+                        {-f0, -f1, -f2, -(di * m0), -(di * m1), -(di * m2)});
+      } else {
+        double *const fi = p_f + D * i, *const fj = p_f + D * j, *const ti = p_t + D * i, *const tj = p_t + D * j;
+        fj[0] += f0, fj[1] += f1, fj[2] += f2;
+        fi[0] -= f0, fi[1] -= f1, fi[2] -= f2;
+        ti[0] -= di * m0, ti[1] -= di * m1, ti[2] -= di * m2;
+        tj[0] -= dj * m0, tj[1] -= dj * m1, tj[2] -= dj * m2;
+      }
       ++t;
     }
   }

@@ -441,6 +441,11 @@ class DynamicSolverT {
   double time() const { return time_; }
   std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
   std::size_t table_size() const { return rows_.pairs(); }
+  /// Heap bytes held (vector capacities): the per-particle arrays (wall histories included), the
+  /// per-row arrays (pair histories, a table build's scratch histories, the threads' row buffers)
+  /// and the neighbour search's scratch. A kept last_good() state is not counted.
+  struct MemoryUse { std::size_t particles = 0, rows = 0, search = 0; };
+  MemoryUse memory_use() const;
   /// Threads the last force evaluation's pair loop ran on (1 below its thresholds; DynamicOptions::threads).
   int threads_used() const { return threads_used_; }
   /// Material thermal state (ContactModel::Full); the temperature schedule is the caller's.
@@ -588,9 +593,11 @@ class DynamicSolverT {
   void pair_forces(const L& pair_law, ForceSums& a);  ///< on opt_.threads threads (solver_threads.hpp)
   /// Rows [k0, k1); Threaded: each row's forces into row_buf_, not summed (solver_pairs_{2,3}d.hpp)
   template <class L, bool InPlace, bool Periodic, bool Threaded>
-  void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
+  void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1, bool direct_sums = true);
   template <class L, bool InPlace, bool Periodic, bool Threaded>
-  void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
+  void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1, bool direct_sums = true);
+  template <class L, bool Periodic>
+  void sum_rows_after_first(ForceSums& a, const double (&hc)[3][3]) const;  ///< (solver_threads.hpp)
   void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
   void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
@@ -739,6 +746,12 @@ class DynamicSolverT {
   std::vector<double> row_buf_, slot_buf_;
   std::vector<std::uint8_t> row_seen_;
   std::vector<int> row_start_, row_slot_;
+  /// The threads' blocks: particles [blk_p_[t], blk_p_[t + 1]) and their rows [blk_k_[t], blk_k_[t + 1]);
+  /// the boundary particles (a row of another block reaches them) of block t: bnd_list_[bnd_off_[t] ..
+  /// bnd_off_[t + 1]), with their slots from row_start_ (for blk_threads_ threads)
+  std::vector<std::size_t> blk_p_, blk_k_;
+  std::vector<int> bnd_list_, bnd_off_;
+  int blk_threads_ = 0;
   bool rows_csr_ok_ = false;
   int threads_used_ = 1;
   sys::TeamHandle team_;  ///< the threads (made at the first threaded step; a copy of the solver has none)

@@ -181,6 +181,10 @@ class CellGridT {
 
   const Layout& layout() const { return layout_; }
   std::size_t size() const { return ids_.size(); }
+  /// Heap bytes held (the vectors' capacities).
+  std::size_t memory_bytes() const {
+    return sizeof(std::uint32_t) * (start_.capacity() + ids_.capacity() + cell_of_.capacity());
+  }
 
  private:
   Layout layout_;

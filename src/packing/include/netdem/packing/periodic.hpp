@@ -98,6 +98,11 @@ class PeriodicPairsT {
   /// line) if the cell is narrower than 2 (2 r_max + extra) across some axis, or a position or the
   /// cell is not finite. The pairs are sorted by (i, j).
   const std::vector<Pair>& find(std::span<const double> pos, std::span<const double> r, const Cell& cell, double extra);
+  /// Heap bytes held (the vectors' capacities).
+  std::size_t memory_bytes() const {
+    return sizeof(Pair) * pairs_.capacity() + sizeof(double) * s_.capacity() + sizeof(int) * wrap_.capacity() +
+           sizeof(std::uint32_t) * (start_.capacity() + ids_.capacity() + cell_of_.capacity() + fill_.capacity());
+  }
 
  private:
   std::vector<Pair> pairs_;

@@ -34,6 +34,15 @@ class PairRows {
   std::vector<Shift> shift;  ///< the image of j per row (periodic cells; else zero)
 
   std::size_t pairs() const { return pi.size(); }
+  /// Heap bytes held by the rows (pi, pj, shift) and by the search's scratch (capacities).
+  std::size_t row_bytes() const {
+    return sizeof(int) * (pi.capacity() + pj.capacity()) + sizeof(Shift) * shift.capacity();
+  }
+  std::size_t scratch_bytes() const {
+    std::size_t b = sizeof(int) * from_.capacity() + sizeof(std::uint64_t) * found_.capacity();
+    for (const auto& a : axes_) b += sizeof(double) * a.capacity();
+    return b + grid_.memory_bytes() + periodic_.memory_bytes();
+  }
 
   /// New rows: every pair with |x_j (+ h n) - x_i| < r_i + r_j + skin (radii up to r_max; `cell`,
   /// if given, the current periodic cell: the pairs through its images), merged with the old rows
