@@ -229,32 +229,48 @@ void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
 #include "solver_threads.hpp"  // (inside this namespace: the pair loop on threads)
 
 template <int D>
-void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
+void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) {
+  // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
+  // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
+  // contact, per group of kSumGroup particles (on the threads: each its own groups), the groups
+  // then added in order.
+  const std::size_t groups = (P_.size() + kSumGroup - 1) / kSumGroup;
+  if (!pst_done_) {
+    pst_sums_.resize(9 * groups);
+    particle_stress_groups(0, groups);
+  }
+  pst_done_ = false;
+  double s[9] = {};
+  for (std::size_t g = 0; g < groups; ++g)
+    for (int c = 0; c < 9; ++c) s[c] += pst_sums_[9 * g + static_cast<std::size_t>(c)];
+  for (int c = 0; c < 9; ++c) (&a.s3[0][0])[c] += s[c];
+}
+
+// Groups [g0, g1) of sum_i F_i (x) x_i into pst_sums_ (9 per group). F_i is the accumulator less
+// the m g it started from (the same product), and x_i is taken from the first particle (exactly
+// translation invariant, and no cancellation of large coordinates).
+template <int D>
+void DynamicSolverT<D>::particle_stress_groups(std::size_t g0, std::size_t g1) {
   const std::size_t n = P_.size();
   const double* const p_x = P_.pos.data();
   const double* const p_f = P_.force.data();
-  double (&s3)[3][3] = a.s3;
-  // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
-  // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
-  // contact. F_i is the accumulator less the m g it started from (the same product), and x_i is
-  // taken from the first particle (exactly translation invariant, and no cancellation of large
-  // coordinates).
   const double* const p_mass = P_.mass.data();
   const double gx = opt_.gravity_x, gy = opt_.gravity_y, gz = opt_.gravity_z;
   const double x0 = n > 0 ? p_x[0] : 0.0, y0 = n > 0 ? p_x[1] : 0.0, z0 = n > 0 ? p_x[D - 1] : 0.0;
-  double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* const f = p_f + D * i;
-    const double* const x = p_x + D * i;
-    const double Fx = f[0] - p_mass[i] * gx, Fy = f[1] - p_mass[i] * gy, Fz = f[D - 1] - p_mass[i] * gz;
-    const double X = x[0] - x0, Y = x[1] - y0, Z = x[D - 1] - z0;
-    s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
-    s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
-    s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
+  for (std::size_t g = g0; g < g1; ++g) {
+    double s00 = 0, s01 = 0, s02 = 0, s10 = 0, s11 = 0, s12 = 0, s20 = 0, s21 = 0, s22 = 0;
+    for (std::size_t i = g * kSumGroup; i < std::min(n, (g + 1) * kSumGroup); ++i) {
+      const double* const f = p_f + D * i;
+      const double* const x = p_x + D * i;
+      const double Fx = f[0] - p_mass[i] * gx, Fy = f[1] - p_mass[i] * gy, Fz = f[D - 1] - p_mass[i] * gz;
+      const double X = x[0] - x0, Y = x[1] - y0, Z = x[D - 1] - z0;
+      s00 += Fx * X, s01 += Fx * Y, s02 += Fx * Z;
+      s10 += Fy * X, s11 += Fy * Y, s12 += Fy * Z;
+      s20 += Fz * X, s21 += Fz * Y, s22 += Fz * Z;
+    }
+    double* const q = pst_sums_.data() + 9 * g;
+    q[0] = s00, q[1] = s01, q[2] = s02, q[3] = s10, q[4] = s11, q[5] = s12, q[6] = s20, q[7] = s21, q[8] = s22;
   }
-  s3[0][0] += s00, s3[0][1] += s01, s3[0][2] += s02;
-  s3[1][0] += s10, s3[1][1] += s11, s3[1][2] += s12;
-  s3[2][0] += s20, s3[2][1] += s21, s3[2][2] += s22;
 }
 
 // The particle-wall contacts, 2D: the pair (wall, particle), n from the wall into the box.

@@ -311,9 +311,8 @@ auto DynamicSolverT<D>::memory_use() const -> MemoryUse {
   m.particles = cap(P_.pos) + cap(P_.rot) + cap(P_.r) + cap(P_.vel) + cap(P_.spin) + cap(P_.mass) +
                 cap(P_.inertia) + cap(P_.force) + cap(P_.torque) + cap(radius_ref_) + cap(prescribed_) +
                 cap(is_prescribed_) + cap(spin_held_) + cap(vel_abs_) + cap(pos_build_) + cap(wall_touch_) +
-                cap(wall_list_) + cap(inv_mass_) + cap(inv_inertia_) + cap(blk_p_) + cap(bnd_list_) + cap(bnd_off_);
-  m.rows = rows_.row_bytes() + cap(pair_live_) + cap(row_buf_) + cap(slot_buf_) + cap(row_seen_) +
-           cap(row_start_) + cap(row_slot_) + cap(blk_k_);
+                cap(wall_list_) + cap(inv_mass_) + cap(inv_inertia_) + cap(blk_p_) + cap(bnd_list_) + cap(bnd_off_) + cap(grp_sums_);
+  m.rows = rows_.row_bytes() + cap(pair_live_) + cap(slot_buf_) + cap(row_start_) + cap(row_slot_) + cap(blk_k_);
   std::visit(
       [&](const auto& t) {
         m.rows += cap(t.pair) + cap(t.next);

@@ -37,13 +37,23 @@ inline void clear_shares(const int* row_slot, std::size_t k, double* slot_buf) {
 template <int D>
 template <class Law, bool InPlace, bool Periodic, bool Threaded>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
-                                                      std::size_t k_end, bool direct_sums) {
+                                                      std::size_t k_end) {
   static_assert(D == 2);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 128;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
+  // the stress and energy per group of kSumGroup particles (the rows of its i), in row order: the
+  // caller adds the groups in order (the same sums for any thread count)
   double sxx = 0, sxy = 0, syx = 0, syy = 0, el = 0, fn_max = 0;
+  double* const grp = grp_sums_.data();
+  std::size_t g_end = 0, g_now = 0;  // the current group: particles below g_end; g_now its index
+  auto next_group = [&](std::size_t i) {  // stores the group's sums (if any), starts the group of i
+    double* const q = grp + kGroupSums * g_now;
+    if (g_end > 0) q[0] = sxx, q[1] = sxy, q[2] = syx, q[3] = syy, q[4] = el;
+    sxx = sxy = syx = syy = el = 0.0;
+    g_now = i / kSumGroup, g_end = (g_now + 1) * kSumGroup;
+  };
   if constexpr (!Threaded)  // (threads: the caller)
     if (pair_live_.size() != rows_.pairs()) pair_live_.assign(rows_.pairs(), 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
@@ -68,13 +78,9 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
   double g_vx[kRowChunk], g_vy[kRowChunk], g_wi[kRowChunk], g_wj[kRowChunk];
   double g_ov[kRowChunk], g_nx[kRowChunk], g_ny[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk];
   double g_vn[kRowChunk], g_vt[kRowChunk];
-  // Threaded (solver_threads.hpp): per row fx, fy, dx, dy, energy (unless direct_sums: the first
-  // block's rows are summed here, as one thread sums them); a boundary particle's signed share
-  // (force, torque: 3 per slot) in the slot of the row in its list (row_slot >= 0), every other
-  // particle's added to its accumulator here
-  (void)direct_sums;
-  double* const row_buf = row_buf_.data();
-  std::uint8_t* const row_seen = row_seen_.data();
+  // Threaded (solver_threads.hpp): a boundary particle's signed share (force, torque: 3 per slot) in
+  // the slot of the row in its list (row_slot >= 0), every other particle's added to its
+  // accumulator here
   double* const slot_buf = slot_buf_.data();
   const int* const row_slot = row_slot_.data();
   for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
@@ -118,12 +124,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) row_seen[k] = 0, clear_shares<3>(row_slot, k, slot_buf);
+        if constexpr (Threaded) clear_shares<3>(row_slot, k, slot_buf);
         continue;
       }
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);
+      if (i >= g_end) next_group(i);  // (rows sorted by i)
       const double nx = g_nx[t], ny = g_ny[t], tx = -ny, ty = nx, dx = g_dx[t], dy = g_dy[t];
       const double vt = g_vt[t];
       contact::ContactKinematics in;
@@ -143,28 +150,18 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       if constexpr (Law::kHistoryOutlivesSeparation) pair_live_[k] = pair_law.has_history(pair_hist[k]) ? 1 : 0;
       if constexpr (contact::kHasContactArea<Law>) fn_max = f_n > fn_max ? f_n : fn_max;
       const double fx = f_n * nx + f_t * tx, fy = f_n * ny + f_t * ty;  // force on j
-      if constexpr (Threaded) {  // the same products and sums; a boundary particle's later, in row order
-        if (direct_sums) {
-          sxx += fx * dx, sxy += fx * dy, syx += fy * dx, syy += fy * dy;
-          if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
-        } else {
-          double* const b = row_buf + 5 * k;
-          b[0] = fx, b[1] = fy, b[2] = dx, b[3] = dy, b[4] = 0.0;
-          if constexpr (contact::kHasElasticEnergy<Law>) b[4] = pair_law.elastic_energy(in);
-          row_seen[k] = 1;
-        }
+      if constexpr (Threaded) {  // the same shares; a boundary particle's later, in row order
         add_share<2, 1>(row_slot[2 * k + 1], slot_buf, p_f + D * j, p_t + j, {fx, fy, -(g_dj[t] * f_t)});
         add_share<2, 1>(row_slot[2 * k], slot_buf, p_f + D * i, p_t + i, {-fx, -fy, -(g_di[t] * f_t)});
-        ++t;
-        continue;
+      } else {
+        double *const fi = p_f + D * i, *const fj = p_f + D * j;
+        fj[0] += fx;
+        fj[1] += fy;
+        fi[0] -= fx;
+        fi[1] -= fy;
+        p_t[i] -= g_di[t] * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
+        p_t[j] -= g_dj[t] * f_t;
       }
-      double *const fi = p_f + D * i, *const fj = p_f + D * j;
-      fj[0] += fx;
-      fj[1] += fy;
-      fi[0] -= fx;
-      fi[1] -= fy;
-      p_t[i] -= g_di[t] * f_t;  // M_i = M_j = -d F_T (kinematics.hpp)
-      p_t[j] -= g_dj[t] * f_t;
       sxx += fx * dx;  // Sigma = (1/V) sum f (x) l, l = x_j - x_i
       sxy += fx * dy;
       syx += fy * dx;
@@ -173,5 +170,6 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_2d(const Law& pair_law, Force
       ++t;
     }
   }
-  a.sxx = sxx, a.sxy = sxy, a.syx = syx, a.syy = syy, a.el = el, a.fn_max = fn_max;
+  next_group(0);
+  a.fn_max = fn_max;
 }

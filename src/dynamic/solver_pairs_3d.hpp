@@ -17,13 +17,22 @@
 template <int D>
 template <class Law, bool InPlace, bool Periodic, bool Threaded>
 NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, ForceSums& a, std::size_t k_begin,
-                                                      std::size_t k_end, bool direct_sums) {
+                                                      std::size_t k_end) {
   static_assert(D == 3);
   using H = typename Law::History;
   constexpr std::size_t kRowChunk = 64;
   const double dt = ts_.dt;
   H* const pair_hist = table<H>().pair.data();  // the law's table, taken once per evaluation
-  double el = 0, fn_max = 0;
+  double el = 0, fn_max = 0, s3p[3][3] = {};  // (periodic: f (x) h n over the rows across a face)
+  // the energy and s3p per group of kSumGroup particles in row order; the caller adds the groups
+  double* const grp = grp_sums_.data();
+  std::size_t g_end = 0, g_now = 0;  // the current group: particles below g_end; g_now its index
+  auto next_group = [&](std::size_t i) {  // stores the group's sums (if any), starts the group of i
+    double* const q = grp + kGroupSums * g_now;
+    if (g_end > 0) q[0] = el, std::copy(&s3p[0][0], &s3p[0][0] + 9, q + 1);
+    el = 0.0, std::fill(&s3p[0][0], &s3p[0][0] + 9, 0.0);
+    g_now = i / kSumGroup, g_end = (g_now + 1) * kSumGroup;
+  };
   if constexpr (!Threaded)  // (threads: the caller, and the caller fills vel_abs_)
     if (pair_live_.size() != rows_.pairs()) pair_live_.assign(rows_.pairs(), 1);
   // the particle arrays, hoisted (the loop stores forces: the vectors' data pointers are not reloaded)
@@ -42,7 +51,6 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
     if constexpr (!Threaded) fill_absolute_velocities(Lr);
     p_vr = vel_abs_.data();
   }
-  double s3p[3][3] = {};  // periodic: f (x) h n over the rows across a face
   bool g_touch[kRowChunk];
   // pass 1a, per row the law will see: the branch, L^2, r_i + r_j, r_i^2 - r_j^2, v_j - v_i, w_i, w_j
   double g_d[3][kRowChunk], g_L2[kRowChunk], g_s[kRowChunk], g_r2[kRowChunk], g_v[3][kRowChunk];
@@ -50,10 +58,8 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
   // pass 1b: n, overlap, centre-to-plane distances, v_n, the tangential velocity, the step's rotation
   double g_n[3][kRowChunk], g_ov[kRowChunk], g_di[kRowChunk], g_dj[kRowChunk], g_vn[kRowChunk];
   double g_t[3][kRowChunk], g_th[3][kRowChunk];
-  // Threaded: f, energy per row (unless direct_sums); a boundary particle's shares per slot, every
-  // other particle's added here (solver_threads.hpp)
-  double* const row_buf = row_buf_.data();
-  std::uint8_t* const row_seen = row_seen_.data();
+  // Threaded: a boundary particle's shares per slot, every other particle's added here
+  // (solver_threads.hpp)
   double* const slot_buf = slot_buf_.data();
   const int* const row_slot = row_slot_.data();
   for (std::size_t k0 = k_begin; k0 < k_end; k0 += kRowChunk) {
@@ -107,12 +113,13 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
     for (std::size_t c = 0; c < m; ++c) {  // pass 2: the law, forces, torques and sums
       const std::size_t k = k0 + c;
       if (skip_row<Law>(g_touch[c], pair_live_[k], pair_hist[k])) {
-        if constexpr (Threaded) row_seen[k] = 0, clear_shares<6>(row_slot, k, slot_buf);
+        if constexpr (Threaded) clear_shares<6>(row_slot, k, slot_buf);
         continue;
       }
       pair_live_[k] = 1;
       const auto i = static_cast<std::size_t>(p_i[k]);
       const auto j = static_cast<std::size_t>(p_j[k]);
+      if (i >= g_end) next_group(i);  // (rows sorted by i)
       const double n0 = g_n[0][t], n1 = g_n[1][t], n2 = g_n[2][t], di = g_di[t], dj = g_dj[t];
       const double t0 = g_t[0][t], t1 = g_t[1][t], t2 = g_t[2][t];
       contact::Kinematics<3> in;
@@ -138,16 +145,9 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       const double f0 = f_n * n0 + ft0, f1 = f_n * n1 + ft1, f2 = f_n * n2 + ft2;  // on j
       // M_i = -d_i n x f_t, M_j = -d_j n x f_t
       const double m0 = n1 * ft2 - n2 * ft1, m1 = n2 * ft0 - n0 * ft2, m2 = n0 * ft1 - n1 * ft0;
-      if (!Threaded || direct_sums) {  // the sums in row order (threads: the first block's rows)
-        // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
-        if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
-        if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
-      } else {  // the other threads' rows, summed after them in row order
-        double* const b = row_buf + 4 * k;
-        b[0] = f0, b[1] = f1, b[2] = f2, b[3] = 0.0;
-        if constexpr (contact::kHasElasticEnergy<Law>) b[3] = pair_law.elastic_energy(in);
-        row_seen[k] = 1;
-      }
+      // Sigma V = sum f (x) l, l = x_j + h n - x_i: here the rows across a face add f (x) h n
+      if constexpr (Periodic) add_image_stress<D>(shift[k].data(), hc, {f0, f1, f2}, s3p);
+      if constexpr (contact::kHasElasticEnergy<Law>) el += pair_law.elastic_energy(in);
       if constexpr (Threaded) {  // the same shares; a boundary particle's later, in row order
         add_share<3, 3>(row_slot[2 * k + 1], slot_buf, p_f + D * j, p_t + D * j,
                         {f0, f1, f2, -(dj * m0), -(dj * m1), -(dj * m2)});
@@ -163,6 +163,6 @@ NETDEM_FLATTEN void DynamicSolverT<D>::pair_forces_3d(const Law& pair_law, Force
       ++t;
     }
   }
-  a.el = el, a.fn_max = fn_max;
-  if constexpr (Periodic) std::copy(&s3p[0][0], &s3p[0][0] + 9, &a.s3[0][0]);
+  next_group(0);
+  a.fn_max = fn_max;
 }

@@ -2,34 +2,28 @@
 // The pair loop on DynamicOptions::threads threads (the solver's sys::ThreadTeam). Included by solver.cpp only, inside its
 // namespace netdem::dem, after solver_pairs_2d.hpp and solver_pairs_3d.hpp.
 //
-// The rows are sorted by (i, j), i < j. Thread t owns a block of particles [P_t, P_t+1) and the rows
-// whose i is in it (a contiguous range, about m / threads rows). One thread adds a particle's shares
-// to its accumulator in row order: the rows where it is j (coming from smaller i) first, then its
-// own. A particle that only rows of its own block reach gets them in that order from its owner,
-// which adds them directly. A boundary particle, reached by a row of an earlier block, gets every
-// share (+f and -d_j (n x f_t) as j, -f and -d_i (n x f_t) as i) written to the row's slot in its
-// list (slot_buf_, row_slot_: its rows in increasing row order), and after a barrier its owner adds
-// the slots in order: the additions of one thread's loop, in the same order (x - y is x + (-y) to
-// the bit). The stress and energy sums: the first block's rows in its loop, then the other rows
-// from row_buf_ in row order on the first thread. Every result is the same to the last bit for
-// any number of threads (tests/dynamic/test_dem_threads.cpp); only the boundary particles (a few
-// per cent with Morton-ordered particles) pay for it.
+// The rows are sorted by (i, j), i < j. Thread t owns a block of particles [P_t, P_t+1), whole groups
+// of kSumGroup particles, and the rows whose i is in it (a contiguous range, about m / threads
+// rows). One thread adds to a particle first the rows where it is j (from smaller i), then its
+// own, in row order. A particle that only rows of its own block reach gets them in that order from
+// its owner, which adds them directly. A boundary particle, reached by a row of an earlier block,
+// gets every share (+f and -d_j (n x f_t) as j, -f and -d_i (n x f_t) as i) written to the row's
+// slot in its list (slot_buf_, row_slot_: its rows in increasing row order), and after a barrier
+// its owner adds the slots in order: the additions of one thread's loop, in the same order (x - y
+// is x + (-y) to the bit). The stress and energy are summed per group of kSumGroup particles in
+// row order and the groups added in order, on one thread or many. Every result is the same to the
+// last bit for any number of threads (tests/dynamic/test_dem_threads.cpp); only the boundary
+// particles (a few per cent with Morton-ordered particles) pay, and no per-row data crosses threads.
 
 namespace {
 constexpr std::size_t kMinThreadedRows = 4096;  // fewer rows: one thread (the same results)
-// A row of sum_rows_after_first against a row of the loop (perf, bench_dem N = 3e4 2D, 1e5 3D)
-template <int D>
-constexpr double kTailCost = D == 2 ? 0.27 : 0.05;
 
 // The blocks of nt threads over the rows (pi sorted, pj): blk_p (nt + 1 particle bounds), blk_k
 // (nt + 1 row bounds), the boundary particles by block (list, off), and per row k the slot of its i
 // (slot[2k]) and of its j (slot[2k + 1]) in the boundary particle's list, -1 for any other particle;
 // start: the boundary particles' slot offsets (list.size() + 1). At a table build or a new count.
-// The first thread also sums the other blocks' rows (sum_rows_after_first), at tail_cost of a row
-// of the loop each: it takes r0 = m (1/(nt-1) - c) / (1 - c + 1/(nt-1)) rows, so that
-// r0 + c (m - r0) = (m - r0)/(nt - 1), the rows of each other thread. (Any split gives the same
-// results; only the balance depends on it.)
-void build_blocks(std::size_t n, int nt, double tail_cost, const std::vector<int>& pi, const std::vector<int>& pj,
+// The blocks start at multiples of the group size G.
+void build_blocks(std::size_t n, int nt, std::size_t G, const std::vector<int>& pi, const std::vector<int>& pj,
                   std::vector<std::size_t>& blk_p, std::vector<std::size_t>& blk_k, std::vector<int>& list,
                   std::vector<int>& off, std::vector<int>& start, std::vector<int>& slot) {
   const std::size_t m = pi.size(), T = static_cast<std::size_t>(nt);
@@ -41,11 +35,9 @@ void build_blocks(std::size_t n, int nt, double tail_cost, const std::vector<int
   blk_k.assign(T + 1, 0);
   blk_p[T] = n;
   blk_k[T] = m;
-  const double o = T > 1 ? 1.0 / static_cast<double>(T - 1) : 0.0, md = static_cast<double>(m);
-  const double r0 = std::max(0.0, md * (o - tail_cost) / (1.0 - tail_cost + o)), r = (md - r0) * o;
   for (std::size_t t = 1; t < T; ++t) {
-    const auto b = std::min(m - 1, static_cast<std::size_t>(r0 + r * static_cast<double>(t - 1)));
-    blk_p[t] = m == 0 ? n : static_cast<std::size_t>(pi[b]);
+    const std::size_t b = m == 0 ? 0 : std::min(m - 1, m * t / T);
+    blk_p[t] = m == 0 ? n : std::max(blk_p[t - 1], std::min(n, static_cast<std::size_t>(pi[b]) / G * G));
     blk_k[t] = static_cast<std::size_t>(std::lower_bound(pi.begin(), pi.end(), static_cast<int>(blk_p[t])) - pi.begin());
   }
   std::vector<int> idx(n, -1);  // the boundary particles' places in list
@@ -103,6 +95,7 @@ template <int D>
 template <class Law, bool InPlace, bool Periodic>
 void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   const std::size_t m = rows_.pairs(), n = P_.size();
+  grp_sums_.assign(kGroupSums * ((n + kSumGroup - 1) / kSumGroup), 0.0);  // (no allocation once grown)
   const int threads = opt_.threads;
   threads_used_ = 1;
   if (threads <= 1 || m < kMinThreadedRows) {
@@ -110,79 +103,68 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
       pair_forces_2d<Law, InPlace, Periodic, false>(pair_law, a, 0, m);
     else
       pair_forces_3d<Law, InPlace, Periodic, false>(pair_law, a, 0, m);
+    add_group_sums<Periodic>(a);
     return;
   }
   if (pair_live_.size() != m) pair_live_.assign(m, 1);
   sys::ThreadTeam& team = team_.get(threads);
   const int nt = team.size();
   if (!rows_csr_ok_ || blk_threads_ != nt) {
-    build_blocks(n, nt, kTailCost<D>, rows_.pi, rows_.pj, blk_p_, blk_k_, bnd_list_, bnd_off_, row_start_, row_slot_);
+    build_blocks(n, nt, kSumGroup, rows_.pi, rows_.pj, blk_p_, blk_k_, bnd_list_, bnd_off_, row_start_, row_slot_);
     blk_threads_ = nt;
     rows_csr_ok_ = true;
   }
-  constexpr std::size_t S = D == 2 ? 5 : 4, SS = D == 2 ? 3 : 6;  // per row; per slot
-  if (row_buf_.size() < S * m) row_buf_.resize(S * m);  // (grows at table builds only)
-  if (row_seen_.size() < m) row_seen_.resize(m);
+  constexpr std::size_t SS = D == 2 ? 3 : 6;  // per slot
   const auto slots = static_cast<std::size_t>(row_start_.back());
-  if (slot_buf_.size() < SS * slots) slot_buf_.resize(SS * slots);
-  double hc[3][3] = {}, Lr[3][3] = {};
-  if constexpr (Periodic) hoist_cell(hc, Lr);
-  if constexpr (D == 3 && Periodic) fill_absolute_velocities(Lr);
+  if (slot_buf_.size() < SS * slots) slot_buf_.resize(SS * slots);  // (grows at table builds only)
+  if constexpr (D == 3 && Periodic) {
+    double hc[3][3] = {}, Lr[3][3] = {};
+    hoist_cell(hc, Lr);
+    fill_absolute_velocities(Lr);
+  }
   double fn_part[256];
-  ForceSums first;  // the first block's sums, then every row's
+  const std::size_t groups = (n + kSumGroup - 1) / kSumGroup;
+  if constexpr (D == 3) pst_sums_.resize(9 * groups);
   auto rows = [&](int ti, int) {
     const auto t = static_cast<std::size_t>(ti);
     ForceSums part;
     std::exception_ptr failed;  // (a law's error: every member still reaches the barrier)
     try {
       if constexpr (D == 2)
-        pair_forces_2d<Law, InPlace, Periodic, true>(pair_law, part, blk_k_[t], blk_k_[t + 1], t == 0);
+        pair_forces_2d<Law, InPlace, Periodic, true>(pair_law, part, blk_k_[t], blk_k_[t + 1]);
       else
-        pair_forces_3d<Law, InPlace, Periodic, true>(pair_law, part, blk_k_[t], blk_k_[t + 1], t == 0);
+        pair_forces_3d<Law, InPlace, Periodic, true>(pair_law, part, blk_k_[t], blk_k_[t + 1]);
     } catch (...) {
       failed = std::current_exception();
     }
     fn_part[t] = part.fn_max;
-    if (t == 0) first = part;
     team.barrier();  // every row written
     if (failed) std::rethrow_exception(failed);  // (the team rethrows the lowest member's)
     gather_slots<D>(bnd_off_[t], bnd_off_[t + 1], bnd_list_.data(), row_start_.data(), slot_buf_.data(),
                     P_.force.data(), P_.torque.data());
-    if (t == 0) sum_rows_after_first<Law, Periodic>(first, hc);
+    // 3D: the block's particles' forces are final: their groups of pair_stress_3d's sum
+    if constexpr (D == 3) particle_stress_groups(blk_p_[t] / kSumGroup, (blk_p_[t + 1] + kSumGroup - 1) / kSumGroup);
   };
   team.run(rows);
+  pst_done_ = D == 3;
   threads_used_ = nt;
   double fn_max = 0.0;
   for (int t = 0; t < nt; ++t) fn_max = fn_part[t] > fn_max ? fn_part[t] : fn_max;
-  a.fn_max = fn_max, a.el = first.el;
-  if constexpr (D == 2) a.sxx = first.sxx, a.sxy = first.sxy, a.syx = first.syx, a.syy = first.syy;
-  if constexpr (D == 3 && Periodic) std::copy(&first.s3[0][0], &first.s3[0][0] + 9, &a.s3[0][0]);
+  a.fn_max = fn_max;
+  add_group_sums<Periodic>(a);
 }
 
-// The stress and energy sums over the rows after the first block, in row order, continuing the
-// first block's (a), as one thread takes them.
+// The stress and energy: the groups' sums (each in row order) added in group order.
 template <int D>
-template <class Law, bool Periodic>
-void DynamicSolverT<D>::sum_rows_after_first(ForceSums& a, const double (&hc)[3][3]) const {
-  constexpr std::size_t S = D == 2 ? 5 : 4;
-  double sxx = a.sxx, sxy = a.sxy, syx = a.syx, syy = a.syy, el = a.el, s3p[3][3];
-  std::copy(&a.s3[0][0], &a.s3[0][0] + 9, &s3p[0][0]);
-  const double* const buf = row_buf_.data();
-  (void)hc;
-  for (std::size_t k = blk_k_[1]; k < rows_.pairs(); ++k) {
-    if (!row_seen_[k]) continue;
-    const double* const b = buf + S * k;
-    if constexpr (D == 2) {
-      sxx += b[0] * b[2];
-      sxy += b[0] * b[3];
-      syx += b[1] * b[2];
-      syy += b[1] * b[3];
-    } else if constexpr (Periodic) {
-      add_image_stress<D>(rows_.shift[k].data(), hc, {b[0], b[1], b[2]}, s3p);
-    }
-    if constexpr (contact::kHasElasticEnergy<Law>) el += b[S - 1];
+template <bool Periodic>
+void DynamicSolverT<D>::add_group_sums(ForceSums& a) const {
+  double s[kGroupSums] = {};
+  for (std::size_t g = 0; g < grp_sums_.size(); g += kGroupSums)
+    for (std::size_t c = 0; c < kGroupSums; ++c) s[c] += grp_sums_[g + c];
+  if constexpr (D == 2) {
+    a.sxx = s[0], a.sxy = s[1], a.syx = s[2], a.syy = s[3], a.el = s[4];
+  } else {
+    a.el = s[0];
+    if constexpr (Periodic) std::copy(s + 1, s + 10, &a.s3[0][0]);
   }
-  a.el = el;
-  if constexpr (D == 2) a.sxx = sxx, a.sxy = sxy, a.syx = syx, a.syy = syy;
-  if constexpr (D == 3 && Periodic) std::copy(&s3p[0][0], &s3p[0][0] + 9, &a.s3[0][0]);
 }

@@ -591,14 +591,15 @@ class DynamicSolverT {
   };
   template <class L, bool InPlace, bool Periodic>
   void pair_forces(const L& pair_law, ForceSums& a);  ///< on opt_.threads threads (solver_threads.hpp)
-  /// Rows [k0, k1); Threaded: each row's forces into row_buf_, not summed (solver_pairs_{2,3}d.hpp)
+  /// Rows [k0, k1); Threaded: a boundary particle's shares to its slots (solver_pairs_{2,3}d.hpp)
   template <class L, bool InPlace, bool Periodic, bool Threaded>
-  void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1, bool direct_sums = true);
+  void pair_forces_3d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
   template <class L, bool InPlace, bool Periodic, bool Threaded>
-  void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1, bool direct_sums = true);
-  template <class L, bool Periodic>
-  void sum_rows_after_first(ForceSums& a, const double (&hc)[3][3]) const;  ///< (solver_threads.hpp)
-  void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3
+  void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
+  template <bool Periodic>
+  void add_group_sums(ForceSums& a) const;  ///< (solver_threads.hpp)
+  void pair_stress_3d(ForceSums& a);  ///< adds sum_i F_i (x) x_i to a.s3 (by groups: pst_sums_)
+  void particle_stress_groups(std::size_t g0, std::size_t g1);
   void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
   void wall_forces_2d(const L& wall_law, ForceSums& a);
@@ -740,11 +741,13 @@ class DynamicSolverT {
   /// pair_live_[k] == 0: the pair history k is fresh, so a separated pair needs no history access
   /// (set at a table build; refilled with 1 if its size differs from the table's).
   std::vector<std::uint8_t> pair_live_;
-  /// Threads (solver_threads.hpp): per row its force (2D: branch) and energy, whether the law saw it;
-  /// per particle its rows in increasing order, the slots of a row's two shares (built after each
-  /// table build: rows_csr_ok_), the shares.
-  std::vector<double> row_buf_, slot_buf_;
-  std::vector<std::uint8_t> row_seen_;
+  /// The pair loop's stress and energy sums per group of kSumGroup particles (kGroupSums each: 2D
+  /// sxx, sxy, syx, syy, energy; 3D energy, the periodic f (x) h n), added in group order
+  /// (solver_threads.hpp). Threads: the boundary particles' slots (built after each table build:
+  /// rows_csr_ok_) and their shares.
+  static constexpr std::size_t kSumGroup = 1024, kGroupSums = 10;
+  std::vector<double> grp_sums_, slot_buf_, pst_sums_;  ///< (pst_sums_: pair_stress_3d's groups)
+  bool pst_done_ = false;  ///< the threads filled pst_sums_ in this evaluation
   std::vector<int> row_start_, row_slot_;
   /// The threads' blocks: particles [blk_p_[t], blk_p_[t + 1]) and their rows [blk_k_[t], blk_k_[t + 1]);
   /// the boundary particles (a row of another block reaches them) of block t: bnd_list_[bnd_off_[t] ..
