@@ -246,6 +246,9 @@ DynamicSolverT<D>::DynamicSolverT(ParticlesT<D> particles, const LudingParams& p
     : P_(std::move(particles)), params_(params), box_(box), opt_(options) {
   params_.validate();
   opt_.validate();
+  // (-0 + 0 = +0: no force accumulator starts at -0, so a thread adding a skipped row's +0 share
+  // leaves it as one thread does; solver_threads.hpp)
+  opt_.gravity_x += 0.0, opt_.gravity_y += 0.0, opt_.gravity_z += 0.0;
   if (setup.cell) {
     periodic_ = true;
     cell_ = *setup.cell;

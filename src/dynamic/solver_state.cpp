@@ -238,8 +238,8 @@ void DynamicSolverT<D>::set_walls(const MovingWall& right, const MovingWall& top
 template <int D>
 void DynamicSolverT<D>::set_gravity(double gx, double gy) {
   if (!std::isfinite(gx) || !std::isfinite(gy)) fail("set_gravity: gravity must be finite");
-  opt_.gravity_x = gx;
-  opt_.gravity_y = gy;
+  opt_.gravity_x = gx + 0.0;  // (+0, never -0: the constructor's note)
+  opt_.gravity_y = gy + 0.0;
 }
 
 template <int D>
@@ -247,7 +247,7 @@ void DynamicSolverT<D>::set_gravity(double gx, double gy, double gz) {
   if (D == 2 && gz != 0.0) fail("set_gravity: a 2D solver has no z");
   if (!std::isfinite(gz)) fail("set_gravity: gravity must be finite");
   set_gravity(gx, gy);
-  opt_.gravity_z = gz;
+  opt_.gravity_z = gz + 0.0;
 }
 
 template <int D>

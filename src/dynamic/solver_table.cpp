@@ -143,9 +143,9 @@ void DynamicSolverT<D>::build_table() {
   build_wall_list();
   double rmax = 0.0;
   for (double r : P_.r) rmax = std::max(rmax, r);
+  rows_csr_ok_ = false;  // (the threads' row lists follow the new rows; cleared first: a throw below)
   rows_.find(P_, skin_, rmax);
   visit_law([&](const auto& law) { carry_histories(law); });
-  rows_csr_ok_ = false;  // (the threads' row lists follow the new rows)
 }
 
 // The periodic table (issue 29): the pairs within r_i + r_j + skin through the images of the
@@ -171,9 +171,9 @@ void DynamicSolverT<D>::build_table_periodic() {
            fmt::format("the periodic cell is {:.4g} wide across an axis, less than twice the largest interaction "
                        "range 2 r_max + skin = {:.4g}", cell_.min_width(), range_max_),
            "the cell was compressed or sheared too far for its number of particles (a larger packing)");
+  rows_csr_ok_ = false;
   rows_.find(P_, skin_, rmax, &cell_);
   visit_law([&](const auto& law) { carry_histories(law); });
-  rows_csr_ok_ = false;
   remove_mean_velocity();
 }
 
