@@ -229,19 +229,13 @@ void DynamicSolverT<D>::fill_absolute_velocities(const double (&Lr)[3][3]) {
 #include "solver_threads.hpp"  // (inside this namespace: the pair loop on threads)
 
 template <int D>
-void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) {
+void DynamicSolverT<D>::pair_stress_3d(ForceSums& a) const {
   // The pairs' part of Sigma V = sum_pairs f (x) (x_j - x_i) (f on j) is sum_i F_i (x) x_i, with
   // F_i the sum of the pair forces on i: one pass over the particles instead of one sum per
-  // contact, per group of kSumGroup particles (on the threads: each its own groups), the groups
-  // then added in order.
-  const std::size_t groups = (P_.size() + kSumGroup - 1) / kSumGroup;
-  if (!pst_done_) {
-    pst_sums_.resize(9 * groups);
-    particle_stress_groups(0, groups);
-  }
-  pst_done_ = false;
+  // contact, per group of kSumGroup particles (pair_forces: on the threads each its own groups),
+  // the groups then added in order.
   double s[9] = {};
-  for (std::size_t g = 0; g < groups; ++g)
+  for (std::size_t g = 0; g < sum_groups(); ++g)
     for (int c = 0; c < 9; ++c) s[c] += pst_sums_[9 * g + static_cast<std::size_t>(c)];
   for (int c = 0; c < 9; ++c) (&a.s3[0][0])[c] += s[c];
 }

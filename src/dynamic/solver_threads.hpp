@@ -95,14 +95,18 @@ template <int D>
 template <class Law, bool InPlace, bool Periodic>
 void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
   const std::size_t m = rows_.pairs(), n = P_.size();
-  grp_sums_.assign(kGroupSums * ((n + kSumGroup - 1) / kSumGroup), 0.0);  // (no allocation once grown)
+  const std::size_t groups = sum_groups();
+  grp_sums_.assign(kGroupSums * groups, 0.0);  // (no allocation once grown)
+  if constexpr (D == 3) pst_sums_.resize(9 * groups);
   const int threads = opt_.threads;
   threads_used_ = 1;
   if (threads <= 1 || m < kMinThreadedRows) {
-    if constexpr (D == 2)
+    if constexpr (D == 2) {
       pair_forces_2d<Law, InPlace, Periodic, false>(pair_law, a, 0, m);
-    else
+    } else {
       pair_forces_3d<Law, InPlace, Periodic, false>(pair_law, a, 0, m);
+      particle_stress_groups(0, groups);
+    }
     add_group_sums<Periodic>(a);
     return;
   }
@@ -123,8 +127,6 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
     fill_absolute_velocities(Lr);
   }
   double fn_part[256];
-  const std::size_t groups = (n + kSumGroup - 1) / kSumGroup;
-  if constexpr (D == 3) pst_sums_.resize(9 * groups);
   auto rows = [&](int ti, int) {
     const auto t = static_cast<std::size_t>(ti);
     ForceSums part;
@@ -146,7 +148,6 @@ void DynamicSolverT<D>::pair_forces(const Law& pair_law, ForceSums& a) {
     if constexpr (D == 3) particle_stress_groups(blk_p_[t] / kSumGroup, (blk_p_[t + 1] + kSumGroup - 1) / kSumGroup);
   };
   team.run(rows);
-  pst_done_ = D == 3;
   threads_used_ = nt;
   double fn_max = 0.0;
   for (int t = 0; t < nt; ++t) fn_max = fn_part[t] > fn_max ? fn_part[t] : fn_max;

@@ -442,7 +442,7 @@ class DynamicSolverT {
   std::size_t rebuilds() const { return rebuilds_; }  ///< neighbour-table builds so far
   std::size_t table_size() const { return rows_.pairs(); }
   /// Heap bytes held (vector capacities): the per-particle arrays (wall histories included), the
-  /// per-row arrays (pair histories, a table build's scratch histories, the threads' row buffers)
+  /// per-row arrays (pair histories, a table build's scratch histories, the threads' slots)
   /// and the neighbour search's scratch. A kept last_good() state is not counted.
   struct MemoryUse { std::size_t particles = 0, rows = 0, search = 0; };
   MemoryUse memory_use() const;
@@ -598,8 +598,9 @@ class DynamicSolverT {
   void pair_forces_2d(const L& pair_law, ForceSums& a, std::size_t k0, std::size_t k1);
   template <bool Periodic>
   void add_group_sums(ForceSums& a) const;  ///< (solver_threads.hpp)
-  void pair_stress_3d(ForceSums& a);  ///< adds sum_i F_i (x) x_i to a.s3 (by groups: pst_sums_)
-  void particle_stress_groups(std::size_t g0, std::size_t g1);
+  void pair_stress_3d(ForceSums& a) const;  ///< adds sum_i F_i (x) x_i to a.s3 (pst_sums_'s groups)
+  void particle_stress_groups(std::size_t g0, std::size_t g1);  ///< (filled by pair_forces)
+  std::size_t sum_groups() const { return (P_.size() + kSumGroup - 1) / kSumGroup; }
   void fill_absolute_velocities(const double (&Lr)[3][3]);
   template <class L, bool InPlace>
   void wall_forces_2d(const L& wall_law, ForceSums& a);
@@ -747,7 +748,6 @@ class DynamicSolverT {
   /// rows_csr_ok_) and their shares.
   static constexpr std::size_t kSumGroup = 1024, kGroupSums = 10;
   std::vector<double> grp_sums_, slot_buf_, pst_sums_;  ///< (pst_sums_: pair_stress_3d's groups)
-  bool pst_done_ = false;  ///< the threads filled pst_sums_ in this evaluation
   std::vector<int> row_start_, row_slot_;
   /// The threads' blocks: particles [blk_p_[t], blk_p_[t + 1]) and their rows [blk_k_[t], blk_k_[t + 1]);
   /// the boundary particles (a row of another block reaches them) of block t: bnd_list_[bnd_off_[t] ..
