@@ -1,4 +1,5 @@
 #include "output.hpp"
+#include "run_status.hpp"
 
 #include "netdem/packing/io.hpp"
 
@@ -448,6 +449,16 @@ void close_run_dir(const std::filesystem::path& dir) {
 
 bool run_dir_opened() { return g_run_dir_opened; }
 
+void reset_run_state() {
+  g_run_dir_opened = false;
+  activity() = "starting";
+}
+
+std::function<void(double)>& progress_hook() {
+  static std::function<void(double)> hook;
+  return hook;
+}
+
 namespace {
 void append_fields(std::string& s, const std::vector<Field>& fields) {
   for (const auto& f : fields) {
@@ -514,6 +525,7 @@ Progress::Progress(std::string what, double total, bool quiet)
     : what_(std::move(what)), total_(total), quiet_(quiet), start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 void Progress::update(double done) {
+  if (progress_hook()) progress_hook()(total_ > 0 ? done / total_ : 0.0);
   if (quiet_) return;
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - last_).count() < 0.5) return;
@@ -527,6 +539,7 @@ void Progress::update(double done) {
 }
 
 void Progress::finish() {
+  if (progress_hook()) progress_hook()(1.0);
   if (quiet_) return;
   const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   std::fprintf(stderr, "%s%s: done in %.2f s\n", printed_ ? "\r" : "", what_.c_str(), el);

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -70,6 +71,9 @@ void close_run_dir(const std::filesystem::path& dir);
 /// True once open_run_dir succeeded in this process: an error after it is a run error (exit 1),
 /// one before it a refused command line (exit 2).
 bool run_dir_opened();
+/// Starts a command afresh in this process (the Python module runs several): no run folder
+/// opened yet, the activity "starting".
+void reset_run_state();
 
 /// MemAvailable of /proc/meminfo in bytes, or 0 if unknown (demsolve's memory estimate;
 /// apps/netsolve/setup.hpp has its own copy, mem_available_bytes, to be replaced by this one).
@@ -93,6 +97,11 @@ std::string vtp_network(const std::vector<double>& x, const std::vector<double>&
 /// The same with the real z of every centre (3D); z == nullptr writes z = 0 (as above).
 std::string vtp_network_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
                            const std::vector<int>& i, const std::vector<int>& j, const std::vector<Field>& cell_data);
+
+/// Called by every Progress::update and finish with the fraction done, quiet or not, when set (the
+/// Python module's progress callback and its Ctrl-C check). It may throw to stop the run: the
+/// exception leaves the command (a type not derived from std::exception passes guarded()).
+std::function<void(double)>& progress_hook();
 
 /// Progress on stderr: percent, rate and ETA, at most twice a second; silent if quiet.
 class Progress {

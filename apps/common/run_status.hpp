@@ -4,6 +4,7 @@
 // exceptions of a run to one line on stderr and exit 1 or 2. netsolve uses them; demsolve can.
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <new>
 #include <string>
 #include <vector>
@@ -52,6 +53,22 @@ struct RunStatus {
   }
 };
 
+/// Where the one-line errors of a command go: stderr, or, when set (the Python module), this sink,
+/// which receives the line without its newline.
+inline std::function<void(const std::string&)>& error_sink() {
+  static std::function<void(const std::string&)> sink;
+  return sink;
+}
+
+/// Writes one error line ("netsolve: error: ...") to the sink if there is one, else to stderr.
+inline void print_error_line(const std::string& line) {
+  if (error_sink()) {
+    error_sink()(line);
+  } else {
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
+}
+
 /// What the program was doing, for "out of memory while ..." (set before each big step).
 inline std::string& activity() {
   static std::string s = "starting";
@@ -67,7 +84,7 @@ int guarded(const std::string& prefix, F&& body) {
     std::string m = msg;
     for (char& c : m)  // one line: every control character becomes a space
       if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
-    std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), m.c_str());
+    print_error_line(prefix + ": error: " + m);
   };
   try {
     return body();

@@ -356,7 +356,7 @@ int stop_untrustworthy(CompactFiles<D>& files, nlohmann::json& summary, const fs
   summary["status_reason"] = end.reason;
   write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
   close_run_dir(out);
-  std::fprintf(stderr, "demsolve: error: %s\n", end.message.c_str());
+  print_error_line("demsolve: error: " + end.message);
   return exit_code::untrustworthy;
 }
 
@@ -430,9 +430,9 @@ int finish_run(CompactFiles<D>& files, nlohmann::json& summary, const Compaction
   }
   std::printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
               diag_c.c_str(), m.Z, r.last.I, static_cast<long long>(r.steps), wall, out.c_str());
-  for (const auto& w : r.warnings) std::fprintf(stderr, "demsolve: warning: %s\n", w.c_str());
+  for (const auto& w : r.warnings) print_error_line("demsolve: warning: " + w);
   if (!r.ok()) {
-    std::fprintf(stderr, "demsolve: error: %s: %s\n", r.status.c_str(), r.reason.c_str());
+    print_error_line("demsolve: error: " + r.status + ": " + r.reason);
     return exit_code::untrustworthy;
   }
   return exit_code::ok;

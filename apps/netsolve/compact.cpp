@@ -394,11 +394,11 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
               last.density, last.S11 / sy, last.S22 / sy, last.Z, rows.unconverged, rows.max_residual, wall, out.c_str());
   if (!stopped.empty()) {
-    std::fprintf(stderr, "netsolve: error: unstable: %s (history.csv and summary.json keep increments 0..%d)\n",
-                 stopped.c_str(), rows.done);
+    print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",
+                                 stopped, rows.done));
   } else if (!status.ok()) {
-    std::fprintf(stderr, "netsolve: %s: %s: %s\n", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
-                 status.status.c_str(), status.reason().c_str());
+    print_error_line(fmt::format("netsolve: {}: {}: {}", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
+                                 status.status, status.reason()));
   }
   return stopped.empty() ? status.exit_code(ra.allow_unconverged) : exit_code::untrustworthy;
 }

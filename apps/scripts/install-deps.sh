@@ -13,6 +13,7 @@ pkgs=(
   libomp-dev                         # clang's OpenMP runtime: find_package(OpenMP) of the clang sanitizer
                                      # build (clang does not depend on it)
   python3 python3-numpy python3-matplotlib
+  pybind11-dev python3-dev python3-pytest   # the Python module netdem (python/) and its tests (tests/python)
 )
 missing=()
 for p in "${pkgs[@]}"; do

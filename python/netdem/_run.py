@@ -1,0 +1,112 @@
+"""Runs a subcommand in process (the extension _netdem) and reads its run folder back."""
+import csv
+import json
+import os
+import shutil
+import tempfile
+
+import numpy as np
+
+from . import _netdem
+
+
+class Result:
+    """A finished run: `history` (history.csv, or timeseries.csv, as a dict of numpy arrays named
+    as its columns), `summary` (summary.json), `status` (the summary's "status": "ok",
+    "unconverged", "unstable", "incomplete", ...), `exit_code` (the command line's: 0 or 3),
+    `messages` (the error or warning lines the command printed) and `out` (the run folder if kept,
+    else None)."""
+
+    def __init__(self, history, summary, exit_code, messages, out):
+        self.history = history
+        self.summary = summary
+        self.status = summary.get("status", "ok" if exit_code == 0 else "unknown")
+        self.exit_code = exit_code
+        self.messages = messages
+        self.out = out
+
+    def __repr__(self):
+        rows = len(next(iter(self.history.values()))) if self.history else 0
+        return f"Result(status={self.status!r}, exit_code={self.exit_code}, {rows} history rows)"
+
+
+def _value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return ",".join(_value(x) for x in v)
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))  # the shortest text that reads back as the same double
+    return str(v)
+
+
+def tokens(kwargs):
+    """The command-line words of keyword arguments: name -> --name (with '_' -> '-', a trailing
+    '_' dropped); True is a flag, False and None leave the option out."""
+    words = []
+    for name, v in kwargs.items():
+        option = "--" + name.rstrip("_").replace("_", "-")
+        if v is None or v is False:
+            continue
+        if v is True:
+            words.append(option)
+        else:
+            words.append(f"{option}={_value(v)}")
+    return words
+
+
+def read_table(path):
+    """A CSV file of a run (header line, '#' lines skipped) as a dict of numpy arrays."""
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    if not rows:
+        return {}
+    header, body = rows[0], rows[1:]
+    table = {}
+    for k, name in enumerate(header):
+        col = [r[k] if k < len(r) else "nan" for r in body]
+        try:
+            table[name] = np.array([float(v) if v != "" else np.nan for v in col], dtype=np.float64)
+        except ValueError:
+            table[name] = np.array(col)
+    return table
+
+
+def read_run(folder, exit_code, messages, keep):
+    """The Result of the run folder `folder`."""
+    summary = {}
+    path = os.path.join(folder, "summary.json")
+    if os.path.exists(path):
+        with open(path) as f:
+            summary = json.load(f)
+    history = {}
+    for name in ("history.csv", "timeseries.csv"):
+        if os.path.exists(os.path.join(folder, name)):
+            history = read_table(os.path.join(folder, name))
+            break
+    return Result(history, summary, exit_code, messages, folder if keep else None)
+
+
+def run(tool, subcommand, kwargs, out=None, progress=None, reader=read_run):
+    """Runs `tool subcommand` with the options of `kwargs` in process; `reader(folder, exit_code,
+    messages, keep)` makes the result. ValueError for a refused command line (exit 2), RuntimeError
+    for a run error (exit 1), both with the command's one-line message."""
+    if "out" in kwargs:
+        raise TypeError("out is the keyword argument of the run folder, not an option")
+    tmp = None
+    if out is None:
+        tmp = tempfile.mkdtemp(prefix="netdem-")
+        folder = os.path.join(tmp, "run")
+    else:
+        folder = os.fspath(out)
+    try:
+        code, lines = _netdem.run(tool, [subcommand] + tokens(kwargs) + [f"--out={folder}"], progress)
+        message = lines[-1] if lines else f"{tool} {subcommand}: exit status {code}"
+        if code == 2:
+            raise ValueError(message)
+        if code not in (0, 3):
+            raise RuntimeError(message)
+        return reader(folder, code, list(lines), tmp is None)
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)

@@ -1,0 +1,82 @@
+"""Shared helpers of the module's tests: the executables of the same build (ctest sets
+NETDEM_NETSOLVE and NETDEM_DEMSOLVE; else the build next to the imported module) and the
+comparison of two run folders."""
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import netdem
+from netdem import _run
+
+# summary.json keys that are not results: wall-clock times and the command itself
+VOLATILE = {"command", "timing_s", "timings", "wall_s", "cpu_s", "threads_available"}
+
+
+def executable(tool):
+    env = os.environ.get(f"NETDEM_{tool.upper()}")
+    if env:
+        return env
+    build = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(netdem.__file__))))
+    return os.path.join(build, "apps", tool)
+
+
+def run_cli(tool, args, cwd=None):
+    """Runs the executable; (exit status, stderr)."""
+    p = subprocess.run([executable(tool)] + args, capture_output=True, text=True, cwd=cwd)
+    return p.returncode, p.stderr
+
+
+def assert_same_numbers(a, b, where="summary"):
+    """Two JSON values equal, every number exactly (NaN equals NaN), volatile keys skipped."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict), where
+        keys = set(a) - VOLATILE
+        assert keys == set(b) - VOLATILE, f"{where}: keys differ: {sorted(keys ^ (set(b) - VOLATILE))}"
+        for k in keys:
+            assert_same_numbers(a[k], b[k], f"{where}.{k}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for k, (x, y) in enumerate(zip(a, b)):
+            assert_same_numbers(x, y, f"{where}[{k}]")
+    elif isinstance(a, float) and math.isnan(a):
+        assert isinstance(b, float) and math.isnan(b), where
+    else:
+        assert a == b, f"{where}: {a!r} != {b!r}"
+
+
+def assert_same_run(cli_dir, result):
+    """The Python result equals the command line's run folder: every history column exactly,
+    summary.json's numbers, every other JSON file's numbers and every other file byte for byte
+    (but command.txt), in subfolders too."""
+    cli_history = _run.read_table(os.path.join(cli_dir, "history.csv"))
+    assert list(cli_history) == list(result.history)
+    for name, col in cli_history.items():
+        assert col.dtype == result.history[name].dtype, name
+        assert np.array_equal(col, result.history[name], equal_nan=col.dtype.kind == "f"), name
+    with open(os.path.join(cli_dir, "summary.json")) as f:
+        assert_same_numbers(json.load(f), result.summary)
+    if result.out is not None:
+        names = files(cli_dir) - {"command.txt", "summary.json"}
+        assert names == files(result.out) - {"command.txt", "summary.json"}
+        for n in sorted(names):
+            a, b = os.path.join(cli_dir, n), os.path.join(result.out, n)
+            if n.endswith(".json"):  # wall-clock times in them
+                with open(a) as f, open(b) as g:
+                    assert_same_numbers(json.load(f), json.load(g), n)
+                continue
+            with open(a, "rb") as f, open(b, "rb") as g:
+                assert f.read() == g.read(), n
+
+
+def files(folder):
+    """The files under `folder`, as paths relative to it."""
+    return {os.path.relpath(os.path.join(d, f), folder) for d, _, fs in os.walk(folder) for f in fs}
+
+
+@pytest.fixture
+def tmp(tmp_path):
+    return str(tmp_path)

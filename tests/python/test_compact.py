@@ -1,0 +1,107 @@
+"""netdem.netsolve.compact and netdem.demsolve.compact against the executables of the same build,
+bit for bit; their errors and statuses as the command line's."""
+import os
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+import netdem
+from conftest import assert_same_run, run_cli
+
+SMALL = ["--width", "20", "--increments", "40", "--quiet"]  # W = 20 converges with 40 increments, not 10
+
+
+@pytest.mark.parametrize("options", [{}, {"friction": 0.1, "path": "closed-die", "snapshots": [0.83, 0.84]}])
+def test_netsolve_compact_equals_cli(tmp, options):
+    args = [w for k, v in options.items() for w in (f"--{k}", ",".join(map(str, v)) if isinstance(v, list) else str(v))]
+    code, _ = run_cli("netsolve", ["compact"] + SMALL + args + ["--out", f"{tmp}/cli"])
+    r = netdem.netsolve.compact(width=20, increments=40, quiet=True, out=f"{tmp}/py", **options)
+    assert r.exit_code == code and r.out == f"{tmp}/py"
+    assert (r.status == "ok") == (code == 0) and r.status in ("ok", "unconverged", "unstable")
+    assert len(r.history["D"]) == 41 and r.history["D"][-1] > r.history["D"][0]
+    assert_same_run(f"{tmp}/cli", r)
+
+
+def test_netsolve_compact_defaults_equal_cli(tmp):
+    """No keyword argument: the command line's defaults (the whole default run, W = 80)."""
+    code, _ = run_cli("netsolve", ["compact", "--quiet", "--out", f"{tmp}/cli"])
+    assert code == 0
+    r = netdem.netsolve.compact(quiet=True, out=f"{tmp}/py")
+    assert r.summary["status"] == "ok"
+    assert abs(r.history["D"][-1] - 0.85) < 1e-3  # the default target density
+    assert_same_run(f"{tmp}/cli", r)
+
+
+def test_without_out_the_folder_is_removed():
+    r = netdem.netsolve.compact(width=20, increments=40, quiet=True)
+    assert r.out is None and r.status == "ok" and len(r.history["S11"]) == 41
+    assert np.all(r.history["S11"][1:] < 0)  # compression
+
+
+def test_demsolve_compact_equals_cli(tmp):
+    args = ["--width", "10", "--increments", "4", "--quiet"]
+    code, _ = run_cli("demsolve", ["compact"] + args + ["--out", f"{tmp}/cli"])
+    assert code == 0
+    r = netdem.demsolve.compact(width=10, increments=4, quiet=True, out=f"{tmp}/py")
+    assert r.exit_code == 0 and len(r.history["D"]) == 5
+    assert_same_run(f"{tmp}/cli", r)
+
+
+@pytest.mark.parametrize("tool,kwargs,args", [
+    ("netsolve", {"width": -1}, ["--width", "-1"]),
+    ("netsolve", {"to_density": 1.5}, ["--to-density", "1.5"]),
+    ("netsolve", {"path": "sideways"}, ["--path", "sideways"]),
+    ("netsolve", {"widht": 20}, ["--widht=20"]),  # CLI11 names the word as given
+    ("demsolve", {"inertial_number": -1}, ["--inertial-number", "-1"]),
+])
+def test_bad_value_raises_the_cli_message(tmp, tool, kwargs, args):
+    code, err = run_cli(tool, ["compact"] + args + ["--out", f"{tmp}/cli"])
+    assert code == 2 and err.count("\n") == 1
+    with pytest.raises(ValueError) as e:
+        getattr(netdem, tool).compact(out=f"{tmp}/py", **kwargs)
+    assert str(e.value) == err.strip()
+    assert not os.path.exists(f"{tmp}/py")  # refused before anything is written
+
+
+def test_untrustworthy_run_returns_its_status(tmp):
+    args = ["--width", "20", "--increments", "5", "--quiet", "--max-newton", "1", "--tol", "1e-12"]
+    code, err = run_cli("netsolve", ["compact"] + args + ["--out", f"{tmp}/cli"])
+    assert code == 3 and "unconverged" in err
+    r = netdem.netsolve.compact(width=20, increments=5, quiet=True, max_newton=1, tol=1e-12, out=f"{tmp}/py")
+    assert r.status == "unconverged" and r.exit_code == 3
+    assert r.summary["status_reason"] and r.messages
+    assert_same_run(f"{tmp}/cli", r)
+
+
+def test_progress_reaches_one_and_can_stop_the_run(tmp):
+    seen = []
+    netdem.netsolve.compact(width=20, increments=10, quiet=True, progress=seen.append)
+    assert seen and seen[-1] == 1.0 and seen == sorted(seen)
+
+    class Stop(Exception):
+        pass
+
+    def stop(fraction):
+        raise Stop()
+
+    with pytest.raises(Stop):
+        netdem.netsolve.compact(width=20, increments=10, quiet=True, progress=stop, out=f"{tmp}/stopped")
+    assert os.path.exists(f"{tmp}/stopped/.incomplete")  # the run stopped inside, as a killed command
+    seen.clear()
+    r = netdem.demsolve.compact(width=10, increments=2, quiet=True, progress=seen.append)
+    assert r.exit_code == 0 and seen[-1] == 1.0
+    with pytest.raises(Stop):
+        netdem.demsolve.compact(width=10, increments=2, quiet=True, progress=stop)
+
+
+def test_ctrl_c_interrupts_a_run():
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            netdem.netsolve.compact(quiet=True)  # the default run, about 1 s
+    finally:
+        timer.cancel()
+    assert netdem.netsolve.compact(width=20, increments=40, quiet=True).status == "ok"  # usable afterwards
