@@ -22,6 +22,7 @@
 #include "netsolve/command.hpp"
 #include "output.hpp"
 #include "run_status.hpp"
+#include "worker_pool.hpp"
 
 namespace py = pybind11;
 
@@ -182,6 +183,9 @@ PYBIND11_MODULE(_netdem, m) {
   m.doc() = "netdem's extension: the command lines' subcommands in process, the packing files (use the package netdem)";
   m.def("run", &run, py::arg("tool"), py::arg("args"), py::arg("progress") = py::none(),
         "Runs `tool args...` in this process (the GIL released); returns (exit status, error lines).");
+  m.def(
+      "set_worker_program", [](const std::vector<std::string>& words) { netdem::app::worker_program() = words; },
+      py::arg("words"), "The program worker processes start (netsolve yield --jobs): words, then the tool's argv.");
   m.def("read_packing", &read_packing, py::arg("path"), "A packing CSV file as a dict of numpy arrays.");
   m.def("write_packing", &write_packing, py::arg("packing"), py::arg("path"), "Writes a dict of read_packing's keys.");
 }

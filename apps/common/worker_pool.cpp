@@ -43,18 +43,25 @@ WorkerResult collect(int index, int st, const std::filesystem::path& record_file
 }
 
 pid_t spawn(const WorkerPool& pool, int index) {
-  std::vector<std::string> args = pool.argv;
+  std::vector<std::string> args = worker_program();
+  args.insert(args.end(), pool.argv.begin(), pool.argv.end());
   for (auto& s : pool.extra_args(index)) args.push_back(std::move(s));
   std::vector<char*> cargs;
   for (auto& s : args) cargs.push_back(s.data());
   cargs.push_back(nullptr);
   pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, "/proc/self/exe", nullptr, nullptr, cargs.data(), environ);
+  const char* program = worker_program().empty() ? "/proc/self/exe" : worker_program().front().c_str();
+  const int rc = ::posix_spawn(&pid, program, nullptr, nullptr, cargs.data(), environ);
   if (rc != 0) throw std::runtime_error(fmt::format("cannot start a worker process: {}", std::strerror(rc)));
   return pid;
 }
 
 }  // namespace
+
+std::vector<std::string>& worker_program() {
+  static std::vector<std::string> words;
+  return words;
+}
 
 void run_in_workers(const WorkerPool& pool, const std::vector<int>& indices, const std::function<void(const WorkerResult&)>& finished) {
   std::fflush(stdout);

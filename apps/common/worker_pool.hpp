@@ -28,6 +28,11 @@ struct WorkerPool {
   int jobs = 1;                                                  ///< workers at the same time
 };
 
+/// The program a worker starts when it is not this executable (the Python module, whose
+/// executable is the interpreter): these words, then the pool's argv (argv[0] the tool's name);
+/// words[0] is the program's path. Empty (the default): /proc/self/exe with the pool's argv.
+std::vector<std::string>& worker_program();
+
 /// Runs a worker for each of `indices` (in this order, at most pool.jobs at a time) and calls
 /// `finished` in the parent as each one ends. Throws std::runtime_error if a worker cannot be
 /// started or waiting fails.

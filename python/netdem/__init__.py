@@ -12,7 +12,7 @@ It returns a Result (.history, .summary, .status, .exit_code). A bad value raise
 the command line's one-line message; a run that finishes untrustworthy returns its status.
 `progress=callable(fraction)` is called during the run (at most every 50 ms); Ctrl-C stops it.
 
-Modules: netdem.netsolve (compact, pack), netdem.demsolve (compact), netdem.packing (deposit,
+Modules: netdem.netsolve (compact, yield_, pack), netdem.demsolve (compact), netdem.packing (deposit,
 read, write).
 """
 from . import demsolve, netsolve, packing

@@ -3,12 +3,17 @@ import csv
 import json
 import os
 import shutil
+import sys
 import tempfile
 
 import numpy as np
 
 from . import _netdem
 
+# worker processes (netsolve yield --jobs) are this interpreter running netdem._worker
+_netdem.set_worker_program([sys.executable, "-c", "import sys; sys.path.insert(0, sys.argv.pop(1)); "
+                            "from netdem import _worker; _worker.main()",
+                            os.path.dirname(os.path.dirname(os.path.abspath(__file__)))])
 
 class Result:
     """A finished run: `history` (history.csv, or timeseries.csv, as a dict of numpy arrays named

@@ -20,3 +20,21 @@ def pack(*, out=None, **options):
         return r
 
     return _run.run("netsolve", "pack", options, out, None, reader)
+
+
+def yield_(*, out=None, progress=None, **options):
+    """`netsolve yield`: compaction, elastic unloading and strain probes in `directions` directions
+    (docs/yield.md); `jobs` worker processes (0, the default: one per core) are this interpreter.
+    Returns a Result whose `history` is the precompaction's and `yield_points` yield_points.csv's
+    columns (numpy arrays; NaN where a probe found no point, text columns as arrays of str).
+    Also reachable as getattr(netdem.netsolve, "yield")."""
+
+    def reader(folder, code, messages, keep):
+        r = _run.read_run(folder, code, messages, keep)
+        r.yield_points = _run.read_table(f"{folder}/yield_points.csv")
+        return r
+
+    return _run.run("netsolve", "yield", options, out, progress, reader)
+
+
+globals()["yield"] = yield_  # `yield` is a Python keyword: netdem.netsolve.yield_ or getattr(..., "yield")

@@ -105,3 +105,17 @@ def test_ctrl_c_interrupts_a_run():
     finally:
         timer.cancel()
     assert netdem.netsolve.compact(width=20, increments=40, quiet=True).status == "ok"  # usable afterwards
+
+
+def test_netsolve_yield_equals_cli(tmp):
+    """yield in worker processes: from Python they are the interpreter running netdem._worker."""
+    args = ["--width", "20", "--directions", "4", "--jobs", "2", "--quiet"]
+    code, _ = run_cli("netsolve", ["yield"] + args + ["--out", f"{tmp}/cli"])
+    r = netdem.netsolve.yield_(width=20, directions=4, jobs=2, quiet=True, out=f"{tmp}/py")
+    assert r.exit_code == code == 0 and r.summary["probes"]["jobs"] == 2
+    assert list(r.yield_points["theta"]) == [0, 90, 180, 270]
+    assert_same_run(f"{tmp}/cli", r)  # the probe records included: a failed worker would differ
+    assert getattr(netdem.netsolve, "yield") is netdem.netsolve.yield_
+    with pytest.raises(ValueError) as e:
+        netdem.netsolve.yield_(directions=0)
+    assert str(e.value) == run_cli("netsolve", ["yield", "--directions", "0", "--out", f"{tmp}/bad"])[1].strip()
