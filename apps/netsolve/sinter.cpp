@@ -702,7 +702,7 @@ int run_sinter_command(int argc, char** argv) {
     app.parse(argc - 1, argv + 1);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "netsolve sinter: error: %s (see --help)\n", e.what());
+    netdem::app::print_error_line(fmt::format("netsolve sinter: error: {} (see --help)", e.what()));
     return 2;
   }
   return netdem::app::netsolve::guarded("netsolve sinter", [&]() { return run(a, app, command); });

@@ -743,7 +743,7 @@ int run_yield_command(int argc, char** argv) {
     app.parse(argc - 1, argv + 1);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "netsolve %s: error: %s (see --help)\n", sub.c_str(), e.what());
+    netdem::app::print_error_line(fmt::format("netsolve {}: error: {} (see --help)", sub, e.what()));
     return 2;
   }
   return netdem::app::netsolve::guarded("netsolve " + sub, [&]() {

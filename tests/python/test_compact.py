@@ -116,6 +116,7 @@ def test_netsolve_yield_equals_cli(tmp):
     assert list(r.yield_points["theta"]) == [0, 90, 180, 270]
     assert_same_run(f"{tmp}/cli", r)  # the probe records included: a failed worker would differ
     assert getattr(netdem.netsolve, "yield") is netdem.netsolve.yield_
-    with pytest.raises(ValueError) as e:
-        netdem.netsolve.yield_(directions=0)
-    assert str(e.value) == run_cli("netsolve", ["yield", "--directions", "0", "--out", f"{tmp}/bad"])[1].strip()
+    for kwargs, args in (({"directions": 0}, ["--directions", "0"]), ({"widht": 20}, ["--widht=20"])):
+        with pytest.raises(ValueError) as e:
+            netdem.netsolve.yield_(**kwargs)
+        assert str(e.value) == run_cli("netsolve", ["yield"] + args + ["--out", f"{tmp}/bad"])[1].strip()
