@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <pybind11/numpy.h>
@@ -57,7 +58,10 @@ class RunHooks {
   }
 
  private:
+  /// Only on the thread of the run (the caller's): a protocol that reports progress from its worker
+  /// threads (demsolve yield's probes) must not throw there, nor call Python from them.
   void call(double fraction) {
+    if (std::this_thread::get_id() != owner_) return;
     const auto now = std::chrono::steady_clock::now();
     if (fraction < 1.0 && started_ && now - last_ < std::chrono::milliseconds(50)) return;
     started_ = true;
@@ -78,6 +82,7 @@ class RunHooks {
   }
 
   const py::object& progress_;
+  const std::thread::id owner_ = std::this_thread::get_id();
   std::chrono::steady_clock::time_point last_;
   bool started_ = false;
   PyObject* type_ = nullptr;
