@@ -3,6 +3,7 @@ bit for bit; their errors and statuses as the command line's."""
 import os
 import signal
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -120,3 +121,27 @@ def test_netsolve_yield_equals_cli(tmp):
         with pytest.raises(ValueError) as e:
             netdem.netsolve.yield_(**kwargs)
         assert str(e.value) == run_cli("netsolve", ["yield"] + args + ["--out", f"{tmp}/bad"])[1].strip()
+
+
+def test_the_run_releases_the_gil():
+    """Another Python thread counts during the default run about as fast as alone; with the GIL
+    held it would count only while the Python side reads the files (measured: 2-5 % of its rate)."""
+    count, done = [0], threading.Event()
+
+    def counter():
+        while not done.is_set():
+            count[0] += 1
+
+    t = threading.Thread(target=counter)
+    t.start()
+    try:
+        t0, c0 = time.perf_counter(), count[0]
+        time.sleep(0.3)
+        alone = (count[0] - c0) / (time.perf_counter() - t0)
+        t0, c0 = time.perf_counter(), count[0]
+        netdem.netsolve.compact(quiet=True)
+        during = (count[0] - c0) / (time.perf_counter() - t0)
+    finally:
+        done.set()
+        t.join()
+    assert during > 0.3 * alone, (during, alone)
