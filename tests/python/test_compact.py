@@ -125,23 +125,27 @@ def test_netsolve_yield_equals_cli(tmp):
 
 def test_the_run_releases_the_gil():
     """Another Python thread counts during the default run about as fast as alone; with the GIL
-    held it would count only while the Python side reads the files (measured: 2-5 % of its rate)."""
+    held it would count only while the Python side reads the files (measured: 4 % of its rate)."""
     count, done = [0], threading.Event()
 
     def counter():
         while not done.is_set():
             count[0] += 1
 
+    def rate(action):
+        t0, c0 = time.perf_counter(), count[0]
+        action()
+        return (count[0] - c0) / (time.perf_counter() - t0)
+
     t = threading.Thread(target=counter)
     t.start()
     try:
-        t0, c0 = time.perf_counter(), count[0]
-        time.sleep(0.3)
-        alone = (count[0] - c0) / (time.perf_counter() - t0)
-        t0, c0 = time.perf_counter(), count[0]
-        netdem.netsolve.compact(quiet=True)
-        during = (count[0] - c0) / (time.perf_counter() - t0)
+        before = rate(lambda: time.sleep(0.3))
+        during = rate(lambda: netdem.netsolve.compact(quiet=True))
+        after = rate(lambda: time.sleep(0.3))
     finally:
         done.set()
         t.join()
-    assert during > 0.3 * alone, (during, alone)
+    # 0.5 measured on a loaded 2-core machine; the rate alone before and after, the lower of them,
+    # for a load that changes meanwhile (other tests)
+    assert during > 0.15 * min(before, after), (during, before, after)
