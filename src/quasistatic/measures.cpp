@@ -296,16 +296,23 @@ void NetworkSolverT<D, L>::Impl::print_worst(double fbar) const {
     }
   for (std::size_t w = 0; w < nw; ++w) {
     const int p = worst[w].second;
-    std::fprintf(stderr, "    worst p=%d |r|/fbar=%.3e contacts=%d sliding=%d non-affine motion %.3e R\n", p,
-                 worst[w].first, closed[p], slid[p],
+    std::fprintf(stderr, "    worst p=%d |r|/fbar=%.3e (components", p, worst[w].first);
+    for (int a = 0; a < kN; ++a)
+      if (dof[kN * p + a] >= 0) {
+        const double rv = f[kN * p + a] - (is_rotation(a) ? eta_r : eta_t) * (du[kN * p + a] - du_ref[kN * p + a]);
+        const double rel = rv / (is_rotation(a) ? r_mean : 1.0) / std::max(fbar, 1e-300);
+        std::fprintf(stderr, " %s%+.2e", is_rotation(a) ? "m/R " : "", rel);
+      }
+    std::fprintf(stderr, ") contacts=%d sliding=%d non-affine motion %.3e R\n", closed[p], slid[p],
                  (D == 2 ? std::hypot(du[kN * p] - du_aff[kN * p], du[kN * p + 1] - du_aff[kN * p + 1])
                          : (Eigen::Map<const Vec>(&du[kN * p]) - Eigen::Map<const Vec>(&du_aff[kN * p])).norm()) /
                      r_mean);
     if (w >= 2) continue;
     for (std::size_t k = 0; k < pi.size(); ++k)
       if ((pi[k] == p || pj[k] == p) && trial[k].loaded)
-        std::fprintf(stderr, "      pair %d-%d f_n %.4e (iteration matrix k_n %.4e) branch %d\n", pi[k], pj[k],
-                     trial[k].f_n, last_kn[k], static_cast<int>(trial[k].branch));
+        std::fprintf(stderr, "      pair %d-%d f_n %.4e |f_t|/f_n %.4f%s (iteration matrix k_n %.4e) branch %d\n", pi[k],
+                     pj[k], trial[k].f_n, ct::tan_norm(trial[k].f_t) / std::max(trial[k].f_n, 1e-300),
+                     trial[k].sliding ? " sliding" : "", last_kn[k], static_cast<int>(trial[k].branch));
   }
 }
 
