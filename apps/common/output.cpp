@@ -1,5 +1,6 @@
 #include "output.hpp"
 #include "run_status.hpp"
+#include "scene_file.hpp"
 
 #include "netdem/packing/io.hpp"
 
@@ -195,7 +196,7 @@ std::string live_holder(const fs::path& dir, const std::string& name) {
 /// True for the names a netdem run writes into its folder (folders of older versions, killed runs).
 bool netdem_name(const std::string& n) {
   static const std::set<std::string> exact = {"command.txt", "summary.json", kIncompleteMarker, kFilesRecord,
-                                              "parameters.json", "report.md", "probes"};
+                                              "parameters.json", "report.md", "probes", "scene.toml"};
   if (exact.count(n) != 0U) return true;
   const auto ends = [&](const char* e) {
     const std::string s(e);
@@ -427,6 +428,7 @@ void open_run_dir(const std::filesystem::path& dir, const std::string& command, 
     report_removed(dir, old, kept);
   }
   write_file_atomic(dir / "command.txt", command + "\n");
+  if (!scene_text().empty()) write_file_atomic(dir / "scene.toml", scene_text());
   g_run_dir_opened = true;
 }
 
@@ -449,8 +451,14 @@ void close_run_dir(const std::filesystem::path& dir) {
 
 bool run_dir_opened() { return g_run_dir_opened; }
 
+std::string& scene_text() {
+  static std::string text;
+  return text;
+}
+
 void reset_run_state() {
   g_run_dir_opened = false;
+  scene_text().clear();
   activity() = "starting";
 }
 

@@ -31,7 +31,9 @@
 // stops (docs/dynamic.md "Instability detection"). A run folder holding another run is refused
 // unless --overwrite (README.md "Run folders"). Errors are one line on stderr. Exit status: 0 ok,
 // 1 run error, 2 command-line error (nothing written), 3 unstable (summary.json "status",
-// state_last_good.txt). See docs/dynamic.md and docs/sintering.md.
+// state_last_good.txt). Every subcommand reads its options from a scene file too, --config
+// scene.toml (the command line overrides it; apps/common/scene_file.hpp), and every run writes its
+// own as scene.toml. See docs/dynamic.md and docs/sintering.md.
 #include <cmath>
 #include <cstdio>
 #include <new>
@@ -48,6 +50,7 @@
 #include "parse.hpp"
 #include "protocol.hpp"
 #include "run_status.hpp"
+#include "scene_file.hpp"
 
 using namespace netdem::app::dem;
 using netdem::dem::quote_input;
@@ -334,8 +337,10 @@ int demsolve_command(int argc, char** argv) {
   DemYieldArgs dy;
   std::string out_dyield;
   auto* dyield = add_dem_yield(app, dy, out_dyield);
+  netdem::app::add_scene_config(app, "demsolve", "", netdem::app::kDemsolveSections);
   try {
     app.parse(argc, argv);
+    netdem::app::set_scene(*app.get_subcommands().front(), "demsolve", app.get_subcommands().front()->get_name());
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     // CLI11 quotes the input: at most 80 printable characters of each argument

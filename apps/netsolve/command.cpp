@@ -5,6 +5,8 @@
 //                     [--no-rotation] [--to-density 0.85 | --to-strain S] [--packing FILE] [--increments N]
 //                     [--precompact-density D1 [--precompact-increments 20]] [--out DIR]   (compact.cpp)
 //
+// Every subcommand reads its options from a scene file too, --config scene.toml (the command line
+// overrides it; apps/common/scene_file.hpp), and every run writes its own as scene.toml.
 // Every run writes into its own folder: .incomplete (first, removed last), command.txt, the packing,
 // history.csv, summary.json and VTK PolyData snapshots; a folder that holds another run is refused
 // unless --overwrite. Errors are one line on stderr. Exit status: 0 ok, 1 run error, 2 command-line
@@ -38,6 +40,7 @@
 #include "pack_green.hpp"
 #include "pack_periodic.hpp"
 #include "parse.hpp"
+#include "scene_file.hpp"
 #include "setup.hpp"
 #include "status.hpp"
 
@@ -256,8 +259,10 @@ int netsolve_command(int argc, char** argv) {
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   const netdem::app::netsolve::CompactCli ccli = netdem::app::netsolve::add_compact_options(comp, ca, ra, out);
+  netdem::app::add_scene_config(app, "netsolve", "", netdem::app::kNetsolveSections);
   try {
     app.parse(argc, argv);
+    netdem::app::set_scene(*app.get_subcommands().front(), "netsolve", app.get_subcommands().front()->get_name());
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     netdem::app::print_error_line(fmt::format("netsolve: error: {} (see --help)", e.what()));

@@ -49,6 +49,7 @@
 #include "sinter_material.hpp"
 #include "sinter_files.hpp"
 #include "parse.hpp"
+#include "scene_file.hpp"
 #include "setup.hpp"
 #include "status.hpp"
 
@@ -698,8 +699,10 @@ int run_sinter_command(int argc, char** argv) {
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
   app.add_flag("--allow-unconverged", a.allow_unconverged, "exit 0 for a run that reached --time but summary.json marks untrustworthy");
   app.add_option("--out", a.out, "output folder")->capture_default_str();
+  netdem::app::add_scene_config(app, "netsolve", "sinter", netdem::app::kNetsolveSections);
   try {
     app.parse(argc - 1, argv + 1);
+    netdem::app::set_scene(app, "netsolve", "sinter");
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     netdem::app::print_error_line(fmt::format("netsolve sinter: error: {} (see --help)", e.what()));

@@ -34,6 +34,7 @@
 #include "output.hpp"
 #include "sinter_material.hpp"
 #include "parse.hpp"
+#include "scene_file.hpp"
 #include "status.hpp"
 
 int run_sinter_pair_command(int argc, char** argv);
@@ -341,8 +342,10 @@ int run_sinter_pair_command(int argc, char** argv) {
   app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier run in --out (README.md 'Run folders')");
   app.add_flag("--allow-unconverged", a.allow_unconverged, "exit 0 for a run that summary.json marks 'unstable' (the status is kept)");
   app.add_option("--out", a.out, "output folder")->capture_default_str();
+  netdem::app::add_scene_config(app, "netsolve", "sinter-pair", netdem::app::kNetsolveSections);
   try {
     app.parse(argc - 1, argv + 1);
+    netdem::app::set_scene(app, "netsolve", "sinter-pair");
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     netdem::app::print_error_line(fmt::format("netsolve sinter-pair: error: {} (see --help)", e.what()));

@@ -44,6 +44,7 @@
 #include "compact.hpp"
 #include "output.hpp"
 #include "parse.hpp"
+#include "scene_file.hpp"
 #include "setup.hpp"
 #include "status.hpp"
 #include "worker_pool.hpp"
@@ -739,8 +740,10 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--out", merge_out, "output folder")->capture_default_str();
     app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier merge in --out (README.md 'Run folders')");
   }
+  netdem::app::add_scene_config(app, "netsolve", sub, netdem::app::kNetsolveSections);
   try {
     app.parse(argc - 1, argv + 1);
+    netdem::app::set_scene(app, "netsolve", sub);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     netdem::app::print_error_line(fmt::format("netsolve {}: error: {} (see --help)", sub, e.what()));
