@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -533,7 +534,8 @@ Progress::Progress(std::string what, double total, bool quiet)
     : what_(std::move(what)), total_(total), quiet_(quiet), start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 void Progress::update(double done) {
-  if (progress_hook()) progress_hook()(total_ > 0 ? done / total_ : 0.0);
+  // in [0, 1]: a run by simulated time ends a step past its total (demsolve yield's precompaction)
+  if (progress_hook()) progress_hook()(total_ > 0 ? std::clamp(done / total_, 0.0, 1.0) : 0.0);
   if (quiet_) return;
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - last_).count() < 0.5) return;

@@ -12,8 +12,10 @@ It returns a Result (.history, .summary, .status, .exit_code). A bad value raise
 the command line's one-line message; a run that finishes untrustworthy returns its status.
 `progress=callable(fraction)` is called during the run (at most every 50 ms); Ctrl-C stops it.
 
-Modules: netdem.netsolve (compact, yield_, pack), netdem.demsolve (compact), netdem.packing (deposit,
-read, write).
+Modules: netdem.netsolve (pack, compact, yield_, yield_merge, sinter_pair, sinter), netdem.demsolve
+(prepare, sinter, compress, vibrate, compact, yield_), netdem.packing (deposit, read, write).
+`config="scene.toml"` reads the options from a scene file (README.md "Scene files"); the keyword
+arguments override it.
 """
 from . import demsolve, netsolve, packing
 from ._run import Result

@@ -77,25 +77,41 @@ def read_table(path):
     return table
 
 
-def read_run(folder, exit_code, messages, keep):
-    """The Result of the run folder `folder`."""
+def read_run(folder, exit_code, messages, keep, history_files=("history.csv", "timeseries.csv")):
+    """The Result of the run folder `folder`; its history is the first of `history_files` there."""
     summary = {}
     path = os.path.join(folder, "summary.json")
     if os.path.exists(path):
         with open(path) as f:
             summary = json.load(f)
     history = {}
-    for name in ("history.csv", "timeseries.csv"):
+    for name in history_files:
         if os.path.exists(os.path.join(folder, name)):
             history = read_table(os.path.join(folder, name))
             break
     return Result(history, summary, exit_code, messages, folder if keep else None)
 
 
-def run(tool, subcommand, kwargs, out=None, progress=None, reader=read_run):
-    """Runs `tool subcommand` with the options of `kwargs` in process; `reader(folder, exit_code,
-    messages, keep)` makes the result. ValueError for a refused command line (exit 2), RuntimeError
-    for a run error (exit 1), both with the command's one-line message."""
+def reader(history_files=("history.csv", "timeseries.csv"), **tables):
+    """A reader for run(): the Result of read_run with its history from the first of
+    `history_files`, and an attribute per keyword, the table of that CSV file (`yield_points=
+    "yield_points.csv"`) or an empty dict if the run did not write it."""
+
+    def read(folder, code, messages, keep):
+        r = read_run(folder, code, messages, keep, history_files)
+        for attribute, name in tables.items():
+            path = os.path.join(folder, name)
+            setattr(r, attribute, read_table(path) if os.path.exists(path) else {})
+        return r
+
+    return read
+
+
+def run(tool, subcommand, kwargs, out=None, progress=None, reader=read_run, positional=()):
+    """Runs `tool subcommand` with the options of `kwargs` (and the words `positional` before
+    them) in process; `reader(folder, exit_code, messages, keep)` makes the result. ValueError for
+    a refused command line (exit 2), RuntimeError for a run error (exit 1), both with the command's
+    one-line message."""
     if "out" in kwargs:
         raise TypeError("out is the keyword argument of the run folder, not an option")
     tmp = None
@@ -105,7 +121,8 @@ def run(tool, subcommand, kwargs, out=None, progress=None, reader=read_run):
     else:
         folder = os.fspath(out)
     try:
-        code, lines = _netdem.run(tool, [subcommand] + tokens(kwargs) + [f"--out={folder}"], progress)
+        words = [subcommand] + [os.fspath(w) for w in positional] + tokens(kwargs) + [f"--out={folder}"]
+        code, lines = _netdem.run(tool, words, progress)
         message = lines[-1] if lines else f"{tool} {subcommand}: exit status {code}"
         if code == 2:
             raise ValueError(message)

@@ -37,4 +37,23 @@ def yield_(*, out=None, progress=None, **options):
     return _run.run("netsolve", "yield", options, out, progress, reader)
 
 
+def yield_merge(*dirs, out=None, **options):
+    """`netsolve yield-merge DIR...`: yield_points.csv assembled from the probe files of the yield
+    run folders `dirs`. Returns a Result whose `yield_points` is yield_points.csv's columns."""
+    return _run.run("netsolve", "yield-merge", options, out, None, _run.reader(yield_points="yield_points.csv"), dirs)
+
+
+def sinter_pair(*, out=None, progress=None, **options):
+    """`netsolve sinter-pair`: one two-particle sintering contact against time (SI units; default:
+    Cu at 1293 K, docs/sintering_pair.md). Returns a Result whose `history` is pair.csv's columns."""
+    return _run.run("netsolve", "sinter-pair", options, out, progress, _run.reader(("pair.csv",)))
+
+
+def sinter(*, out=None, progress=None, **options):
+    """`netsolve sinter`: the staggered sintering scheme of Ivannikov et al. in 3D (docs/staggered.md;
+    default: the Cu benchmark). Returns a Result whose `history` is history.csv's and `steps`
+    steps.csv's columns."""
+    return _run.run("netsolve", "sinter", options, out, progress, _run.reader(steps="steps.csv"))
+
+
 globals()["yield"] = yield_  # `yield` is a Python keyword: netdem.netsolve.yield_ or getattr(..., "yield")

@@ -4,6 +4,7 @@ comparison of two run folders."""
 import json
 import math
 import os
+import re
 import subprocess
 
 import numpy as np
@@ -12,8 +13,8 @@ import pytest
 import netdem
 from netdem import _run
 
-# summary.json keys that are not results: wall-clock times and the command itself
-VOLATILE = {"command", "timing_s", "timings", "wall_s", "cpu_s", "threads_available"}
+# summary.json keys that are not results: wall-clock and CPU times and the command itself
+VOLATILE = re.compile(r"^(command|threads_available|timing_s|timings?|timers?(_s)?|(wall|cpu)(_time)?_s|.*_(wall|cpu)_s|.*_per_(cpu_)?s)$")
 
 
 def executable(tool):
@@ -34,8 +35,9 @@ def assert_same_numbers(a, b, where="summary"):
     """Two JSON values equal, every number exactly (NaN equals NaN), volatile keys skipped."""
     if isinstance(a, dict):
         assert isinstance(b, dict), where
-        keys = set(a) - VOLATILE
-        assert keys == set(b) - VOLATILE, f"{where}: keys differ: {sorted(keys ^ (set(b) - VOLATILE))}"
+        keys = {k for k in a if not VOLATILE.match(k)}
+        other = {k for k in b if not VOLATILE.match(k)}
+        assert keys == other, f"{where}: keys differ: {sorted(keys ^ other)}"
         for k in keys:
             assert_same_numbers(a[k], b[k], f"{where}.{k}")
     elif isinstance(a, list):
@@ -48,11 +50,20 @@ def assert_same_numbers(a, b, where="summary"):
         assert a == b, f"{where}: {a!r} != {b!r}"
 
 
-def assert_same_run(cli_dir, result):
-    """The Python result equals the command line's run folder: every history column exactly,
-    summary.json's numbers, every other JSON file's numbers and every other file byte for byte
-    (but command.txt), in subfolders too."""
-    cli_history = _run.read_table(os.path.join(cli_dir, "history.csv"))
+def report_lines(text):
+    """A report.md without its command line and its timing section (netsolve sinter's)."""
+    lines = text.decode().split("\n")
+    if "## Timing" in lines:
+        lines = lines[:lines.index("## Timing")]
+    return [l for l in lines if not (l.startswith("`") and " --out" in l)]
+
+
+def assert_same_run(cli_dir, result, history="history.csv"):
+    """The Python result equals the command line's run folder: every column of its history
+    (`history`) exactly, summary.json's numbers, every other JSON file's numbers, report.md without
+    the command line and the timings, and every other file byte for byte (but command.txt), in
+    subfolders too."""
+    cli_history = _run.read_table(os.path.join(cli_dir, history))
     assert list(cli_history) == list(result.history)
     for name, col in cli_history.items():
         assert col.dtype == result.history[name].dtype, name
@@ -67,6 +78,8 @@ def assert_same_run(cli_dir, result):
                 a, b = f.read(), g.read()
             if n.endswith(".json") or (n.endswith(".txt") and a.startswith(b"{")):  # JSON, state files too:
                 assert_same_numbers(json.loads(a), json.loads(b), n)        # wall-clock times in them
+            elif n.endswith(".md"):
+                assert report_lines(a) == report_lines(b), n
             else:
                 assert a == b, n
 
