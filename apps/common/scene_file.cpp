@@ -2,6 +2,7 @@
 #include "scene_file.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <istream>
 #include <memory>
 #include <set>
@@ -85,11 +86,18 @@ constexpr const char* kConfigHelp =
     "read the options from this scene file (TOML, a section per subcommand, e.g. [compact] friction = 0.1; "
     "the command line overrides it; every run writes its own as scene.toml: README.md 'Scene files')";
 
-/// CLI11's ExistingFile without its name in --help (the type is FILE).
+/// The check of --config: a regular file (CLI11's ExistingFile takes a FIFO or a device, whose
+/// reading may never end).
 CLI::Validator existing_file() {
-  CLI::Validator v = CLI::ExistingFile;
-  v.description("");
-  return v;
+  return CLI::Validator(
+      [](std::string& path) {
+        std::error_code ec;
+        const std::string shown = "'" + path.substr(0, 200) + "'";
+        if (!std::filesystem::exists(path, ec)) return "no such file: " + shown;
+        if (!std::filesystem::is_regular_file(path, ec)) return shown + " is not a regular file";
+        return std::string();
+      },
+      "");
 }
 
 /// `value` as a TOML string the CLI11 reader gives back unchanged, or "" if it cannot.

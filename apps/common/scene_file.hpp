@@ -9,7 +9,7 @@
 // whose keys are the long options without "--"; the command line overrides the file. A file may
 // hold the sections of several subcommands of its tool: a run reads its own and skips the others.
 // A key outside a section, an unknown section or key, or a bad value is refused like a bad command
-// line (one line, exit 2), as is a missing file. Every run writes the options it was given, with
+// line (one line, exit 2), as is a missing file or one that is not a regular file. Every run writes the options it was given, with
 // every other option's default as a comment, to scene.toml in its run folder (open_run_dir), so that
 // `--config RUN/scene.toml --out OTHER` reruns it. --out, --overwrite and --config are not part of
 // a scene. Values are written as given (relative paths stay relative to the working folder).

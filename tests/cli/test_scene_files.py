@@ -2,11 +2,11 @@
 """Scene files (issue 33 item 2, README.md "Scene files"): for every subcommand of netsolve and
 demsolve, a small run, then `--config RUN/scene.toml --out OTHER`, must write the same files, bit
 for bit after the normalisation of tests/regress/default_outputs.py (wall-clock keys and columns
-dropped) and without the command line (command.txt, summary.json "command"); the rerun's
-scene.toml equals the run's. A command-line option overrides the file (the run equals the one
-given both options on the command line); the sections of other subcommands are skipped; a bad
-file (missing, unknown key, bad value, key outside a section, unknown section) is one line on
-stderr, exit 2 and no run folder.
+dropped) and without the command line (command.txt, the "command" keys of the JSON files and state
+files, the report lines that quote it); the rerun's scene.toml equals the run's. A command-line
+option overrides the file (the run equals the one given both options on the command line); the
+sections of other subcommands are skipped; a bad file (missing, not a regular file, unknown key,
+bad value, key outside a section, unknown section) is one line on stderr, exit 2 and no run folder.
 
 usage: test_scene_files.py PATH/TO/netsolve PATH/TO/demsolve
 """
@@ -30,7 +30,7 @@ def check(ok, what):
 
 
 def run(argv, cwd):
-    return subprocess.run(argv, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    return subprocess.run(argv, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=120)
 
 
 def without_command(v):
@@ -152,6 +152,9 @@ def main():
         refused(NS, "bad_missing", ["compact", "--config", "missing.toml"], "missing.toml", t)
         refused(NS, "bad_missing_pair", ["sinter-pair", "--config", "missing.toml"], "missing.toml", t)
         refused(DS, "bad_dem_missing", ["prepare", "--config", "missing.toml"], "missing.toml", t)
+        os.mkfifo(os.path.join(t, "fifo.toml"))  # opening it for reading would wait for a writer for ever
+        refused(NS, "bad_fifo", ["compact", "--config", "fifo.toml"], "not a regular file", t)
+        refused(NS, "bad_folder", ["sinter-pair", "--config", "yield"], "not a regular file", t)
     print(f"scene files: {len(failures)} failures")
     return 1 if failures else 0
 
