@@ -17,7 +17,7 @@ time being the relative density.
     PYTHONPATH=build/python /usr/bin/python3 examples/paraview_series.py [--small] [--out DIR]
 
 --small: 60 spheres, 500 s, 4 snapshots, W = 24 R (about a second); default: 805 spheres, 5000 s,
-10 snapshots, W = 80 R (minutes).
+10 snapshots, W = 80 R (10 s measured).
 """
 import argparse
 import glob

@@ -12,7 +12,7 @@ analytic surface that netsolve yield computes from the contact fabric (S11_analy
 
 Writes DIR/yield_surface.png and the run folder DIR/run (yield_points.csv, summary.json, ...).
 --small: W = 24 R and 8 directions (under a second); default: W = 80 R and 24 directions, one
-probe per core (about 20 s on one core).
+probe per core (25 s measured on a 2-core machine with one core busy).
 """
 import argparse
 import os
