@@ -55,6 +55,8 @@ def tokens(kwargs):
             continue
         if v is True:
             words.append(option)
+        elif _value(v) == "":  # an empty list or text: its own word, as `--snapshots ""` on the command
+            words += [option, ""]  # line ("--snapshots=" would take the next word as its value)
         else:
             words.append(f"{option}={_value(v)}")
     return words

@@ -35,6 +35,16 @@ def test_netsolve_compact_defaults_equal_cli(tmp):
     assert_same_run(f"{tmp}/cli", r)
 
 
+@pytest.mark.parametrize("empty", [[], ""])
+def test_an_empty_list_is_an_empty_value(tmp, empty):
+    """snapshots=[] is `--snapshots ""` (no snapshot), not an option that swallows the next word."""
+    code, _ = run_cli("netsolve", ["compact"] + SMALL + ["--snapshots", "", "--out", f"{tmp}/cli"])
+    r = netdem.netsolve.compact(width=20, increments=40, snapshots=empty, quiet=True, out=f"{tmp}/py")
+    assert r.exit_code == code == 0
+    assert not any(n.startswith("particles_D") for n in os.listdir(f"{tmp}/py"))
+    assert_same_run(f"{tmp}/cli", r)
+
+
 def test_without_out_the_folder_is_removed():
     r = netdem.netsolve.compact(width=20, increments=40, quiet=True)
     assert r.out is None and r.status == "ok" and len(r.history["S11"]) == 41
