@@ -302,7 +302,7 @@ def cu_section(R, F, rep, outdir, quick, t_end):
           f"{fin2['contacts_start']} → {fin2['contacts']}", "> 1", gain > 1, "no")
     ratio_on = fin2["shrink_mean"] / pair_s
     F.add("Cu with new contacts: packing shrinkage against the pair's", f"ratio {ratio_on:.3f}",
-          "reported (the paper: below the pair's, approaching it with new contacts)", None, "no")
+          "reported (the paper shows it only without new contacts, Fig 11c: below the pair's; its \"approaches the reference values\" is about Ti against experiment, not about new contacts)", None, "no")
 
     # ---- Fig 12: dt history and run times
     fig, ax = plt.subplots(figsize=(6.5, 4))
