@@ -1,18 +1,17 @@
 """Reading a run into ParaView through a .pvd time series.
 
-`netdem.netsolve.sinter` writes its snapshots (particles_K.vtp: the spheres with radius and
-displacement; bonds_K.vtp: the necks as lines) with snapshots.pvd, a ParaView collection that
-gives each pair of files its time. This script sinters a small green body, checks that the .pvd's
-files exist and parse, and opens the series with ParaView's Python (`paraview.simple`, e.g. under
-`pvpython`) when it is importable: a screenshot of the last time step. Otherwise it prints how to
-open the file: `paraview DIR/sinter/snapshots.pvd`, or File > Open in ParaView, then Apply; a
-"Point Gaussian" or "Glyph" (sphere, scaled by "radius") representation draws the spheres.
-
-Only `netsolve sinter` writes a .pvd. The other snapshot series are loose .vtp files:
-netsolve compact (particles_D<density>.vtp, contacts_*.vtp, cell_*.vtp with --boundary periodic)
-and the demsolve subcommands (particles_<phase or tag>.vtp, contacts_*.vtp). `write_pvd` below
-makes a collection from such files; the script does so for a small netsolve compact run, its
-time being the relative density.
+Every tool that writes snapshots writes snapshots.pvd beside them, a ParaView collection that
+gives each snapshot's files their time and a part each. `netdem.netsolve.sinter`'s snapshots
+(particles_K.vtp: the spheres with radius and displacement; bonds_K.vtp: the necks as lines) have
+the time t; `netdem.netsolve.compact`'s (particles_TAG.vtp, contacts_TAG.vtp, cell_TAG.vtp with
+--boundary periodic; TAG initial, D<density>, final) the relative density D; the demsolve
+subcommands' the time t of their time series. This script sinters a small green body and compacts
+a small packing, checks that each run's .pvd's files exist and parse at the times asked for, and
+opens the sintering series with ParaView's Python (`paraview.simple`, e.g. under `pvpython`) when
+it is importable: a screenshot of the last time step. Otherwise it prints how to open the file:
+`paraview DIR/sinter/snapshots.pvd`, or File > Open in ParaView, then Apply; a "Point Gaussian" or
+"Glyph" (sphere, scaled by "radius") representation draws the spheres (on the particles block:
+Extract Block, or the block named "particles" of a compact run's series).
 
     PYTHONPATH=build/python /usr/bin/python3 examples/paraview_series.py [--small] [--out DIR]
 
@@ -20,9 +19,7 @@ time being the relative density.
 10 snapshots, W = 80 R (10 s measured).
 """
 import argparse
-import glob
 import os
-import re
 import sys
 import xml.etree.ElementTree as ET
 
@@ -35,19 +32,6 @@ def pvd_datasets(pvd):
     base = os.path.dirname(os.path.abspath(pvd))
     return [(float(d.get("timestep")), int(d.get("part", 0)), os.path.join(base, d.get("file")))
             for d in root.iter("DataSet")]
-
-
-def write_pvd(pvd, series):
-    """Writes a .pvd collection of `series`, a list of (time, [vtp files]) (a part per file)."""
-    lines = ['<?xml version="1.0"?>',
-             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
-    for t, files in series:
-        for part, f in enumerate(files):
-            rel = os.path.relpath(f, os.path.dirname(os.path.abspath(pvd)))
-            lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" file="{rel}"/>')
-    lines += ["  </Collection>", "</VTKFile>", ""]
-    with open(pvd, "w") as f:
-        f.write("\n".join(lines))
 
 
 def check_series(pvd, points=None):
@@ -109,18 +93,18 @@ def main():
     if len(times) != snaps + 1 or times[-1] != t_end:
         errors.append(f"{len(times)} snapshot times ending at {times[-1]}, expected {snaps + 1} ending at {t_end}")
 
-    # netsolve compact: loose particles_D<density>.vtp files, made into a series here
-    c = netdem.netsolve.compact(width=width, snapshots=[0.82, 0.84, 0.85], quiet=True,
-                                out=os.path.join(args.out, "compact"), overwrite=True)
-    series = []
-    for f in glob.glob(os.path.join(args.out, "compact", "particles_D*.vtp")):
-        density = float(re.search(r"particles_D([0-9.]+)\.vtp$", f).group(1))
-        series.append((density, [f, f.replace("particles_", "contacts_")]))
+    # netsolve compact: its snapshots.pvd, the time being the relative density D
+    asked = [0.82, 0.84, 0.85]
+    c = netdem.netsolve.compact(width=width, snapshots=asked, quiet=True, out=os.path.join(args.out, "compact"),
+                                overwrite=True)
     compact_pvd = os.path.abspath(os.path.join(args.out, "compact", "snapshots.pvd"))
-    write_pvd(compact_pvd, sorted(series))
-    print(f"{compact_pvd}: written here, {len(series)} densities {sorted(t for t, _ in series)}")
-    if c.status != "ok" or len(series) != 3:
-        errors.append(f"compact: status {c.status}, {len(series)} snapshots")
+    densities = sorted({t for t, _, _ in pvd_datasets(compact_pvd)})
+    print(f"{compact_pvd}: {len(densities)} densities {densities}")
+    # the start, then each density asked for at the first increment at or past it (the last is
+    # the end of the run, so no separate final snapshot)
+    if c.status != "ok" or len(densities) != len(asked) + 1 or \
+            not all(d - 1e-9 <= t < d + 0.01 for d, t in zip(asked, densities[1:])):
+        errors.append(f"compact: status {c.status}, densities {densities}, asked for {asked}")
     errors += check_series(compact_pvd, points=c.summary.get("particles"))
 
     show_in_paraview(pvd, os.path.join(args.out, "paraview.png"))

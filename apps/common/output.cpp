@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -20,6 +21,7 @@
 #include <sstream>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -528,6 +530,49 @@ std::string vtp_network_3d(const std::vector<double>& x, const std::vector<doubl
   for (std::size_t k = 0; k < i.size(); ++k) s += fmt::format("{} ", 2 * (k + 1));
   s += "\n        </DataArray>\n      </Lines>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
   return s;
+}
+
+namespace {
+/// `s` as an XML attribute value (the names the tools write need none of this).
+std::string xml_attribute(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+}  // namespace
+
+std::string pvd_text(const std::vector<PvdDataSet>& sets) {
+  std::string s = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  for (const auto& d : sets) {
+    s += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"{}\" file=\"{}\"", d.timestep, d.part,
+                     xml_attribute(d.file));
+    if (!d.name.empty()) s += fmt::format(" name=\"{}\"", xml_attribute(d.name));
+    s += "/>\n";
+  }
+  return s + "  </Collection>\n</VTKFile>\n";
+}
+
+void write_pvd(const std::filesystem::path& path, const std::vector<PvdDataSet>& sets) {
+  write_file_atomic(path, pvd_text(sets));
+}
+
+SnapshotSeries::SnapshotSeries(std::filesystem::path pvd, std::vector<std::string> kinds)
+    : pvd_(std::move(pvd)), kinds_(std::move(kinds)) {}
+
+bool SnapshotSeries::add(double timestep, const std::string& tag) {
+  if (!std::isfinite(timestep) || (!sets_.empty() && !(timestep > sets_.back().timestep))) return false;
+  for (std::size_t k = 0; k < kinds_.size(); ++k)
+    sets_.push_back({timestep, static_cast<int>(k), fmt::format("{}_{}.vtp", kinds_[k], tag), kinds_[k]});
+  write_pvd(pvd_, sets_);
+  return true;
 }
 
 Progress::Progress(std::string what, double total, bool quiet)

@@ -98,6 +98,46 @@ std::string vtp_network(const std::vector<double>& x, const std::vector<double>&
 std::string vtp_network_3d(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>* z,
                            const std::vector<int>& i, const std::vector<int>& j, const std::vector<Field>& cell_data);
 
+// ---- ParaView collections (.pvd) ---------------------------------------------------------------
+/// One data set of a .pvd collection: the value ParaView steps through (`timestep`), the block it
+/// fills at that time (`part`), its file (relative to the .pvd's folder) and the block's name
+/// ("": no name attribute).
+struct PvdDataSet {
+  double timestep = 0.0;
+  int part = 0;
+  std::string file;
+  std::string name;
+};
+/// The text of a .pvd collection of `sets`, in their order (the timesteps with 17 digits: exact).
+std::string pvd_text(const std::vector<PvdDataSet>& sets);
+/// Writes pvd_text(sets) to `path` atomically (write_file_atomic).
+void write_pvd(const std::filesystem::path& path, const std::vector<PvdDataSet>& sets);
+
+/// A run's snapshot series and its .pvd (snapshots.pvd in the run folder), so that ParaView opens
+/// one file and steps through the snapshots. One .pvd with a part per kind rather than one .pvd per
+/// kind: each time step holds the whole state (particles, contacts, the periodic cell) as the named
+/// blocks of one data set (Extract Block picks the particles for a glyph), as netsolve sinter's
+/// snapshots.pvd does. Nothing is written before the first snapshot.
+class SnapshotSeries {
+ public:
+  /// `kinds`: the files of a snapshot TAG are KIND_TAG.vtp, part k the k-th kind, its block named so.
+  SnapshotSeries(std::filesystem::path pvd, std::vector<std::string> kinds);
+  /// Records snapshot `tag` at `timestep` and rewrites the .pvd atomically (a run stopped later
+  /// keeps a valid .pvd of the snapshots so far). A snapshot whose timestep is not above the last
+  /// one listed is left out (returns false; its files stay): the same state written again under
+  /// another name (`final` after the last phase or the last density reached), which ParaView would
+  /// draw twice at one time.
+  bool add(double timestep, const std::string& tag);
+  /// The run folder (the .pvd's).
+  std::filesystem::path dir() const { return pvd_.parent_path(); }
+  const std::vector<PvdDataSet>& sets() const { return sets_; }
+
+ private:
+  std::filesystem::path pvd_;
+  std::vector<std::string> kinds_;
+  std::vector<PvdDataSet> sets_;
+};
+
 /// Called by every Progress::update and finish with the fraction done, quiet or not, when set (the
 /// Python module's progress callback and its Ctrl-C check). It may throw to stop the run: the
 /// exception leaves the command (a type not derived from std::exception passes guarded()).

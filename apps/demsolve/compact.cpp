@@ -142,7 +142,8 @@ class CompactFiles : public CompactionObserverT<D> {
  public:
   CompactFiles(const DynamicSolverT<D>& s, const fs::path& out, std::vector<double> snaps, bool walls, double t_end,
                bool quiet, bool legs)
-      : s_(s), out_(out), snaps_(std::move(snaps)), walls_(walls), periodic_(s.periodic()), legs_(legs),
+      : s_(s), out_(out), series_(compact_snapshot_series(out, s.periodic())), snaps_(std::move(snaps)), walls_(walls),
+        periodic_(s.periodic()), legs_(legs),
         progress_("compact", t_end, quiet) {
     const auto& lab = sys::voigt_labels<D>();
     csv_ = legs_ ? "increment,leg" : "increment";
@@ -178,7 +179,7 @@ class CompactFiles : public CompactionObserverT<D> {
     leg_end_[static_cast<std::size_t>(r.leg)] = r;
     if (r.increment == 0) return;
     while (next_snap_ < snaps_.size() && s_.density() >= snaps_[next_snap_] - 1e-9) {
-      write_compact_snapshot(s_, out_, fmt::format("D{:.3f}", snaps_[next_snap_]), cs_);
+      write_compact_snapshot(s_, series_, fmt::format("D{:.3f}", snaps_[next_snap_]), cs_);
       ++next_snap_;
     }
   }
@@ -189,13 +190,15 @@ class CompactFiles : public CompactionObserverT<D> {
     if (!stopped.empty()) csv_ += "# stopped: " + stopped + "\n";
     write_file_atomic(out_ / "history.csv", csv_);
   }
-  std::vector<ContactInfo>& contacts_buffer() { return cs_; }
+  /// A snapshot of the solver's state now (initial, final), in the series.
+  void snapshot(const std::string& tag) { write_compact_snapshot(s_, series_, tag, cs_); }
   /// The last row of each leg reached.
   const std::vector<CompactionRowT<D>>& leg_ends() const { return leg_end_; }
 
  private:
   const DynamicSolverT<D>& s_;
   fs::path out_;
+  SnapshotSeries series_;
   std::vector<double> snaps_;
   bool walls_, periodic_, legs_;
   Progress progress_;
@@ -406,7 +409,7 @@ template <int D>
 int finish_run(CompactFiles<D>& files, nlohmann::json& summary, const CompactionSummaryT<D>& r, const DynamicSolverT<D>& s,
                const DemCompactArgs& a, const std::optional<sys::JammedStateT<D>>& jammed, std::uint64_t seed,
                double wall, const fs::path& out) {
-  write_compact_snapshot(s, out, "final", files.contacts_buffer());
+  files.snapshot("final");
   if (a.save_state) save_jammed<D>(s, r.last.E, jammed ? jammed->strain : Eigen::Matrix<double, D, D>::Zero(), seed, out);
   if (a.save_state || jammed) summary["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state ? "jammed.json" : ""}};
   summary["status"] = r.status;
@@ -513,7 +516,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
                  static_cast<unsigned long long>(pk.seed), source.c_str(), a.inertial_number, rate.gamma_dot, t_end,
                  dt_first, steps_est);
   CompactFiles<D> files(s, out, snaps, walls, t_end, a.quiet, legs.size() > 1);
-  write_compact_snapshot(s, out, "initial", files.contacts_buffer());
+  files.snapshot("initial");
   nlohmann::json summary = compact_summary<D>(command, a, path, rate, source, pk.seed, n, pre.size());
   if (legs.size() > 1) summary["t_end"] = t_end;
 

@@ -94,6 +94,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   struct Writer final : TestObserverT<D> {
     double z0, p, t_start;
     const fs::path& out;
+    SnapshotSeries series = protocol_snapshot_series(out);  // its time: compress.csv's t
     Progress progress;
     std::string csv = D == 2 ? "t,eps_zz,szz,szz_over_p,sxx_over_p,szz_contacts,nu,C\n"
                              : "t,eps_zz,szz,szz_over_p,sxx_over_p,syy_over_p,szz_contacts,nu,C\n";
@@ -106,7 +107,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
     void sample(const DynamicSolverT<D>& s, std::int64_t k) override {
       if (k == 0) {
         s.check_health();
-        write_snapshot(s, out, "eps0", cs);
+        write_snapshot(s, series, "eps0", s.time() - t_start, cs);
       }
       const auto ws = s.wall_stress();
       const double C = count_contacts(s, pairs).coordination(s.particles().size());
@@ -122,7 +123,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
     void stepped(const DynamicSolverT<D>& s, std::int64_t) override {
       if (next_snap < std::size(snap_t) && s.time() - t_start >= snap_t[next_snap] - 0.5 * s.dt()) {
         s.check_health();
-        write_snapshot(s, out, fmt::format("t{}", snap_t[next_snap]), cs);
+        write_snapshot(s, series, fmt::format("t{}", snap_t[next_snap]), s.time() - t_start, cs);
         ++next_snap;
       }
     }
@@ -142,7 +143,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_file_atomic(out / "compress.csv", writer.csv);
   write_file_atomic(out / "state.txt", format_state(s.state()));
-  write_snapshot(s, out, "final", writer.cs);
+  write_snapshot(s, writer.series, "final", s.time() - t_start, writer.cs);
   // failure: the peak of szz; stiffness: least-squares slope of szz over eps in [0, 0.005]
   const CompressionFigures fig = compression_figures(run, 0.005);
   const std::size_t ipk = fig.peak;
@@ -222,6 +223,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   struct Writer final : TestObserver {
     double amplitude, w, t_start;
     const fs::path& out;
+    SnapshotSeries series = protocol_snapshot_series(out);  // its time: timeseries.csv's t
     Progress progress;
     Clusters clusters;
     std::string csv = "t,floor_y,Ekin,y_centre,largest_cluster,single_grains\n";
@@ -231,7 +233,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
     void sample(const DynamicSolver& s, std::int64_t k) override {
       if (k == 0) {
         s.check_health();
-        write_snapshot(s, out, "initial", cs);
+        write_snapshot(s, series, "initial", s.time() - t_start, cs);
       }
       clusters.update(s);
       double yc = 0.0;
@@ -263,7 +265,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
   write_file_atomic(out / "clusters.csv", cc);
   write_file_atomic(out / "state.txt", format_state(s.state()));
   // cluster id per particle, numbered by decreasing size
-  write_snapshot(s, out, "final", writer.cs, {Field{"cluster", 1, clusters.rank()}});
+  write_snapshot(s, writer.series, "final", s.time() - t_start, writer.cs, {Field{"cluster", 1, clusters.rank()}});
   const std::size_t singles = static_cast<std::size_t>(std::count(sizes.begin(), sizes.end(), 1u));
   nlohmann::json j{{"command", command},
                    {"state_file", a.state_file},

@@ -91,13 +91,19 @@ std::string contacts_csv(const ParticlesT<D>& P, const std::vector<ContactInfo>&
 }  // namespace
 
 template <int D>
-void write_snapshot(const DynamicSolverT<D>& s, const fs::path& out, const std::string& label,
+void write_snapshot(const DynamicSolverT<D>& s, SnapshotSeries& series, const std::string& label, double t,
                     std::vector<ContactInfo>& cs, const std::vector<Field>& extra) {
+  const fs::path out = series.dir();
   s.contacts(cs);
   std::string pv = particles_vtp(s.particles(), cs, extra);
   write_file_atomic(out / fmt::format("particles_{}.vtp", label), pv);
   write_file_atomic(out / fmt::format("contacts_{}.vtp", label), contacts_vtp(s.particles(), cs));
   write_file_atomic(out / fmt::format("contacts_{}.csv", label), contacts_csv(s.particles(), cs));
+  series.add(t, label);
+}
+
+SnapshotSeries protocol_snapshot_series(const fs::path& out) {
+  return SnapshotSeries(out / "snapshots.pvd", {"particles", "contacts"});
 }
 
 namespace {
@@ -296,7 +302,7 @@ class PhaseWriter final : public PhaseObserverT<D> {
   void sample(const DynamicSolverT<D>& s, std::size_t phase, std::int64_t steps) override {
     if (steps == 0) {
       s.check_health();
-      write_snapshot(s, out_, "initial", cs_);
+      write_snapshot(s, series_, "initial", s.time(), cs_);
     }
     const ContactCounts c = count_contacts(s, buf_);
     const auto ws = s.wall_stress();
@@ -325,7 +331,7 @@ class PhaseWriter final : public PhaseObserverT<D> {
     const auto now = std::chrono::steady_clock::now();
     const std::string& name = phases_[p].name;
     write_file_atomic(out_ / fmt::format("state_{}.txt", name), format_state(s.state()));
-    write_snapshot(s, out_, name, cs_);
+    write_snapshot(s, series_, name, s.time(), cs_);
     const double cpu = cpu_now();
     phase_list_.push_back(phase_json(s, name, std::chrono::duration<double>(now - t_phase_).count(), cpu - cpu_phase_));
     t_phase_ = now;
@@ -339,7 +345,7 @@ class PhaseWriter final : public PhaseObserverT<D> {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count();
     write_file_atomic(out_ / "timeseries.csv", csv_);
     write_file_atomic(out_ / "state.txt", format_state(s.state()));
-    write_snapshot(s, out_, "final", cs_);
+    write_snapshot(s, series_, "final", s.time(), cs_);
     const auto n = static_cast<double>(s.particles().size());
     summary["phases"] = phase_list_;
     const double cpu = cpu_now() - cpu_start_;
@@ -392,6 +398,7 @@ class PhaseWriter final : public PhaseObserverT<D> {
   const std::vector<SinterPhase>& phases_;
   double pressure_, k1c_;
   fs::path out_;
+  SnapshotSeries series_ = protocol_snapshot_series(out_);
   Progress progress_;
   double cpu_phase_, cpu_start_;
   std::chrono::steady_clock::time_point t_start_, t_phase_;
@@ -572,10 +579,10 @@ int run_protocol(const std::string& command, const SampleSpec& sample, const Run
   return run_protocol_body<2>(command, sample, args, phases, prepare_only, out, nullptr);
 }
 
-template void write_snapshot<2>(const DynamicSolverT<2>&, const fs::path&, const std::string&, std::vector<ContactInfo>&,
-                                 const std::vector<Field>&);
-template void write_snapshot<3>(const DynamicSolverT<3>&, const fs::path&, const std::string&, std::vector<ContactInfo>&,
-                                 const std::vector<Field>&);
+template void write_snapshot<2>(const DynamicSolverT<2>&, SnapshotSeries&, const std::string&, double,
+                                 std::vector<ContactInfo>&, const std::vector<Field>&);
+template void write_snapshot<3>(const DynamicSolverT<3>&, SnapshotSeries&, const std::string&, double,
+                                 std::vector<ContactInfo>&, const std::vector<Field>&);
 template void check_run_limits<2>(const DynamicSolverT<2>&, double, double, bool);
 template void check_run_limits<3>(const DynamicSolverT<3>&, double, double, bool);
 template int report_unstable<2>(const InstabilityError&, const DynamicSolverT<2>&, const fs::path&, nlohmann::json);

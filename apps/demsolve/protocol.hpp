@@ -81,10 +81,14 @@ void apply_overrides(netdem::dem::LudingParams& p, const std::vector<std::string
 /// particles_<label>.vtp (radius, velocity, omega, particle_pressure = average particle stress
 /// p_i = sum_c f_n d_i / (2 pi a_i^2) [N/m], contacts, and `extra`), contacts_<label>.vtp (f_n,
 /// f_t, attractive, sliding per contact line) and contacts_<label>.csv (distributions).
-/// 3D: the same with z, velocity and spin vectors, p_i in N/m^2 and |f_t|.
+/// 3D: the same with z, velocity and spin vectors, p_i in N/m^2 and |f_t|. In series.dir(), listed in
+/// `series` at the time `t`.
 template <int D>
-void write_snapshot(const netdem::dem::DynamicSolverT<D>& s, const std::filesystem::path& out, const std::string& label,
+void write_snapshot(const netdem::dem::DynamicSolverT<D>& s, SnapshotSeries& series, const std::string& label, double t,
                     std::vector<netdem::dem::ContactInfo>& buffer, const std::vector<Field>& extra = {});
+/// The series of those snapshots, snapshots.pvd: ParaView's time is the time t of the run's time
+/// series (timeseries.csv, compress.csv); parts particles and contacts.
+SnapshotSeries protocol_snapshot_series(const std::filesystem::path& out);
 
 /// Loads a state file with NAME=VALUE overrides applied to its contact parameters.
 netdem::dem::SolverState load_state(const std::string& file, const std::vector<std::string>& overrides);

@@ -17,8 +17,9 @@ using namespace netdem::dem;
 namespace netdem::app::dem {
 
 template <int D>
-void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, const std::string& tag,
+void write_compact_snapshot(const DynamicSolverT<D>& s, SnapshotSeries& series, const std::string& tag,
                             std::vector<ContactInfo>& cs) {
+  const fs::path out = series.dir();
   const ParticlesT<D>& P = s.particles();
   const std::vector<double> x = P.axis(0), y = P.axis(1), z = D == 3 ? P.axis(D - 1) : std::vector<double>{};
   std::vector<double> pre(P.size(), 0.0);
@@ -74,11 +75,18 @@ void write_compact_snapshot(const DynamicSolverT<D>& s, const fs::path& out, con
   } else {
     write_file_atomic(file, vtp_network_3d(x, y, &z, ci, cj, {fn, ft, ov, sl}));
   }
+  series.add(s.density(), tag);
 }
 
-template void write_compact_snapshot<2>(const DynamicSolverT<2>&, const fs::path&, const std::string&,
+SnapshotSeries compact_snapshot_series(const fs::path& out, bool periodic) {
+  std::vector<std::string> kinds = {"particles", "contacts"};
+  if (periodic) kinds.emplace_back("cell");
+  return SnapshotSeries(out / "snapshots.pvd", kinds);
+}
+
+template void write_compact_snapshot<2>(const DynamicSolverT<2>&, SnapshotSeries&, const std::string&,
                                         std::vector<ContactInfo>&);
-template void write_compact_snapshot<3>(const DynamicSolverT<3>&, const fs::path&, const std::string&,
+template void write_compact_snapshot<3>(const DynamicSolverT<3>&, SnapshotSeries&, const std::string&,
                                         std::vector<ContactInfo>&);
 
 DynamicOptions plastic_options(double mu, double k_t, bool reversible, double first_touch, double damping, double drag,

@@ -24,12 +24,16 @@ using netdem::dem::DynamicSolver;
 using Sample = netdem::dem::CompactionSampleT<2>;
 using Meter = netdem::dem::CompactionMeterT<2>;
 
-/// netsolve's snapshot files and field names (apps/netsolve/main.cpp write_snapshot), plus the
-/// velocities: particles_<tag>.vtp, contacts_<tag>.vtp (the loaded particle-particle contacts).
+/// netsolve's snapshot files and field names (apps/netsolve/compact.cpp write_snapshot), plus the
+/// velocities: particles_<tag>.vtp, contacts_<tag>.vtp (the loaded particle-particle contacts),
+/// cell_<tag>.vtp (periodic), in series.dir(), listed in `series` at the density D of the state.
 /// 3D: positions x, y, z; the spin vector; the tangential force's magnitude.
 template <int D>
-void write_compact_snapshot(const netdem::dem::DynamicSolverT<D>& s, const std::filesystem::path& out,
-                            const std::string& tag, std::vector<ContactInfo>& cs);
+void write_compact_snapshot(const netdem::dem::DynamicSolverT<D>& s, SnapshotSeries& series, const std::string& tag,
+                            std::vector<ContactInfo>& cs);
+/// The series of those snapshots, snapshots.pvd: ParaView's time is the density D (the quantity
+/// --snapshots names); parts particles, contacts and (periodic) cell.
+SnapshotSeries compact_snapshot_series(const std::filesystem::path& out, bool periodic);
 
 
 /// The explicit solver's options for the plastic-indentation law on netsolve's scenes (sigma_y = 1,

@@ -31,7 +31,10 @@ namespace netdem::app::netsolve {
 
 namespace {
 
-void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, const std::string& tag) {
+/// particles_TAG.vtp, contacts_TAG.vtp and (periodic) cell_TAG.vtp, listed in `series` at the
+/// density D of the state.
+void write_snapshot(const netdem::qs::NetworkSolver& s, SnapshotSeries& series, const std::string& tag, double density) {
+  const fs::path out = series.dir();
   std::vector<double> x = s.x(), y = s.y();
   const auto cell = s.periodic_cell();
   if (cell) {  // a periodic cell: the centres wrapped into it, contacts drawn to j's image, the cell's outline
@@ -72,6 +75,14 @@ void write_snapshot(const netdem::qs::NetworkSolver& s, const fs::path& out, con
     sl.values.push_back(c.sliding ? 1.0 : 0.0);
   }
   netdem::app::write_file_atomic(out / fmt::format("contacts_{}.vtp", tag), netdem::app::vtp_network(nx, ny, ci, cj, {fn, ft, ov, sl}));
+  series.add(density, tag);
+}
+
+/// snapshots.pvd: ParaView's time is the density D (the quantity --snapshots names).
+SnapshotSeries snapshot_series(const fs::path& out, bool periodic) {
+  std::vector<std::string> kinds = {"particles", "contacts"};
+  if (periodic) kinds.emplace_back("cell");
+  return SnapshotSeries(out / "snapshots.pvd", kinds);
 }
 
 /// The solver and compaction options of `compact`, checked (before the output folder exists).
@@ -249,9 +260,9 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
 /// The rows of a run: history.csv (with the column `leg` when it precompacts), the records of the
 /// run status, the snapshots at the --snapshots densities, the progress and each leg's last row.
 struct CompactRows {
-  CompactRows(const qs::NetworkSolver& s, const fs::path& dir, std::vector<double> snapshots, const qs::SolverOptions& so,
+  CompactRows(const qs::NetworkSolver& s, SnapshotSeries& snapshot_series, std::vector<double> snapshots, const qs::SolverOptions& so,
               const qs::CompactionOptions& co, bool quiet)
-      : solver(s), out(dir), snaps(std::move(snapshots)), sy(so.law.sigma_y), legs(co.precompacts()),
+      : solver(s), series(snapshot_series), snaps(std::move(snapshots)), sy(so.law.sigma_y), legs(co.precompacts()),
         total(co.increments + (legs ? co.precompact_increments : 0)), progress("compact", total, quiet) {
     csv = legs ? "increment,leg," : "increment,";
     csv += "E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
@@ -292,10 +303,10 @@ struct CompactRows {
     done = row.increment;
     leg_end[row.leg == 0 ? 0 : 1] = {true, row.increment, m};
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
-      write_snapshot(solver, out, fmt::format("D{:.3f}", snaps[next_snap]));
+      write_snapshot(solver, series, fmt::format("D{:.3f}", snaps[next_snap]), m.density);
       ++next_snap;
     }
-    if (row.increment % 20 == 0) write_file_atomic(out / "history.csv", csv);  // checkpoint
+    if (row.increment % 20 == 0) write_file_atomic(series.dir() / "history.csv", csv);  // checkpoint
     progress.update(row.increment);
     last = m;
     if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
@@ -304,7 +315,7 @@ struct CompactRows {
   }
 
   const qs::NetworkSolver& solver;
-  fs::path out;
+  SnapshotSeries& series;
   std::vector<double> snaps;
   double sy;
   bool legs;
@@ -350,8 +361,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
 
   const auto t0 = std::chrono::steady_clock::now();
   qs::NetworkSolver solver = jammed ? qs::NetworkSolver(*jammed, so) : qs::NetworkSolver(pk, so);
-  write_snapshot(solver, out, "initial");
-  CompactRows rows(solver, out, snaps, so, co, a.quiet);
+  SnapshotSeries series = snapshot_series(out, periodic);
+  write_snapshot(solver, series, "initial", solver.measures().density);
+  CompactRows rows(solver, series, snaps, so, co, a.quiet);
   std::string stopped;  // why the run stopped before the target, or ""
   activity() = "compacting";
   try {
@@ -366,7 +378,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_file_atomic(out / "history.csv", rows.csv);
   if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
-    write_snapshot(solver, out, "final");
+    write_snapshot(solver, series, "final", rows.last.density);
     if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());
     if (a.save_state && !periodic) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
   }

@@ -396,6 +396,7 @@ class Recorder final : public st::StaggeredObserver {
   void snapshot(const st::Staggered& s, int index) override {
     write_snapshot(out_, index, s);
     snaps.emplace_back(index, s.time());
+    write_file_atomic(out_ / "snapshots.pvd", pvd(snaps));  // rewritten with each: a killed run keeps a valid one
   }
   void checkpoint(const st::Staggered& s, int index, long k) override {
     const std::string file = fmt::format("state_{}.txt", index);

@@ -56,12 +56,15 @@ void write_snapshot(const fs::path& out, int k, const st::Staggered& s) {
 }
 
 std::string pvd(const std::vector<std::pair<int, double>>& snaps) {
-  std::string s = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  std::vector<PvdDataSet> sets;  // no block names: the .pvd's bytes as before the shared writer
   for (const auto& [k, t] : snaps) {
-    s += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"0\" file=\"particles_{:03d}.vtp\"/>\n", t, k);
-    s += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"1\" file=\"bonds_{:03d}.vtp\"/>\n", t, k);
+    // one entry per time, as SnapshotSeries: a step that passes several snapshot times (or ends the
+    // run at the last of them) writes them all of one state, which ParaView would draw twice
+    if (!sets.empty() && !(t > sets.back().timestep)) continue;
+    sets.push_back({t, 0, fmt::format("particles_{:03d}.vtp", k), ""});
+    sets.push_back({t, 1, fmt::format("bonds_{:03d}.vtp", k), ""});
   }
-  return s + "  </Collection>\n</VTKFile>\n";
+  return pvd_text(sets);
 }
 
 json options_json(const st::StaggeredOptions& o) {

@@ -24,3 +24,17 @@ finish() {
   echo "cli: $pass passed, $fail failed"
   [ "$fail" -eq 0 ]
 }
+# check_pvd NAME DIR KIND,KIND,... [tests/pvd_check.py options]: DIR's snapshots.pvd is the
+# ParaView collection of its KIND_*.vtp snapshots (tests/pvd_check.py) and its .netdem-files lists
+# it (--overwrite removes it).
+pvd_check="$(dirname "${BASH_SOURCE[0]}")/../pvd_check.py"
+check_pvd() {
+  local name="$1" dir="$2"
+  shift 2
+  if /usr/bin/python3 "$pvd_check" "$dir" "$@" 2>"$tmp/pvd_stderr" && grep -qx snapshots.pvd "$dir/.netdem-files"; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1))
+    echo "FAIL $name: $(head -3 "$tmp/pvd_stderr")$(grep -qx snapshots.pvd "$dir/.netdem-files" 2>/dev/null || echo " (.netdem-files does not list snapshots.pvd)")"
+  fi
+}

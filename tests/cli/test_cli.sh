@@ -38,6 +38,8 @@ else
   fail=$((fail + 1))
   echo "FAIL good_run: $(cat "$tmp/stderr")"
 fi
+# snapshots.pvd: the snapshots by density D (the default --snapshots 0.82,0.84,0.85: 0.82 reached)
+check_pvd good_run_pvd "$good" particles,contacts --tags initial,D0.820,final --history history.csv:D
 # Eq 13 is origin-free through the command line (issue 12, section 4): the default compaction of
 # the W = 20 packing and of the same packing and box shifted by (1e3, 1e3) R. Z identical, contact
 # stress within 0.2 %, Eq 13 within 1 % (with lever arms from the origin: S22 -0.532 vs -0.839,
@@ -148,4 +150,5 @@ else
   fail=$((fail + 1))
   echo "FAIL energy_friction: $(cat "$tmp/stderr")"
 fi
+check_pvd energy_friction_pvd "$ef" particles,contacts --tags initial,final --history history.csv:D  # --snapshots ''
 finish

@@ -50,6 +50,7 @@ ok compact_exit [ $? -eq 0 ]
 ok compact_kinetic head -1 "$tmp/c/history.csv" | grep -q 'S11_kinetic,S22_kinetic,S12_kinetic$'
 ok compact_mode grep -q '"mode": "periodic"' "$tmp/c/summary.json"
 ok compact_cell grep -q 'NumberOfLines="4"' "$tmp/c/cell_final.vtp"
+check_pvd compact_pvd "$tmp/c" particles,contacts,cell --history history.csv:D
 ok compact_density grep -q '"D": 0\.85' "$tmp/c/summary.json"
 "$ds" compact --dim 3 --boundary periodic --packing "$tmp/p3/packing.csv" --to-density 0.7 --inertial-number 1e-2 \
   --increments 5 --quiet --out "$tmp/c3" >/dev/null 2>&1

@@ -55,6 +55,7 @@ good "$tmp/a" && good "$tmp/b" &&
   has_columns "$tmp/a/timeseries.csv" t nu C sxx szz Ekin && grep -q '"seed": 7' "$tmp/a/summary.json" &&
   cmp -s "$tmp/a/state.txt" "$tmp/b/state.txt"
 result good_prepare $?
+check_pvd good_prepare_pvd "$tmp/a" particles,contacts --tags initial,prepare  # final: prepare's state
 
 # particle friction in the preparation (--mu-prepare, an investigation option): the prepared
 # contacts carry tangential forces with it and none without it (the paper's frictionless compression)
@@ -101,6 +102,7 @@ times=(--t-heat 0.002 --heat-time 0.001 --sinter-time 0.001 --cool-time 0.001 --
   has_columns "$tmp/s/contacts_sinter.csv" overlap_rel f_n f_t mu_t &&
   grep -q '"densification"' "$tmp/s/summary.json"
 result good_sinter $?
+check_pvd good_sinter_pvd "$tmp/s" particles,contacts --tags initial,prepare,heat,sinter,cool,relax
 "$ds" sinter --state "$tmp/s/state_prepare.txt" "${times[@]}" --quiet --out "$tmp/r" >/dev/null 2>"$tmp/stderr" &&
   cmp -s "$tmp/s/state.txt" "$tmp/r/state.txt"
 result restart_from_prepare_is_exact $?
@@ -109,6 +111,8 @@ result restart_from_prepare_is_exact $?
   --quiet --out "$tmp/z" >/dev/null 2>"$tmp/stderr" &&
   /usr/bin/env python3 -c "import json,sys; f=json.load(open('$tmp/z/summary.json'))['final']; sys.exit(0 if f['T'] == 140.0 else 1)"
 result zero_length_phases_end_hot $?
+# the phases of no length end where heat ends: one time step of the .pvd (their files are heat's)
+check_pvd zero_length_phases_pvd "$tmp/z" particles,contacts --tags initial,prepare,heat
 check_bad state_past_end "past the end" sinter --state "$tmp/s/state.txt" "${times[@]}"
 # --param m_wall / gamma_wall given with --state reach the state's stress-controlled walls (Eq 1)
 "$ds" sinter --state "$tmp/s/state_prepare.txt" "${times[@]}" --param gamma_wall=7 --param m_wall=0.5 --quiet \
@@ -167,9 +171,11 @@ check_bad vibrate_missing_state "cannot open state file" vibrate --state "$tmp/n
   has_columns "$tmp/c/compress.csv" t eps_zz szz szz_over_p nu C &&
   grep -q '"peak_szz"' "$tmp/c/summary.json" && grep -q '"stiffness"' "$tmp/c/summary.json"
 result good_compress $?
+check_pvd good_compress_pvd "$tmp/c" particles,contacts --tags eps0,final  # t0.005 lies past --max-strain 0.002
 "$ds" vibrate --state "$tmp/s/state.txt" --time 0.002 --quiet --out "$tmp/v" >/dev/null 2>"$tmp/stderr" &&
   files_ok "$tmp/v" clusters.csv summary.json timeseries.csv particles_final.vtp &&
   grep -q '"largest_cluster_fraction"' "$tmp/v/summary.json" &&
   [ "$(tail -n +2 "$tmp/v/clusters.csv" | awk -F, '{s += $2} END {print s}')" = 25 ]
 result good_vibrate $?
+check_pvd good_vibrate_pvd "$tmp/v" particles,contacts --tags initial,final
 finish

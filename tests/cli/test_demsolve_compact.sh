@@ -66,6 +66,7 @@ rc=$?
 sys.exit(0 if s["status"] == "incomplete" and s["steps"] == int(sys.argv[2]) and s["increments_done"] < 100 else 1)' \
     "$tmp/ms/summary.json" "$max"
 result max_steps_enforced $?
+check_pvd max_steps_pvd "$tmp/ms" particles,contacts --history history.csv:D  # the snapshots so far, no final
 
 # layer mode (the default boundary), a small scene
 "$ds" compact --packing "$pk" --inertial-number 1e-3 --quiet --out "$tmp/l" >/dev/null 2>"$tmp/stderr" &&
@@ -89,6 +90,7 @@ ok = ok and s["inertial_number"] == 1e-3 and s["friction"] == "inf" and s["presc
 sys.exit(0 if ok else 1)
 PY
 result layer_run $?
+check_pvd layer_run_pvd "$tmp/l" particles,contacts --tags initial,D0.820,D0.840,D0.850 --history history.csv:D
 
 # walls mode: the wall stress beside the contact stress
 "$ds" compact --packing "$pk" --inertial-number 1e-3 --boundary walls --quiet --out "$tmp/w" >/dev/null 2>"$tmp/stderr" &&

@@ -108,6 +108,8 @@ for f in command.txt history.csv steps.csv dL_bar.csv state.txt summary.json rep
   ok "sn_file_$f" [ -s "$a/$f" ]
 done
 ok sn_no_marker [ ! -e "$a/.incomplete" ]
+# snapshots.pvd (the shared writer of apps/common/output.hpp): the six snapshots by time t, the bonds as part 1
+check_pvd sn_pvd "$a" particles,bonds --tags 000,001,002,003,004,005 --history history.csv:t
 # the command draws nothing: report.md names the script that plots history.csv
 ok sn_no_svg [ ! -e "$a/history.svg" ]
 ok sn_report_names_plot grep -q "apps/scripts/plot_sinter.py" "$a/report.md"

@@ -45,6 +45,9 @@ print(f"periodic lattice: D {float(last['D']):.4f}, S11 {got[0]:.9f} S22 {got[1]
 ok = rc == 0 and s["mode"] == "periodic" and err < 1e-8 and int(last["contacts"]) == 108
 sys.exit(0 if ok else 1)
 PY
+# snapshots.pvd: the cell as a third part; the default --snapshots densities lie below the
+# lattice's 0.907, written at the start (the initial state's files), so only initial and final are listed
+check_pvd periodic_pvd "$tmp/p" particles,contacts,cell --tags initial,final --history history.csv:D
 /usr/bin/python3 -c "
 import sys; t = open(sys.argv[1]).read().replace('# periodic\n', ''); open(sys.argv[2], 'w').write(t)" "$tmp/lat.csv" "$tmp/walled.csv"
 check_bad periodic_no_packing "periodic packing" compact --boundary periodic

@@ -110,7 +110,14 @@ if [ "$rc" -eq 0 ] && [ -s "$h/notes.txt" ] && grep -q "kept 1 other: notes.txt"
 d="$tmp/D"
 if start_long "$d" "$ds" prepare --dim 3 --n 300 --time 50 --quiet --out "$d"; then
   held_refused "$ds" "$d" demsolve_live prepare --n 20 --time 0.002 --quiet
+  # a run killed after its first snapshot keeps a valid snapshots.pvd of it (rewritten with each)
+  for _ in $(seq 1200); do [ -s "$d/snapshots.pvd" ] && break; sleep 0.05; done
   stop_long
+  if /usr/bin/python3 "$pvd_check" "$d" particles,contacts 2>"$tmp/stderr" && [ -e "$d/.incomplete" ]; then
+    ok
+  else
+    ko "demsolve_killed_pvd"
+  fi
   printf 'my notes\n' >"$d/notes.txt"
   "$ds" prepare --n 20 --time 0.002 --quiet --overwrite --out "$d" >/dev/null 2>"$tmp/stderr"
   rc=$?
@@ -123,6 +130,16 @@ if start_long "$d" "$ds" prepare --dim 3 --n 300 --time 50 --quiet --out "$d"; t
 else
   fail=$((fail + 1))
 fi
+
+# ---- snapshots.pvd is the run's own: --overwrite removes it with the snapshots it names, and the
+# new run's names only its own (issue 33)
+c="$tmp/C"
+"$ns" compact --width 16 --increments 40 --to-density 0.83 --snapshots 0.81,0.82 --quiet --out "$c" >/dev/null 2>"$tmp/stderr"
+check_pvd compact_pvd "$c" particles,contacts --tags initial,D0.810,D0.820,final --history history.csv:D
+"$ns" compact --width 16 --increments 40 --to-density 0.83 --snapshots '' --quiet --overwrite --out "$c" >/dev/null 2>"$tmp/stderr"
+rc=$?
+if [ "$rc" -eq 0 ] && [ ! -e "$c/particles_D0.810.vtp" ] && grep -q "removed" "$tmp/stderr"; then ok; else ko "overwrite_pvd rc=$rc"; fi
+check_pvd overwritten_pvd "$c" particles,contacts --tags initial,final --history history.csv:D
 
 # An empty file option is refused with one line naming it (it was read as "not given": the run
 # went on from the defaults), and no folder is made.

@@ -105,6 +105,8 @@ if [ "$rc" -eq 3 ] && status_is "$s" unstable && [ "$(grep -c . "$tmp/stderr")" 
 else
   ko "unstable_stop rc=$rc"
 fi
+# the stopped run's snapshots.pvd names what it wrote: the initial state (no final snapshot)
+check_pvd unstable_stop_pvd "$s" particles,contacts --tags initial --history history.csv:D
 # --allow-unconverged does not hide a stopped run
 export_kernels "$ns" compact --width 20 --increments 20 --friction 0 --viscosity 0 --first-touch 0 --quiet --allow-unconverged --out "$tmp/unstable2" >/dev/null 2>"$tmp/stderr"
 rc=$?

@@ -6,12 +6,17 @@ import math
 import os
 import re
 import subprocess
+import sys
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
 
 import netdem
 from netdem import _run
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from pvd_check import snapshot_series_errors  # noqa: E402  (tests/pvd_check.py)
 
 # summary.json keys that are not results: wall-clock and CPU times and the command itself
 VOLATILE = re.compile(r"^(command|threads_available|timing_s|timings?|timers?(_s)?|(wall|cpu)(_time)?_s|.*_(wall|cpu)_s|.*_per_(cpu_)?s)$")
@@ -82,6 +87,23 @@ def assert_same_run(cli_dir, result, history="history.csv"):
                 assert report_lines(a) == report_lines(b), n
             else:
                 assert a == b, n
+
+
+def assert_snapshot_series(folder, kinds, tags=None, history=None):
+    """`folder`'s snapshots.pvd is the ParaView collection of its snapshot series (tests/pvd_check.py);
+    kinds None: the folder holds no .pvd (the run wrote no snapshot)."""
+    if kinds is None:
+        assert not [n for n in os.listdir(folder) if n.endswith(".pvd")], os.listdir(folder)
+        return
+    errors = snapshot_series_errors(folder, list(kinds), tags, history)
+    assert not errors, "\n".join(errors)
+
+
+def snapshot_tags(folder):
+    """The snapshots listed in `folder`'s snapshots.pvd, in order: TAG of particles_TAG.vtp."""
+    root = ET.parse(os.path.join(folder, "snapshots.pvd")).getroot()
+    return [re.fullmatch(r"particles_(.+)\.vtp", d.get("file")).group(1) for d in root.iter("DataSet")
+            if d.get("part") == "0"]
 
 
 def files(folder):

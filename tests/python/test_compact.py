@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import netdem
-from conftest import assert_same_run, run_cli
+from conftest import assert_same_run, assert_snapshot_series, run_cli, snapshot_tags
 
 SMALL = ["--width", "20", "--increments", "40", "--quiet"]  # W = 20 converges with 40 increments, not 10
 
@@ -23,6 +23,10 @@ def test_netsolve_compact_equals_cli(tmp, options):
     assert (r.status == "ok") == (code == 0) and r.status in ("ok", "unconverged", "unstable")
     assert len(r.history["D"]) == 41 and r.history["D"][-1] > r.history["D"][0]
     assert_same_run(f"{tmp}/cli", r)
+    assert_snapshot_series(r.out, ["particles", "contacts"], history="history.csv:D")
+    # every density asked for is reached (the run ends at 0.85); final is listed unless it is the last one's state
+    expected = ["initial"] + [f"D{d:.3f}" for d in sorted(options.get("snapshots", [0.82, 0.84, 0.85]))]
+    assert [t for t in snapshot_tags(r.out) if t != "final"] == expected
 
 
 def test_netsolve_compact_defaults_equal_cli(tmp):
@@ -43,6 +47,7 @@ def test_an_empty_list_is_an_empty_value(tmp, empty):
     assert r.exit_code == code == 0
     assert not any(n.startswith("particles_D") for n in os.listdir(f"{tmp}/py"))
     assert_same_run(f"{tmp}/cli", r)
+    assert_snapshot_series(r.out, ["particles", "contacts"], ["initial", "final"], history="history.csv:D")
 
 
 def test_without_out_the_folder_is_removed():
@@ -58,6 +63,7 @@ def test_demsolve_compact_equals_cli(tmp):
     r = netdem.demsolve.compact(width=10, increments=4, quiet=True, out=f"{tmp}/py")
     assert r.exit_code == 0 and len(r.history["D"]) == 5
     assert_same_run(f"{tmp}/cli", r)
+    assert_snapshot_series(r.out, ["particles", "contacts"], history="history.csv:D")
 
 
 @pytest.mark.parametrize("tool,kwargs,args", [
@@ -100,6 +106,7 @@ def test_progress_reaches_one_and_can_stop_the_run(tmp):
     with pytest.raises(Stop):
         netdem.netsolve.compact(width=20, increments=10, quiet=True, progress=stop, out=f"{tmp}/stopped")
     assert os.path.exists(f"{tmp}/stopped/.incomplete")  # the run stopped inside, as a killed command
+    assert_snapshot_series(f"{tmp}/stopped", ["particles", "contacts"], ["initial"])  # what it wrote
     seen.clear()
     r = netdem.demsolve.compact(width=10, increments=2, quiet=True, progress=seen.append)
     assert r.exit_code == 0 and seen[-1] == 1.0

@@ -6,7 +6,7 @@ import pytest
 
 import netdem
 from netdem import _run
-from conftest import assert_same_run, run_cli
+from conftest import assert_same_run, assert_snapshot_series, run_cli
 
 
 @pytest.fixture(scope="module")
@@ -40,6 +40,13 @@ CASES = [
 ]
 
 
+# the parts of each subcommand's snapshots.pvd (None: no snapshot, no .pvd)
+SERIES = {("netsolve", "sinter_pair"): None, ("netsolve", "sinter"): ("particles", "bonds"),
+          ("demsolve", "prepare"): ("particles", "contacts"), ("demsolve", "sinter"): ("particles", "contacts"),
+          ("demsolve", "compress"): ("particles", "contacts"), ("demsolve", "vibrate"): ("particles", "contacts"),
+          ("demsolve", "yield_"): None}
+
+
 @pytest.mark.parametrize("tool,function,subcommand,options,history", CASES, ids=[f"{c[0]}-{c[2]}" for c in CASES])
 def test_subcommand_equals_cli(tmp, inputs, tool, function, subcommand, options, history):
     options = {k: v.format(d=inputs) if isinstance(v, str) else v for k, v in options.items()}
@@ -50,6 +57,7 @@ def test_subcommand_equals_cli(tmp, inputs, tool, function, subcommand, options,
     assert r.exit_code == code and len(next(iter(r.history.values()))) > 1
     assert seen and seen[-1] == 1.0 and all(0 <= f <= 1 for f in seen)
     assert_same_run(f"{tmp}/cli", r, history)
+    assert_snapshot_series(r.out, SERIES[(tool, function)])  # the executable's is the same, byte for byte
     if function in ("vibrate",):
         assert r.clusters and list(r.clusters) == list(_run.read_table(f"{tmp}/cli/clusters.csv"))
     if function == "yield_":
