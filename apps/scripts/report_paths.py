@@ -173,9 +173,11 @@ def source_ids(repo, paths, modified):
     return out
 
 
-def provenance(repo, case, binaries=()):
+def provenance(repo, case, binaries=(), reused=None):
     """The provenance of a report of `case` made now from the work tree of `repo`, with the SHA-256 of
-    each binary in `binaries` (paths; missing files are recorded as such)."""
+    each binary in `binaries` (paths; missing files are recorded as such). `reused`: which runs the
+    report read from earlier run folders instead of running them (text, e.g. "all (--report-only)"),
+    so that the binaries are not claimed to have made them; None if every run ran now."""
     paths = case_sources(case)
     try:
         commit = _git(repo, "rev-parse", "HEAD").strip()
@@ -190,7 +192,7 @@ def provenance(repo, case, binaries=()):
         if b:
             bins[shown_path(os.path.abspath(b), repo)] = sha256_file(b) if os.path.isfile(b) else "missing"
     return {"case": case, "commit": commit, "modified": bool(changed), "modified_files": changed,
-            "sources": sources, "binaries": bins,
+            "sources": sources, "binaries": bins, **({"reused": reused} if reused else {}),
             "generated": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
 
 
@@ -201,6 +203,9 @@ def provenance_lines(prov, counts):
     commit = (prov.get("commit") or "unknown")[:12]
     tree = "work tree modified: " + ", ".join(prov["modified_files"]) if prov.get("modified") else "work tree clean"
     bins = "; ".join(f"`{k}` sha256 {v}" for k, v in sorted(prov.get("binaries", {}).items())) or "none"
+    if prov.get("reused"):
+        bins += (f" (runs reused from earlier run folders, not run by these binaries: {prov['reused']}; the "
+                 "sources they measure are unchanged since, or declared unaffected in the report)")
     return ["", "## Provenance", "",
             f"Commit {commit} ({tree}); generated {prov.get('generated', '?')}. Binaries run: {bins}. "
             f"Totals: {totals_text(counts)} (MISSING: a line that could not be evaluated, with the reason in the "

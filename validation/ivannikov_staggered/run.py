@@ -94,8 +94,14 @@ def runs_list(quick):
     return r
 
 
+REUSED = []  # the runs run_all read from their folders instead of running them
+
+
 def run_all(netsolve, runs_dir, quick, force):
+    """{name: the run's summary and tables}; runs whose command.txt is unchanged are read, not run
+    (their names in REUSED, for the report's provenance)."""
     out = {}
+    REUSED.clear()
     for name, args in runs_list(quick).items():
         d = os.path.join(runs_dir, name)
         args = [a.replace("@", runs_dir + os.sep) if a.startswith("@") else a for a in args]
@@ -111,6 +117,8 @@ def run_all(netsolve, runs_dir, quick, force):
             held = any(os.path.exists(os.path.join(d, f)) for f in ("command.txt", "summary.json", ".incomplete"))
             run = cmd[:-2] + (["--overwrite"] if held else []) + cmd[-2:]
             subprocess.run(run, check=True, stdout=subprocess.DEVNULL)
+        else:
+            REUSED.append(name)
         with open(os.path.join(d, "summary.json")) as f:
             s = json.load(f)
         rec = {"summary": s, "dir": d}
@@ -219,7 +227,8 @@ def main():
            "documented reconstruction of docs/sintering_pair.md, not Thomsen et al.'s model. So the paper's curves are "
            "compared in their trends (the findings it states), not number for number.\n\n"
            "## Findings\n\n" + F.table() + "\n" + "\n".join(rep)
-           + "\n".join(provenance_lines(provenance(REPO, "ivannikov_staggered", [a.netsolve]), counts)) + "\n")
+           + "\n".join(provenance_lines(provenance(REPO, "ivannikov_staggered", [a.netsolve],
+                                                           f"{len(REUSED)} of {len(R)}: {', '.join(REUSED)}" if REUSED else None), counts)) + "\n")
     with open(os.path.join(outdir, "report.md"), "w") as f:
         f.write(txt)
     print(f"{totals_text(counts)} -> {os.path.join(outdir, 'report.md')}")

@@ -448,7 +448,7 @@ def label_of(r):
     return who + (f" at {r[1].split('at D = ')[1].split()[0].rstrip(':')}" if "at D = " in r[1] else "")
 
 
-def write_report(mode, R, K, runs, out, binaries, cmdline):
+def write_report(mode, R, K, runs, out, binaries, cmdline, reused=None):
     rows, per_seed = evaluate(mode, R, K)
     fr_rows = FR.evaluate(mode, R, helpers())
     layer_rows = FR.evaluate(mode, R, helpers(), layer=True)
@@ -521,7 +521,7 @@ def write_report(mode, R, K, runs, out, binaries, cmdline):
     notes = os.path.join(HERE, "notes.md")
     if os.path.isfile(notes) and mode["name"] == "full":
         L += ["", "## Notes (notes.md, written by hand)", "", open(notes, encoding="utf-8").read().strip()]
-    L += provenance_lines(provenance(REPO, CASE, binaries), c)
+    L += provenance_lines(provenance(REPO, CASE, binaries, reused), c)
     with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
         f.write("\n".join(L) + "\n")
     print(f"report: {shown_path(os.path.join(out, 'report.md'), REPO)} ({c})")
@@ -536,7 +536,8 @@ def main():
             PER.run_all(a.jobs, bins, runs, a.force, a.timeout, [r for r in items if PER.selected(r[0], only)])
     cmdline = "/usr/bin/python3 validation/redanz_fleck_walls/run.py" + (" --quick" if a.quick else "")
     R, K = load(mode, runs)
-    write_report(mode, R, K, runs, out, [a.netsolve, a.demsolve], cmdline)
+    write_report(mode, R, K, runs, out, [a.netsolve, a.demsolve], cmdline,
+                 "all (--report-only)" if a.report_only else None)
 
 
 if __name__ == "__main__":
