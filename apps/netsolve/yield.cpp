@@ -34,6 +34,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "netdem/contact/plastic_indentation.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/analytic_yield.hpp"
@@ -85,6 +86,8 @@ struct YieldArgs {
   std::vector<int> probe_list;  ///< --probes: a set of indices (empty: every direction)
   int jobs = 0;
   double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
+  /// elastic un/reloading stiffness over the loading tangent at u_max (section 3.4), the law's default
+  double unload_ratio = netdem::contact::PlasticIndentationParams{}.unload_ratio;
   int fine = 20;
   bool quiet = false, overwrite = false, allow_unconverged = false;
   std::string out = "results/yield";
@@ -150,6 +153,10 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
   pre = qs::SolverOptions::yield_precompaction();
   pre.mode = parse_bc(a.compact_bc, "--compact-bc");
   netdem::app::netsolve::apply_law_args(a.law, pre);
+  if (!(a.unload_ratio >= 1.0 && a.unload_ratio <= 1e8))
+    throw std::invalid_argument(fmt::format("--unload-ratio must lie in [1, 1e8] (the un/reloading stiffness over the "
+                                            "loading tangent), got {}", a.unload_ratio));
+  pre.law.unload_ratio = a.unload_ratio;
   pre.validate();
   probe = qs::SolverOptions::yield_probe();
   probe.mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
@@ -469,6 +476,7 @@ void YieldRun::make_setup() {
   setup["friction"] = a.law.friction;
   setup["normal_unloading"] = a.law.normal_unloading;
   setup["first_touch"] = a.law.first_touch;
+  setup["unload_ratio"] = a.unload_ratio;
   setup["compact_bc"] = bc_name(so_.mode);
   setup["probe_bc"] = po_.affine_centres ? "affine" : bc_name(po_.mode);
   setup["directions"] = a.directions;
@@ -723,6 +731,10 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--fine", a.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
     app.add_option("--growth", a.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
     app.add_option("--unload-tol", a.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
+    app.add_option("--unload-ratio", a.unload_ratio,
+                   "elastic un/reloading stiffness over the loading tangent at u_max (section 3.4): the unloading "
+                   "and the probes; the precompaction too with --normal-unloading elastic")
+        ->capture_default_str();
     netdem::app::netsolve::add_law_options(
         app, a.law,
         "normal law during the precompaction: 'reversible' (Eq 2 both ways, the paper's compaction) or "

@@ -45,6 +45,8 @@ check_rc width_1e7 2 "above the limit" pack --width 1e7  # used to be a raw std:
 check_rc width_nan 2 "width" pack --width nan
 check_rc friction_negative 2 "friction" compact --friction -1
 check_rc yield_state_dir 2 "is a folder" yield --from-state "$tmp"
+check_rc unload_ratio_low 2 "--unload-ratio must lie in \[1, 1e8\]" yield --unload-ratio 0.5
+check_rc unload_ratio_nan 2 "--unload-ratio must lie in" yield --unload-ratio nan
 check_rc sinter_profile_dir 2 "is a folder" sinter-pair --profile "$tmp"
 # out of memory is named, never a raw std::bad_alloc (exit 1)
 # (not under AddressSanitizer: it reserves terabytes of address space and cannot run under ulimit -v;
