@@ -54,6 +54,9 @@ CASES = {
     "die_LL_inf": ("l.r.-l.r., sticking", "closed-die", "die", "die", "inf"),
     "hydro_AA_inf": ("affine-affine, sticking", "hydrostatic", "affine", "affine", "inf"),
 }
+# the paper's independence from the un/reloading stiffness (its 10^3 x the loading stiffness, our default):
+# die_LL_inf again at 10^2 and 10^4 (netsolve yield --unload-ratio; issue 32)
+UNLOAD = {"die_LL_inf_ur100": 100, "die_LL_inf_ur10000": 10000}
 KINDS = (("curv", "max curvature"), ("off", "0.1% offset"))
 STYLE = {
     "AA_mu0": dict(color="black", marker="o"),
@@ -80,8 +83,10 @@ def case_args(name, scale, jobs):
 
 def run_case(binary, name, scale, runs, jobs, force):
     """One case (walls.run_one: skipped when its folder holds a finished run of the same arguments);
-    a failed case stops the script."""
-    why = WL.run_one(binary, name, case_args(name, scale, jobs), runs, force)
+    a failed case stops the script. An UNLOAD case is die_LL_inf at its un/reloading stiffness."""
+    args = (case_args("die_LL_inf", scale, jobs) + ["--unload-ratio", f"{UNLOAD[name]:g}"] if name in UNLOAD
+            else case_args(name, scale, jobs))
+    why = WL.run_one(binary, name, args, runs, force)
     if why:
         sys.exit(f"{name} failed: {why}")
 
@@ -270,6 +275,33 @@ def fig_curves(runs, outdir):
     plt.close(fig_)
 
 
+def unload_lines(C, U, add, miss):
+    """The paper (section 4): "the yield points are independent of the exact value of the unloading-reloading
+    stiffness as long as it is sufficiently high" (10^3 x the loading stiffness there and by default here).
+    Closed die, l.r.-l.r., sticking at 10^2 and 10^4 against 10^3: the median size ratio over the directions
+    (size_ratio) in the band of this report's other 'same size' lines, with the largest single-direction
+    deviation as the note."""
+    ref = C.get("die_LL_inf")
+    band = "0.9-1.1 (ours; the paper: independent)"
+    for kind, kl in KINDS:
+        fin = f"Section 4: closed die, l.r.-l.r. sticking, yield points at un/reloading stiffness 10² and 10⁴ / 10³ ({kl})"
+        if ref is None or len(U) < len(UNLOAD):
+            miss(fin, band, ["die_LL_inf"] + list(UNLOAD))
+            continue
+        ratios, worst = [], 0.0
+        for n in UNLOAD:
+            r, m = size_ratio(U[n], ref, kind)
+            ratios.append((r, m))
+            for k, p in U[n]["points"].items():
+                q = ref["points"].get(k)
+                if q is not None and math.isfinite(radius(p, kind)) and radius(q, kind) > 0:
+                    worst = max(worst, abs(radius(p, kind) / radius(q, kind) - 1))
+        ok = all(0.9 <= r <= 1.1 for r, _ in ratios)
+        add(fin, ", ".join(f"{r:.2f} (median of {m})" for r, m in ratios), band, ok,
+            f"largest single-direction deviation {100 * worst:.0f} % (the directions near the unloading direction "
+            "have small yield stresses)")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
@@ -283,7 +315,7 @@ def main():
     ap.add_argument("--force", action="store_true")
     ap.add_argument("--report-only", action="store_true",
                     help="run nothing: the figures and report.md from the runs there are (a missing run is a MISSING line)")
-    ap.add_argument("--cases", default=",".join(list(CASES) + ["walls"]),
+    ap.add_argument("--cases", default=",".join(list(CASES) + list(UNLOAD) + ["walls"]),
                     help="comma-separated subset; 'walls': the cases between walls (walls.py)")
     a = ap.parse_args()
     scale = QUICK if a.quick else FULL
@@ -416,6 +448,8 @@ def main():
             add(fin, f"{load_norm(ll) / load_norm(aa):.2f}, {load_norm(li) / load_norm(ll):.2f}", "-", None, note)
         else:
             miss(fin, "-", (f"{pre}_AA_mu0", f"{pre}_LL_mu0", f"{pre}_LL_inf"), note)
+    unload_lines(C, {n: load(runs, n) for n in UNLOAD if os.path.exists(os.path.join(runs, n, "yield_points.csv"))},
+                 add, miss)
     aa = C.get("hydro_AA_mu0")
     for n, lab in (("hydro_LA_mu0", "l.r.-affine"), ("hydro_AL_mu0", "affine-l.r.")):
         for kind, kl in KINDS:
