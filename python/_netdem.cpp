@@ -36,15 +36,18 @@ struct PythonError {};
 /// One run at a time: the command lines keep their run state in process-wide variables.
 std::mutex g_run_mutex;
 
-/// Sets the apps' error sink and progress hook for one run and clears them after it.
+/// Sets the apps' error and summary sinks and progress hook for one run and clears them after it.
 class RunHooks {
  public:
-  RunHooks(std::vector<std::string>& lines, const py::object& progress) : progress_(progress) {
+  RunHooks(std::vector<std::string>& lines, std::vector<std::string>& summary, const py::object& progress)
+      : progress_(progress) {
     netdem::app::error_sink() = [&lines](const std::string& line) { lines.push_back(line); };
+    netdem::app::summary_sink() = [&summary](const std::string& line) { summary.push_back(line); };
     netdem::app::progress_hook() = [this](double fraction) { call(fraction); };
   }
   ~RunHooks() {
     netdem::app::error_sink() = nullptr;
+    netdem::app::summary_sink() = nullptr;
     netdem::app::progress_hook() = nullptr;
   }
   RunHooks(const RunHooks&) = delete;
@@ -90,8 +93,9 @@ class RunHooks {
   PyObject* traceback_ = nullptr;
 };
 
-/// Runs `tool args...` (tool "netsolve" or "demsolve") in process; returns the exit status and the
-/// error lines the command printed (without the GIL during the run).
+/// Runs `tool args...` (tool "netsolve" or "demsolve") in process; returns the exit status, the
+/// error lines and the closing summary lines the command would have printed (without the GIL during
+/// the run; nothing goes to the process's stdout).
 py::tuple run(const std::string& tool, const std::vector<std::string>& args, const py::object& progress) {
   if (tool != "netsolve" && tool != "demsolve") throw py::value_error("tool must be 'netsolve' or 'demsolve', not '" + tool + "'");
   std::vector<std::string> words{tool};
@@ -100,10 +104,10 @@ py::tuple run(const std::string& tool, const std::vector<std::string>& args, con
   for (auto& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
   const int argc = static_cast<int>(words.size());
-  std::vector<std::string> lines;
+  std::vector<std::string> lines, summary;
   int code = 0;
   bool stopped = false;
-  RunHooks hooks(lines, progress);
+  RunHooks hooks(lines, summary, progress);
   {
     py::gil_scoped_release release;
     const std::lock_guard<std::mutex> lock(g_run_mutex);
@@ -114,7 +118,7 @@ py::tuple run(const std::string& tool, const std::vector<std::string>& args, con
     }
   }
   if (stopped) hooks.raise();
-  return py::make_tuple(code, lines);
+  return py::make_tuple(code, lines, summary);
 }
 
 py::array_t<double> array(const std::vector<double>& v) { return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data()); }

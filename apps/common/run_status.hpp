@@ -2,6 +2,7 @@
 // The status of a run and the exit codes of the command-line tools (README.md "Exit status"):
 // RunStatus (summary.json "status", "status_reason", exit 0 or 3), and guarded(), which maps the
 // exceptions of a run to one line on stderr and exit 1 or 2. netsolve uses them; demsolve can.
+#include <cstdarg>
 #include <cstdio>
 #include <exception>
 #include <functional>
@@ -66,6 +67,33 @@ inline void print_error_line(const std::string& line) {
     error_sink()(line);
   } else {
     std::fprintf(stderr, "%s\n", line.c_str());
+  }
+}
+
+/// Where a command's closing summary line goes ("D = 0.8500: ... -> DIR"): stdout, or, when set (the
+/// Python module, which returns it instead), this sink, which receives the line without its newline.
+inline std::function<void(const std::string&)>& summary_sink() {
+  static std::function<void(const std::string&)> sink;
+  return sink;
+}
+
+/// printf for the closing summary line of a command: to the summary sink if there is one, else to
+/// stdout, formatted exactly as std::printf would.
+__attribute__((format(printf, 1, 2))) inline void summary_printf(const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  va_list copy;
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  std::string line(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
+  if (n > 0) std::vsnprintf(line.data(), line.size() + 1, format, args);
+  va_end(args);
+  if (summary_sink()) {
+    if (!line.empty() && line.back() == '\n') line.pop_back();
+    summary_sink()(line);
+  } else {
+    std::fputs(line.c_str(), stdout);
   }
 }
 

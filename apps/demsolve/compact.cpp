@@ -431,7 +431,7 @@ int finish_run(CompactFiles<D>& files, nlohmann::json& summary, const Compaction
     diag += fmt::format(", S33/sy = {:.4f}", m.S[2]);
     diag_c += fmt::format(", {:.4f}", m.Sc[2]);
   }
-  std::printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
+  netdem::app::summary_printf("D = %.4f: %s (contacts %s), Z = %.3f, I = %.3g, %lld steps, %.2f s -> %s\n", s.density(), diag.c_str(),
               diag_c.c_str(), m.Z, r.last.I, static_cast<long long>(r.steps), wall, out.c_str());
   for (const auto& w : r.warnings) print_error_line("demsolve: warning: " + w);
   if (!r.ok()) {

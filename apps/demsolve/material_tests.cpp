@@ -14,6 +14,7 @@
 #include "netdem/dynamic/protocol.hpp"
 #include "netdem/dynamic/state.hpp"
 #include "protocol.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 using namespace netdem::dem;
@@ -167,7 +168,7 @@ int run_compress_body(const std::string& command, const CompressArgs& a, const f
   if constexpr (D == 3) j["dim"] = 3;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("compress: peak szz = %.4g %s (%.3f p) at eps_zz = %.4f, stiffness %.4g %s over eps in [0, 0.005], "
+  netdem::app::summary_printf("compress: peak szz = %.4g %s (%.3f p) at eps_zz = %.4f, stiffness %.4g %s over eps in [0, 0.005], "
               "%.1f s -> %s\n",
               run.szz[ipk], D == 2 ? "N/m" : "N/m^2", run.szz[ipk] / p, run.eps[ipk], fig.stiffness,
               D == 2 ? "N/m" : "N/m^2", wall, out.c_str());
@@ -280,7 +281,7 @@ int run_vibrate(const std::string& command, const VibrateArgs& a, const fs::path
                    {"status_reason", "every instability check passed"}};
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("vibrate: %zu clusters, largest %u of %zu disks (%.3f), single grains %.3f, %.1f s -> %s\n", sizes.size(),
+  netdem::app::summary_printf("vibrate: %zu clusters, largest %u of %zu disks (%.3f), single grains %.3f, %.1f s -> %s\n", sizes.size(),
               sizes.front(), n, static_cast<double>(sizes.front()) / static_cast<double>(n),
               static_cast<double>(singles) / static_cast<double>(n), wall, out.c_str());
   return 0;

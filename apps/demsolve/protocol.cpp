@@ -532,7 +532,7 @@ int run_protocol_body(const std::string& command, const SampleSpec& sample, cons
   write_file_atomic(out / "summary.json", summary.dump(2) + "\n");
   close_run_dir(out);
   const auto& f = summary["final"];
-  std::printf("t = %.4f s: nu = %.4f, C = %.3f (%.3f without walls), sxx/p = %.4f, szz/p = %.4f, k1(T,t)/k1 = %.4f, "
+  netdem::app::summary_printf("t = %.4f s: nu = %.4f, C = %.3f (%.3f without walls), sxx/p = %.4f, szz/p = %.4f, k1(T,t)/k1 = %.4f, "
               "Ekin = %.3e J, %.1f s -> %s\n",
               f["t"].get<double>(), f["nu"].get<double>(), f["C"].get<double>(), f["C_without_walls"].get<double>(),
               f["sxx_over_p"].get<double>(), f["szz_over_p"].get<double>(), f["k1_over_k1"].get<double>(),

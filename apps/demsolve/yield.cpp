@@ -510,7 +510,7 @@ int YieldRun::finish() {
   j_["timing_s"] = {{"total", total}, {"compaction", t_compact_}, {"unloading", t_unload_}, {"probes", t_probes_}};
   write_file_atomic(out_ / "summary.json", j_.dump(2) + "\n");
   close_run_dir(out_);
-  std::printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e; %d/%zu probes ok; "
+  netdem::app::summary_printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e; %d/%zu probes ok; "
               "%.1f s (compaction %.1f, unloading %.1f, probes %.1f) -> %s\n",
               s_->density(), loaded_.Z, loaded_.S[0], loaded_.S[1], un_.stress_norm, ok_, selection.size(), total,
               t_compact_, t_unload_, t_probes_, out_.c_str());

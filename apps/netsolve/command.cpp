@@ -43,6 +43,7 @@
 #include "scene_file.hpp"
 #include "setup.hpp"
 #include "status.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 using netdem::app::Field;
@@ -98,7 +99,7 @@ int run_pack_3d(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
   j["status_reason"] = "a packing has no convergence criteria";
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   netdem::app::close_run_dir(out);
-  std::printf("seed %llu (3D, %s): %zu spheres, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
+  netdem::app::summary_printf("seed %llu (3D, %s): %zu spheres, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
               static_cast<unsigned long long>(a.seed), a.lateral.c_str(), st.particles, st.disk_contacts, st.wall_contacts,
               st.density, st.coordination, (out / "packing.csv").c_str());
   return 0;
@@ -126,7 +127,7 @@ int run_pack(const PackArgs& a, const RunArgs& ra, const fs::path& out) {
   j["status_reason"] = "a packing has no convergence criteria";
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   netdem::app::close_run_dir(out);
-  std::printf("seed %llu: %zu particles, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
+  netdem::app::summary_printf("seed %llu: %zu particles, %zu contacts (+%zu wall), D0 = %.4f, Z = %.3f -> %s\n",
               static_cast<unsigned long long>(a.seed), st.particles, st.disk_contacts, st.wall_contacts, st.density,
               st.coordination, (out / "packing.csv").c_str());
   return 0;

@@ -24,6 +24,7 @@
 #include "output.hpp"
 #include "parse.hpp"
 #include "status.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 
@@ -403,7 +404,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
   const double sy = so.law.sigma_y;
-  std::printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
+  netdem::app::summary_printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
               last.density, last.S11 / sy, last.S22 / sy, last.Z, rows.unconverged, rows.max_residual, wall, out.c_str());
   if (!stopped.empty()) {
     print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",

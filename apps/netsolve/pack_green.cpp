@@ -226,7 +226,7 @@ int run_pack_green_body(const GreenArgs& a, std::uint64_t seed, bool overwrite, 
   j["status_reason"] = res.ok() ? std::string("every criterion met") : res.reason;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
-  std::printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %s), mean overlap %.2e r "
+  netdem::app::summary_printf("seed %llu (green body): %zu spheres, box %.4f x %.4f x %.4f mm, density %.4f (bulk %s), mean overlap %.2e r "
               "(max %.2e), %lld steps, %.1f s -> %s\n",
               static_cast<unsigned long long>(seed), pk.size(), 1e3 * b.width(), 1e3 * b.height(), 1e3 * b.depth(),
               vs / b.volume(), has_bulk ? fmt::format("{:.4f}", bulk).c_str() : "n/a: the window is under one diameter",

@@ -110,7 +110,7 @@ int run_pack_periodic(const PeriodicPackArgs& a, int dim, bool overwrite, const 
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
   std::string psi = dim == 2 ? fmt::format(", psi6 = {:.3f} (local {:.3f})", m.psi6_global, m.psi6_local) : std::string();
-  std::printf("seed %llu (periodic, %dD): %zu particles, D = %.4f, Z = %.3f (%.3f without %.1f %% rattlers)%s, "
+  netdem::app::summary_printf("seed %llu (periodic, %dD): %zu particles, D = %.4f, Z = %.3f (%.3f without %.1f %% rattlers)%s, "
               "overlap max %.2e R, mean %.2e R, %lld steps, %.1f s -> %s\n",
               static_cast<unsigned long long>(a.pack.seed), dim, pk.size(), m.density, m.Z, m.Z_backbone,
               100.0 * m.rattler_fraction, psi.c_str(), m.max_overlap, m.mean_overlap, static_cast<long long>(m.steps),

@@ -52,6 +52,7 @@
 #include "scene_file.hpp"
 #include "setup.hpp"
 #include "status.hpp"
+#include "run_status.hpp"
 
 int run_sinter_command(int argc, char** argv);
 
@@ -627,7 +628,7 @@ int run(const Args& a, const CLI::App& app, const std::string& command) {
 
   if (o.sum) {
     const st::StaggeredMeasures& f = o.sum->last;
-    std::printf("t = %.6g s: shrinkage %.5g %.5g %.5g, density %.5f, neck %.5f, %zu contacts, %zu steps, %.3g s -> %s\n", f.t, f.shrink_x,
+    netdem::app::summary_printf("t = %.6g s: shrinkage %.5g %.5g %.5g, density %.5f, neck %.5f, %zu contacts, %zu steps, %.3g s -> %s\n", f.t, f.shrink_x,
                 f.shrink_y, f.shrink_z, f.density, f.neck_mean, f.contacts, rec.rows.size() - 1, o.wall, out.c_str());
     if (o.sum->failed()) {
       std::fprintf(stderr, "netsolve sinter: error: unstable: %s (history.csv keeps the steps before)\n", o.sum->stop_message.c_str());

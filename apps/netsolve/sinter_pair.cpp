@@ -36,6 +36,7 @@
 #include "parse.hpp"
 #include "scene_file.hpp"
 #include "status.hpp"
+#include "run_status.hpp"
 
 int run_sinter_pair_command(int argc, char** argv);
 
@@ -303,7 +304,7 @@ int run(const Args& a, const std::string& command) {
   if (c.status != sp::PairStatus::Ok)
     std::fprintf(stderr, "netsolve sinter-pair: stopped at t = %.6g s: %s\n", c.t, sp::describe(c.status, io.x_over_R_max).c_str());
   if (last != nullptr)
-    std::printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3g s -> %s\n", last->t, last->x_over_R, last->shrinkage,
+    netdem::app::summary_printf("t = %.6g s: x/R = %.6f, shrinkage = %.5e, %ld steps, %.3g s -> %s\n", last->t, last->x_over_R, last->shrinkage,
                 c.steps, wall, out.c_str());
   return status.exit_code(a.allow_unconverged);
 }

@@ -50,6 +50,7 @@
 #include "status.hpp"
 #include "worker_pool.hpp"
 #include "yield_records.hpp"
+#include "run_status.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -661,7 +662,7 @@ int YieldRun::finish() {
                    {"share", {{"compaction", t_compact_ / total}, {"unloading", t_unload_ / total}, {"probes", t_probes_ / total}}}};
   app::write_file_atomic(out_ / "summary.json", j.dump(2) + "\n");
   app::close_run_dir(out_);
-  std::printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e in %d increments; "
+  netdem::app::summary_printf("D = %.4f (Z = %.3f): loading point S11/sy = %.4f, S22/sy = %.4f; unloaded to |S| = %.1e in %d increments; "
               "%d/%zu probes ok; %.1f s (compaction %.1f, unloading %.1f, probes %.1f) -> %s\n",
               loaded_.density, loaded_.Z, loaded_.S11 / sy, loaded_.S22 / sy, un_.stress_norm, static_cast<int>(un_.path.size()) - 1,
               ok, selection_.size(), total, t_compact_, t_unload_, t_probes_, out_.c_str());

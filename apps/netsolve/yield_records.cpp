@@ -18,6 +18,7 @@
 
 #include "output.hpp"
 #include "status.hpp"
+#include "run_status.hpp"
 
 namespace netdem::app::netsolve::yield {
 
@@ -258,7 +259,7 @@ int run_merge(const std::vector<std::string>& dirs, const std::string& out_dir, 
   j["probes"] = {{"found", recs.size()}, {"directions", directions}, {"missing", missing}, {"not_ok", not_ok}};
   netdem::app::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   netdem::app::close_run_dir(out);
-  std::printf("merged %zu of %d probes from %zu folders%s -> %s\n", recs.size(), directions, dirs.size(),
+  netdem::app::summary_printf("merged %zu of %d probes from %zu folders%s -> %s\n", recs.size(), directions, dirs.size(),
               missing.empty() ? "" : fmt::format(" ({} missing)", missing.size()).c_str(), out.c_str());
   return 0;
 }

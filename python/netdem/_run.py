@@ -19,8 +19,9 @@ class Result:
     """A finished run: `history` (history.csv, or timeseries.csv, as a dict of numpy arrays named
     as its columns), `summary` (summary.json), `status` (the summary's "status": "ok",
     "unconverged", "unstable", "incomplete", ...), `exit_code` (the command line's: 0 or 3),
-    `messages` (the error or warning lines the command printed) and `out` (the run folder if kept,
-    else None)."""
+    `messages` (the error or warning lines the command printed), `summary_line` (the closing line
+    the command line prints on stdout, which the module returns instead of printing) and `out` (the
+    run folder if kept, else None)."""
 
     def __init__(self, history, summary, exit_code, messages, out):
         self.history = history
@@ -29,6 +30,7 @@ class Result:
         self.exit_code = exit_code
         self.messages = messages
         self.out = out
+        self.summary_line = ""
 
     def __repr__(self):
         rows = len(next(iter(self.history.values()))) if self.history else 0
@@ -124,13 +126,15 @@ def run(tool, subcommand, kwargs, out=None, progress=None, reader=read_run, posi
         folder = os.fspath(out)
     try:
         words = [subcommand] + [os.fspath(w) for w in positional] + tokens(kwargs) + [f"--out={folder}"]
-        code, lines = _netdem.run(tool, words, progress)
+        code, lines, printed = _netdem.run(tool, words, progress)
         message = lines[-1] if lines else f"{tool} {subcommand}: exit status {code}"
         if code == 2:
             raise ValueError(message)
         if code not in (0, 3):
             raise RuntimeError(message)
-        return reader(folder, code, list(lines), tmp is None)
+        result = reader(folder, code, list(lines), tmp is None)
+        result.summary_line = printed[-1] if printed else ""
+        return result
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -7,7 +7,7 @@ from . import _netdem
 
 
 def main():
-    code, lines = _netdem.run(sys.argv[1], sys.argv[2:])
+    code, lines, _ = _netdem.run(sys.argv[1], sys.argv[2:])
     for line in lines:
         print(line, file=sys.stderr)
     sys.exit(code)

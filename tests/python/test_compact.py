@@ -1,7 +1,9 @@
 """netdem.netsolve.compact and netdem.demsolve.compact against the executables of the same build,
 bit for bit; their errors and statuses as the command line's."""
 import os
+import re
 import signal
+import subprocess
 import threading
 import time
 
@@ -9,7 +11,7 @@ import numpy as np
 import pytest
 
 import netdem
-from conftest import assert_same_run, assert_snapshot_series, run_cli, snapshot_tags
+from conftest import assert_same_run, assert_snapshot_series, executable, run_cli, snapshot_tags
 
 SMALL = ["--width", "20", "--increments", "40", "--quiet"]  # W = 20 converges with 40 increments, not 10
 
@@ -48,6 +50,20 @@ def test_an_empty_list_is_an_empty_value(tmp, empty):
     assert not any(n.startswith("particles_D") for n in os.listdir(f"{tmp}/py"))
     assert_same_run(f"{tmp}/cli", r)
     assert_snapshot_series(r.out, ["particles", "contacts"], ["initial", "final"], history="history.csv:D")
+
+
+def test_the_summary_line_is_returned_not_printed(tmp, capfd):
+    """The command line's closing line goes to stdout; from Python it is Result.summary_line (the same
+    text but for the run time and the folder), and nothing reaches the process's stdout."""
+    p = subprocess.run([executable("netsolve"), "compact"] + SMALL + ["--out", f"{tmp}/cli"], capture_output=True, text=True)
+    capfd.readouterr()
+    r = netdem.netsolve.compact(width=20, increments=40, quiet=True, out=f"{tmp}/py")
+    out, _ = capfd.readouterr()
+    assert out == ""
+    cli = p.stdout.strip().splitlines()[-1]
+    assert r.summary_line.startswith("D = ") and r.summary_line.endswith(f"-> {tmp}/py")
+    strip = lambda line: re.sub(r", [0-9.]+ s -> .*$", "", line)  # noqa: E731
+    assert strip(r.summary_line) == strip(cli)
 
 
 def test_without_out_the_folder_is_removed():
