@@ -94,14 +94,10 @@ def runs_list(quick):
     return r
 
 
-REUSED = []  # the runs run_all read from their folders instead of running them
-
-
 def run_all(netsolve, runs_dir, quick, force):
-    """{name: the run's summary and tables}; runs whose command.txt is unchanged are read, not run
-    (their names in REUSED, for the report's provenance)."""
-    out = {}
-    REUSED.clear()
+    """({name: the run's summary and tables}, [the names of the runs read from their folders, not run:
+    their command.txt is unchanged], for the report's provenance)."""
+    out, reused = {}, []
     for name, args in runs_list(quick).items():
         d = os.path.join(runs_dir, name)
         args = [a.replace("@", runs_dir + os.sep) if a.startswith("@") else a for a in args]
@@ -118,7 +114,7 @@ def run_all(netsolve, runs_dir, quick, force):
             run = cmd[:-2] + (["--overwrite"] if held else []) + cmd[-2:]
             subprocess.run(run, check=True, stdout=subprocess.DEVNULL)
         else:
-            REUSED.append(name)
+            reused.append(name)
         with open(os.path.join(d, "summary.json")) as f:
             s = json.load(f)
         rec = {"summary": s, "dir": d}
@@ -130,7 +126,7 @@ def run_all(netsolve, runs_dir, quick, force):
         if os.path.isfile(dl):
             rec["dL_bar"] = read_csv(dl)
         out[name] = rec
-    return out
+    return out, reused
 
 
 def read_csv(path):
@@ -205,7 +201,7 @@ def main():
     runs_dir = a.runs or os.path.join(REPO, "results", "validation", "ivannikov_staggered" + ("_quick" if a.quick else ""))
     os.makedirs(outdir, exist_ok=True)
     os.makedirs(runs_dir, exist_ok=True)
-    R = run_all(os.path.abspath(a.netsolve), runs_dir, a.quick, a.force)
+    R, reused = run_all(os.path.abspath(a.netsolve), runs_dir, a.quick, a.force)
     F = Findings()
     rep = []
     t_end = 1000.0 if a.quick else 5000.0
@@ -228,7 +224,7 @@ def main():
            "compared in their trends (the findings it states), not number for number.\n\n"
            "## Findings\n\n" + F.table() + "\n" + "\n".join(rep)
            + "\n".join(provenance_lines(provenance(REPO, "ivannikov_staggered", [a.netsolve],
-                                                           f"{len(REUSED)} of {len(R)}: {', '.join(REUSED)}" if REUSED else None), counts)) + "\n")
+                                                           f"{len(reused)} of {len(R)}: {', '.join(reused)}" if reused else None), counts)) + "\n")
     with open(os.path.join(outdir, "report.md"), "w") as f:
         f.write(txt)
     print(f"{totals_text(counts)} -> {os.path.join(outdir, 'report.md')}")

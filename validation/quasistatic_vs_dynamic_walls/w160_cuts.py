@@ -25,6 +25,10 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, os.path.join(REPO, "apps", "scripts"))
+from report_paths import load_module  # noqa: E402
+
+QVD = load_module("qvd_layer", os.path.join(REPO, "validation", "quasistatic_vs_dynamic", "run.py"))  # its fit()
 SEEDS = (1, 2, 3)
 PATHS = ("hydrostatic", "closed-die")
 INERTIAL = (2e-4, 1e-4, 5e-5)
@@ -69,13 +73,8 @@ def at(h, d, col):
 
 def dem_limit(hs, d, col):
     """sigma0 and its standard error of the line sigma = sigma0 + a I through the DEM runs hs {I: history}."""
-    x = np.array(sorted(hs))
-    y = np.array([at(hs[i], d, col) for i in x])
-    a = np.vstack([np.ones_like(x), x]).T
-    c = np.linalg.lstsq(a, y, rcond=None)[0]
-    r = y - a @ c
-    se = np.sqrt(r @ r / (len(x) - 2) * np.linalg.inv(a.T @ a)[0, 0])
-    return c[0], se
+    s0, se, _, _ = QVD.fit(sorted(hs), [at(hs[i], d, col) for i in sorted(hs)])
+    return s0, se
 
 
 def summary_of(folder):
