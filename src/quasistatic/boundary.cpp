@@ -4,6 +4,7 @@
 
 namespace netdem::qs {
 
+#ifndef NETDEM_QS_MORE  // (not a template: compiled once, with the 2D solver)
 void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free,
                    const std::vector<std::uint8_t>& periph, int pinned, bool affine_centres) {
   const int n = static_cast<int>(periph.size()), kn = dim + rot_dofs;
@@ -22,6 +23,7 @@ void DofMap::build(int dim, int rot_dofs, BoundaryMode mode, bool rotations_free
       for (int a = dim; a < kn; ++a) dof[kn * p + a] = nfree++;
   }
 }
+#endif
 
 // The prescribed motion (Eqs 14-15 on current coordinates) is the affine motion of the increment;
 // the predictor for the free DOFs is this affine motion plus the previous increment's non-affine
@@ -90,11 +92,15 @@ void NetworkSolverT<D, L>::set_reversible_normal(bool reversible) {
   s.set_options(o);
 }
 
+// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+#ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
+#else
 template class NetworkSolverT<3>;
 // the linear law: the Impl's members only (set_reversible_normal is the plastic law's, and clang 14
 // instantiates constrained members too)
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
+#endif
 
 }  // namespace netdem::qs

@@ -290,9 +290,13 @@ IncrementReport NetworkSolverT<D, L>::Impl::attempt_energy(const Mat& dE) {
   return rep;
 }
 
+// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+#ifndef NETDEM_QS_MORE
 template struct NetworkSolverT<2>::Impl;
+#else
 template struct NetworkSolverT<3>::Impl;
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
+#endif
 
 }  // namespace netdem::qs

@@ -227,7 +227,6 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   return m;
 }
 
-
 /// Max |contact force| on the free DOFs / fbar (moments divided by the mean radius): the
 /// out-of-balance contact force, i.e. the viscous drag that holds the increment.
 template <int D, class L>
@@ -245,7 +244,6 @@ double NetworkSolverT<D, L>::Impl::unbalance(double fbar, double* rms) const {
   if (rms) *rms = c > 0 ? std::sqrt(s2 / c) / std::max(fbar, 1e-300) : 0.0;
   return m / std::max(fbar, 1e-300);
 }
-
 
 /// Diagnostics (verbose): one line per Newton iteration with the branch transitions since the last.
 template <int D, class L>
@@ -316,7 +314,10 @@ void NetworkSolverT<D, L>::Impl::print_worst(double fbar) const {
   }
 }
 
+// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+#ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
+#else
 // 3D: member by member (measures() is 2D only, and clang 14 instantiates constrained members too)
 template std::vector<ContactView> NetworkSolverT<3>::contacts() const;
 template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3>::periodic_cell() const;
@@ -327,5 +328,6 @@ template std::vector<ContactView> NetworkSolverT<3, LinearLawT<3>>::contacts() c
 template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3, LinearLawT<3>>::periodic_cell() const;
 template StressMeasuresT<3> NetworkSolverT<3, LinearLawT<3>>::stress() const;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
+#endif
 
 }  // namespace netdem::qs

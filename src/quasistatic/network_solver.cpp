@@ -309,6 +309,7 @@ void NetworkStateT<D, H>::validate() const {
   check_box_stretch(box_deformation, bad);
 }
 
+#ifndef NETDEM_QS_MORE  // (a specialisation: compiled once, with the 2D solver)
 void NetworkStateT<2>::validate() const {
   auto bad = [](const std::string& m) { throw std::invalid_argument("network state: " + m); };
   const std::size_t n = x.size(), np = pair_i.size();
@@ -371,6 +372,7 @@ void NetworkStateT<2>::validate() const {
   check_box_stretch(box_deformation_build, bad);
   if (!strain.allFinite() || !dE_prev.allFinite()) bad("non-finite strain");
 }
+#endif
 
 template <int D, class L>
 const typename NetworkSolverT<D, L>::Options& NetworkSolverT<D, L>::options() const {
@@ -439,12 +441,16 @@ int NetworkSolverT<D, L>::free_dofs() const {
   return impl_->nfree;
 }
 
+// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+#ifndef NETDEM_QS_MORE
+template class NetworkSolverT<2>;
+#else
 template struct NetworkStateT<3>;
 template struct NetworkStateT<2, LinearLawT<2>::History>;
 template struct NetworkStateT<3, LinearLawT<3>::History>;
-template class NetworkSolverT<2>;
 template class NetworkSolverT<3>;
 template class NetworkSolverT<2, LinearLawT<2>>;
 template class NetworkSolverT<3, LinearLawT<3>>;
+#endif
 
 }  // namespace netdem::qs

@@ -124,8 +124,12 @@ double NetworkSolverT<D, L>::Impl::wall_work() const {
   return w;
 }
 
+// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 // 2D only: the 3D solver refuses the walls mode (network_solver.cpp) and never calls these
+#ifndef NETDEM_QS_MORE
 template struct NetworkSolverT<2>::Impl;
+#else
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
+#endif
 
 }  // namespace netdem::qs

@@ -30,7 +30,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <unsupported/Eigen/AutoDiff>
 
 #include "netdem/contact/rotation.hpp"
 
@@ -62,47 +61,11 @@ struct BondElement {
 /// centre distance to 1e-9, as after the shrinkage correction; lB0 is then set to the exact rest,
 /// so that a rigid rotation gives no force) and the radii RA, RB. Throws std::invalid_argument for
 /// coincident centres, non-positive or non-finite lengths, or y40 + y70 != |xB - xA|.
-inline BondElement make_bond(const Eigen::Vector3d& xA, const Eigen::Vector3d& xB, double lA, double lB, double RA,
-                             double RB) {
-  const Eigen::Vector3d d = xB - xA;
-  const double L = d.norm();
-  if (!(L > 0.0) || !std::isfinite(L)) throw std::invalid_argument("make_bond: the centres coincide or are not finite");
-  if (!(lA > 0.0 && lB > 0.0 && std::isfinite(lA + lB)))
-    throw std::invalid_argument("make_bond: the centre-to-grain-boundary distances must be > 0 and finite");
-  if (!(RA > 0.0 && RB > 0.0 && std::isfinite(RA + RB)))
-    throw std::invalid_argument("make_bond: the radii must be > 0 and finite");
-  BondElement b;
-  b.e3 = d / L;
-  // e1: the coordinate axis least aligned with e3, made orthogonal to it; e2 = e3 x e1
-  Eigen::Vector3d a = Eigen::Vector3d::UnitX();
-  const Eigen::Vector3d ab = b.e3.cwiseAbs();
-  if (ab.y() <= ab.x() && ab.y() <= ab.z())
-    a = Eigen::Vector3d::UnitY();
-  else if (ab.z() <= ab.x() && ab.z() <= ab.y())
-    a = Eigen::Vector3d::UnitZ();
-  b.e1 = (a - b.e3 * b.e3.dot(a)).normalized();
-  b.e2 = b.e3.cross(b.e1);
-  if (!(std::fabs(lA + lB - L) <= 1e-9 * L))
-    throw std::invalid_argument("make_bond: y40 + y70 must be the centre distance (the shrinkage correction, Eqs 41-44)");
-  b.lA0 = lA;
-  b.lB0 = L - lA;
-  b.Rm = 0.5 * (RA + RB);
-  return b;
-}
+BondElement make_bond(const Eigen::Vector3d& xA, const Eigen::Vector3d& xB, double lA, double lB, double RA,
+                      double RB);
 
 /// H of Eq 29 in global coordinates: y_link = H y (Eq 27), y = (u_A, theta_A, u_B, theta_B).
-inline BondH bond_H(const BondElement& b) {
-  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d LA = skew<double>(b.lA0 * b.e3), LB = skew<double>(-b.lB0 * b.e3);  // L_A0, L_B0 (Eq 25)
-  BondH H = BondH::Zero();
-  H.block<3, 3>(0, 0) = I;
-  H.block<3, 3>(0, 3) = -LA;
-  H.block<3, 3>(0, 6) = -I;
-  H.block<3, 3>(0, 9) = LB;
-  H.block<3, 3>(3, 3) = I;
-  H.block<3, 3>(3, 9) = -I;
-  return H;
-}
+BondH bond_H(const BondElement& b);
 
 /// The axial stiffness E A / L0 of the link (Eqs 33, 36), the same expression as K_link's (3,3)
 /// entry in the element frame. The sintering element's load is this times the step's shrinkage,
@@ -114,36 +77,17 @@ inline double bond_axial_stiffness(const BondElement& b, const BondMaterial& m) 
 
 /// K_link of Eqs 33-36 in global coordinates: blocks R diag(GA, GA, EA) R^T / L0 and
 /// R diag(EI, EI, GJ) R^T / L0, R = [e1 e2 e3].
-inline BondMat6 bond_K_link(const BondElement& b, const BondMaterial& m) {
-  const double pi = std::numbers::pi;
-  const double A = pi * b.Rm * b.Rm, Ib = 0.25 * pi * b.Rm * b.Rm * b.Rm * b.Rm, J = 2.0 * Ib;  // Eq 36
-  const double L0 = b.L0(), G = m.G();
-  Eigen::Matrix3d R;
-  R.col(0) = b.e1;
-  R.col(1) = b.e2;
-  R.col(2) = b.e3;
-  const Eigen::Vector3d kF(G * A / L0, G * A / L0, m.E * A / L0), kM(m.E * Ib / L0, m.E * Ib / L0, G * J / L0);
-  BondMat6 K = BondMat6::Zero();
-  K.block<3, 3>(0, 0) = R * kF.asDiagonal() * R.transpose();
-  K.block<3, 3>(3, 3) = R * kM.asDiagonal() * R.transpose();
-  return K;
-}
+BondMat6 bond_K_link(const BondElement& b, const BondMaterial& m);
 
 /// The element stiffness K_e = H^T K_link H (Eq 40), 12 x 12, symmetric positive semi-definite
 /// with the six rigid-body motions of the step as its null space.
-inline BondMat12 bond_stiffness(const BondElement& b, const BondMaterial& m) {
-  const BondH H = bond_H(b);
-  return H.transpose() * bond_K_link(b, m) * H;
-}
+BondMat12 bond_stiffness(const BondElement& b, const BondMaterial& m);
 
 /// The link deformation y_link = (eps, gamma) = H y (Eq 27).
-inline BondVec6 bond_deformation(const BondElement& b, const BondVec12& y) { return bond_H(b) * y; }
+BondVec6 bond_deformation(const BondElement& b, const BondVec12& y);
 
 /// The nodal forces and moments P = H^T K_link H y (Eq 40): (F_A, M_A, F_B, M_B).
-inline BondVec12 bond_forces(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
-  const BondH H = bond_H(b);
-  return H.transpose() * (bond_K_link(b, m) * (H * y));
-}
+BondVec12 bond_forces(const BondElement& b, const BondMaterial& m, const BondVec12& y);
 
 // ---------------------------------------------------------------------------------------------
 // The finite-rotation form (Eq 20 with Eqs 22-24). The arms turn with the nodes, l_A = Q_A l_A0 and
@@ -171,49 +115,16 @@ Eigen::Matrix<T, 6, 1> bond_deformation_finite(const BondElement& b, const Eigen
 }
 
 /// The link energy W = 1/2 y_link^T K_link y_link of the finite-rotation form.
-inline double bond_energy_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
-  const BondVec6 yl = bond_deformation_finite<double>(b, y);
-  return 0.5 * yl.dot(bond_K_link(b, m) * yl);
-}
+double bond_energy_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y);
 
 /// The nodal forces of the finite-rotation form, P = dW/dy = B^T K_link y_link: (F_A, M_A, F_B, M_B)
 /// with F_A = -F_B = K_F eps, M_A = J_A^T K_F eps + K_M gamma, M_B = -J_B^T K_F eps - K_M gamma,
-/// J_A = -skew(Q_A l_A0) J_l(theta_A), J_B = -skew(Q_B l_B0) J_l(theta_B). T: double, or an
-/// AutoDiffScalar for the tangent.
-template <class T>
-Eigen::Matrix<T, 12, 1> bond_forces_finite_t(const BondElement& b, const BondMat6& K, const Eigen::Matrix<T, 12, 1>& y) {
-  using V = Eigen::Matrix<T, 3, 1>;
-  using M3 = Eigen::Matrix<T, 3, 3>;
-  const V a = (b.lA0 * b.e3).template cast<T>(), c = (-b.lB0 * b.e3).template cast<T>();
-  const V tA = y.template segment<3>(3), tB = y.template segment<3>(9);
-  const M3 QA = rotation_rodrigues<T>(tA), QB = rotation_rodrigues<T>(tB);
-  const V eps = y.template segment<3>(0) - y.template segment<3>(6) + (QA * a - a) - (QB * c - c);
-  const V gam = tA - tB;
-  const M3 KF = K.block<3, 3>(0, 0).template cast<T>(), KM = K.block<3, 3>(3, 3).template cast<T>();
-  const V f = KF * eps, mm = KM * gam;
-  const M3 JA = -skew<T>(QA * a) * left_jacobian<T>(tA), JB = -skew<T>(QB * c) * left_jacobian<T>(tB);
-  Eigen::Matrix<T, 12, 1> P;
-  P.template segment<3>(0) = f;
-  P.template segment<3>(3) = JA.transpose() * f + mm;
-  P.template segment<3>(6) = -f;
-  P.template segment<3>(9) = -(JB.transpose() * f) - mm;
-  return P;
-}
-
-inline BondVec12 bond_forces_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
-  return bond_forces_finite_t<double>(b, bond_K_link(b, m), y);
-}
+/// J_A = -skew(Q_A l_A0) J_l(theta_A), J_B = -skew(Q_B l_B0) J_l(theta_B) (bond.cpp; there also in an
+/// AutoDiffScalar for the tangent).
+BondVec12 bond_forces_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y);
 
 /// The consistent tangent dP/dy of the finite-rotation form (the Hessian of W, symmetric): forward-
 /// mode automatic differentiation of bond_forces_finite_t. At y = 0 it is K_e of Eq 40.
-inline BondMat12 bond_tangent_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y) {
-  using AD = Eigen::AutoDiffScalar<BondVec12>;
-  Eigen::Matrix<AD, 12, 1> ya;
-  for (int i = 0; i < 12; ++i) ya(i) = AD(y(i), 12, i);
-  const Eigen::Matrix<AD, 12, 1> P = bond_forces_finite_t<AD>(b, bond_K_link(b, m), ya);
-  BondMat12 Kt;
-  for (int i = 0; i < 12; ++i) Kt.row(i) = P(i).derivatives().transpose();
-  return Kt;
-}
+BondMat12 bond_tangent_finite(const BondElement& b, const BondMaterial& m, const BondVec12& y);
 
 }  // namespace netdem::contact
