@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "netdem/packing/cell_grid.hpp"
+#include "netdem/packing/random_fill.hpp"  // uniform01
 #include "deposition_checks.hpp"
 
 namespace netdem::packing {
@@ -45,9 +46,6 @@ constexpr double kArcEnd = 1e-9;       // angular distance treated as "at the en
 constexpr long kMaxSteps = 1'000'000;  // per disk; a guard against a logic error, never reached
 
 constexpr int kLeftWall = -1, kRightWall = -2, kFloor = -3, kEquator = -4;
-
-/// [0,1) from one 64-bit draw: the top 53 bits, exact and platform independent.
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 double wrap_2pi(double a) {
   a = std::fmod(a, 2 * kPi);
