@@ -54,7 +54,8 @@ namespace {
 
 /// The outer layer of a 3D packing (the die mode's prescribed particles): the spheres whose
 /// surface comes within one mean radius of a face of the spheres' bounding box.
-std::vector<std::uint8_t> peripheral_layer_3d(const packing::Packing& pk) {
+/// (maybe_unused: the tools' build of this file instantiates only the 2D solver, NETDEM_QS_MORE)
+[[maybe_unused]] std::vector<std::uint8_t> peripheral_layer_3d(const packing::Packing& pk) {
   const std::size_t n = pk.size();
   const std::vector<double>* axes[3] = {&pk.x, &pk.y, &pk.z};
   double lo[3], hi[3], r_mean = 0.0;
