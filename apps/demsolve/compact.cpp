@@ -151,8 +151,9 @@ class CompactFiles : public CompactionObserverT<D> {
     csv_ += ",D";
     for (const char* l : lab) csv_ += fmt::format(",S{}", l);
     for (const char* l : lab) csv_ += fmt::format(",S{}_contacts", l);
-    csv_ += ",Z,contacts,sliding,mean_fn,dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,time,I,kinetic_ratio,steps,"
-            "samples,dt,outside,D_in_box";
+    csv_ += ",Z,contacts,sliding,mean_fn,dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,";
+    if constexpr (D == 2) csv_ += "dev_ut_centres,dev_ut_rotations,";  // (netsolve's Figs 7-8 columns)
+    csv_ += "time,I,kinetic_ratio,steps,samples,dt,outside,D_in_box";
     if (walls_) csv_ += ",wall_vs_contact_gap";
     if (periodic_)
       for (const char* l : lab) csv_ += fmt::format(",S{}_kinetic", l);
@@ -166,8 +167,10 @@ class CompactFiles : public CompactionObserverT<D> {
     csv_ += fmt::format(",{:.9g}", r.density);
     for (double v : m.S) csv_ += fmt::format(",{:.9g}", v);
     for (double v : m.Sc) csv_ += fmt::format(",{:.9g}", v);
-    csv_ += fmt::format(",{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.6g},{:.6g},{:.9g},{},{:.4e},{},{},{:.4e}", m.Z,
-                        m.contacts, m.sliding, m.mean_fn, m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut, r.time,
+    csv_ += fmt::format(",{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.6g},{:.6g}", m.Z, m.contacts, m.sliding, m.mean_fn,
+                        m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut);
+    if constexpr (D == 2) csv_ += fmt::format(",{:.6g},{:.6g}", m.dev_ut_centres, m.dev_ut_rotations);
+    csv_ += fmt::format(",{:.9g},{},{:.4e},{},{},{:.4e}", r.time,
                         std::isfinite(r.I) ? fmt::format("{:.6g}", r.I) : std::string(), r.kinetic_ratio, r.steps,
                         r.samples, r.dt);
     csv_ += fmt::format(",{},{:.9g}", r.outside, r.density_in_box);

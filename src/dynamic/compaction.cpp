@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "netdem/field_error.hpp"
+#include "netdem/contact/kinematics.hpp"
 #include "netdem/system/affine_deviation.hpp"
 
 namespace netdem::dem {
@@ -158,6 +159,7 @@ void CompactionSampleT<D>::add(const CompactionSampleT& o, double w) {
   for (std::size_t k = 0; k < S.size(); ++k) S[k] += w * o.S[k], Sc[k] += w * o.Sc[k], Sk[k] += w * o.Sk[k];
   Z += w * o.Z, contacts += w * o.contacts, sliding += w * o.sliding, mean_fn += w * o.mean_fn;
   dev_mean_ratio += w * o.dev_mean_ratio, dev_ratio_of_means += w * o.dev_ratio_of_means, affine_ut += w * o.affine_ut;
+  dev_ut_centres += w * o.dev_ut_centres, dev_ut_rotations += w * o.dev_ut_rotations;
   kinetic += w * o.kinetic, work += w * o.work;
 }
 
@@ -171,17 +173,18 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
   const ParticlesT<D>& P = s.particles();
   auto& formed = formed_;  // (a member: its storage is reused from sample to sample)
   formed.clear();
-  const auto by_key = [](const auto& e, std::uint64_t k) { return e.first < k; };
+  const auto by_key = [](const Formed& e, std::uint64_t k) { return e.key < k; };
   int loaded = 0;
-  double sum_fn = 0;
+  double sum_fn = 0, sum_tc = 0, sum_tr = 0;
   sys::AffineDeviation dev(r_mean_);
   for (const auto& ct : cs_) {
     if (ct.wall >= 0 || !(ct.f_spring > 0.0)) continue;
-    const std::uint64_t key = (std::uint64_t{ct.i} << 32) | ct.j;
-    Voigt<D> ef = prev_;  // first seen: the strain at the previous sample
-    if (const auto it = std::lower_bound(form_.begin(), form_.end(), key, by_key); it != form_.end() && it->first == key)
-      ef = it->second;
-    formed.emplace_back(key, ef);
+    Formed f;
+    f.key = (std::uint64_t{ct.i} << 32) | ct.j;
+    f.E_form = prev_;  // first seen: the strain at the previous sample
+    const auto it = std::lower_bound(form_.begin(), form_.end(), f.key, by_key);
+    const bool seen = it != form_.end() && it->key == f.key;
+    if (seen) f.E_form = it->E_form;
     ++loaded;
     sum_fn += ct.f_spring;
     m.sliding += ct.sliding ? 1.0 : 0.0;
@@ -193,13 +196,31 @@ CompactionSampleT<D> CompactionMeterT<D>::measure(const DynamicSolverT<D>& s, co
       n << ct.nx, ct.ny, ct.nz;
     }
     // Eq 16 with the strain accumulated since the contact formed
-    dev.add(ct.overlap, sys::affine_approach<D>(n, tensor_of_difference<D>(E, ef), P.r[ct.i] + P.r[ct.j]));
+    const auto a = sys::affine_approach<D>(n, tensor_of_difference<D>(E, f.E_form), P.r[ct.i] + P.r[ct.j]);
+    dev.add(ct.overlap, a);
+    if constexpr (D == 2) {  // Figs 7-8: the motion since the last sample, as netsolve's commit adds it
+      f.nx = ct.nx, f.ny = ct.ny, f.L = P.r[ct.i] + P.r[ct.j] - ct.overlap, f.d_i = ct.d_i, f.d_j = ct.d_j;
+      f.theta_i = P.rot[ct.i], f.theta_j = P.rot[ct.j];
+      if (seen) {
+        contact::PairGeometry g0, g1;
+        g0.n = contact::Vec(it->nx, it->ny), g0.L = it->L, g0.d_i = it->d_i, g0.d_j = it->d_j;
+        g1.n = contact::Vec(f.nx, f.ny), g1.L = f.L, g1.d_i = f.d_i, g1.d_j = f.d_j;
+        const double centres = contact::slip_increment(g0, g1, 0.0, 0.0);  // L dphi
+        f.centre = it->centre + centres;
+        f.slip = it->slip + contact::slip_increment(g0, g1, f.theta_i - it->theta_i, f.theta_j - it->theta_j);
+      }
+      sum_tc += std::fabs(f.centre - a.tangential);
+      sum_tr += std::fabs(f.slip - a.tangential);
+    }
+    formed.push_back(f);
   }
   // (the contacts come in the table's (i, j) order; sorted in case a table ever is not)
-  const auto by_first = [](const auto& a, const auto& b) { return a.first < b.first; };
+  const auto by_first = [](const Formed& x, const Formed& y) { return x.key < y.key; };
   if (!std::is_sorted(formed.begin(), formed.end(), by_first)) std::sort(formed.begin(), formed.end(), by_first);
   form_.swap(formed);
   prev_ = E;
+  m.dev_ut_centres = dev.of_mean_affine_normal(sum_tc, loaded);
+  m.dev_ut_rotations = dev.of_mean_affine_normal(sum_tr, loaded);
   m.contacts = loaded;
   m.Z = 2.0 * loaded / static_cast<double>(P.size());
   m.mean_fn = loaded > 0 ? sum_fn / loaded : 0.0;

@@ -78,7 +78,7 @@ import csv, json, math, sys
 d = sys.argv[1]
 rows = list(csv.DictReader(l for l in open(d + "/history.csv") if not l.startswith("#")))
 need = ("increment E11 E22 E12 D S11 S22 S12 S11_contacts S22_contacts Z contacts sliding mean_fn "
-        "dev_un_mean_ratio dev_un_ratio_of_means time I kinetic_ratio steps").split()
+        "dev_un_mean_ratio dev_un_ratio_of_means dev_ut_centres dev_ut_rotations time I kinetic_ratio steps").split()
 ok = all(c in rows[0] for c in need) and len(rows) == 101
 ok = ok and not any(v.strip().lower() in ("nan", "inf", "-inf", "+inf") for r in rows for v in r.values())
 last = rows[-1]

@@ -7,6 +7,9 @@
 //    u = R_sum - L_0 exp(e t), so the Eq 16 deviation of every contact is the second-order strain
 //    term: |u - u^a| / u^a = (exp(e t) - 1 - e t) / |e t| ~ |e t| / 2; Z = 3 (square), 4 (cubic);
 //    the run ends at the target density D = D_0 exp(-tr E);
+//  * the Figs 7-8 tangential deviation (2D): a rigid rotation of the lattice moves the centres by
+//    L alpha across every contact and slips no contact point; turning every disk by beta slips
+//    each contact point by L beta;
 //  * the strain paths and the protocol's options, refused with the field they name.
 #include <gtest/gtest.h>
 
@@ -166,6 +169,55 @@ void affine_lattice_compaction() {
 
 TEST(DemCompaction, AffineSquareLatticeMatchesEq16Disks) { affine_lattice_compaction<2>(); }
 TEST(DemCompaction, AffineCubicLatticeMatchesEq16Spheres) { affine_lattice_compaction<3>(); }
+
+/// The Figs 7-8 bookkeeping of the meter (2D), on a square lattice of 4 x 4 unit disks with the
+/// overlap u0, measured in three states at the same macroscopic strain E (hydrostatic, so u_T^a = 0
+/// and u_N^a = x R_sum, x = -E11, for every contact):
+///  * a rigid rotation of the whole lattice by alpha, centres and angles: each contact's centres
+///    move by L alpha across it, and its contact points do not slip (Eq 5 is objective);
+///  * then every disk turned by beta more, the centres held: each contact point slips by
+///    -(d_i + d_j) beta = -L beta, the centres do not move.
+TEST(DemCompaction, TangentialDeviationIsObjectiveAndCountsTheRolling) {
+  const int m = 4;
+  const double u0 = 1e-3, alpha = 0.02, beta = -0.005, x = 0.01;
+  const auto pk = lattice<2>(m, u0);
+  const double cx = 0.5 * (pk.box.x_min + pk.box.x_max), cy = 0.5 * (pk.box.y_min + pk.box.y_max);
+  auto solver_at = [&](double rot, double spin) {
+    ParticlesT<2> P = particles_at_rest<2>(pk, 1.0);
+    const double c = std::cos(rot), s = std::sin(rot);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      const double dx = P.pos[2 * p] - cx, dy = P.pos[2 * p + 1] - cy;
+      P.pos[2 * p] = cx + c * dx - s * dy;
+      P.pos[2 * p + 1] = cy + s * dx + c * dy;
+      P.rot[p] = rot + spin;
+    }
+    Box box(pk.box);
+    box.x_min -= 1.0, box.y_min -= 1.0, box.x_max += 1.0, box.y_max += 1.0;  // room for the turned corners
+    box.contact_walls = false;
+    DynamicOptions o;
+    o.model = ContactModel::PlasticIndentation;
+    o.plastic.sigma_y = 1.0;
+    o.plastic.mu = 0.0;
+    return DynamicSolverT<2>(std::move(P), o.plastic, box, o);
+  };
+  const Voigt<2> E{-x, -x, 0.0};
+  CompactionMeterT<2> meter(false, 1.0);
+  const auto first = meter.measure(solver_at(0.0, 0.0), E);  // every contact first seen: nothing accumulated
+  ASSERT_EQ(first.contacts, 2 * m * (m - 1));
+  EXPECT_EQ(first.dev_ut_centres, 0.0);
+  EXPECT_EQ(first.dev_ut_rotations, 0.0);
+  // (E_form = 0 for every contact: the strain before the first sample)
+  const double L = 2.0 - u0, una = x * 2.0;
+  const auto turned = meter.measure(solver_at(alpha, 0.0), E);
+  ASSERT_EQ(turned.contacts, first.contacts);
+  EXPECT_NEAR(turned.dev_ut_centres, L * alpha / una, 1e-12);
+  EXPECT_NEAR(turned.dev_ut_rotations, 0.0, 1e-12);
+  const auto rolled = meter.measure(solver_at(alpha, beta), E);
+  EXPECT_NEAR(rolled.dev_ut_centres, L * alpha / una, 1e-12);  // the centres did not move
+  EXPECT_NEAR(rolled.dev_ut_rotations, L * std::fabs(beta) / una, 1e-12);
+  // the Eq 16 normal measure is the same in every state (the overlaps are)
+  EXPECT_NEAR(rolled.dev_ratio_of_means, first.dev_ratio_of_means, 1e-12);
+}
 
 TEST(DemCompaction, OptionsNameTheirField) {
   const auto path = sys::StrainPathT<2>::parse("hydrostatic");

@@ -31,6 +31,10 @@ struct CompactionSampleT {
   Voigt<D> Sk{};
   double Z = 0, contacts = 0, sliding = 0, mean_fn = 0;
   double dev_mean_ratio = 0, dev_ratio_of_means = 0, affine_ut = 0;  ///< Eq 16 (sys::AffineDeviation)
+  /// 2D, Redanz & Fleck Figs 7-8 as netsolve measures them: mean |u_T - u_T^a| over the mean u_N^a,
+  /// u_T the tangential displacement of the centres (L dphi, "centres") or of the contact points
+  /// (Eq 5 with the rotations, "rotations") accumulated since the contact was first seen (0 in 3D)
+  double dev_ut_centres = 0, dev_ut_rotations = 0;
   double kinetic = 0;  ///< kinetic energy of the motion relative to the affine field, spins included
   double work = 0;     ///< sum F_N u_N / 2 over the loaded particle contacts (spring force)
   void add(const CompactionSampleT& o, double w);
@@ -56,9 +60,18 @@ class CompactionMeterT {
   double r_mean_;
   std::vector<ContactInfo> cs_;
   std::vector<std::uint8_t> is_pre_;
-  /// The strain at formation of each loaded pair (key i << 32 | j, sorted): the last sample's and
-  /// this one's (storage reused from sample to sample: no allocation once it is large enough).
-  std::vector<std::pair<std::uint64_t, Voigt<D>>> form_, formed_;
+  /// What each loaded pair carries from sample to sample (key i << 32 | j): the strain when it was
+  /// first seen and, in 2D, its geometry and the particles' angles at the last sample and the
+  /// tangential displacements accumulated since (Figs 7-8).
+  struct Formed {
+    std::uint64_t key = 0;
+    Voigt<D> E_form{};
+    double nx = 0, ny = 0, L = 0, d_i = 0, d_j = 0, theta_i = 0, theta_j = 0;
+    double centre = 0, slip = 0;
+  };
+  /// The pairs of the last sample and of this one, sorted by key (storage reused from sample to
+  /// sample: no allocation once it is large enough).
+  std::vector<Formed> form_, formed_;
   Voigt<D> prev_{};
 };
 
