@@ -1,5 +1,5 @@
 """The paper's compaction findings with friction (2, 4, 6b, 6c, 6d, 7c, 8a-8c; 1a beside them) on the
-DEM between walls, from the same depositions as the frictionless lines (issue 32: "each unexplained line
+DEM between walls (8a-8c from demsolve's Figs 7-8 columns, written since 2026-12-07), from the same depositions as the frictionless lines (issue 32: "each unexplained line
 measured on converged runs and on the DEM"). Imported by run.py, which runs and reports them.
 
 Runs per seed: `demsolve compact --boundary walls` from the deposition, hydrostatic and closed die, with
@@ -138,12 +138,22 @@ def lines(R, h, layer=False):
                           lambda s, I, pk=pk, fk=fk, col=col: at(s, pk, fk, I, lambda r: h.peak(r, col)[0]),
                           ("max over D ≥ 0.815 (the compaction case's note)",
                            lambda s, I, pk=pk, fk=fk, col=col: at(s, pk, fk, I, lambda r: late_max(r, col))), col))
+    def plateau(r, col):  # the compaction case's plateau: the median over 0.83 <= D <= the end density
+        if col not in r.h:  # (a run of a demsolve older than its Figs 7-8 columns)
+            return float("nan")
+        m = (r.h["D"] >= 0.83) & (r.h["D"] <= TARGET_D + END_TOL)
+        return float(np.median(r.h[col][m])) if m.any() else float("nan")
+
+    for fid, pk, fk, what, paper, lo, hi in (
+            ("8a", "hydro", "inf", "hydrostatic, sticking", "plateau ~0.5 (3.3, Fig 8a)", 0.3, 0.7),
+            ("8b", "die", "mu0.1", "closed die, μ = 0.1", "plateau ~1.5 (3.3, Fig 8b)", 1.0, 2.0),
+            ("8c", "die", "inf", "closed die, sticking", "plateau ~1.5 (3.3, Fig 8b)", 1.0, 2.0)):
+        L.append((fid, f"{what}: plateau of ⟨|uT−uTA|⟩/⟨uNA⟩ (median over D ≥ 0.83; uT of Eq 5, with the rotations)",
+                  paper, f"{lo}..{hi}", lambda v, lo=lo, hi=hi: lo <= v <= hi,
+                  lambda s, I, pk=pk, fk=fk: at(s, pk, fk, I, lambda r: plateau(r, "dev_ut_rotations")),
+                  ("the centres only (dev_ut_centres)",
+                   lambda s, I, pk=pk, fk=fk: at(s, pk, fk, I, lambda r: plateau(r, "dev_ut_centres")))))
     return [x + (None,) * (8 - len(x)) for x in L]
-
-
-MISSING_LINES = (("8a", "hydrostatic, sticking: plateau of ⟨|uT−uTA|⟩/⟨uNA⟩", "plateau ~0.5 (3.3, Fig 8a)", "0.3..0.7"),
-                 ("8b", "closed die, μ = 0.1: plateau of ⟨|uT−uTA|⟩/⟨uNA⟩", "plateau ~1.5 (3.3, Fig 8b)", "1.0..2.0"),
-                 ("8c", "closed die, sticking: plateau of ⟨|uT−uTA|⟩/⟨uNA⟩", "plateau ~1.5 (3.3, Fig 8b)", "1.0..2.0"))
 
 
 def evaluate(mode, R, h, layer=False):
@@ -185,9 +195,6 @@ def evaluate(mode, R, h, layer=False):
         inb = f"{sum(1 for x in fin_v if test(x))} / {n}" if test else "—"
         rows.append((fid, fin, paper, band, h.fmt_ms(m, se, n) + f"; seeds {min(fin_v):.4g}..{max(fin_v):.4g}", check, inb,
                      vd, "; ".join(notes)))
-    for fid, fin, paper, band in MISSING_LINES:
-        rows.append((fid, fin, paper, band, h.missing_text("demsolve writes no tangential deviation column"), "—", "—",
-                     h.MISSING, ""))
     return rows
 
 

@@ -228,6 +228,11 @@ def measures(R):
                       "> 2.0", lambda v: v > 2.0, of(path, lambda r, c=col: peak(r, c)[0]), col))
             L.append((f"7b-{path}", f"{where} frictionless: density of the peak of {sym}", "peak at D ~ 0.83 (3.3, Fig 7)",
                       "0.82..0.84", lambda v: 0.82 <= v <= 0.84, of(path, lambda r, c=col: peak(r, c)[1]), col))
+    # Fig 8b on the DEM (demsolve's Figs 7-8 columns, since 2026-12-07; netsolve has no frictionless die path
+    # from the deposition: a mechanism until it jams)
+    L.append(("8d", "closed die frictionless: initial peak of ⟨|uT−uTA|⟩/⟨uNA⟩ (uT of Eq 5, with the rotations; DEM)",
+              "initial peak ~14 (3.3, Fig 8b)", "7..28", lambda v: 7 <= v <= 28,
+              of("die", lambda r: peak(r, "dev_ut_rotations")[0] if "dev_ut_rotations" in r.h else float("nan")), None))
     return L, ratio, net_ratio
 
 
@@ -332,10 +337,6 @@ def evaluate(mode, R, K):
             lo_txt = missing_text("runs missing or failed")
         rows.append((fid, fin, paper, band, lo_txt, fmt_ms(m_hi, se_hi, n_hi, p) if hi else "—", inb, vd,
                      "; ".join(notes)))
-    rows.append(("8d", "closed die frictionless: initial peak of ⟨|uT−uTA|⟩/⟨uNA⟩", "initial peak ~14 (3.3, Fig 8b)",
-                 "7..28", missing_text("demsolve writes no tangential deviation column, and netsolve has no "
-                                       "frictionless die path from the deposition (a mechanism until it jams)"),
-                 "—", "—", MISSING, ""))
     return rows, per_seed
 
 
