@@ -140,10 +140,12 @@ void check_boundary(const DemCompactArgs& a, bool walls) {
 template <int D>
 class CompactFiles : public CompactionObserverT<D> {
  public:
+  /// simple_shear: no Figs 7-8 columns (the cell's spin turns every branch, and Eq 16's u_T^a, from the
+  /// symmetric strain, has no spin: docs/dynamic.md)
   CompactFiles(const DynamicSolverT<D>& s, const fs::path& out, std::vector<double> snaps, bool walls, double t_end,
-               bool quiet, bool legs)
+               bool quiet, bool legs, bool simple_shear)
       : s_(s), out_(out), series_(compact_snapshot_series(out, s.periodic())), snaps_(std::move(snaps)), walls_(walls),
-        periodic_(s.periodic()), legs_(legs),
+        periodic_(s.periodic()), legs_(legs), tangential_(D == 2 && !simple_shear),
         progress_("compact", t_end, quiet) {
     const auto& lab = sys::voigt_labels<D>();
     csv_ = legs_ ? "increment,leg" : "increment";
@@ -152,7 +154,7 @@ class CompactFiles : public CompactionObserverT<D> {
     for (const char* l : lab) csv_ += fmt::format(",S{}", l);
     for (const char* l : lab) csv_ += fmt::format(",S{}_contacts", l);
     csv_ += ",Z,contacts,sliding,mean_fn,dev_un_mean_ratio,dev_un_ratio_of_means,affine_ut,";
-    if constexpr (D == 2) csv_ += "dev_ut_centres,dev_ut_rotations,";  // (netsolve's Figs 7-8 columns)
+    if (tangential_) csv_ += "dev_ut_centres,dev_ut_rotations,";  // (netsolve's Figs 7-8 columns)
     csv_ += "time,I,kinetic_ratio,steps,samples,dt,outside,D_in_box";
     if (walls_) csv_ += ",wall_vs_contact_gap";
     if (periodic_)
@@ -169,7 +171,7 @@ class CompactFiles : public CompactionObserverT<D> {
     for (double v : m.Sc) csv_ += fmt::format(",{:.9g}", v);
     csv_ += fmt::format(",{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{:.6g},{:.6g}", m.Z, m.contacts, m.sliding, m.mean_fn,
                         m.dev_mean_ratio, m.dev_ratio_of_means, m.affine_ut);
-    if constexpr (D == 2) csv_ += fmt::format(",{:.6g},{:.6g}", m.dev_ut_centres, m.dev_ut_rotations);
+    if (tangential_) csv_ += fmt::format(",{:.6g},{:.6g}", m.dev_ut_centres, m.dev_ut_rotations);
     csv_ += fmt::format(",{:.9g},{},{:.4e},{},{},{:.4e}", r.time,
                         std::isfinite(r.I) ? fmt::format("{:.6g}", r.I) : std::string(), r.kinetic_ratio, r.steps,
                         r.samples, r.dt);
@@ -203,7 +205,7 @@ class CompactFiles : public CompactionObserverT<D> {
   fs::path out_;
   SnapshotSeries series_;
   std::vector<double> snaps_;
-  bool walls_, periodic_, legs_;
+  bool walls_, periodic_, legs_, tangential_;
   Progress progress_;
   std::string csv_;
   std::size_t next_snap_ = 0;
@@ -518,7 +520,7 @@ int run_compact(const std::string& command, const DemCompactArgs& a, const fs::p
                  "dt = %.3g, about %.3g steps\n", D == 3 ? " --dim 3" : "", n, D == 2 ? "particles" : "spheres", D0,
                  static_cast<unsigned long long>(pk.seed), source.c_str(), a.inertial_number, rate.gamma_dot, t_end,
                  dt_first, steps_est);
-  CompactFiles<D> files(s, out, snaps, walls, t_end, a.quiet, legs.size() > 1);
+  CompactFiles<D> files(s, out, snaps, walls, t_end, a.quiet, legs.size() > 1, co.simple_shear);
   files.snapshot("initial");
   nlohmann::json summary = compact_summary<D>(command, a, path, rate, source, pk.seed, n, pre.size());
   if (legs.size() > 1) summary["t_end"] = t_end;
