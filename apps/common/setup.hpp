@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -177,7 +178,7 @@ struct LawArgs {
   double tol = qs::SolverOptions::compact().residual_tol, viscosity = qs::SolverOptions::compact().viscosity;
   double first_touch = contact::PlasticIndentationParams{}.first_touch;
   int max_newton = 0;  ///< 0: the iteration's own (legacy drag: the preset's 10; pseudo-transient: 50; energy merit: 500)
-  std::string iteration = "legacy-drag";
+  std::string iteration = "auto";  ///< auto: qs::default_iteration of the run's boundary modes
   double regularisation_scale = 1.0;
   int max_cuts = qs::SolverOptions{}.max_cuts;
   std::string merit = "energy";
@@ -200,7 +201,7 @@ inline LawArgs law_args(const qs::SolverOptions& o) {
   a.first_touch = o.law.first_touch;
   a.tol = o.residual_tol;
   a.viscosity = o.viscosity;
-  a.iteration = o.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+  a.iteration = "auto";  // the preset's iteration is the library's; the commands choose by the boundary
   a.regularisation_scale = o.regularisation_scale;
   a.max_cuts = o.max_cuts;
   a.merit = o.energy_merit ? (o.friction_energy_merit ? "energy-friction" : "energy") : "residual";
@@ -227,10 +228,11 @@ inline void add_law_options(CLI::App& app, LawArgs& a, const std::string& unload
                  "Newton); pseudo-transient: its start value, on each Newton step")
       ->capture_default_str();
   app.add_option("--iteration", a.iteration,
-                 "legacy-drag: the drag of the increment stays in the answer (earlier results; the default for now); "
                  "pseudo-transient: the drag acts on each Newton step only and an increment is accepted on the "
-                 "undragged residual, RMS <= --tol and max <= 10 x --tol (docs/quasistatic.md)")
-      ->check(CLI::IsMember({"legacy-drag", "pseudo-transient"}))
+                 "undragged residual, RMS <= --tol and max <= 10 x --tol; legacy-drag: the drag of the increment "
+                 "stays in the answer (earlier results); auto: pseudo-transient, but legacy-drag when a phase runs "
+                 "in the die's prescribed layer, which holds no undragged equilibrium (docs/quasistatic.md)")
+      ->check(CLI::IsMember({"auto", "legacy-drag", "pseudo-transient"}))
       ->capture_default_str();
   app.add_option("--regularisation-scale", a.regularisation_scale,
                  "multiplies the drag (the regularisation the iteration keeps); a converged pseudo-transient answer "
@@ -271,14 +273,18 @@ inline packing::Box walls_box(const packing::Packing& pk) {
 }
 
 /// Copies the LawArgs into the solver options; throws std::invalid_argument for a bad --friction.
-inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so) {
+/// `probing`: the boundary mode of a later phase on the same iteration (yield's probes); the
+/// default iteration (`auto`) depends on both modes.
+inline void apply_law_args(const LawArgs& a, qs::SolverOptions& so, std::optional<qs::BoundaryMode> probing = {}) {
   so.law.mu = parse_friction(a.friction);
   so.law.k_t = a.k_t;
   so.law.sigma_y = a.sigma_y;
   so.law.first_touch = a.first_touch;
   so.law.reversible = a.normal_unloading == "reversible";
   so.residual_tol = a.tol;
-  so.iteration = a.iteration == "pseudo-transient" ? qs::Iteration::PseudoTransient : qs::Iteration::LegacyDrag;
+  so.iteration = a.iteration == "pseudo-transient" ? qs::Iteration::PseudoTransient
+                 : a.iteration == "legacy-drag"    ? qs::Iteration::LegacyDrag
+                                                   : qs::default_iteration(so.mode, probing.value_or(so.mode));
   so.energy_merit = a.merit == "energy" || a.merit == "energy-friction";
   so.friction_energy_merit = a.merit == "energy-friction";
   if (a.max_newton > 0) {

@@ -153,7 +153,8 @@ std::vector<int> select_probes(const YieldArgs& a) {
 void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions& probe) {
   pre = qs::SolverOptions::yield_precompaction();
   pre.mode = parse_bc(a.compact_bc, "--compact-bc");
-  netdem::app::netsolve::apply_law_args(a.law, pre);
+  // the iteration covers both phases: its default depends on both boundary modes
+  netdem::app::netsolve::apply_law_args(a.law, pre, parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc"));
   if (!(a.unload_ratio >= 1.0 && a.unload_ratio <= 1e8))
     throw std::invalid_argument(fmt::format("--unload-ratio must lie in [1, 1e8] (the un/reloading stiffness over the "
                                             "loading tangent), got {}", a.unload_ratio));

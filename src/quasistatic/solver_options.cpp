@@ -17,6 +17,11 @@ void require(bool ok, const std::string& msg) {
 }
 }  // namespace
 
+Iteration default_iteration(BoundaryMode compaction, BoundaryMode probing) {
+  return compaction == BoundaryMode::Die || probing == BoundaryMode::Die ? Iteration::LegacyDrag
+                                                                         : Iteration::PseudoTransient;
+}
+
 void IterationOptions::validate() const {
   require(!affine_centres || mode == BoundaryMode::Periodic,
           "solver: affine_centres (every centre prescribed) is an option of the periodic boundary mode");

@@ -92,6 +92,8 @@ def yield_args(mode, tool, bc):
     a = ["yield", "--width", f"{mode['width']:g}", "--seed", "1", "--compact-bc", bc, "--directions",
          str(YIELD_DIRECTIONS), "--probes", ",".join(map(str, YIELD_PROBES)), "--quiet", "--allow-unconverged"]
     a += ["--jobs", "1"]  # the pool of run.py supplies the parallelism
+    if tool == "netsolve":
+        a += ["--iteration", "legacy-drag"]  # this case measures the legacy drag (the default in the die only)
     if tool == "demsolve" and bc == "die" and mode["name"] == "full":
         # W = 80 die: at the default 1e-3 one probe's holds take > 40 min; 3e-3 takes about 330 s
         # (docs/dynamic.md, "demsolve yield"). The die points are report only.
@@ -123,7 +125,8 @@ def net_args(mode, c, div):
     v = VISC_DEFAULT / div
     return ["compact", "--width", f"{mode['width']:g}", "--seed", str(c["seed"]), "--path", c["path"],
             "--friction", c["friction"], "--boundary", c["boundary"], "--to-density", f"{NET_D:g}",
-            "--increments", str(NET_INC), "--viscosity", f"{v:.10g}", "--allow-unconverged", "--quiet"]
+            "--increments", str(NET_INC), "--viscosity", f"{v:.10g}", "--iteration", "legacy-drag",
+            "--allow-unconverged", "--quiet"]  # the legacy drag's study (the default in the die only)
 
 
 def all_runs(mode):

@@ -112,7 +112,7 @@ def case_args(name, mode, unloading=None):
     inc = mode["increments"] * opts.get("inc_factor", 1)
     a = ["compact", "--width", f"{mode['width']:g}", "--seed", "1", "--path", opts["path"],
          "--friction", opts["friction"], "--to-density", f"{TARGET_D:g}", "--increments", str(inc),
-         "--normal-unloading", unloading]
+         "--normal-unloading", unloading, "--iteration", "legacy-drag"]  # the paper's die needs it; the default there
     if opts.get("affine"):
         a.append("--affine")
     if opts.get("norot"):

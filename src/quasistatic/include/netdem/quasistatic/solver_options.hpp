@@ -39,6 +39,15 @@ enum class BoundaryMode { Die, Affine, Walls, Periodic };
 ///    solver before issue 28; its answers contain the drag). Kept to reproduce earlier results.
 enum class Iteration { PseudoTransient, LegacyDrag };
 
+/// The commands' default iteration for the boundary modes a run uses (measured, docs/quasistatic.md
+/// "Which iteration by default"): the pseudo-transient iteration, whose answer is an equilibrium of
+/// the undragged equations, wherever the boundary can hold the packing without a drag (affine,
+/// walls, periodic); the legacy drag when a phase runs in the paper's die (a prescribed peripheral
+/// layer), which has no undragged equilibrium of a sticking packing past D ~ 0.824: the disks are
+/// extruded between the prescribed ones.
+Iteration default_iteration(BoundaryMode compaction, BoundaryMode probing);
+inline Iteration default_iteration(BoundaryMode mode) { return default_iteration(mode, mode); }
+
 /// What the network solver's iteration takes, whatever its contact law.
 struct IterationOptions {
   BoundaryMode mode = BoundaryMode::Die;
