@@ -73,7 +73,7 @@ def case_args(name, scale, jobs):
     a = ["yield", "--width", str(scale["width"]), "--increments", str(scale["increments"]),
          "--directions", str(scale["directions"]), "--precompact", pre, "--compact-bc", cbc,
          "--probe-bc", pbc, "--friction", mu, "--to-density", "0.85", "--normal-unloading", "reversible",
-         "--jobs", str(jobs), "--quiet"]
+         "--iteration", "legacy-drag", "--jobs", str(jobs), "--quiet"]  # one iteration for all (the die's default)
     if mu == "0":
         # frictionless precompactions are studied unconverged on purpose (exit 3 otherwise); the
         # status stays in summary.json
@@ -503,17 +503,21 @@ def main():
     lines += [""] + [f"![{f_}]({f_})" for f_ in wfigs]
     lines += ["", "## Runs", "", "| case | D | Z | loading point S11, S22 | unloading | probes ok | time total (compaction / unloading / probes) s |",
               "|---|---|---|---|---|---|---|"]
-    for n in CASES:
-        if n not in C:
+    labels = {n: f"{CASES[n][0]}, {CASES[n][1]}" for n in CASES}
+    labels |= {n: f"{CASES['die_LL_inf'][0]}, {CASES['die_LL_inf'][1]}, --unload-ratio {r:g}" for n, r in UNLOAD.items()}
+    for n, label in labels.items():
+        got = C.get(n) or (load(runs, n) if n in UNLOAD and os.path.exists(os.path.join(runs, n, "yield_points.csv"))
+                           else None)
+        if not got:
             # a case without yield points: say why (its summary.json status), not a silent gap
             reason_text = no_points_reason(runs, n)
-            lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | no yield points: {reason_text} | | | | | |")
+            lines.append(f"| {n} ({label}) | no yield points: {reason_text} | | | | | |")
             continue
-        s = C[n]["summary"]
+        s = got["summary"]
         p = s["precompaction"]
         u = s["unloading"]
         t = s["timing_s"]
-        lines.append(f"| {n} ({CASES[n][0]}, {CASES[n][1]}) | {p['D']:.4f} | {p['Z']:.3f} | {p['S11']:.3f}, {p['S22']:.3f} | "
+        lines.append(f"| {n} ({label}) | {p['D']:.4f} | {p['Z']:.3f} | {p['S11']:.3f}, {p['S22']:.3f} | "
                      f"\\|Σ\\| = {u['stress_norm']:.1e} in {u['increments']} | {s['probes']['ok']}/{s['probes']['run']} | "
                      f"{t['total']:.1f} ({t['compaction']:.1f} / {t['unloading']:.1f} / {t['probes']:.1f}) |")
     lines += ["", f"Times are wall seconds of the runs of this report (`--jobs {a.jobs}`: cases run one after another, "
