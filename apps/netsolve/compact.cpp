@@ -393,7 +393,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   if (!stopped.empty()) status.add("unstable", "stopped: " + stopped);
   rows.conv.judge(status, "");
   if (stopped.empty()) rows.equilibrium.judge(status);
-  if (so.mode == qs::BoundaryMode::Walls && a.state_file.empty() && rows.unconverged > 0)
+  if (so.mode == qs::BoundaryMode::Walls && a.state_file.empty() && rows.unconverged > 0 && !status.ok())
     status.add("unconverged", "a loose packing between walls is a mechanism until the walls jam it: start from a "
                               "jammed state (--state, e.g. demsolve compact --boundary walls --save-state)");
   if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));

@@ -481,6 +481,8 @@ void YieldRun::make_setup() {
   setup["unload_ratio"] = a.unload_ratio;
   setup["compact_bc"] = bc_name(so_.mode);
   setup["probe_bc"] = po_.affine_centres ? "affine" : bc_name(po_.mode);
+  // the resolved iteration: yield-merge refuses to mix the legacy drag's points with undragged ones
+  setup["iteration"] = so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
   setup["directions"] = a.directions;
   setup["packing"] = source_;
   setup["particles"] = solver_->size();

@@ -3,7 +3,8 @@
 # one clear line on stderr, a non-zero exit and no output folder; a tiny good run writes
 # yield_points.csv with the documented columns, one curve per probe and summary.json, and no plot
 # (apps/scripts/plot_yield.py draws surface.png from it); two job-array slices merged give the same
-# points as the whole run.
+# points as the whole run; the default iteration follows the boundary modes and merging refuses to mix
+# iterations.
 # usage: test_yield.sh PATH/TO/netsolve
 set -u
 ns="$1"
@@ -83,5 +84,22 @@ if "$ns" "${args[@]}" --friction 0 --probes 0 --out "$tmp/ysf" >/dev/null 2>"$tm
   check_bad yield_merge_mismatch "different setup" yield-merge "$tmp/ys0" "$tmp/ysf"
 else
   ko yield_friction_run
+fi
+# the default iteration (docs/quasistatic.md "Which iteration by default"): the legacy drag when a
+# phase runs in the die, the pseudo-transient iteration otherwise; the setup records it, so that
+# yield-merge refuses to mix the two
+iteration_is() {  # folder, expected solver.iteration and setup.iteration
+  /usr/bin/python3 -c "import json, sys; s = json.load(open(sys.argv[1] + '/summary.json'))
+sys.exit(0 if s['solver']['iteration'] == s['setup']['iteration'] == sys.argv[2] else 1)" "$1" "$2"
+}
+if "$ns" "${args[@]}" --compact-bc affine --probe-bc die --friction 0 --probes 0 --out "$tmp/yad" >/dev/null 2>"$tmp/stderr" &&
+   "$ns" "${args[@]}" --compact-bc affine --probes 0 --out "$tmp/yaa" >/dev/null 2>"$tmp/stderr" &&
+   "$ns" "${args[@]}" --iteration pseudo-transient --probes 0 --out "$tmp/ypt" >/dev/null 2>"$tmp/stderr" &&
+   iteration_is "$good" legacy-drag && iteration_is "$tmp/yad" legacy-drag && iteration_is "$tmp/yaa" pseudo-transient &&
+   iteration_is "$tmp/ypt" pseudo-transient; then
+  ok
+  check_bad yield_merge_iterations "different setup" yield-merge "$tmp/ys1" "$tmp/ypt"
+else
+  ko yield_default_iteration
 fi
 finish

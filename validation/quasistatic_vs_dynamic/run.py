@@ -80,7 +80,7 @@ DEV_BAND = 0.20           # |dev / dev0 - 1| <= 20 %
 
 
 # yield points (section 5): four probe directions of 8 (135, 180, 225, 270 deg) after hydrostatic
-# precompaction, sticking, seed 1, affine and die; both solvers with their defaults
+# precompaction, sticking, seed 1, affine and die; both solvers with their defaults (netsolve with `--iteration legacy-drag`, its default until 2026-12-07)
 YIELD_DIRECTIONS = 8
 YIELD_PROBES = (3, 4, 5, 6)
 YIELD_BCS = ("affine", "die")
