@@ -191,6 +191,11 @@ inline constexpr int kPseudoTransientMaxNewton = 50;
 /// docs/quasistatic.md "Frictionless: a trust region on the energy").
 inline constexpr int kEnergyMaxNewton = 500;
 
+/// The name of an iteration, as --iteration spells it and summary.json records it.
+inline const char* iteration_name(qs::Iteration it) {
+  return it == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+}
+
 /// The LawArgs of a library preset (the command's defaults).
 inline LawArgs law_args(const qs::SolverOptions& o) {
   LawArgs a;

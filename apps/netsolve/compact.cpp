@@ -232,7 +232,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
     const bool inl = qs::cholmod_inline_openmp(&why);
     j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
   }
-  j["solver"]["iteration"] = so.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+  j["solver"]["iteration"] = netdem::app::netsolve::iteration_name(so.iteration);
   j["solver"]["regularisation_scale"] = so.regularisation_scale;
   j["solver"]["max_cuts"] = so.max_cuts;
   // the merit the iteration used (energy, energy-friction or residual)

@@ -153,15 +153,16 @@ std::vector<int> select_probes(const YieldArgs& a) {
 void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions& probe) {
   pre = qs::SolverOptions::yield_precompaction();
   pre.mode = parse_bc(a.compact_bc, "--compact-bc");
+  const qs::BoundaryMode probe_mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
   // the iteration covers both phases: its default depends on both boundary modes
-  netdem::app::netsolve::apply_law_args(a.law, pre, parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc"));
+  netdem::app::netsolve::apply_law_args(a.law, pre, probe_mode);
   if (!(a.unload_ratio >= 1.0 && a.unload_ratio <= 1e8))
     throw std::invalid_argument(fmt::format("--unload-ratio must lie in [1, 1e8] (the un/reloading stiffness over the "
                                             "loading tangent), got {}", a.unload_ratio));
   pre.law.unload_ratio = a.unload_ratio;
   pre.validate();
   probe = qs::SolverOptions::yield_probe();
-  probe.mode = parse_bc(a.probe_bc.empty() ? a.compact_bc : a.probe_bc, "--probe-bc");
+  probe.mode = probe_mode;
   if (pre.mode == qs::BoundaryMode::Periodic && probe.mode == qs::BoundaryMode::Affine) {
     probe.mode = qs::BoundaryMode::Periodic;  // affine probing of the periodic state: every centre
     probe.affine_centres = true;              // prescribed, the histories kept
@@ -482,7 +483,7 @@ void YieldRun::make_setup() {
   setup["compact_bc"] = bc_name(so_.mode);
   setup["probe_bc"] = po_.affine_centres ? "affine" : bc_name(po_.mode);
   // the resolved iteration: yield-merge refuses to mix the legacy drag's points with undragged ones
-  setup["iteration"] = so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
+  setup["iteration"] = netdem::app::netsolve::iteration_name(so_.iteration);
   setup["directions"] = a.directions;
   setup["packing"] = source_;
   setup["particles"] = solver_->size();
@@ -652,7 +653,7 @@ int YieldRun::finish() {
                  {"probes", {{"tol", po_.residual_tol}, {"viscosity", po_.viscosity},
                              {"viscosity_strain", po_.viscosity_strain}, {"chord_steps", po_.chord_steps},
                              {"linear_tol", po_.linear_tolerance}, {"max_newton", po_.max_newton}}},
-                 {"iteration", so_.iteration == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag"},
+                 {"iteration", netdem::app::netsolve::iteration_name(so_.iteration)},
                  {"regularisation_scale", so_.regularisation_scale},
                  {"max_cuts", so_.max_cuts}};
   if (so_.iteration == qs::Iteration::PseudoTransient)  // the merit used (energy, energy-friction or residual)

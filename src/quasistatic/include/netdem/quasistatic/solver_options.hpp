@@ -46,7 +46,6 @@ enum class Iteration { PseudoTransient, LegacyDrag };
 /// layer), which has no undragged equilibrium of a sticking packing past D ~ 0.824: the disks are
 /// extruded between the prescribed ones.
 Iteration default_iteration(BoundaryMode compaction, BoundaryMode probing);
-inline Iteration default_iteration(BoundaryMode mode) { return default_iteration(mode, mode); }
 
 /// What the network solver's iteration takes, whatever its contact law.
 struct IterationOptions {
