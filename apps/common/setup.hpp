@@ -167,6 +167,33 @@ inline packing::Packing input_packing(const std::string& packing_file, const Pac
   return make_packing(a);
 }
 
+/// A 3D packing file (dim 3), or the 3D deposition of `a` (its --lateral); `source` describes which.
+/// `solver` names the solver in the refusal of a lateral-periodic deposition file (periodic sides
+/// and a floor: neither solver has that boundary). A fully periodic file is returned: the caller
+/// decides.
+inline packing::Packing input_packing_3d(const std::string& packing_file, const PackArgs& a, std::string& source,
+                                         const char* solver) {
+  if (!packing_file.empty()) {
+    if (std::filesystem::is_directory(packing_file))
+      throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes "
+                                   "DIR/packing.csv)", packing::quote_input(packing_file)));
+    source = packing_file;
+    packing::Packing p = packing::read_packing_csv(packing_file);
+    if (p.dim != 3)
+      throw UsageError(fmt::format("--packing {} is a 2D packing; --dim 3 needs a 3D packing file (id,x,y,z,r with "
+                                   "'# dim 3', netsolve pack --dim 3)", packing::quote_input(packing_file)));
+    for (const auto& c : p.comments)
+      if (!p.periodic && c.find("lateral periodic") != std::string::npos)
+        throw UsageError(fmt::format("--packing {} is a lateral-periodic deposition (periodic sides, a floor): "
+                                     "{} has no such boundary (use --lateral walls, or a fully periodic "
+                                     "packing with --boundary periodic)", packing::quote_input(packing_file), solver));
+    return p;
+  }
+  source = fmt::format("3D ballistic deposition, W = {} R, r = R[{}, {}], seed {}, lateral walls", a.width,
+                       a.mono ? 1.0 : a.r_min, a.mono ? 1.0 : a.r_max, a.seed);
+  return make_packing_3d(a);
+}
+
 /// Contact law and Newton options common to `compact` and `yield`.
 /// The law's numbers default to the law's own (contact::PlasticIndentationParams), the Newton
 /// options to the library's compaction preset (qs::SolverOptions::compact()); friction and the

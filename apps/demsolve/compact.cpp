@@ -65,25 +65,7 @@ packing::Packing input_packing_of(const DemCompactArgs& a, std::string& source) 
       throw;
     }
   } else {
-    if (!a.packing_file.empty()) {
-      if (fs::is_directory(a.packing_file))
-        throw UsageError(fmt::format("--packing '{}' is a folder, not a packing CSV file (netsolve pack writes "
-                                     "DIR/packing.csv)", packing::quote_input(a.packing_file)));
-      source = a.packing_file;
-      packing::Packing p = packing::read_packing_csv(a.packing_file);
-      if (p.dim != 3)
-        throw UsageError(fmt::format("--packing {} is a 2D packing; --dim 3 needs a 3D packing file (id,x,y,z,r with "
-                                     "'# dim 3', netsolve pack --dim 3)", packing::quote_input(a.packing_file)));
-      for (const auto& c : p.comments)
-        if (!p.periodic && c.find("lateral periodic") != std::string::npos)
-          throw UsageError(fmt::format("--packing {} is a lateral-periodic deposition (periodic sides, a floor): "
-                                       "the explicit DEM has no such boundary (use --lateral walls, or a fully periodic "
-                                       "packing with --boundary periodic)", packing::quote_input(a.packing_file)));
-      return p;
-    }
-    source = fmt::format("3D ballistic deposition, W = {} R, r = R[{}, {}], seed {}, lateral walls", a.pack.width,
-                         a.pack.mono ? 1.0 : a.pack.r_min, a.pack.mono ? 1.0 : a.pack.r_max, a.pack.seed);
-    return netdem::app::netsolve::make_packing_3d(a.pack);
+    return netdem::app::netsolve::input_packing_3d(a.packing_file, a.pack, source, "the explicit DEM");
   }
 }
 

@@ -2,6 +2,7 @@
 // the folder opens), the run through qs::run_compaction (a hydrostatic precompaction first with
 // --precompact-density), history.csv, the snapshots, the run status and summary.json.
 #include "compact.hpp"
+#include "compact_common.hpp"
 
 #include <algorithm>
 #include <array>
@@ -88,30 +89,8 @@ SnapshotSeries snapshot_series(const fs::path& out, bool periodic) {
 
 /// The solver and compaction options of `compact`, checked (before the output folder exists).
 void compact_options(const CompactArgs& a, netdem::qs::SolverOptions& so, netdem::qs::CompactionOptions& co) {
-  namespace qs = netdem::qs;
-  so = a.solver;  // the Newton knobs bound directly by the command line
-  so.mode = a.affine                 ? qs::BoundaryMode::Affine
-            : a.boundary == "walls"    ? qs::BoundaryMode::Walls
-            : a.boundary == "periodic" ? qs::BoundaryMode::Periodic
-                                       : qs::BoundaryMode::Die;
-  if (a.affine && a.boundary != "layer")
-    throw std::invalid_argument(fmt::format("--affine and --boundary {} exclude each other (--affine prescribes every centre)",
-                                            a.boundary));
-  if (so.mode == qs::BoundaryMode::Periodic && !a.state_file.empty())
-    throw netdem::app::UsageError("--state: a jammed state has walls or a layer, not a periodic cell (--boundary periodic)");
-  so.rotations = !a.no_rotation;
-  netdem::app::netsolve::apply_law_args(a.law, so);
-  so.verbose = a.verbose;
-  so.validate();
-  co.path = qs::StrainPath::parse(a.path);
-  co.target_density = a.to_density;
-  co.target_strain = a.to_strain;
-  co.increments = a.increments;
-  co.precompact_density = a.precompact_density;
-  co.precompact_increments = a.precompact_increments;
-  if (so.mode == qs::BoundaryMode::Walls && co.path.E12 != 0.0)
-    throw std::invalid_argument(fmt::format("--boundary walls: the walls stay axis-parallel, so the path needs E12 = 0, got {}",
-                                            co.path.E12));
+  so = compact_solver_options(a);
+  co = compact_compaction_options<2>(a, so);
 }
 
 /// Disk centres outside the initial box: die mode prescribes only the peripheral layer, and a
@@ -136,16 +115,11 @@ struct LegEnd {
 /// What a `compact` run measured, for its summary.json.
 struct CompactRecord {
   std::string source;
-  int done = 0, unconverged = 0, outside = 0;
-  double max_residual = 0.0, wall = 0.0;
+  int done = 0, outside = 0;
+  double wall = 0.0;
   netdem::qs::StateMeasures last;
-  netdem::app::netsolve::ConvergenceRecord conv;
-  netdem::app::netsolve::EquilibriumRecord equilibrium;
   std::string stopped;
-  int instabilities = 0, cut_increments = 0;  ///< increments with an instability event, cut increments
-  int unconverged_substeps = 0;  ///< sub-increments committed unaccepted (IncrementReport)
-  int unjammed = 0;  ///< increments accepted as unjammed (energy merit)
-  double drag_work = 0.0, contact_work = 0.0;  ///< summed over the increments
+  const IncrementTally& tally;
   std::array<LegEnd, 2> legs;  ///< the last row of each leg (a run that precompacts)
 };
 
@@ -191,8 +165,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   namespace qs = netdem::qs;
   const double sy = so.law.sigma_y;
   const auto& tm = solver.timings();
-  const auto& [source, done, unconverged, outside, max_residual, wall, last, conv, equilibrium, stopped, instabilities,
-               cut_increments, unconverged_substeps, unjammed, drag_work, contact_work, legs] = r;
+  const auto& [source, done, outside, wall, last, stopped, tally, legs] = r;
   nlohmann::json j;
   j["command"] = command;
   status.write(j);
@@ -221,33 +194,12 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
                 {"E22", last.E22},          {"E12", last.E12},
                 {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone}};
-  j["solver"] = {{"unconverged_increments", unconverged}, {"max_residual", max_residual},
-                 {"free_dofs", solver.free_dofs()},     {"newton_iterations", tm.newton_iterations},
-                 {"analyses", tm.analyses},             {"factorisations", tm.factorisations},
-                 {"solves", tm.solves},                 {"tol", so.residual_tol},
-                 {"max_newton", so.max_newton},         {"viscosity", so.viscosity},
-                 {"viscosity_strain", so.viscosity_strain}, {"linear_tol", so.linear_tolerance}};
+  j["solver"] = solver_summary(so, tm, solver.free_dofs(), tally);
   {
     std::string why;
     const bool inl = qs::cholmod_inline_openmp(&why);
     j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
   }
-  j["solver"]["iteration"] = netdem::app::netsolve::iteration_name(so.iteration);
-  j["solver"]["regularisation_scale"] = so.regularisation_scale;
-  j["solver"]["max_cuts"] = so.max_cuts;
-  // the merit the iteration used (energy, energy-friction or residual)
-  if (so.iteration == qs::Iteration::PseudoTransient) j["solver"]["merit"] = so.merit_name();
-  if (so.uses_energy_merit()) j["solver"]["unjammed_increments"] = unjammed;
-  j["solver"]["instability_events"] = instabilities;
-  j["solver"]["cut_increments"] = cut_increments;
-  j["solver"]["unconverged_substeps"] = unconverged_substeps;
-  j["solver"]["drag_work_fraction"] = contact_work > 0.0 ? drag_work / contact_work : 0.0;
-  j["solver"]["max_newton_residual"] = conv.max_newton_residual;
-  j["solver"]["last_increment_converged"] = conv.last_converged;
-  j["solver"]["eq13_vs_contacts"] = equilibrium.last;  // judged in the run status (origin-free Eq 13)
-  j["solver"]["max_eq13_vs_contacts"] = equilibrium.max;
-  j["solver"]["net_force_ratio"] = equilibrium.last_net_force;  // |sum F| / sum |F| of the reactions
-  j["solver"]["max_net_force_ratio"] = equilibrium.max_net_force;
   const bool saved = a.save_state && stopped.empty();
   j["state"] = saved ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
@@ -264,14 +216,12 @@ struct CompactRows {
   CompactRows(const qs::NetworkSolver& s, SnapshotSeries& snapshot_series, std::vector<double> snapshots, const qs::SolverOptions& so,
               const qs::CompactionOptions& co, bool quiet)
       : solver(s), series(snapshot_series), snaps(std::move(snapshots)), sy(so.law.sigma_y), legs(co.precompacts()),
-        total(co.increments + (legs ? co.precompact_increments : 0)), progress("compact", total, quiet) {
+        total(co.increments + (legs ? co.precompact_increments : 0)), progress("compact", total, quiet), tally(so) {
     csv = legs ? "increment,leg," : "increment,";
     csv += "E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
            "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
            "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,"
            "unconverged_substeps,rattlers,Z_backbone\n";
-    conv.tol = so.residual_tol;
-    if (so.iteration == qs::Iteration::PseudoTransient) conv.max_unconverged_fraction = 0.0;
     growth.tol = so.residual_tol;
   }
 
@@ -289,18 +239,7 @@ struct CompactRows {
                        m.net_force_ratio, m.eq13_vs_contacts, row.report.substeps, row.report.instability ? 1 : 0,
                        qs::drag_work_fraction(row.report), row.report.unconverged_substeps, m.rattlers,
                        m.Z_backbone);
-    if (row.increment > 0) {
-      instabilities += row.report.instability;
-      unjammed += row.report.unjammed;
-      cut_increments += row.report.substeps > 1;
-      unconverged_substeps += row.report.unconverged_substeps;
-      drag_work += row.report.drag_work;
-      contact_work += row.report.contact_work;
-      unconverged += !row.report.converged;
-      max_residual = std::max(max_residual, row.report.residual);
-      conv.add(row.increment, row.report.converged, row.report.newton_residual);
-      equilibrium.add(row.increment, m.eq13_vs_contacts, m.net_force_ratio);
-    }
+    if (row.increment > 0) tally.add(row.increment, row.report, m.eq13_vs_contacts, m.net_force_ratio);
     done = row.increment;
     leg_end[row.leg == 0 ? 0 : 1] = {true, row.increment, m};
     while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
@@ -324,11 +263,9 @@ struct CompactRows {
   Progress progress;
   std::string csv;
   std::size_t next_snap = 0;
-  int unconverged = 0, instabilities = 0, cut_increments = 0, unconverged_substeps = 0, unjammed = 0, done = 0;
-  double max_residual = 0.0, drag_work = 0.0, contact_work = 0.0;
+  IncrementTally tally;
+  int done = 0;
   qs::StateMeasures last;
-  ConvergenceRecord conv;
-  EquilibriumRecord equilibrium;
   ResidualGrowth growth;
   std::array<LegEnd, 2> leg_end;
 };
@@ -391,9 +328,9 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
                  outside);
   RunStatus status;
   if (!stopped.empty()) status.add("unstable", "stopped: " + stopped);
-  rows.conv.judge(status, "");
-  if (stopped.empty()) rows.equilibrium.judge(status);
-  if (so.mode == qs::BoundaryMode::Walls && a.state_file.empty() && rows.unconverged > 0 && !status.ok())
+  rows.tally.conv.judge(status, "");
+  if (stopped.empty()) rows.tally.equilibrium.judge(status);
+  if (so.mode == qs::BoundaryMode::Walls && a.state_file.empty() && rows.tally.unconverged > 0 && !status.ok())
     status.add("unconverged", "a loose packing between walls is a mechanism until the walls jam it: start from a "
                               "jammed state (--state, e.g. demsolve compact --boundary walls --save-state)");
   if (outside > 0) status.add("unstable", fmt::format("{} disk centres left the box between the peripheral disks", outside));
@@ -401,14 +338,12 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   if (last.Z < 2.0) status.add("unstable", fmt::format("final Z = {:.3g} < 2: the network is a mechanism", last.Z));
   const nlohmann::json j =
       compact_summary(command, a, ra, so, co, pk, solver, status,
-                      {source, rows.done, rows.unconverged, outside, rows.max_residual, wall, last, rows.conv,
-                       rows.equilibrium, stopped, rows.instabilities, rows.cut_increments, rows.unconverged_substeps, rows.unjammed, rows.drag_work,
-                       rows.contact_work, rows.leg_end});
+                      {source, rows.done, outside, wall, last, stopped, rows.tally, rows.leg_end});
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
   const double sy = so.law.sigma_y;
   netdem::app::summary_printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
-              last.density, last.S11 / sy, last.S22 / sy, last.Z, rows.unconverged, rows.max_residual, wall, out.c_str());
+              last.density, last.S11 / sy, last.S22 / sy, last.Z, rows.tally.unconverged, rows.tally.max_residual, wall, out.c_str());
   if (!stopped.empty()) {
     print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",
                                  stopped, rows.done));
@@ -515,6 +450,7 @@ int run_compact_cli(const CompactCli& cli, const PackArgs& pa, const CompactArgs
   if (cli.precompact_density->count() > 0 && !(ca.precompact_density > 0.0 && ca.precompact_density < 1.0))
     throw UsageError(fmt::format("--precompact-density must be in (0, 1) (a relative density), got {}",
                                  ca.precompact_density));
+  if (pa.dim == 3) return run_compact_3d(pa, ca, ra, command, out);
   return run_compact(pa, ca, ra, command, out);
 }
 

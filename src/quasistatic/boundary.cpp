@@ -92,11 +92,11 @@ void NetworkSolverT<D, L>::set_reversible_normal(bool reversible) {
   s.set_options(o);
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
-#else
 template class NetworkSolverT<3>;
+#else
 // the linear law: the Impl's members only (set_reversible_normal is the plastic law's, and clang 14
 // instantiates constrained members too)
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;

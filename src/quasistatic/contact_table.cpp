@@ -32,15 +32,15 @@ void NetworkSolverT<D, L>::Impl::build_neighbours() {
   tim.neighbours += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template struct ContactTableT<2, ct::PlasticIndentationLawT<2>>;
 template struct NetworkSolverT<2>::Impl;
-#else
 template struct ContactTableT<3, ct::PlasticIndentationLawT<3>>;
+template struct NetworkSolverT<3>::Impl;
+#else
 template struct ContactTableT<2, LinearLawT<2>>;
 template struct ContactTableT<3, LinearLawT<3>>;
-template struct NetworkSolverT<3>::Impl;
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 #endif

@@ -290,11 +290,11 @@ IncrementReport NetworkSolverT<D, L>::Impl::attempt_energy(const Mat& dE) {
   return rep;
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template struct NetworkSolverT<2>::Impl;
-#else
 template struct NetworkSolverT<3>::Impl;
+#else
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 #endif

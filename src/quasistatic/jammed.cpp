@@ -97,11 +97,10 @@ sys::JammedStateT<D> NetworkSolverT<D, L>::jammed_state() const {
   return raw_jammed<D, L>(*rest.impl_);
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template NetworkSolverT<2>::NetworkSolverT(const sys::JammedStateT<2>&, const SolverOptions&);
 template sys::JammedStateT<2> NetworkSolverT<2>::jammed_state() const;
-#else
 template NetworkSolverT<3>::NetworkSolverT(const sys::JammedStateT<3>&, const SolverOptions&);
 template sys::JammedStateT<3> NetworkSolverT<3>::jammed_state() const;
 #endif

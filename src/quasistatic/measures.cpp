@@ -199,10 +199,14 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   m.eq13 = 0.5 * (S + S.transpose());
   Mat SC = Mat::Zero();
   double sum_fn = 0.0;
+  std::vector<int> bi, bj;  // the load-bearing pairs (rattlers)
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
+    bi.push_back(i);
+    bj.push_back(j);
     const auto g = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]);
+    m.fabric += g.n * g.n.transpose();
     Vec fj;
     if constexpr (D == 2) {
       fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
@@ -222,7 +226,21 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   }
   const double c = m.contacts.norm(), d = (m.eq13 - m.contacts).norm();
   m.eq13_vs_contacts = c > 0.0 ? d / c : (d > 0.0 ? 1.0 : 0.0);
+  if (m.contact_count > 0) m.fabric /= m.contact_count;
+  {
+    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, {}, D + 1);
+    m.rattlers = static_cast<int>(bb.rattlers);
+    m.Z_backbone = bb.Z;
+  }
   m.Z = 2.0 * m.contact_count / s.n;
+  if (m.contact_count == 0) {  // before any load: the touching pairs, as measures()
+    int touching = 0;
+    for (std::size_t k = 0; k < s.pi.size(); ++k) {
+      const int i = s.pi[k];
+      touching += (s.at_j(k) - s.at(i)).norm() <= (s.ps.r[i] + s.ps.r[s.pj[k]]) * (1.0 + 1e-6);
+    }
+    m.Z = 2.0 * touching / s.n;
+  }
   m.mean_normal_force = m.contact_count > 0 ? sum_fn / m.contact_count : 0.0;
   return m;
 }
@@ -314,15 +332,15 @@ void NetworkSolverT<D, L>::Impl::print_worst(double fbar) const {
   }
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
-#else
 // 3D: member by member (measures() is 2D only, and clang 14 instantiates constrained members too)
 template std::vector<ContactView> NetworkSolverT<3>::contacts() const;
 template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3>::periodic_cell() const;
 template StressMeasuresT<3> NetworkSolverT<3>::stress() const;
 template struct NetworkSolverT<3>::Impl;
+#else
 template class NetworkSolverT<2, LinearLawT<2>>;
 template std::vector<ContactView> NetworkSolverT<3, LinearLawT<3>>::contacts() const;
 template std::optional<packing::PeriodicCellT<3>> NetworkSolverT<3, LinearLawT<3>>::periodic_cell() const;

@@ -54,7 +54,7 @@ namespace {
 
 /// The outer layer of a 3D packing (the die mode's prescribed particles): the spheres whose
 /// surface comes within one mean radius of a face of the spheres' bounding box.
-/// (maybe_unused: the tools' build of this file instantiates only the 2D solver, NETDEM_QS_MORE)
+/// (maybe_unused: the NETDEM_QS_MORE build of this file instantiates only the linear law)
 [[maybe_unused]] std::vector<std::uint8_t> peripheral_layer_3d(const packing::Packing& pk) {
   const std::size_t n = pk.size();
   const std::vector<double>* axes[3] = {&pk.x, &pk.y, &pk.z};
@@ -442,14 +442,14 @@ int NetworkSolverT<D, L>::free_dofs() const {
   return impl_->nfree;
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
-#else
 template struct NetworkStateT<3>;
+template class NetworkSolverT<3>;
+#else
 template struct NetworkStateT<2, LinearLawT<2>::History>;
 template struct NetworkStateT<3, LinearLawT<3>::History>;
-template class NetworkSolverT<3>;
 template class NetworkSolverT<2, LinearLawT<2>>;
 template class NetworkSolverT<3, LinearLawT<3>>;
 #endif

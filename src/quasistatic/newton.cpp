@@ -454,11 +454,11 @@ void NetworkSolverT<D, L>::Impl::clip_step() {
   }
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template class NetworkSolverT<2>;
-#else
 template class NetworkSolverT<3>;
+#else
 template class NetworkSolverT<2, LinearLawT<2>>;
 template class NetworkSolverT<3, LinearLawT<3>>;
 #endif

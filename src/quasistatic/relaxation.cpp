@@ -164,11 +164,11 @@ int NetworkSolverT<D, L>::Impl::relax_worst(double fbar, double rms) {
   return static_cast<int>(bad.size());
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 #ifndef NETDEM_QS_MORE
 template struct NetworkSolverT<2>::Impl;
-#else
 template struct NetworkSolverT<3>::Impl;
+#else
 template struct NetworkSolverT<2, LinearLawT<2>>::Impl;
 template struct NetworkSolverT<3, LinearLawT<3>>::Impl;
 #endif

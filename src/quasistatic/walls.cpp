@@ -124,7 +124,7 @@ double NetworkSolverT<D, L>::Impl::wall_work() const {
   return w;
 }
 
-// 2D plastic: netdem_quasistatic; 3D and the linear law: NETDEM_QS_MORE (CMakeLists.txt)
+// the plastic law (2D, 3D): netdem_quasistatic; the linear law: NETDEM_QS_MORE (CMakeLists.txt)
 // 2D only: the 3D solver refuses the walls mode (network_solver.cpp) and never calls these
 #ifndef NETDEM_QS_MORE
 template struct NetworkSolverT<2>::Impl;

@@ -39,6 +39,7 @@ CASES = [
     ("netsolve_green", "netsolve", ["pack", "--dim", "3", "--route", "green-body"]),
     ("netsolve_compact", "netsolve", ["compact"]),
     ("netsolve_compact_walls", "netsolve", ["compact", "--boundary", "walls", "--allow-unconverged"]),
+    ("netsolve_compact3d", "netsolve", ["compact", "--dim", "3", "--width", "10"]),
     ("netsolve_yield", "netsolve", ["yield", "--jobs", "1"]),
     ("netsolve_sinter_pair", "netsolve", ["sinter-pair"]),
     ("netsolve_sinter", "netsolve", ["sinter"]),

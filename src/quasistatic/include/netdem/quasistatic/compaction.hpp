@@ -1,12 +1,15 @@
 #pragma once
 // Compaction driver: strain paths and the increment loop to a target density or strain
-// (Redanz & Fleck 2001 section 2.4: hydrostatic E11 = E22, E12 = 0; closed die E22 < 0, E11 = E12 = 0).
+// (Redanz & Fleck 2001 section 2.4: hydrostatic E11 = E22, E12 = 0; closed die E22 < 0, E11 = E12 = 0),
+// in both dimensions (issue 30: 3D, closed die along z, any six-component direction).
 #include <functional>
 #include <string>
+#include <type_traits>
 
 #include <Eigen/Core>
 
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/strain_path.hpp"
 
 namespace netdem::qs {
 
@@ -21,10 +24,30 @@ struct StrainPath {
   static StrainPath parse(const std::string& text);
 };
 
-struct CompactionOptions {
-  StrainPath path;
+/// The 3D direction (Voigt order E11, E22, E33, E23, E13, E12; closed die along z).
+struct StrainPath3 {
+  std::string name = "hydrostatic";
+  sys::Voigt<3> E{-1.0, -1.0, -1.0, 0.0, 0.0, 0.0};
+  Eigen::Matrix3d rate() const;
+  static StrainPath3 hydrostatic();
+  /// "hydrostatic", "closed-die" or "E11,E22,E33[,E23,E13,E12]"; throws (one line).
+  static StrainPath3 parse(const std::string& text);
+};
+
+template <int D>
+using StrainPathOf = std::conditional_t<D == 2, StrainPath, StrainPath3>;
+
+/// What a compaction row measures: the 2D StateMeasures (with the Figs 7-8 deviations), the
+/// stresses of StressMeasuresT in 3D.
+template <int D>
+using CompactionMeasuresOf = std::conditional_t<D == 2, StateMeasures, StressMeasuresT<3>>;
+
+template <int D>
+struct CompactionOptionsT {
+  using Mat = Eigen::Matrix<double, D, D>;
+  StrainPathOf<D> path;
   double target_density = 0.85;
-  /// If > 0: run to this equivalent strain |E| = sqrt(E:E) = sqrt(E11^2 + E22^2 + 2 E12^2) along
+  /// If > 0: run to this equivalent strain |E| = sqrt(E:E) (2D: sqrt(E11^2 + E22^2 + 2 E12^2)) along
   /// `path` instead of to target_density (which is then ignored). Any direction, also one that
   /// keeps the volume (pure shear 1,-1,0) or dilates; in [kMinTargetStrain, kMaxTargetStrain], and
   /// a compacting path must end below density 1.
@@ -41,25 +64,38 @@ struct CompactionOptions {
   /// from the precompaction density.
   void validate(double initial_density) const;
   /// The strain of each increment of the path (leg 1) from a state of density `initial_density`.
-  Eigen::Matrix2d increment_strain(double initial_density) const;
+  Mat increment_strain(double initial_density) const;
   /// The hydrostatic precompaction leg alone (to precompact_density in precompact_increments).
-  CompactionOptions precompaction() const;
+  CompactionOptionsT precompaction() const;
 
  private:
   /// The checks of the path's target from `density`, a start called `from` in the messages.
   void validate_path(double density, const char* from) const;
 };
+using CompactionOptions = CompactionOptionsT<2>;
+using CompactionOptions3 = CompactionOptionsT<3>;
 
-struct CompactionRow {
+template <int D>
+struct CompactionRowT {
   int increment = 0;  ///< counted through both legs
   int leg = 1;        ///< 0: the precompaction (and the initial row of a run that precompacts), 1: the path
-  StateMeasures state;
+  CompactionMeasuresOf<D> state;
   IncrementReport report;
 };
+using CompactionRow = CompactionRowT<2>;
 
 /// Runs the compaction (the precompaction first, if any); calls on_row for the initial state
 /// (increment 0) and after each increment, numbered through both legs.
-void run_compaction(NetworkSolver& solver, const CompactionOptions& options,
-                    const std::function<void(const CompactionRow&)>& on_row);
+/// (on_row's type is not deduced: a lambda converts to it.)
+template <int D>
+void run_compaction(NetworkSolverT<D>& solver, const CompactionOptionsT<D>& options,
+                    const std::type_identity_t<std::function<void(const CompactionRowT<D>&)>>& on_row);
+
+extern template struct CompactionOptionsT<2>;
+extern template struct CompactionOptionsT<3>;
+extern template void run_compaction<2>(NetworkSolverT<2>&, const CompactionOptionsT<2>&,
+                                       const std::type_identity_t<std::function<void(const CompactionRowT<2>&)>>&);
+extern template void run_compaction<3>(NetworkSolverT<3>&, const CompactionOptionsT<3>&,
+                                       const std::type_identity_t<std::function<void(const CompactionRowT<3>&)>>&);
 
 }  // namespace netdem::qs

@@ -159,8 +159,14 @@ struct StressMeasuresT {
   double eq13_vs_contacts = 0;   ///< |eq13 - contacts| / |contacts| (Frobenius)
   double net_force_ratio = 0;    ///< |sum of the reactions| / sum of |reaction|
   int contact_count = 0, sliding = 0;
-  double Z = 0;                  ///< 2 x load-bearing contacts / N
+  double Z = 0;                  ///< 2 x load-bearing contacts / N (before any load: touching pairs)
   double mean_normal_force = 0;
+  /// <n (x) n> over the load-bearing contacts (trace 1; zero without any): the fabric
+  Mat fabric = Mat::Zero();
+  /// Rattlers (sys::prune_rattlers, fewer than D + 1 load-bearing contacts, recursively) and the
+  /// backbone's 2 x contacts / particles, as StateMeasures.
+  int rattlers = 0;
+  double Z_backbone = 0;
 };
 
 /// Affine-deviation bookkeeping of one contact (section 3.3, Figs 7-8). In 3D only E_form is kept

@@ -1,0 +1,46 @@
+#pragma once
+// What `netsolve compact` in 2D (compact.cpp) and in 3D (compact3.cpp, issue 30) share: the solver
+// and compaction options of the command line, the tally of the increments' reports and the
+// "solver" block of summary.json.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "compact.hpp"
+#include "netdem/quasistatic/compaction.hpp"
+#include "netdem/quasistatic/network_solver.hpp"
+#include "status.hpp"
+
+namespace netdem::app::netsolve {
+
+/// The solver options of `compact` (boundary mode, law, the iteration's knobs), checked
+/// (std::invalid_argument or UsageError, one line).
+qs::SolverOptions compact_solver_options(const CompactArgs& a);
+
+/// The compaction options of `compact` in dimension D (path, target, increments, precompaction);
+/// a walls run needs an axis-parallel path.
+template <int D>
+qs::CompactionOptionsT<D> compact_compaction_options(const CompactArgs& a, const qs::SolverOptions& so);
+
+/// The increments' reports of a run, summed, with the records the run status judges.
+struct IncrementTally {
+  int unconverged = 0, instabilities = 0, cut_increments = 0, unconverged_substeps = 0, unjammed = 0;
+  double max_residual = 0.0, drag_work = 0.0, contact_work = 0.0;
+  ConvergenceRecord conv;
+  EquilibriumRecord equilibrium;
+
+  /// Accepted increments only need tol; the pseudo-transient iteration accepts no unconverged one.
+  IncrementTally(const qs::SolverOptions& so);
+  /// One increment (> 0) with the state's equilibrium measures.
+  void add(int increment, const qs::IncrementReport& r, double eq13_vs_contacts, double net_force_ratio);
+};
+
+/// netsolve compact --dim 3 (compact3.cpp): the sphere network's run and its files; its exit status.
+int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const std::string& command,
+                   const std::filesystem::path& out);
+
+/// summary.json's "solver": the iteration, its knobs, the counts of the tally and the timings' counts.
+nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,
+                              const IncrementTally& t);
+
+}  // namespace netdem::app::netsolve

@@ -1,0 +1,165 @@
+#!/usr/bin/env bash
+# netsolve compact --dim 3 (issue 30): physics that could fail, and bad input.
+#  * closed form: a simple cubic lattice of n^3 touching spheres (n = 4) compacted affinely and
+#    hydrostatically to D = 0.6 has S = -(3 pi / 4) sigma_y (u/R) exp(-2E) (n - 1)/n per axis, u =
+#    2R (1 - e^E) (every bond carries the 3D plastic force 3 pi sigma_y R u over L = 2R e^E); the
+#    same lattice in a periodic cell has it without (n - 1)/n, its free spheres staying in
+#    equilibrium in every increment;
+#  * the DEM: affine frictionless compaction of a 3D deposition gives demsolve compact's stresses
+#    (the same contacts, the DEM's own force loop, no dashpots);
+#  * invariance: the deposition rotated by 90 degrees about x and shifted gives the permuted
+#    stresses, affine (1e-9) and in the die of the peripheral layer, closed die along z (along y
+#    after the rotation) with sticking friction and rotations (1e-3, the iteration's tolerance);
+#  * the files: history.csv with the six components, the fabric (trace 1), no NaN; summary.json;
+#    snapshots.pvd with z;
+#  * bad input: one line, exit 2, no folder.
+# usage: test_netsolve_compact3d.sh PATH/TO/netsolve PATH/TO/demsolve
+set -u
+ns="$1"
+ds="$2"
+tool="$ns"
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+result() {  # name ok?
+  if [ "$2" -eq 0 ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $1: $(head -c 2000 "$tmp/stderr")"; fi
+}
+"$ns" pack --dim 3 --width 6 --out "$tmp/p3" >/dev/null 2>"$tmp/stderr"
+result pack3d $?
+"$ns" pack --width 10 --out "$tmp/p2" >/dev/null 2>"$tmp/stderr"
+result pack2d $?
+p3="$tmp/p3/packing.csv"
+
+# the lattices (touching spheres of radius 1 at spacing 2, box [0, 2n]^3) and the rotated deposition
+/usr/bin/python3 - "$tmp" "$p3" <<'PY'
+import sys
+tmp, p3 = sys.argv[1], sys.argv[2]
+n = 4
+rows = [f"{k},{2*i+1},{2*j+1},{2*l+1},1" for k, (i, j, l) in
+        enumerate((i, j, l) for i in range(n) for j in range(n) for l in range(n))]
+for name, periodic in (("lattice", False), ("lattice_periodic", True)):
+    with open(f"{tmp}/{name}.csv", "w") as f:
+        f.write(f"# box 0 0 0 {2*n} {2*n} {2*n}\n# dim 3\n" + ("# periodic\n" if periodic else "") + "id,x,y,z,r\n")
+        f.write("\n".join(rows) + "\n")
+# rotation by 90 degrees about x, (x, y, z) -> (x, -z, y), then a shift
+lines = open(p3).read().splitlines()
+out, box = [], None
+for l in lines:
+    if l.startswith("# box"):
+        x0, y0, z0, x1, y1, z1 = map(float, l.split()[2:])
+        box = (x0, y0, z0, x1, y1, z1)
+        out.append(f"# box {x0 + 3.5!r} {-z1 - 7.25!r} {y0 + 1.5!r} {x1 + 3.5!r} {-z0 - 7.25!r} {y1 + 1.5!r}")
+    elif l.startswith("#") or l.startswith("id"):
+        out.append(l)
+    else:
+        i, x, y, z, r = l.split(",")
+        out.append(f"{i},{float(x) + 3.5!r},{-float(z) - 7.25!r},{float(y) + 1.5!r},{r}")
+open(f"{tmp}/rotated.csv", "w").write("\n".join(out) + "\n")
+PY
+result lattices $?
+
+check_bad dim3_walls "walls is 2D only" compact --dim 3 --boundary walls --packing "$p3"
+check_bad dim3_save_state "no state file yet" compact --dim 3 --affine --packing "$p3" --save-state
+check_bad dim3_2d_file "is a 2D packing" compact --dim 3 --affine --packing "$tmp/p2/packing.csv"
+check_bad dim2_3d_file "is a 3D packing" compact --packing "$p3"
+check_bad dim3_no_compaction "does not compact" compact --dim 3 --affine --packing "$p3" --path 1,1,-1
+check_bad dim3_bad_path "3 or 6 finite numbers" compact --dim 3 --affine --packing "$p3" --path=-1,-1
+check_bad dim3_target "not above the current density" compact --dim 3 --affine --packing "$p3" --to-density 0.3
+check_bad dim3_periodic_plain "has no '# periodic' line" compact --dim 3 --boundary periodic --packing "$p3"
+check_bad dim3_periodic_file "is a periodic packing" compact --dim 3 --affine --packing "$tmp/lattice_periodic.csv"
+check_bad dim3_lid "--lid inside" compact --dim 3 --affine --width 6 --lid centre
+check_bad dim4 "--dim" compact --dim 4
+
+run() {  # name args...: a run that must exit 0
+  local name="$1"
+  shift
+  "$ns" compact --dim 3 --quiet "$@" --out "$tmp/$name" >/dev/null 2>"$tmp/stderr"
+  result "$name" $?
+}
+run lattice --affine --packing "$tmp/lattice.csv" --to-density 0.6 --increments 10 --snapshots 0.55,0.6
+run lattice_periodic --boundary periodic --packing "$tmp/lattice_periodic.csv" --to-density 0.6 --increments 10 --snapshots ''
+
+/usr/bin/python3 - "$tmp" <<'PY'
+import csv, json, math, sys
+tmp = sys.argv[1]
+n, ok = 4, True
+for name, factor in (("lattice", (n - 1) / n), ("lattice_periodic", 1.0)):
+    s = json.load(open(f"{tmp}/{name}/summary.json"))
+    f = s["final"]
+    E = f["E11"]  # the accumulated strain per axis
+    u = 2 * (1 - math.exp(E))
+    want = -(3 * math.pi / 4) * u * math.exp(-2 * E) * factor
+    err = max(abs(f[f"S{a}"] - want) / abs(want) for a in ("11", "22", "33"))
+    shear = max(abs(f[f"S{a}"]) for a in ("23", "13", "12"))
+    print(f"{name}: E = {E:.6f}, S = {f['S11']:.9f} {f['S22']:.9f} {f['S33']:.9f}, closed form {want:.9f}, "
+          f"rel err {err:.2e}, Z {f['Z']}, D {f['D']:.12f}, status {s['status']}")
+    ok &= err < 1e-9 and shear < 1e-12 and abs(f["D"] - 0.6) < 1e-12 and s["status"] == "ok"
+    ok &= abs(f["Z"] - 6 * factor) < 1e-12 and math.exp(E) > 1 / math.sqrt(2)
+    rows = list(csv.DictReader(l for l in open(f"{tmp}/{name}/history.csv") if not l.startswith("#")))
+    ok &= len(rows) == 11 and all(r["converged"] == "1" for r in rows[1:])
+    ok &= all(math.isfinite(float(v)) for r in rows for v in r.values())
+    last = rows[-1]
+    ok &= abs(float(last["fabric11"]) + float(last["fabric22"]) + float(last["fabric33"]) - 1) < 1e-8
+    ok &= abs(float(last["fabric11"]) - 1 / 3) < 1e-8  # the three bond directions in equal numbers
+    if name == "lattice_periodic":
+        ok &= s["solver"]["iteration"] == "pseudo-transient" and float(last["residual_rms"]) <= 1e-3
+sys.exit(0 if ok else 1)
+PY
+result lattice_closed_form $?
+check_pvd lattice_snapshots "$tmp/lattice" particles,contacts
+grep -q 'NumberOfComponents="3"' "$tmp/lattice/particles_D0.600.vtp" && grep -q '"peripheral"' "$tmp/lattice/particles_D0.600.vtp"
+result lattice_vtp_3d $?
+
+# the DEM: affine, frictionless, no dashpots. A DEM row is the mean over its window (docs/dynamic.md),
+# a netsolve row the state at the increment's end: each of the DEM's 20 windows is compared with the
+# trapezoidal mean of netsolve's 16 increments in it (measured: 1e-4 of max |S| apart, half a DEM
+# sample's delay; Z equal where no contact forms)
+run affine_mu0 --snapshots '' --affine --packing "$p3" --friction 0 --to-density 0.62 --increments 320
+"$ds" compact --dim 3 --affine --packing "$p3" --friction 0 --damping 0 --to-density 0.62 --increments 20 --quiet \
+  --snapshots '' --out "$tmp/dem_mu0" >/dev/null 2>"$tmp/stderr"
+result dem_affine_mu0 $?
+/usr/bin/python3 - "$tmp" <<'PY'
+import csv, sys
+tmp = sys.argv[1]
+def rows(d):
+    return list(csv.DictReader(l for l in open(f"{tmp}/{d}/history.csv") if not l.startswith("#")))
+n, d = rows("affine_mu0"), rows("dem_mu0")
+comp = ["S" + c for c in ("11", "22", "33", "23", "13", "12")]
+k = 16
+scale = max(abs(float(n[-1][c])) for c in comp)
+worst, worst_z = 0.0, 0.0
+for w in range(1, 21):
+    seg = n[(w - 1) * k:w * k + 1]
+    for c in comp + ["Z"]:
+        v = [float(r[c]) for r in seg]
+        mean = (sum(v) - 0.5 * (v[0] + v[-1])) / k
+        if c == "Z":
+            worst_z = max(worst_z, abs(float(d[w][c]) - mean))
+        else:
+            worst = max(worst, abs(float(d[w][c]) - mean) / scale)
+print(f"netsolve vs DEM, affine mu = 0, 20 windows to D = 0.62: max |S_DEM - S_netsolve| / max |S| = {worst:.2e} "
+      f"(band 1e-3), max |Z_DEM - Z_netsolve| = {worst_z:.4f} (band 0.01); S33 at the end {n[-1]['S33']}")
+sys.exit(0 if len(d) == 21 and len(n) == 321 and worst < 1e-3 and worst_z < 0.01 else 1)
+PY
+result netsolve_equals_dem_affine $?
+
+# invariance under a rotation by 90 degrees about x (S22 <-> S33, S12 <-> S13) and a shift
+run affine_a --snapshots '' --affine --packing "$p3" --to-density 0.62 --increments 20
+run affine_b --snapshots '' --affine --packing "$tmp/rotated.csv" --to-density 0.62 --increments 20
+run die_a --snapshots '' --packing "$p3" --path closed-die --to-density 0.62 --increments 20 --allow-unconverged
+run die_b --snapshots '' --packing "$tmp/rotated.csv" --path 0,-1,0 --to-density 0.62 --increments 20 --allow-unconverged
+/usr/bin/python3 - "$tmp" <<'PY'
+import json, sys
+tmp = sys.argv[1]
+ok = True
+for a, b, tol in (("affine_a", "affine_b", 1e-9), ("die_a", "die_b", 1e-3)):
+    fa, fb = json.load(open(f"{tmp}/{a}/summary.json"))["final"], json.load(open(f"{tmp}/{b}/summary.json"))["final"]
+    pairs = (("11", "11"), ("22", "33"), ("33", "22"), ("23", "23"), ("13", "12"), ("12", "13"))
+    scale = max(abs(fa["S" + p]) for p, _ in pairs)
+    diff = max(abs(abs(fa["S" + p]) - abs(fb["S" + q])) for p, q in pairs) / scale
+    print(f"{a} vs {b}: S = {fa['S11']:.6f} {fa['S22']:.6f} {fa['S33']:.6f} / {fb['S11']:.6f} {fb['S33']:.6f} "
+          f"{fb['S22']:.6f}, max diff / max |S| = {diff:.2e} (band {tol:g}), Z {fa['Z']} / {fb['Z']}")
+    ok &= diff < tol and fa["S33"] < 0 and fa["contacts"] == fb["contacts"]
+sys.exit(0 if ok else 1)
+PY
+result rotation_invariance $?
+finish
