@@ -7,6 +7,8 @@
 #    equilibrium in every increment;
 #  * the DEM: affine frictionless compaction of a 3D deposition gives demsolve compact's stresses
 #    (the same contacts, the DEM's own force loop, no dashpots);
+#  * the affine formula S = -(1/V) sum 6 pi sigma_y R* u L n n over the deposition's touching pairs at
+#    e^E x0, computed in the test from the packing file alone, equals netsolve's affine stress (1e-9);
 #  * invariance: the deposition rotated by 90 degrees about x and shifted gives the permuted
 #    stresses, affine (1e-9) and in the die of the peripheral layer, closed die along z (along y
 #    after the rotation) with sticking friction and rotations (1e-3, the iteration's tolerance);
@@ -162,4 +164,40 @@ for a, b, tol in (("affine_a", "affine_b", 1e-9), ("die_a", "die_b", 1e-3)):
 sys.exit(0 if ok else 1)
 PY
 result rotation_invariance $?
+# the affine formula on the packing's own contacts, computed here from the packing file alone: the
+# centres at e^E x0 (hydrostatic, every centre affine), each touching pair with F = 6 pi sigma_y R* u
+# (the loading branch: every pair approaches monotonically), S = -(1/V) sum F L n n
+/usr/bin/python3 - "$tmp" "$p3" <<'PY'
+import json, math, sys
+import numpy as np
+tmp, p3 = sys.argv[1], sys.argv[2]
+box, rows = None, []
+for l in open(p3):
+    if l.startswith("# box"):
+        box = [float(v) for v in l.split()[2:]]
+    elif l[0].isdigit():
+        rows.append([float(v) for v in l.split(",")[1:]])
+a = np.array(rows)
+x0, r = a[:, :3], a[:, 3]
+f = json.load(open(f"{tmp}/affine_a/summary.json"))["final"]
+E = f["E11"]
+V = (box[3] - box[0]) * (box[4] - box[1]) * (box[5] - box[2]) * math.exp(3 * E)
+S = np.zeros((3, 3))
+pairs = 0
+for i in range(len(r)):
+    d = (x0[i + 1:] - x0[i]) * math.exp(E)
+    L = np.linalg.norm(d, axis=1)
+    u = r[i] + r[i + 1:] - L
+    for k in np.nonzero(u > 0)[0]:
+        rs = r[i] * r[i + 1 + k] / (r[i] + r[i + 1 + k])
+        n = d[k] / L[k]
+        S -= 6 * math.pi * rs * u[k] * L[k] * np.outer(n, n) / V
+        pairs += 1
+comp = {"11": (0, 0), "22": (1, 1), "33": (2, 2), "23": (1, 2), "13": (0, 2), "12": (0, 1)}
+err = max(abs(f["S" + c] - S[ij]) for c, ij in comp.items()) / np.abs(S).max()
+print(f"affine formula on the deposition's contacts at E = {E:.6f}: S33 {S[2, 2]:.9f} (netsolve {f['S33']:.9f}), "
+      f"{pairs} pairs (netsolve {f['contacts']}), max diff / max |S| = {err:.2e}")
+sys.exit(0 if err < 1e-9 and pairs == f["contacts"] else 1)
+PY
+result affine_formula_on_contacts $?
 finish
