@@ -193,7 +193,8 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
                 {"S12", last.S12 / sy},     {"S_asym", last.S_asym / sy},  {"Z", last.Z},
                 {"contacts", last.contacts}, {"sliding", last.sliding},   {"E11", last.E11},
                 {"E22", last.E22},          {"E12", last.E12},
-                {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone}};
+                {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone},
+                {"fabric11", last.fabric11}, {"fabric22", last.fabric22}, {"fabric12", last.fabric12}};
   j["solver"] = solver_summary(so, tm, solver.free_dofs(), tally);
   {
     std::string why;
@@ -221,7 +222,7 @@ struct CompactRows {
     csv += "E11,E22,E12,D,S11,S22,S12,S_asym,S11_contacts,S22_contacts,Z,contacts,sliding,mean_fn,"
            "dev_un_mean_ratio,dev_un_ratio_of_means,dev_ut_centres,dev_ut_rotations,affine_ut,residual,residual_rms,newton_residual,newton,"
            "linear_iterations,converged,net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,"
-           "unconverged_substeps,rattlers,Z_backbone\n";
+           "unconverged_substeps,rattlers,Z_backbone,fabric11,fabric22,fabric12\n";
     growth.tol = so.residual_tol;
   }
 
@@ -230,7 +231,8 @@ struct CompactRows {
     csv += fmt::format("{}", row.increment);
     if (legs) csv += fmt::format(",{}", row.leg);
     csv += fmt::format(",{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{},{},{:.9g},"
-                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{},{},{:.6g}\n",
+                       "{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{},{},{:.6g},"
+                       "{:.9g},{:.9g},{:.9g}\n",
                        m.E11, m.E22, m.E12, m.density, m.S11 / sy, m.S22 / sy, m.S12 / sy, m.S_asym / sy,
                        m.S11_contacts / sy, m.S22_contacts / sy, m.Z, m.contacts, m.sliding, m.mean_normal_force,
                        m.dev_normal_mean_ratio, m.dev_normal_ratio_of_means, m.dev_tangential_centres,
@@ -238,7 +240,7 @@ struct CompactRows {
                        row.report.newton_iterations, row.report.linear_iterations, row.report.converged ? 1 : 0,
                        m.net_force_ratio, m.eq13_vs_contacts, row.report.substeps, row.report.instability ? 1 : 0,
                        qs::drag_work_fraction(row.report), row.report.unconverged_substeps, m.rattlers,
-                       m.Z_backbone);
+                       m.Z_backbone, m.fabric11, m.fabric22, m.fabric12);
     if (row.increment > 0) tally.add(row.increment, row.report, m.eq13_vs_contacts, m.net_force_ratio);
     done = row.increment;
     leg_end[row.leg == 0 ? 0 : 1] = {true, row.increment, m};

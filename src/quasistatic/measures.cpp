@@ -90,6 +90,9 @@ StateMeasures NetworkSolverT<D, L>::measures() const
     const auto g = ct::pair_geometry(s.at(i), s.at_j(k), s.ps.r[i], s.ps.r[j]);
     const Eigen::Vector2d fj = s.fn_c[k] * g.n + s.ft_c[k] * g.t;
     SC -= fj * (g.L * g.n).transpose();
+    m.fabric11 += g.n.x() * g.n.x();
+    m.fabric22 += g.n.y() * g.n.y();
+    m.fabric12 += g.n.x() * g.n.y();
     ++loaded;
     sum_fn += s.fn_c[k];
     m.sliding += s.slide_c[k];
@@ -98,6 +101,11 @@ StateMeasures NetworkSolverT<D, L>::measures() const
     dev.add(g.overlap, a);
     sum_tc += std::fabs(s.aux[k].centre - a.tangential);
     sum_tr += std::fabs(s.aux[k].slip - a.tangential);
+  }
+  if (loaded > 0) {
+    m.fabric11 /= loaded;
+    m.fabric22 /= loaded;
+    m.fabric12 /= loaded;
   }
   SC += SW;
   {  // rattlers (issue 28 item 4): fewer than D + 1 load-bearing contacts, walls included, recursively

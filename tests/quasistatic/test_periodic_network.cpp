@@ -183,6 +183,10 @@ TEST(PeriodicNetwork, TriangularLatticeMatchesInfiniteLattice) {
     EXPECT_NEAR(rr.m.S12, 0.0, 1e-10 * std::fabs(expect)) << "mu " << mu;
     EXPECT_EQ(rr.m.contacts, 3 * nc * nr) << "every disk keeps its six contacts";
     EXPECT_EQ(rr.unconverged, 0);
+    // the fabric <n n> of the three bond directions 0, 60, 120 degrees: isotropic, 1/2 on the diagonal
+    EXPECT_NEAR(rr.m.fabric11, 0.5, 1e-12) << "mu " << mu;
+    EXPECT_NEAR(rr.m.fabric22, 0.5, 1e-12) << "mu " << mu;
+    EXPECT_NEAR(rr.m.fabric12, 0.0, 1e-12) << "mu " << mu;
   }
 }
 

@@ -126,6 +126,8 @@ struct StateMeasures {
   int rattlers = 0;
   double Z_backbone = 0;
   double mean_normal_force = 0;
+  /// The fabric <n (x) n> over the load-bearing contacts (trace 1; 0 without any), issue 30
+  double fabric11 = 0, fabric22 = 0, fabric12 = 0;
   // Fig 7 / Fig 8 affine-deviation measures (section 3.3)
   double dev_normal_mean_ratio = 0;  ///< < |u_N - u_N^A| / u_N^A >
   double dev_normal_ratio_of_means = 0;  ///< < |u_N - u_N^A| > / < u_N^A >
