@@ -206,6 +206,17 @@ def make_figures(R, mode, runs, out):
     return figs
 
 
+def run_binaries(R):
+    """{tool (as recorded by the runs): sha256} of the binaries that made the runs, from each run's
+    meta.json; a tool whose runs used more than one binary lists every sha."""
+    shas = {}
+    for r in R.values():
+        sha = (r.meta or {}).get("binary_sha256")
+        if sha:
+            shas.setdefault(f"{r.tool} (the runs' meta.json)", set()).add(sha)
+    return {k: ", ".join(sorted(v)) for k, v in shas.items()}
+
+
 def write_report(R, mode, runs, out, binaries):
     rows, drag = evaluate(R, mode, runs)
     figs = make_figures(R, mode, runs, out)
@@ -235,7 +246,11 @@ def write_report(R, mode, runs, out, binaries):
     notes = os.path.join(HERE, "notes.md")
     if os.path.isfile(notes):
         L += ["", "## Notes (notes.md, written by hand)", "", open(notes, encoding="utf-8").read().strip()]
-    L += provenance_lines(provenance(REPO, CASE, binaries), c)
+    prov = provenance(REPO, CASE, binaries)
+    ran = run_binaries(R)
+    if ran:  # the binaries that made the runs (their meta.json), not the files at report time
+        prov["binaries"] = ran
+    L += provenance_lines(prov, c)
     with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
         f.write("\n".join(L) + "\n")
     print(f"report: {shown_path(os.path.join(out, 'report.md'), REPO)} ({c})")
