@@ -11,7 +11,8 @@ Packings (made once in --work, reused): the green body of `netsolve pack --dim 3
   green_die      the green body in the die of the peripheral layer, the default iteration (legacy drag);
   green_die_pt   the same with --iteration pseudo-transient (true equilibrium; the 3D die leaks);
   green_affine   the green body, every centre affine;
-  periodic       the periodic packing in its cell (pseudo-transient, the default there).
+  periodic       the periodic packing in its cell (pseudo-transient, the default there);
+  periodic_reuse the same with the kept factor (--factor-reuse 20).
 Writes a Markdown table: wall time, the solver's split (assembly, neighbours, analysis, factorisation,
 solve), Newton iterations, factorisations, peak resident memory (GNU time), the run status.
 Measure on an idle machine; this is a benchmark, not a test.
@@ -31,6 +32,7 @@ CASES = {
     "green_die_pt": ("green", ["--iteration", "pseudo-transient"]),
     "green_affine": ("green", ["--affine"]),
     "periodic": ("periodic", ["--boundary", "periodic"]),
+    "periodic_reuse": ("periodic", ["--boundary", "periodic", "--factor-reuse", "20"]),
 }
 
 
@@ -82,6 +84,8 @@ def main():
         cmd = [a.netsolve, "compact", "--dim", "3", "--packing", prep[key], "--to-strain", "0.1", "--increments", "100",
                "--threads", "1", "--snapshots", "", "--quiet", "--allow-unconverged", "--overwrite", "--out", d] + extra
         rc, wall, rss, err = run(cmd, env)
+        if not os.path.isfile(os.path.join(d, "summary.json")):
+            sys.exit(f"error: {c} wrote no summary.json (exit {rc}): {err.strip()[-300:]}")
         s = json.load(open(os.path.join(d, "summary.json")))
         t, so = s["timing_s"], s["solver"]
         rows.append((c, s["particles"], s["initial_density"], s["final"]["D"], wall, t, so, rss, s["status"], rc))

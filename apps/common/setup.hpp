@@ -54,6 +54,13 @@ inline constexpr double kMaxDisks = 5e7;
 /// and of the network solver per disk (measured: 5 kB per disk in `compact` between W = 80 and 160, CHOLMOD included).
 inline constexpr double kDepositionBytesPerDisk = 250.0;
 inline constexpr double kSolverBytesPerDisk = 10000.0;
+/// The 3D network solver per sphere at 1e4 spheres (measured: 1.52 GB peak for 1e4 spheres in a
+/// periodic cell, CHOLMOD's factor most of it; bench/netsolve3d_speed.py), growing like N^(1/3)
+/// with the fill of a 3D factor: the estimate of check_deposition_size.
+inline constexpr double kSolverBytesPerSphere1e4 = 160000.0;
+/// netsolve compact --dim 3's deposition width when --width is not given: about 1000 spheres (the
+/// 2D default of 80 R would be about 7e4 spheres, hours of factorisations).
+inline constexpr double kDefaultWidth3d = 20.0;
 
 /// MemAvailable of /proc/meminfo in bytes, or 0 if unknown.
 inline double mem_available_bytes() {
@@ -79,7 +86,8 @@ inline void check_deposition_size(const PackArgs& a, bool solve = false) {
   const double r3 = (r0 + r1) * (r0 * r0 + r1 * r1) / 4.0;  // <r^3>
   const double disks = a.dim == 3 ? a.width * a.width * a.width * 0.65 / (4.0 / 3.0 * std::numbers::pi * r3)
                                   : a.width * a.width * 0.85 / (std::numbers::pi * r2);
-  const double bytes = disks * (kDepositionBytesPerDisk + (solve ? kSolverBytesPerDisk : 0.0));
+  const double solver = a.dim == 3 ? kSolverBytesPerSphere1e4 * std::cbrt(std::max(disks, 1.0) / 1e4) : kSolverBytesPerDisk;
+  const double bytes = disks * (kDepositionBytesPerDisk + (solve ? solver : 0.0));
   if (disks > kMaxDisks) {
     const std::string n = std::isfinite(disks) ? fmt::format("about {:.3g}", disks) : "more than 1e300";
     const std::string gb = std::isfinite(bytes) ? fmt::format("about {:.3g} GB", bytes / 1e9) : "more memory than exists";
@@ -185,8 +193,9 @@ inline packing::Packing input_packing_3d(const std::string& packing_file, const 
     for (const auto& c : p.comments)
       if (!p.periodic && c.find("lateral periodic") != std::string::npos)
         throw UsageError(fmt::format("--packing {} is a lateral-periodic deposition (periodic sides, a floor): "
-                                     "{} has no such boundary (use --lateral walls, or a fully periodic "
-                                     "packing with --boundary periodic)", packing::quote_input(packing_file), solver));
+                                     "{} has no such boundary (make one with netsolve pack --dim 3 --lateral walls, or "
+                                     "use a fully periodic packing with --boundary periodic)",
+                                     packing::quote_input(packing_file), solver));
     return p;
   }
   source = fmt::format("3D ballistic deposition, W = {} R, r = R[{}, {}], seed {}, lateral walls", a.width,

@@ -260,8 +260,8 @@ int netsolve_command(int argc, char** argv) {
   auto* comp = app.add_subcommand("compact", "compaction to a target density (default: polydisperse packing, hydrostatic, sticking, D = 0.85)");
   add_pack_opts(comp);
   const netdem::app::netsolve::CompactCli ccli = netdem::app::netsolve::add_compact_options(comp, ca, ra, out);
-  comp->add_option("--dim", pa.dim, "2: disks; 3: spheres (netsolve pack --dim 3's deposition or a 3D --packing; --affine, "
-                                    "--boundary layer or periodic; --path E11,E22,E33[,E23,E13,E12], closed die along z)")
+  comp->add_option("--dim", pa.dim, "2: disks; 3: spheres (netsolve pack --dim 3's deposition, --width 20 unless given, or a 3D "
+                                    "--packing; --affine, --boundary layer or periodic; --path E11,E22,E33[,E23,E13,E12], closed die along z)")
       ->check(CLI::IsMember({2, 3}))
       ->capture_default_str();
   netdem::app::add_scene_config(app, "netsolve", "", netdem::app::kNetsolveSections);
@@ -298,6 +298,7 @@ int netsolve_command(int argc, char** argv) {
           throw netdem::app::UsageError(fmt::format("{} is an option of --route green-body", opt->get_name()));
       return run_pack(pa, ra, out);
     }
+    if (pa.dim == 3 && comp->count("--width") == 0) pa.width = netdem::app::netsolve::kDefaultWidth3d;  // ~1000 spheres, not ~7e4
     if (pa.dim == 3 && comp->count("--lid") > 0 && pa.lid != "inside")
       throw netdem::app::UsageError(fmt::format("--lid '{}': the 3D deposition implements only --lid inside (whole spheres below the lid)",
                                                 netdem::packing::quote_input(pa.lid)));

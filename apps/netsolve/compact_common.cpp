@@ -74,6 +74,7 @@ nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimin
   j["iteration"] = iteration_name(so.iteration);
   j["regularisation_scale"] = so.regularisation_scale;
   j["max_cuts"] = so.max_cuts;
+  j["factor_reuse"] = so.factor_reuse;
   // the merit the iteration used (energy, energy-friction or residual)
   if (so.iteration == qs::Iteration::PseudoTransient) j["merit"] = so.merit_name();
   if (so.uses_energy_merit()) j["unjammed_increments"] = t.unjammed;

@@ -266,17 +266,32 @@ void NetworkSolverT<D, L>::Impl::start_drag(const Mat& dE) {
 }
 
 // The Newton step into sol: a fresh factorisation of M (with drag and regularisation) on fresh
-// iterations, then GMRES on K preconditioned by it (direct solve when symmetric); clipped.
+// iterations, then GMRES on K preconditioned by it (direct solve when symmetric); clipped. With
+// factor_reuse, a fresh tangent may instead be solved by GMRES with the kept (older) factor.
 template <int D, class L>
 bool NetworkSolverT<D, L>::Impl::linear_step(bool fresh, bool nonsym, IncrementReport& rep) {
   LinearStatus st;
+  bool solved = false;
   if (fresh) {
     regularise();
-    st = lin.factorise(M, pattern_changed);
-    pattern_changed = false;
-    if (!st.ok) throw std::runtime_error("increment: " + st.message);
+    const bool keep = opt.factor_reuse > 0 && !pattern_changed && factor_reuses < opt.factor_reuse &&
+                      kept_iterations <= IterationOptions::kKeptFactorMaxIterations && lin.has_factor();
+    if (keep) {  // GMRES on the current tangent, the kept factor as preconditioner
+      st = lin.solve(nonsym ? K : M, rhs, sol);
+      ++factor_reuses;
+      kept_iterations = st.iterations;
+      factor_current = false;
+      solved = st.ok;
+    }
+    if (!solved) {
+      st = lin.factorise(M, pattern_changed);
+      pattern_changed = false;
+      if (!st.ok) throw std::runtime_error("increment: " + st.message);
+      factor_current = true;
+      factor_reuses = kept_iterations = 0;
+    }
   }
-  st = nonsym ? lin.solve(K, rhs, sol) : lin.solve(rhs, sol);
+  if (!solved) st = nonsym || !factor_current ? lin.solve(nonsym ? K : M, rhs, sol) : lin.solve(rhs, sol);
   if (!st.ok) {
     // GMRES hit its cap: fall back to the symmetric slip-status tangent (defect correction)
     st = lin.solve(rhs, sol);

@@ -150,6 +150,10 @@ struct NetworkSolverT<D, L>::Impl : ContactTableT<D, L>, DofMap, WallTableT<D, L
   SpMat K, M;
   PairPattern pattern;  // K's structure, the pairs' slots and the diagonal entries (pair_pattern.hpp)
   bool pattern_changed = true;
+  // the kept factor (IterationOptions::factor_reuse): whether the factor is of the current M,
+  // fresh tangents solved with it since it was made, GMRES iterations of the last such solve
+  bool factor_current = false;
+  int factor_reuses = 0, kept_iterations = 0;
 
   // trial buffers of the current increment
   std::vector<double> du, f;

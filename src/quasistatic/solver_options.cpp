@@ -57,6 +57,8 @@ void IterationOptions::validate() const {
   require(backtracks >= 1 && backtracks <= 30, fmt::format("solver: backtracks must be in [1, 30], got {}", backtracks));
   require(threads >= 1 && threads <= 256, fmt::format("solver: threads must be in [1, 256], got {}", threads));
   require(chord_steps >= 0 && chord_steps <= 100, fmt::format("solver: chord_steps must be in [0, 100], got {}", chord_steps));
+  require(factor_reuse >= 0 && factor_reuse <= 1000,
+          fmt::format("solver: factor_reuse must be in [0, 1000], got {}", factor_reuse));
   require(std::isfinite(viscosity_strain) && viscosity_strain >= 0.0 && viscosity_strain <= 1.0,
           fmt::format("solver: viscosity_strain must be in [0, 1], got {}", viscosity_strain));
   require(std::isfinite(slide_stiffness_fraction) && slide_stiffness_fraction >= 0.0 && slide_stiffness_fraction <= 1.0,

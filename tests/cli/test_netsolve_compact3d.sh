@@ -9,9 +9,11 @@
 #    (the same contacts, the DEM's own force loop, no dashpots);
 #  * the affine formula S = -(1/V) sum 6 pi sigma_y R* u L n n over the deposition's touching pairs at
 #    e^E x0, computed in the test from the packing file alone, equals netsolve's affine stress (1e-9);
-#  * invariance: the deposition rotated by 90 degrees about x and shifted gives the permuted
-#    stresses, affine (1e-9) and in the die of the peripheral layer, closed die along z (along y
-#    after the rotation) with sticking friction and rotations (1e-3, the iteration's tolerance);
+#  * invariance: the deposition rotated by 90 degrees about x and shifted gives the rotated stresses
+#    (signs included), affine and in the die of the peripheral layer, closed die along z (along y
+#    after the rotation) with sticking friction and rotations (both 1e-9; measured 1e-13, 1e-15);
+#  * the kept factor (--factor-reuse 20) ends a periodic compaction at --tol 1e-6 in the state of a
+#    factorisation per fresh tangent (1e-4 of max |S|), with fewer factorisations;
 #  * the files: history.csv with the six components, the fabric (trace 1), no NaN; summary.json;
 #    snapshots.pvd with z;
 #  * bad input: one line, exit 2, no folder.
@@ -111,6 +113,23 @@ check_pvd lattice_snapshots "$tmp/lattice" particles,contacts
 grep -q 'NumberOfComponents="3"' "$tmp/lattice/particles_D0.600.vtp" && grep -q '"peripheral"' "$tmp/lattice/particles_D0.600.vtp"
 result lattice_vtp_3d $?
 
+# a shear direction reaches its own Voigt component (E12 = |E|/sqrt 2, nothing else; the affine shear
+# opens contacts and Z < 3 reads "unstable", hence --allow-unconverged), and the default
+# 3D deposition is W = 20 R (about 1000 spheres), not the 2D default width
+run shear12 --snapshots '' --affine --packing "$tmp/lattice.csv" --path 0,0,0,0,0,1 --to-strain 0.01 --increments 4 --allow-unconverged
+run default_width --snapshots '' --affine --to-density 0.6 --increments 4
+/usr/bin/python3 - "$tmp" <<'PY'
+import csv, json, math, sys
+tmp = sys.argv[1]
+last = list(csv.DictReader(l for l in open(f"{tmp}/shear12/history.csv") if not l.startswith("#")))[-1]
+e = {c: float(last["E" + c]) for c in ("11", "22", "33", "23", "13", "12")}
+s = json.load(open(f"{tmp}/default_width/summary.json"))
+print(f"shear path 0,0,0,0,0,1 to |E| = 0.01: E = {e}; default 3D deposition: {s['particles']} spheres")
+ok = abs(e["12"] - 0.01 / math.sqrt(2)) < 1e-10 and all(abs(e[c]) < 1e-15 for c in ("11", "22", "33", "23", "13"))
+sys.exit(0 if ok and 700 <= s["particles"] <= 1300 else 1)
+PY
+result shear_component_and_default_width $?
+
 # the DEM: affine, frictionless, no dashpots. A DEM row is the mean over its window (docs/dynamic.md),
 # a netsolve row the state at the increment's end: each of the DEM's 20 windows is compared with the
 # trapezoidal mean of netsolve's 16 increments in it (measured: 1e-4 of max |S| apart, half a DEM
@@ -153,11 +172,12 @@ run die_b --snapshots '' --packing "$tmp/rotated.csv" --path 0,-1,0 --to-density
 import json, sys
 tmp = sys.argv[1]
 ok = True
-for a, b, tol in (("affine_a", "affine_b", 1e-9), ("die_a", "die_b", 1e-3)):
+# Q: (x, y, z) -> (x, -z, y); S' = Q S Q^T: S'22 = S33, S'33 = S22, S'23 = -S23, S'12 = -S13, S'13 = S12
+for a, b, tol in (("affine_a", "affine_b", 1e-9), ("die_a", "die_b", 1e-9)):
     fa, fb = json.load(open(f"{tmp}/{a}/summary.json"))["final"], json.load(open(f"{tmp}/{b}/summary.json"))["final"]
-    pairs = (("11", "11"), ("22", "33"), ("33", "22"), ("23", "23"), ("13", "12"), ("12", "13"))
-    scale = max(abs(fa["S" + p]) for p, _ in pairs)
-    diff = max(abs(abs(fa["S" + p]) - abs(fb["S" + q])) for p, q in pairs) / scale
+    pairs = (("11", "11", 1), ("33", "22", 1), ("22", "33", 1), ("23", "23", -1), ("13", "12", -1), ("12", "13", 1))
+    scale = max(abs(fa["S" + p]) for p, _, _ in pairs)
+    diff = max(abs(sign * fa["S" + p] - fb["S" + q]) for p, q, sign in pairs) / scale
     print(f"{a} vs {b}: S = {fa['S11']:.6f} {fa['S22']:.6f} {fa['S33']:.6f} / {fb['S11']:.6f} {fb['S33']:.6f} "
           f"{fb['S22']:.6f}, max diff / max |S| = {diff:.2e} (band {tol:g}), Z {fa['Z']} / {fb['Z']}")
     ok &= diff < tol and fa["S33"] < 0 and fa["contacts"] == fb["contacts"]
@@ -169,35 +189,61 @@ result rotation_invariance $?
 # (the loading branch: every pair approaches monotonically), S = -(1/V) sum F L n n
 /usr/bin/python3 - "$tmp" "$p3" <<'PY'
 import json, math, sys
-import numpy as np
 tmp, p3 = sys.argv[1], sys.argv[2]
-box, rows = None, []
+box, pts = None, []
 for l in open(p3):
     if l.startswith("# box"):
         box = [float(v) for v in l.split()[2:]]
     elif l[0].isdigit():
-        rows.append([float(v) for v in l.split(",")[1:]])
-a = np.array(rows)
-x0, r = a[:, :3], a[:, 3]
+        pts.append([float(v) for v in l.split(",")[1:]])
 f = json.load(open(f"{tmp}/affine_a/summary.json"))["final"]
 E = f["E11"]
+s = math.exp(E)
 V = (box[3] - box[0]) * (box[4] - box[1]) * (box[5] - box[2]) * math.exp(3 * E)
-S = np.zeros((3, 3))
+S = [[0.0] * 3 for _ in range(3)]
 pairs = 0
-for i in range(len(r)):
-    d = (x0[i + 1:] - x0[i]) * math.exp(E)
-    L = np.linalg.norm(d, axis=1)
-    u = r[i] + r[i + 1:] - L
-    for k in np.nonzero(u > 0)[0]:
-        rs = r[i] * r[i + 1 + k] / (r[i] + r[i + 1 + k])
-        n = d[k] / L[k]
-        S -= 6 * math.pi * rs * u[k] * L[k] * np.outer(n, n) / V
+for i, (xi, yi, zi, ri) in enumerate(pts):
+    for xj, yj, zj, rj in pts[i + 1:]:
+        d = ((xj - xi) * s, (yj - yi) * s, (zj - zi) * s)
+        L = math.sqrt(sum(c * c for c in d))
+        u = ri + rj - L
+        if u <= 0:
+            continue
+        F = 6 * math.pi * (ri * rj / (ri + rj)) * u
+        for a in range(3):
+            for b in range(3):
+                S[a][b] -= F * L * (d[a] / L) * (d[b] / L) / V
         pairs += 1
 comp = {"11": (0, 0), "22": (1, 1), "33": (2, 2), "23": (1, 2), "13": (0, 2), "12": (0, 1)}
-err = max(abs(f["S" + c] - S[ij]) for c, ij in comp.items()) / np.abs(S).max()
-print(f"affine formula on the deposition's contacts at E = {E:.6f}: S33 {S[2, 2]:.9f} (netsolve {f['S33']:.9f}), "
+scale = max(abs(S[a][b]) for a in range(3) for b in range(3))
+err = max(abs(f["S" + c] - S[a][b]) for c, (a, b) in comp.items()) / scale
+print(f"affine formula on the deposition's contacts at E = {E:.6f}: S33 {S[2][2]:.9f} (netsolve {f['S33']:.9f}), "
       f"{pairs} pairs (netsolve {f['contacts']}), max diff / max |S| = {err:.2e}")
 sys.exit(0 if err < 1e-9 and pairs == f["contacts"] else 1)
 PY
 result affine_formula_on_contacts $?
+# the kept factor (--factor-reuse): a 200-sphere periodic packing compacted with and without it at
+# --tol 1e-6 ends in the same state (both every increment accepted; the stresses within 1e-4 of
+# max |S|) with fewer factorisations
+"$ns" pack --dim 3 --periodic --n 200 --quiet --out "$tmp/pp" >/dev/null 2>"$tmp/stderr"
+result periodic_pack3d $?
+d0=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["density"])' "$tmp/pp/summary.json")
+for fr in 0 20; do
+  run reuse$fr --snapshots '' --boundary periodic --packing "$tmp/pp/packing.csv" --tol 1e-6 --factor-reuse $fr \
+    --to-density "$(/usr/bin/python3 -c "print(f'{$d0 + 0.02:.6f}')")" --increments 10
+done
+/usr/bin/python3 - "$tmp" <<'PY'
+import json, sys
+tmp = sys.argv[1]
+a, b = (json.load(open(f"{tmp}/reuse{k}/summary.json")) for k in (0, 20))
+comp = ("11", "22", "33", "23", "13", "12")
+scale = max(abs(a["final"]["S" + c]) for c in comp)
+diff = max(abs(a["final"]["S" + c] - b["final"]["S" + c]) for c in comp) / scale
+fa, fb = a["solver"]["factorisations"], b["solver"]["factorisations"]
+print(f"kept factor: S33 {a['final']['S33']:.8f} / {b['final']['S33']:.8f}, max diff / max |S| = {diff:.2e} (band 1e-4), "
+      f"factorisations {fa} / {fb}, unconverged {a['solver']['unconverged_increments']} / {b['solver']['unconverged_increments']}")
+ok = diff < 1e-4 and fb < fa and a["status"] == b["status"] == "ok" and b["solver"]["factor_reuse"] == 20
+sys.exit(0 if ok else 1)
+PY
+result factor_reuse_same_state $?
 finish

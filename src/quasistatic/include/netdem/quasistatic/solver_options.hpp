@@ -109,6 +109,14 @@ struct IterationOptions {
   /// Chord (modified Newton) steps: after each fresh tangent and factorisation, up to this many
   /// iterations reuse them (residual re-evaluated, no assembly, no factorisation; 0: off).
   int chord_steps = 0;
+  /// Kept factor (issue 30; the staggered scheme's rule): up to this many fresh tangents in a row
+  /// are solved by GMRES preconditioned with the last factorisation instead of a new one; a new
+  /// factorisation follows a pattern change, a GMRES that does not converge, or one that needed
+  /// more than kKeptFactorMaxIterations iterations (0: every fresh tangent is factorised). The
+  /// tangent solved is the current one, so the converged state is the same; only the path and the
+  /// cost change.
+  int factor_reuse = 0;
+  static constexpr int kKeptFactorMaxIterations = 30;
   /// Nonlinear Gauss-Seidel smoothing after each Newton step: local_sweeps sweeps over the
   /// particles whose residual exceeds local_threshold x the RMS residual, each a damped Newton
   /// iteration (local_iterations at most) on the particle's own DOFs with its neighbours held
