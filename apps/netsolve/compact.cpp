@@ -18,7 +18,6 @@
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/compaction.hpp"
-#include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/system/archive.hpp"
 #include "netdem/system/jammed_state.hpp"
@@ -196,18 +195,12 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
                 {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone},
                 {"fabric11", last.fabric11}, {"fabric22", last.fabric22}, {"fabric12", last.fabric12}};
   j["solver"] = solver_summary(so, tm, solver.free_dofs(), tally);
-  {
-    std::string why;
-    const bool inl = qs::cholmod_inline_openmp(&why);
-    j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
-  }
   const bool saved = a.save_state && stopped.empty();
   j["state"] = saved ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
     j["jammed_state"] = {{"from", a.state_file},
                          {"saved", saved && so.mode != qs::BoundaryMode::Periodic ? "jammed.json" : ""}};
-  j["timing_s"] = {{"wall", wall},           {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
-                   {"analyse", tm.analyse},  {"factorise", tm.factorise}, {"solve", tm.solve}};
+  add_run_records(j, tm, wall);
   return j;
 }
 
@@ -248,12 +241,8 @@ struct CompactRows {
       write_snapshot(solver, series, fmt::format("D{:.3f}", snaps[next_snap]), m.density);
       ++next_snap;
     }
-    if (row.increment % 20 == 0) write_file_atomic(series.dir() / "history.csv", csv);  // checkpoint
-    progress.update(row.increment);
     last = m;
-    if (row.increment > 0 && growth.add(row.increment, row.report.newton_residual))
-      throw StopRun{growth.message(row.increment, row.report.newton_residual)};
-    activity() = fmt::format("compacting (increment {} of {})", row.increment + 1, total);
+    end_compact_row(row.increment, row.report.newton_residual, total, csv, series, progress, growth);
   }
 
   const qs::NetworkSolver& solver;
@@ -346,14 +335,7 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
   const double sy = so.law.sigma_y;
   netdem::app::summary_printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, Z = %.3f, %d unconverged increments (max residual %.2e), %.2f s -> %s\n",
               last.density, last.S11 / sy, last.S22 / sy, last.Z, rows.tally.unconverged, rows.tally.max_residual, wall, out.c_str());
-  if (!stopped.empty()) {
-    print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",
-                                 stopped, rows.done));
-  } else if (!status.ok()) {
-    print_error_line(fmt::format("netsolve: {}: {}: {}", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
-                                 status.status, status.reason()));
-  }
-  return stopped.empty() ? status.exit_code(ra.allow_unconverged) : exit_code::untrustworthy;
+  return finish_compact_run(stopped, rows.done, status, ra);
 }
 
 }  // namespace

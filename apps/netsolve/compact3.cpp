@@ -20,7 +20,6 @@
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/compaction.hpp"
-#include "netdem/quasistatic/linear_solver.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
 #include "netdem/system/strain_path.hpp"
 #include "output.hpp"
@@ -162,12 +161,8 @@ struct Compact3Rows {
       write_snapshot_3d(solver, series, fmt::format("D{:.3f}", snaps[next_snap]), m.density);
       ++next_snap;
     }
-    if (row.increment % 20 == 0) write_file_atomic(series.dir() / "history.csv", csv);  // checkpoint
-    progress.update(row.increment);
     last = m;
-    if (row.increment > 0 && growth.add(row.increment, r.newton_residual))
-      throw StopRun{growth.message(row.increment, r.newton_residual)};
-    activity() = fmt::format("compacting (increment {} of {})", row.increment + 1, total);
+    end_compact_row(row.increment, r.newton_residual, total, csv, series, progress, growth);
   }
 
   const qs::NetworkSolver3& solver;
@@ -316,28 +311,15 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = state_json(last, sy);
   j["solver"] = solver_summary(so, tm, solver.free_dofs(), rows.tally);
-  {
-    std::string why;
-    const bool inl = qs::cholmod_inline_openmp(&why);
-    j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
-  }
   j["state"] = nullptr;
-  j["timing_s"] = {{"wall", wall},          {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
-                   {"analyse", tm.analyse}, {"factorise", tm.factorise}, {"solve", tm.solve}};
+  add_run_records(j, tm, wall);
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);
   summary_printf("D = %.4f: S11/sy = %.4f, S22/sy = %.4f, S33/sy = %.4f, Z = %.3f, %d unconverged increments (max "
                  "residual %.2e), %.2f s -> %s\n",
                  last.density, last.eq13(0, 0) / sy, last.eq13(1, 1) / sy, last.eq13(2, 2) / sy, last.Z,
                  rows.tally.unconverged, rows.tally.max_residual, wall, out.c_str());
-  if (!stopped.empty()) {
-    print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",
-                                 stopped, rows.done));
-  } else if (!status.ok()) {
-    print_error_line(fmt::format("netsolve: {}: {}: {}", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
-                                 status.status, status.reason()));
-  }
-  return stopped.empty() ? status.exit_code(ra.allow_unconverged) : exit_code::untrustworthy;
+  return finish_compact_run(stopped, rows.done, status, ra);
 }
 
 }  // namespace netdem::app::netsolve

@@ -91,4 +91,31 @@ nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimin
   return j;
 }
 
+void add_run_records(nlohmann::json& j, const qs::SolverTimings& tm, double wall) {
+  std::string why;
+  const bool inl = qs::cholmod_inline_openmp(&why);
+  j["cholmod_inline_openmp"] = {{"active", inl}, {"why_not", inl ? nlohmann::json(nullptr) : nlohmann::json(why)}};
+  j["timing_s"] = {{"wall", wall},          {"assemble", tm.assemble}, {"neighbours", tm.neighbours},
+                   {"analyse", tm.analyse}, {"factorise", tm.factorise}, {"solve", tm.solve}};
+}
+
+void end_compact_row(int increment, double newton_residual, int total, const std::string& csv, SnapshotSeries& series,
+                     Progress& progress, ResidualGrowth& growth) {
+  if (increment % 20 == 0) write_file_atomic(series.dir() / "history.csv", csv);  // checkpoint
+  progress.update(increment);
+  if (increment > 0 && growth.add(increment, newton_residual)) throw StopRun{growth.message(increment, newton_residual)};
+  activity() = fmt::format("compacting (increment {} of {})", increment + 1, total);
+}
+
+int finish_compact_run(const std::string& stopped, int done, const RunStatus& status, const RunArgs& ra) {
+  if (!stopped.empty()) {
+    print_error_line(fmt::format("netsolve: error: unstable: {} (history.csv and summary.json keep increments 0..{})",
+                                 stopped, done));
+  } else if (!status.ok()) {
+    print_error_line(fmt::format("netsolve: {}: {}: {}", ra.allow_unconverged ? "warning (--allow-unconverged)" : "error",
+                                 status.status, status.reason()));
+  }
+  return stopped.empty() ? status.exit_code(ra.allow_unconverged) : exit_code::untrustworthy;
+}
+
 }  // namespace netdem::app::netsolve

@@ -43,4 +43,15 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
 nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,
                               const IncrementTally& t);
 
+/// summary.json's "cholmod_inline_openmp" and "timing_s" (the solver's split and the wall time).
+void add_run_records(nlohmann::json& j, const qs::SolverTimings& tm, double wall);
+
+/// The end of a row of history.csv: the checkpoint every 20 increments, the progress, the stop rule
+/// of a growing residual (throws StopRun) and the activity line.
+void end_compact_row(int increment, double newton_residual, int total, const std::string& csv, SnapshotSeries& series,
+                     Progress& progress, ResidualGrowth& growth);
+
+/// The run's last line on stderr (a stopped run, or a status that is not ok) and its exit status.
+int finish_compact_run(const std::string& stopped, int done, const RunStatus& status, const RunArgs& ra);
+
 }  // namespace netdem::app::netsolve
