@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "compact.hpp"
+#include "compact3.hpp"
 #include "compact_common.hpp"
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
@@ -30,8 +31,6 @@ namespace fs = std::filesystem;
 
 namespace netdem::app::netsolve {
 
-namespace {
-
 using Mat3 = Eigen::Matrix3d;
 using Row3 = qs::CompactionRowT<3>;
 
@@ -43,7 +42,7 @@ sys::Voigt<3> voigt(const Mat3& m) {
 }
 
 /// {"11": m11, ..., "12": m12} / scale.
-nlohmann::json voigt_json(const Mat3& m, const char* prefix, double scale = 1.0) {
+nlohmann::json voigt_json(const Mat3& m, const char* prefix, double scale) {
   nlohmann::json j;
   const auto v = voigt(m);
   for (int k = 0; k < 6; ++k)
@@ -116,72 +115,6 @@ int centres_outside_3d(const qs::NetworkSolver3& s, const packing::Box& box) {
   return outside;
 }
 
-/// The rows of a 3D run: history.csv, the tally, the snapshots, the progress, each leg's last row.
-struct Compact3Rows {
-  Compact3Rows(const qs::NetworkSolver3& s, SnapshotSeries& snapshot_series, std::vector<double> snapshots,
-               const qs::SolverOptions& so, const qs::CompactionOptions3& co, bool quiet)
-      : solver(s), series(snapshot_series), snaps(std::move(snapshots)), sy(so.law.sigma_y), legs(co.precompacts()),
-        total(co.increments + (legs ? co.precompact_increments : 0)), progress("compact", total, quiet), tally(so) {
-    growth.tol = so.residual_tol;
-    csv = legs ? "increment,leg" : "increment";
-    for (const char* pre : {"E", "", "S", "S_contacts:", "fabric"}) {
-      if (*pre == '\0') {
-        csv += ",D";
-        continue;
-      }
-      const std::string p(pre);
-      for (const char* l : sys::voigt_labels<3>())
-        csv += p.back() == ':' ? fmt::format(",S{}_contacts", l) : fmt::format(",{}{}", p, l);
-    }
-    csv += ",Z,contacts,sliding,mean_fn,residual,residual_rms,newton_residual,newton,linear_iterations,converged,"
-           "net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,unconverged_substeps,rattlers,"
-           "Z_backbone\n";
-  }
-
-  void add(const Row3& row) {
-    const auto& m = row.state;
-    const auto& r = row.report;
-    csv += fmt::format("{}", row.increment);
-    if (legs) csv += fmt::format(",{}", row.leg);
-    for (double v : voigt(m.strain)) csv += fmt::format(",{:.9g}", v);
-    csv += fmt::format(",{:.9g}", m.density);
-    for (double v : voigt(m.eq13)) csv += fmt::format(",{:.9g}", v / sy);
-    for (double v : voigt(m.contacts)) csv += fmt::format(",{:.9g}", v / sy);
-    for (double v : voigt(m.fabric)) csv += fmt::format(",{:.9g}", v);
-    csv += fmt::format(",{:.6g},{},{},{:.9g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{},{},{:.6g}\n", m.Z,
-                       m.contact_count, m.sliding, m.mean_normal_force, r.residual, r.residual_rms, r.newton_residual,
-                       r.newton_iterations, r.linear_iterations, r.converged ? 1 : 0, m.net_force_ratio,
-                       m.eq13_vs_contacts, r.substeps, r.instability ? 1 : 0, qs::drag_work_fraction(r),
-                       r.unconverged_substeps, m.rattlers, m.Z_backbone);
-    if (row.increment > 0) tally.add(row.increment, r, m.eq13_vs_contacts, m.net_force_ratio);
-    done = row.increment;
-    leg_end[row.leg == 0 ? 0 : 1] = row;
-    reached[row.leg == 0 ? 0 : 1] = true;
-    while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
-      write_snapshot_3d(solver, series, fmt::format("D{:.3f}", snaps[next_snap]), m.density);
-      ++next_snap;
-    }
-    last = m;
-    end_compact_row(row.increment, r.newton_residual, total, csv, series, progress, growth);
-  }
-
-  const qs::NetworkSolver3& solver;
-  SnapshotSeries& series;
-  std::vector<double> snaps;
-  double sy;
-  bool legs;
-  int total;
-  Progress progress;
-  std::string csv;
-  std::size_t next_snap = 0;
-  IncrementTally tally;
-  int done = 0;
-  qs::StressMeasuresT<3> last;
-  ResidualGrowth growth;
-  std::array<Row3, 2> leg_end;
-  std::array<bool, 2> reached{false, false};
-};
-
 /// summary.json's description of the state `m`: D, the stresses / sigma_y, Z, the counts.
 nlohmann::json state_json(const qs::StressMeasuresT<3>& m, double sy) {
   nlohmann::json j = voigt_json(m.eq13, "S", sy);
@@ -198,6 +131,56 @@ nlohmann::json state_json(const qs::StressMeasuresT<3>& m, double sy) {
   j["Z_backbone"] = m.Z_backbone;
   return j;
 }
+
+// ------------------------------------------------------------------------------------------------
+Compact3Rows::Compact3Rows(const qs::NetworkSolver3& s, SnapshotSeries& snapshot_series, std::vector<double> snapshots,
+                           const qs::SolverOptions& so, const qs::CompactionOptions3& co, bool quiet)
+    : solver(s), series(snapshot_series), snaps(std::move(snapshots)), sy(so.law.sigma_y), legs(co.precompacts()),
+      total(co.increments + (legs ? co.precompact_increments : 0)), progress("compact", total, quiet), tally(so) {
+  growth.tol = so.residual_tol;
+  csv = legs ? "increment,leg" : "increment";
+  for (const char* pre : {"E", "", "S", "S_contacts:", "fabric"}) {
+    if (*pre == '\0') {
+      csv += ",D";
+      continue;
+    }
+    const std::string p(pre);
+    for (const char* l : sys::voigt_labels<3>())
+      csv += p.back() == ':' ? fmt::format(",S{}_contacts", l) : fmt::format(",{}{}", p, l);
+  }
+  csv += ",Z,contacts,sliding,mean_fn,residual,residual_rms,newton_residual,newton,linear_iterations,converged,"
+         "net_force_ratio,eq13_vs_contacts,substeps,instability,drag_work_fraction,unconverged_substeps,rattlers,"
+         "Z_backbone\n";
+}
+
+void Compact3Rows::add(const Row3& row) {
+  const auto& m = row.state;
+  const auto& r = row.report;
+  csv += fmt::format("{}", row.increment);
+  if (legs) csv += fmt::format(",{}", row.leg);
+  for (double v : voigt(m.strain)) csv += fmt::format(",{:.9g}", v);
+  csv += fmt::format(",{:.9g}", m.density);
+  for (double v : voigt(m.eq13)) csv += fmt::format(",{:.9g}", v / sy);
+  for (double v : voigt(m.contacts)) csv += fmt::format(",{:.9g}", v / sy);
+  for (double v : voigt(m.fabric)) csv += fmt::format(",{:.9g}", v);
+  csv += fmt::format(",{:.6g},{},{},{:.9g},{:.3e},{:.3e},{:.3e},{},{},{},{:.3e},{:.3e},{},{},{:.3e},{},{},{:.6g}\n", m.Z,
+                     m.contact_count, m.sliding, m.mean_normal_force, r.residual, r.residual_rms, r.newton_residual,
+                     r.newton_iterations, r.linear_iterations, r.converged ? 1 : 0, m.net_force_ratio,
+                     m.eq13_vs_contacts, r.substeps, r.instability ? 1 : 0, qs::drag_work_fraction(r),
+                     r.unconverged_substeps, m.rattlers, m.Z_backbone);
+  if (row.increment > 0) tally.add(row.increment, r, m.eq13_vs_contacts, m.net_force_ratio);
+  done = row.increment;
+  leg_end[row.leg == 0 ? 0 : 1] = row;
+  reached[row.leg == 0 ? 0 : 1] = true;
+  while (next_snap < snaps.size() && m.density >= snaps[next_snap] - 1e-9) {
+    write_snapshot_3d(solver, series, fmt::format("D{:.3f}", snaps[next_snap]), m.density);
+    ++next_snap;
+  }
+  last = m;
+  end_compact_row(row.increment, r.newton_residual, total, csv, series, progress, growth);
+}
+
+namespace {
 
 /// The checks of the options that 3D does not take yet (UsageError, one line).
 void check_3d_options(const CompactArgs& a) {

@@ -39,6 +39,9 @@ struct IncrementTally {
 int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const std::string& command,
                    const std::filesystem::path& out);
 
+/// netsolve yield --dim 3 (yield3.cpp): argv as `netsolve yield ...`; its exit status.
+int run_yield3_command(int argc, char** argv);
+
 /// summary.json's "solver": the iteration, its knobs, the counts of the tally and the timings' counts.
 nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,
                               const IncrementTally& t);

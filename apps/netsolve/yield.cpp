@@ -43,6 +43,7 @@
 #include "netdem/quasistatic/yield_driver.hpp"
 #include "netdem/quasistatic/yield_probe.hpp"
 #include "compact.hpp"
+#include "compact_common.hpp"
 #include "output.hpp"
 #include "parse.hpp"
 #include "scene_file.hpp"
@@ -686,6 +687,23 @@ int run_yield(const YieldArgs& a, const std::string& command) {
 
 /// Entry point of `netsolve yield` and `netsolve yield-merge` (argv[1] is the subcommand).
 int run_yield_command(int argc, char** argv) {
+  // --dim 3: the sphere packings' command (yield3.cpp); --dim 2 is this one
+  std::vector<char*> args(argv, argv + argc);
+  for (std::size_t k = 2; k < args.size(); ++k) {
+    const std::string w = args[k];
+    if (w != "--dim" && w.rfind("--dim=", 0) != 0) continue;
+    const std::string v = w == "--dim" ? (k + 1 < args.size() ? args[k + 1] : "") : w.substr(6);
+    if (v == "3" && std::string(argv[1]) == "yield") return netdem::app::netsolve::run_yield3_command(argc, argv);
+    if (v != "2") {
+      netdem::app::print_error_line(fmt::format("netsolve {}: error: --dim must be 2 or 3{}, got '{}'", argv[1],
+                                                std::string(argv[1]) == "yield" ? "" : " (yield-merge: 2)", v));
+      return 2;
+    }
+    args.erase(args.begin() + static_cast<long>(k), args.begin() + static_cast<long>(k) + (w == "--dim" ? 2 : 1));
+    argc = static_cast<int>(args.size());
+    argv = args.data();
+    break;
+  }
   std::string command;
   for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
   const std::string sub = argv[1];

@@ -5,6 +5,7 @@
 #include <exception>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include <Eigen/LU>
 #include <fmt/format.h>
@@ -13,24 +14,77 @@ namespace netdem::qs {
 
 namespace {
 
+// What unload and probe_along read from a state, per dimension. 2D keeps the StateMeasures
+// arithmetic of the 2D tool (its outputs are byte-identical to before the 3D form); 3D reads the
+// symmetric Eq 13 stress of StressMeasuresT.
 double stress_norm(const StateMeasures& m) {
   return std::sqrt(m.S11 * m.S11 + m.S22 * m.S22 + 2.0 * m.S12 * m.S12);
 }
+double stress_norm(const StressMeasuresT<3>& m) { return m.eq13.norm(); }
+double strain_norm(const StateMeasures& m) {
+  return std::sqrt(m.E11 * m.E11 + m.E22 * m.E22 + 2 * m.E12 * m.E12);
+}
+double strain_norm(const StressMeasuresT<3>& m) { return m.strain.norm(); }
+StateMeasures measure(const NetworkSolverT<2>& s) { return s.measures(); }
+StressMeasuresT<3> measure(const NetworkSolverT<3>& s) { return s.stress(); }
 
+// The projection of a state's stress on the stress w = Sigma_0 / |Sigma_0| before unloading.
+struct Projection2 {
+  double w11, w22, w12;
+  Projection2(const StateMeasures& m0, double s0) : w11(m0.S11 / s0), w22(m0.S22 / s0), w12(m0.S12 / s0) {}
+  double operator()(const StateMeasures& m) const { return m.S11 * w11 + m.S22 * w22 + 2.0 * m.S12 * w12; }
+};
+struct Projection3 {
+  Eigen::Matrix3d w;
+  Projection3(const StressMeasuresT<3>& m0, double s0) : w(m0.eq13 / s0) {}
+  double operator()(const StressMeasuresT<3>& m) const { return m.eq13.cwiseProduct(w).sum(); }
+};
+template <int D>
+using ProjectionT = std::conditional_t<D == 2, Projection2, Projection3>;
+
+// One probe sample: the state's stress / sigma_y and its work-conjugate Sigma : dir.
+template <int D>
+ProbeSample probe_sample(const NetworkSolverT<D>& solver, const Eigen::Matrix<double, D, D>& dir, double sigma_y,
+                         Eigen::Matrix<double, D, D>* full) {
+  ProbeSample p;
+  if constexpr (D == 2) {
+    const auto m = solver.measures();
+    p.S11 = m.S11 / sigma_y;
+    p.S22 = m.S22 / sigma_y;
+    p.S12 = m.S12 / sigma_y;
+    p.stress = p.S11 * dir(0, 0) + p.S22 * dir(1, 1);  // the 2D directions are diagonal
+    if (dir(0, 1) != 0.0) p.stress += 2.0 * p.S12 * dir(0, 1);
+    p.density = m.density;
+    p.Z = m.Z;
+    if (full) *full << p.S11, p.S12, p.S12, p.S22;
+  } else {
+    const auto m = solver.stress();
+    const Eigen::Matrix<double, D, D> s = m.eq13 / sigma_y;
+    p.S11 = s(0, 0);
+    p.S22 = s(1, 1);
+    p.S12 = s(0, 1);
+    p.stress = s.cwiseProduct(dir).sum();
+    p.density = m.density;
+    p.Z = m.Z;
+    if (full) *full = s;
+  }
+  return p;
+}
 
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
-UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, double sigma_y, double unload_ratio,
-                    const UnloadOptions& options) {
+template <int D>
+UnloadResultT<D> unload(NetworkSolverT<D>& solver, const Eigen::Matrix<double, D, D>& direction, double sigma_y,
+                        double unload_ratio, const UnloadOptions& options) {
   if (!(direction.norm() > 0.0) || !std::isfinite(direction.norm()))
     throw std::invalid_argument("unload: the compaction direction is zero or not finite");
   if (!(sigma_y > 0.0) || !(unload_ratio > 0.0) || !(options.tol > 0.0) || options.max_increments < 1)
     throw std::invalid_argument("unload: sigma_y, unload_ratio, tol and max_increments must be positive");
-  const Eigen::Matrix2d dir = direction / direction.norm();
-  UnloadResult res;
-  UnloadStep st;
-  st.state = solver.measures();
+  const Eigen::Matrix<double, D, D> dir = direction / direction.norm();
+  UnloadResultT<D> res;
+  UnloadStepT<D> st;
+  st.state = measure(solver);
   res.path.push_back(st);
   const double s0 = stress_norm(st.state);
   res.loading_norm = s0 / sigma_y;
@@ -39,12 +93,10 @@ UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, dou
     res.converged = true;
     return res;
   }
-  // projection of the stress on its direction before unloading
-  const double w11 = st.state.S11 / s0, w22 = st.state.S22 / s0, w12 = st.state.S12 / s0;
-  auto proj = [&](const StateMeasures& m) { return m.S11 * w11 + m.S22 * w22 + 2.0 * m.S12 * w12; };
+  const ProjectionT<D> proj(st.state, s0);  // on the stress's direction before unloading
   double step = options.first_step;
   if (!(step > 0.0)) {
-    const double e = std::sqrt(st.state.E11 * st.state.E11 + st.state.E22 * st.state.E22 + 2 * st.state.E12 * st.state.E12);
+    const double e = strain_norm(st.state);
     step = 0.2 * 2.0 * e / unload_ratio;
     if (!(step > 0.0)) step = 1e-6;
   }
@@ -53,9 +105,9 @@ UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, dou
   double slope_last = 0.0;  // last positive secant slope of p
   double lambda_cap = std::numeric_limits<double>::infinity();
   for (int k = 1; k <= options.max_increments; ++k) {
-    UnloadStep s;
+    UnloadStepT<D> s;
     s.report = solver.increment(-step * dir);
-    s.state = solver.measures();
+    s.state = measure(solver);
     lambda += step;
     s.strain = lambda;
     res.path.push_back(s);
@@ -103,26 +155,27 @@ UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, dou
   return res;
 }
 
+template UnloadResultT<2> unload<2>(NetworkSolverT<2>&, const Eigen::Matrix2d&, double, double, const UnloadOptions&);
+template UnloadResultT<3> unload<3>(NetworkSolverT<3>&, const Eigen::Matrix3d&, double, double, const UnloadOptions&);
+
 // ------------------------------------------------------------------------------------------------
-ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const ProbeOptions& o) {
+template <int D>
+ProbeCurve probe_along(NetworkSolverT<D>& solver, const Eigen::Matrix<double, D, D>& dir_in, double sigma_y,
+                       const ProbeOptions& o, std::vector<Eigen::Matrix<double, D, D>>* full) {
+  using Mat = Eigen::Matrix<double, D, D>;
   if (!(o.first_step > 0.0) || !(o.max_step > 0.0) || !(o.max_strain > 0.0) || !(o.growth >= 1.0) ||
       o.max_increments < 1 || o.fine_increments < 0 || !(sigma_y > 0.0))
     throw std::invalid_argument("probe: steps, growth, limits and sigma_y must be positive");
+  if (!dir_in.allFinite() || !(dir_in.norm() > 0.0))
+    throw std::invalid_argument("probe: the strain-rate direction is zero or not finite");
+  // a unit direction as it is (the 2D (cos, sin) directions), any other one normalised
+  const Mat dir = std::abs(dir_in.norm() - 1.0) < 1e-15 ? dir_in : Mat(dir_in / dir_in.norm());
   ProbeCurve c;
-  c.theta = theta;
-  const double ct = std::cos(theta), st = std::sin(theta);
-  Eigen::Matrix2d dir;
-  dir << ct, 0.0, 0.0, st;
+  if (full) full->clear();
+  Mat s = Mat::Zero();
   auto sample = [&](double strain, const IncrementReport* r) {
-    const auto m = solver.measures();
-    ProbeSample p;
+    ProbeSample p = probe_sample<D>(solver, dir, sigma_y, &s);
     p.strain = strain;
-    p.S11 = m.S11 / sigma_y;
-    p.S22 = m.S22 / sigma_y;
-    p.S12 = m.S12 / sigma_y;
-    p.stress = p.S11 * ct + p.S22 * st;
-    p.density = m.density;
-    p.Z = m.Z;
     if (r) {
       p.newton = r->newton_iterations;
       p.converged = r->converged;
@@ -131,6 +184,7 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
     return p;
   };
   c.samples.push_back(sample(0.0, nullptr));
+  if (full) full->push_back(s);
   ProbeSchedule schedule(o, c.samples[0].strain, c.samples[0].stress);
   for (;;) {
     const double h = schedule.next();
@@ -152,11 +206,25 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
       c.samples.pop_back();
       break;
     }
+    if (full) full->push_back(s);
     if (!schedule.record(h, c.samples.back().strain, c.samples.back().stress)) {
       c.end = schedule.end();
       break;
     }
   }
+  return c;
+}
+
+template ProbeCurve probe_along<2>(NetworkSolverT<2>&, const Eigen::Matrix2d&, double, const ProbeOptions&,
+                                   std::vector<Eigen::Matrix2d>*);
+template ProbeCurve probe_along<3>(NetworkSolverT<3>&, const Eigen::Matrix3d&, double, const ProbeOptions&,
+                                   std::vector<Eigen::Matrix3d>*);
+
+ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const ProbeOptions& o) {
+  Eigen::Matrix2d dir;
+  dir << std::cos(theta), 0.0, 0.0, std::sin(theta);
+  ProbeCurve c = probe_along<2>(solver, dir, sigma_y, o);
+  c.theta = theta;
   return c;
 }
 
@@ -177,6 +245,32 @@ YieldPoint fabric_affine_point(const NetworkSolver& solver, double theta, double
     s22 -= c.f_n * L * ny * ny;
   }
   return {s11 / (area * sigma_y), s22 / (area * sigma_y)};
+}
+
+Eigen::Matrix3d fabric_affine_stress3(const NetworkSolver3& solver, const Eigen::Matrix3d& Edot, double mu_eff,
+                                      double sigma_y) {
+  if (!Edot.allFinite() || !(Edot.norm() > 0.0) || !(sigma_y > 0.0 && std::isfinite(sigma_y)) ||
+      !(mu_eff >= 0.0 && std::isfinite(mu_eff)))
+    throw std::invalid_argument("fabric_affine_stress3: need a finite nonzero rate, sigma_y > 0 and mu_eff >= 0");
+  const Eigen::Matrix3d rate = 0.5 * (Edot + Edot.transpose()) / Edot.norm();
+  const double volume = solver.box_deformation().determinant() * solver.solid_area() / solver.initial_density();
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (const auto& c : solver.contacts()) {
+    const Eigen::Vector3d l(c.l[0], c.l[1], c.l[2]);
+    const double L = l.norm();
+    if (!(L > 0.0)) continue;
+    const Eigen::Vector3d n = l / L, rn = rate * n;
+    const double en = n.dot(rn);
+    if (!(en < 0.0)) continue;  // not compressed by this strain rate
+    s.noalias() -= c.f_n * L * n * n.transpose();
+    const Eigen::Vector3d vt = rn - en * n;
+    const double speed = vt.norm();
+    if (mu_eff > 0.0 && speed > 1e-12) {
+      const Eigen::Vector3d t = vt / speed;
+      s.noalias() += 0.5 * mu_eff * c.f_n * L * (t * n.transpose() + n * t.transpose());
+    }
+  }
+  return s / (volume * sigma_y);
 }
 
 }  // namespace netdem::qs

@@ -8,6 +8,7 @@
 // the sampled curve (x = probe strain magnitude |dE|, y = work-conjugate stress Sigma : E_hat),
 // so they are unit-testable on synthetic curves.
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,20 +43,29 @@ struct UnloadOptions {
   double first_step = 0.0;
 };
 
-struct UnloadStep {
+/// The measures an unloading step keeps: StateMeasures in 2D, StressMeasuresT<3> in 3D.
+template <int D>
+using UnloadMeasuresT = std::conditional_t<D == 2, StateMeasures, StressMeasuresT<D>>;
+
+template <int D>
+struct UnloadStepT {
   double strain = 0;  ///< accumulated reversal strain magnitude
-  StateMeasures state;
+  UnloadMeasuresT<D> state;
   IncrementReport report;
 };
+using UnloadStep = UnloadStepT<2>;
 
-struct UnloadResult {
+template <int D>
+struct UnloadResultT {
   bool converged = false;
   double strain = 0;          ///< total reversal strain magnitude |dE|
   double stress_norm = 0;     ///< final |Sigma| / sigma_y
   double loading_norm = 0;    ///< |Sigma| / sigma_y before unloading
-  std::vector<UnloadStep> path;  ///< the state before unloading (strain 0) and after each increment
+  std::vector<UnloadStepT<D>> path;  ///< the state before unloading (strain 0) and after each increment
   std::string message;        ///< empty, or why it stopped early
 };
+using UnloadResult = UnloadResultT<2>;
+using UnloadResult3 = UnloadResultT<3>;
 
 /// Unloads by increments along -direction (the compaction strain-rate direction, any magnitude)
 /// until |Sigma| < tol sigma_y. Each step is the secant prediction of the strain left to
@@ -67,8 +77,11 @@ struct UnloadResult {
 /// reversal reaches 3 x the linear spring-back of the first step, so that a noisy network is never
 /// unloaded into a loose one. Never throws for non-convergence;
 /// a solver exception propagates.
-UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, double sigma_y, double unload_ratio,
-                    const UnloadOptions& options = {});
+/// Sigma is the symmetric Eq 13 stress (3D: StressMeasuresT::eq13, the contact stress in a
+/// periodic cell). Instantiated for the plastic law in 2D and 3D.
+template <int D>
+UnloadResultT<D> unload(NetworkSolverT<D>& solver, const Eigen::Matrix<double, D, D>& direction, double sigma_y,
+                        double unload_ratio, const UnloadOptions& options = {});
 
 // ------------------------------------------------------------------------------------------------
 // Probing
@@ -76,6 +89,15 @@ UnloadResult unload(NetworkSolver& solver, const Eigen::Matrix2d& direction, dou
 /// exceptions (singular / indefinite tangent, e.g. localisation on dilatant probes): the curve
 /// then ends there with end = "singular: <message>".
 ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const ProbeOptions& options);
+
+/// Reloads along the strain-rate direction `dir` (any dimension; the steps are strain magnitudes
+/// |dE|, so `dir` is normalised to a unit Frobenius norm) as probe() does: sample.stress =
+/// Sigma : dir / |dir| / sigma_y. `full`, if given, receives the stress tensor / sigma_y of every
+/// sample (samples hold S11, S22, S12 only). probe(solver, theta, ...) is this with
+/// diag(cos theta, sin theta).
+template <int D>
+ProbeCurve probe_along(NetworkSolverT<D>& solver, const Eigen::Matrix<double, D, D>& dir, double sigma_y,
+                       const ProbeOptions& options, std::vector<Eigen::Matrix<double, D, D>>* full = nullptr);
 
 // ------------------------------------------------------------------------------------------------
 // Fabric-resolved affine bound (our addition; docs/yield.md "Fabric-resolved affine bound")
@@ -89,5 +111,15 @@ ProbeCurve probe(NetworkSolver& solver, double theta, double sigma_y, const Prob
 /// force; called at the loading point it gives the affine-affine surface that the probes should
 /// reach. Tangential forces are left out (frictionless surface).
 YieldPoint fabric_affine_point(const NetworkSolver& solver, double theta, double sigma_y);
+
+/// The 3D fabric-resolved affine bound for the strain rate Edot (any symmetric direction): every
+/// load-bearing contact that Edot compresses keeps its normal force f_N and, with mu_eff > 0, slides
+/// at the cap mu_eff f_N against its affine tangential velocity L (Edot n - (n.Edot.n) n);
+/// Sigma = -(1/V) sum L f_N [n n - mu_eff sym(t n)] / sigma_y over them (V = current cell volume,
+/// L n = the branch vector, to j's image in a periodic cell). The isotropic form of the same
+/// mechanism is analytic_yield3.hpp's. Throws std::invalid_argument for a non-finite or zero rate,
+/// sigma_y <= 0 or mu_eff < 0.
+Eigen::Matrix3d fabric_affine_stress3(const NetworkSolver3& solver, const Eigen::Matrix3d& Edot, double mu_eff,
+                                      double sigma_y);
 
 }  // namespace netdem::qs
