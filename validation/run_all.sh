@@ -11,7 +11,7 @@ py=/usr/bin/python3
 status=0
 for case_dir in "$here"/redanz_fleck_compaction "$here"/redanz_fleck_yield "$here"/luding_sintering "$here"/sintering_pair \
     "$here"/quasistatic_vs_dynamic "$here"/quasistatic_vs_dynamic_periodic "$here"/quasistatic_vs_dynamic_walls \
-    "$here"/redanz_fleck_walls "$here"/compaction_3d "$here"/ivannikov_staggered; do
+    "$here"/redanz_fleck_walls "$here"/compaction_3d "$here"/literature_3d "$here"/ivannikov_staggered; do
   echo "== $(basename "$case_dir")"
   "$py" "$case_dir/run.py" "$@" || status=1
 done

@@ -177,7 +177,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
   j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? "affine" : so.mode == qs::BoundaryMode::Walls ? "walls" : so.mode == qs::BoundaryMode::Periodic ? "periodic" : "die";
+  j["mode"] = a.affine ? (so.affine_centres ? "affine (periodic cell)" : "affine") : so.mode == qs::BoundaryMode::Walls ? "walls" : so.mode == qs::BoundaryMode::Periodic ? "periodic" : "die";
   if (so.mode == qs::BoundaryMode::Periodic)  // no prescribed boundary: Eq 13 has no reactions to sum
     j["stress_measure"] = "contact stress (periodic cell: S = S_contacts, eq13_vs_contacts 0 by construction)";
   j["rotations"] = !a.no_rotation;
@@ -365,7 +365,9 @@ std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, 
 CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std::string& out) {
   CompactCli cli;
   cli.packing = comp->add_option("--packing", ca.packing_file, "packing CSV (id,x,y,r with '# box' line) instead of a new deposition");
-  comp->add_flag("--affine", ca.affine, "affine motion of every particle centre (default: die, peripheral layer only)");
+  comp->add_flag("--affine", ca.affine,
+                 "affine motion of every particle centre (default: die, peripheral layer only); with --boundary periodic: "
+                 "every centre follows the periodic cell");
   comp->add_option("--boundary", ca.boundary,
                    "layer: the peripheral layer follows the strain (die mode, section 2.4); walls: nothing prescribed, four "
                    "rigid frictionless walls at the box faces move with the box (E12 = 0; Eq 13 from the wall forces); periodic: a "

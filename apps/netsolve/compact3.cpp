@@ -271,7 +271,7 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
   j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? "affine" : periodic ? "periodic" : "die";
+  j["mode"] = a.affine ? (periodic ? "affine (periodic cell)" : "affine") : periodic ? "periodic" : "die";
   if (periodic) j["stress_measure"] = "contact stress (periodic cell: S = S_contacts, eq13_vs_contacts 0 by construction)";
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E", co.path.E}};

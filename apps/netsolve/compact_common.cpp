@@ -14,9 +14,13 @@ qs::SolverOptions compact_solver_options(const CompactArgs& a) {
             : a.boundary == "walls"    ? qs::BoundaryMode::Walls
             : a.boundary == "periodic" ? qs::BoundaryMode::Periodic
                                        : qs::BoundaryMode::Die;
-  if (a.affine && a.boundary != "layer")
+  if (a.affine && a.boundary != "layer" && a.boundary != "periodic")
     throw std::invalid_argument(fmt::format("--affine and --boundary {} exclude each other (--affine prescribes every centre)",
                                             a.boundary));
+  if (a.affine && a.boundary == "periodic") {  // every centre follows the periodic cell, the histories kept
+    so.mode = qs::BoundaryMode::Periodic;
+    so.affine_centres = true;
+  }
   if (so.mode == qs::BoundaryMode::Periodic && !a.state_file.empty())
     throw netdem::app::UsageError("--state: a jammed state has walls or a layer, not a periodic cell (--boundary periodic)");
   so.rotations = !a.no_rotation;

@@ -184,15 +184,23 @@ void Yield3Run::setup() {
   activity() = a.packing_file.empty() ? "building the 3D ballistic deposition" : "reading " + a.packing_file;
   if (a.packing_file.empty()) check_deposition_size(a.pack, true);
   pk_ = input_packing_3d(a.packing_file, a.pack, source_, "the network solver");
-  // auto: periodic for a periodic packing; otherwise affine (the 3D die leaks, docs/quasistatic.md)
+  // auto: periodic for a periodic packing; otherwise affine (the 3D die leaks, docs/quasistatic.md).
+  // affine with a periodic packing: every centre follows the cell.
   const std::string cbc = a.compact_bc == "auto" ? (pk_.periodic ? "periodic" : "affine") : a.compact_bc;
   so_ = qs::SolverOptions::yield_precompaction();
   so_.mode = parse_mode(cbc, "--compact-bc");
-  qs::BoundaryMode probe_mode = a.probe_bc.empty() ? so_.mode : parse_mode(a.probe_bc, "--probe-bc");
+  if (so_.mode == qs::BoundaryMode::Affine && pk_.periodic) {  // every centre follows the periodic cell
+    so_.mode = qs::BoundaryMode::Periodic;
+    so_.affine_centres = true;
+  }
+  qs::BoundaryMode probe_mode =
+      a.probe_bc.empty() ? (so_.affine_centres ? qs::BoundaryMode::Affine : so_.mode) : parse_mode(a.probe_bc, "--probe-bc");
   if ((so_.mode == qs::BoundaryMode::Periodic) != pk_.periodic)
     throw UsageError(fmt::format("--compact-bc {} {} a periodic packing ('# periodic' line; netsolve pack --dim 3 --periodic)",
                                  cbc, pk_.periodic ? "does not take" : "needs"));
   const bool affine_cell = so_.mode == qs::BoundaryMode::Periodic && probe_mode == qs::BoundaryMode::Affine;
+  if (so_.affine_centres && !affine_cell)
+    throw UsageError("--probe-bc: an affine precompaction in a periodic cell is probed affine");
   if (probe_mode != so_.mode && !affine_cell)
     throw UsageError("--probe-bc: in 3D the probes run in the precompaction's mode, or affine in its periodic cell");
   apply_law_args(a.law, so_, probe_mode);
@@ -274,6 +282,10 @@ void Yield3Run::loading_point() {
 void Yield3Run::unload_phase() {
   const auto t0 = Clock::now();
   activity() = "unloading";
+  // from here on in the probes' mode, as in 2D (an affine probe of a periodic cell unloads affinely)
+  qs::SolverOptions o = po_;
+  o.law.reversible = so_.law.reversible;
+  solver_ = std::make_unique<qs::NetworkSolver3>(solver_->state(), o);
   solver_->set_reversible_normal(false);
   qs::UnloadOptions uo;
   uo.tol = a_.unload_tol;
@@ -411,7 +423,7 @@ int Yield3Run::finish() {
   j["initial_density"] = pk_.density();
   j["sigma_y"] = sy_;
   j["setup"] = {{"precompact", a_.precompact}, {"to_density", co_.target_density}, {"increments", co_.increments},
-                {"compact_bc", mode_name(so_.mode)}, {"probe_bc", po_.affine_centres ? "affine" : mode_name(po_.mode)},
+                {"compact_bc", so_.affine_centres ? "affine (periodic cell)" : mode_name(so_.mode)}, {"probe_bc", po_.affine_centres ? "affine (periodic cell)" : mode_name(po_.mode)},
                 {"friction", a_.law.friction}, {"mu_eff", mu_eff_}, {"unload_ratio", so_.law.unload_ratio},
                 {"k_t", so_.law.k_t}, {"first_touch", so_.law.first_touch}, {"rotations", so_.rotations}};
   j["precompaction"] = rows_->done > 0 ? state_json(rows_->last, sy_) : json(nullptr);

@@ -4,7 +4,8 @@
 #    hydrostatically to D = 0.6 has S = -(3 pi / 4) sigma_y (u/R) exp(-2E) (n - 1)/n per axis, u =
 #    2R (1 - e^E) (every bond carries the 3D plastic force 3 pi sigma_y R u over L = 2R e^E); the
 #    same lattice in a periodic cell has it without (n - 1)/n, its free spheres staying in
-#    equilibrium in every increment;
+#    equilibrium in every increment, and the same with every centre following the cell (--affine
+#    --boundary periodic);
 #  * the DEM: affine frictionless compaction of a 3D deposition gives demsolve compact's stresses
 #    (the same contacts, the DEM's own force loop, no dashpots);
 #  * the affine formula S = -(1/V) sum 6 pi sigma_y R* u L n n over the deposition's touching pairs at
@@ -81,12 +82,13 @@ run() {  # name args...: a run that must exit 0
 }
 run lattice --affine --packing "$tmp/lattice.csv" --to-density 0.6 --increments 10 --snapshots 0.55,0.6
 run lattice_periodic --boundary periodic --packing "$tmp/lattice_periodic.csv" --to-density 0.6 --increments 10 --snapshots ''
+run lattice_periodic_affine --affine --boundary periodic --packing "$tmp/lattice_periodic.csv" --to-density 0.6 --increments 10 --snapshots ''
 
 /usr/bin/python3 - "$tmp" <<'PY'
 import csv, json, math, sys
 tmp = sys.argv[1]
 n, ok = 4, True
-for name, factor in (("lattice", (n - 1) / n), ("lattice_periodic", 1.0)):
+for name, factor in (("lattice", (n - 1) / n), ("lattice_periodic", 1.0), ("lattice_periodic_affine", 1.0)):
     s = json.load(open(f"{tmp}/{name}/summary.json"))
     f = s["final"]
     E = f["E11"]  # the accumulated strain per axis
@@ -106,6 +108,8 @@ for name, factor in (("lattice", (n - 1) / n), ("lattice_periodic", 1.0)):
     ok &= abs(float(last["fabric11"]) - 1 / 3) < 1e-8  # the three bond directions in equal numbers
     if name == "lattice_periodic":
         ok &= s["solver"]["iteration"] == "pseudo-transient" and float(last["residual_rms"]) <= 1e-3
+    ok &= s["mode"] == {"lattice": "affine", "lattice_periodic": "periodic",
+                        "lattice_periodic_affine": "affine (periodic cell)"}[name]
 sys.exit(0 if ok else 1)
 PY
 result lattice_closed_form $?

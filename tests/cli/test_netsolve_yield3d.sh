@@ -12,6 +12,8 @@
 #    D, Z and E (docs/yield_analytic.md "3D"), and the psi = 0 analytic point is that vertex;
 #  * invariance: the deposition rotated by 90 degrees about x and shifted, probed along the rotated
 #    six-component rate (--rate), gives the rotated stress tensor at the offset point (1e-9);
+#  * an affine precompaction in a periodic cell (--compact-bc affine, every centre follows the cell):
+#    its psi = 0 bound is the loading point too;
 #  * a periodic cell, frictionless, pseudo-transient, the slice --probe 1/4 of 8 directions (psi =
 #    45 and 225 deg): every probe with a point lies below 1.1 x the affine bound (relaxation only
 #    lowers it; measured 0.85), the unloading reaches --unload-tol;
@@ -77,6 +79,7 @@ run along --packing "$p3" --rate="$rate" --to-density 0.47
 # E13 <- E12, E12 <- -E13 (Voigt order 11, 22, 33, 23, 13, 12)
 run along_rotated --packing "$tmp/rotated.csv" --rate="-1,0.2,0.3,-0.1,0.4,0.2" --to-density 0.47
 run periodic --packing "$tmp/pp/packing.csv" --friction 0 --directions 8 --probe 1/4 --max-strain 2e-3
+run periodic_affine --packing "$tmp/pp/packing.csv" --compact-bc affine --friction 0 --directions 4
 check_pvd pvd_periodic "$tmp/periodic" particles,contacts,cell
 
 /usr/bin/python3 - "$tmp" <<'PY'
@@ -179,6 +182,15 @@ for row in rows("periodic"):
         bad.append(f"periodic psi={row['psi']}: offset {so:.5g} above 1.1 x the affine bound {sf:.5g}")
 if ok < 1:
     bad.append(f"periodic: only {ok} probes found their points")
+
+# ---- an affine precompaction in the periodic cell: the psi = 0 bound is again the loading point
+s = json.load(open(f"{tmp}/periodic_affine/summary.json"))
+r0 = rows("periodic_affine")[0]
+pl, ql = s["precompaction"]["p"], s["precompaction"]["q"]
+if not (s["setup"]["compact_bc"] == "affine (periodic cell)" and s["status"] == "ok"
+        and abs(f(r0["p_fabric"]) - pl) < 1e-8 * pl and abs(f(r0["q_fabric"]) - ql) < 1e-8 * pl):
+    bad.append(f"periodic affine: {s['setup']['compact_bc']}, {s['status']}, fabric ({r0['p_fabric']}, {r0['q_fabric']}) "
+               f"against the loading point ({pl}, {ql})")
 
 # ---- no NaN in any file
 import glob

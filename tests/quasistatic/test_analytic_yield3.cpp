@@ -1,6 +1,6 @@
 // Tests of the analytic affine upper-bound yield surfaces of sphere packings (docs/yield_analytic.md
 // "3D"): the general evaluation against an independent Love-Weber sum over a quasi-uniform set of
-// two million contact normals, against the (p, q) closed forms and the closed-form vertex; the
+// a million contact normals, against the (p, q) closed forms and the closed-form vertex; the
 // stated numbers of the notes (p = 1.5 Z D sigma_y |E|, closed-die vertex 0.9 / 0.3, the isochoric
 // probes); rotation covariance, normality and convexity (frictionless), homogeneity and linearity,
 // the sticking limits, and input validation.
@@ -60,22 +60,35 @@ Mat3 random_rate(std::mt19937& rng) {
   return sym(m);
 }
 
-// The independent reference: the Love-Weber sum over 2N contact normals of a Fibonacci sphere
-// (quasi-uniform, each of weight 4 pi / N), every contact with the force of the model.
-Mat3 love_weber(const AffineYield3Input& in, const Mat3& rate, int n = 2000000) {
+// The independent reference: the Love-Weber sum over N contact normals of a Fibonacci sphere
+// (quasi-uniform, each of weight 4 pi / N), every contact with the force of the model. Plain scalars
+// (the test runs under the sanitizers too).
+Mat3 love_weber(const AffineYield3Input& in, const Mat3& rate, int n = 1000000) {
   const double golden = kPi * (3.0 - std::sqrt(5.0));
-  Mat3 sig = Mat3::Zero();
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z);
-    const Vec3 nv(r * std::cos(golden * i), r * std::sin(golden * i), z);
-    const Vec3 rn = rate * nv;
-    const double en = nv.dot(rn);
+  double s[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  double R[3][3], E[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R[i][j] = rate(i, j), E[i][j] = in.E(i, j);
+  for (int k = 0; k < n; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z);
+    const double nv[3] = {r * std::cos(golden * k), r * std::sin(golden * k), z};
+    double rn[3], en = 0.0, f = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      rn[i] = R[i][0] * nv[0] + R[i][1] * nv[1] + R[i][2] * nv[2];
+      en += nv[i] * rn[i];
+      f -= nv[i] * (E[i][0] * nv[0] + E[i][1] * nv[1] + E[i][2] * nv[2]);  // force / (6 pi sigma_y R^2)
+    }
     if (!(en < 0.0)) continue;
-    const double f = -nv.dot(in.E * nv);  // force / (6 pi sigma_y R^2)
-    sig -= f * nv * nv.transpose();
-    const Vec3 vt = rn - en * nv;
-    if (in.mu_eff > 0.0 && vt.norm() > 0.0) sig += f * in.mu_eff * sym(vt.normalized() * nv.transpose());
+    double vt[3], speed = 0.0;
+    for (int i = 0; i < 3; ++i) vt[i] = rn[i] - en * nv[i], speed += vt[i] * vt[i];
+    speed = std::sqrt(speed);
+    const double mu = in.mu_eff > 0.0 && speed > 0.0 ? in.mu_eff / speed : 0.0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) s[i][j] += f * (-nv[i] * nv[j] + 0.5 * mu * (vt[i] * nv[j] + nv[i] * vt[j]));
   }
+  Mat3 sig;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) sig(i, j) = s[i][j];
   return (9.0 * in.density * in.z0 * in.sigma_y / (8.0 * kPi)) * (4.0 * kPi / n) * sig;
 }
 
@@ -143,12 +156,12 @@ TEST(AnalyticYield3, GeneralQuadratureMatchesPQClosedForms) {
     for (const double mu : {0.0, kStick, 0.5}) {
       const auto in = input(E, mu);
       const double scale = std::abs(qs::pq_of(qs::affine_vertex3(in)).p);
-      for (int k = 0; k < 72; ++k) {
-        const double psi = 5.0 * k * kDeg;
+      for (int k = 0; k < 36; ++k) {
+        const double psi = 10.0 * k * kDeg;
         const auto ref = qs::affine_yield3_pq(in, psi);
         const auto got = qs::pq_of(qs::affine_yield3_stress(in, qs::axisymmetric_rate(psi)));
-        EXPECT_NEAR(got.p / scale, ref.p / scale, 1e-12) << "psi " << 5 * k << " mu " << mu;
-        EXPECT_NEAR(got.q / scale, ref.q / scale, 1e-12) << "psi " << 5 * k << " mu " << mu;
+        EXPECT_NEAR(got.p / scale, ref.p / scale, 1e-12) << "psi " << 10 * k << " mu " << mu;
+        EXPECT_NEAR(got.q / scale, ref.q / scale, 1e-12) << "psi " << 10 * k << " mu " << mu;
       }
     }
   }
@@ -162,7 +175,7 @@ TEST(AnalyticYield3, GeneralQuadratureMatchesLoveWeberSum) {
       const auto in = input(E, mu);
       const double scale = qs::affine_vertex3(in).norm();
       double worst = 0.0;
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < 2; ++k) {
         const Mat3 r = random_rate(rng);
         worst = std::max(worst, rel(qs::affine_yield3_stress(in, r), love_weber(in, r), scale));
       }
@@ -175,18 +188,18 @@ TEST(AnalyticYield3, GeneralQuadratureMatchesLoveWeberSum) {
 TEST(AnalyticYield3, QuadratureHasConverged) {
   // Frictionless, the integrand is analytic inside each panel (exponential convergence); sticking,
   // the tangential speed vanishes at the rate's eigen-directions on the equator (a cone point at a
-  // corner of the panels: algebraic convergence, measured 1e-9 of the vertex with 2 panels).
+  // corner of the panels: algebraic convergence; 2 against 32 panels: 1.6e-10 of the vertex).
   std::mt19937 rng(13);
   for (const double mu : {0.0, kStick}) {
     const auto in = input(general_strain(), mu);
     const double scale = qs::affine_vertex3(in).norm();
     double worst = 0.0;
-    for (int k = 0; k < 20; ++k) {
+    for (int k = 0; k < 5; ++k) {
       const Mat3 r = random_rate(rng);
-      worst = std::max(worst, rel(qs::affine_yield3_stress(in, r), qs::detail::affine_yield3_stress(in, r, 16), scale));
+      worst = std::max(worst, rel(qs::affine_yield3_stress(in, r), qs::detail::affine_yield3_stress(in, r, 8), scale));
     }
     EXPECT_LT(worst, mu == 0.0 ? 1e-12 : 1e-8) << "mu " << mu;
-    std::printf("2 against 16 panels, mu_eff %.3f: worst %.2e of the vertex\n", mu, worst);
+    std::printf("2 against 8 panels, mu_eff %.3f: worst %.2e of the vertex\n", mu, worst);
   }
 }
 
@@ -208,7 +221,7 @@ TEST(AnalyticYield3, FrictionlessStressIsGradientAndSupportPoint) {
   const auto in = input(general_strain());
   const double scale = qs::affine_vertex3(in).norm();
   std::vector<Mat3> rates;
-  for (int k = 0; k < 40; ++k) rates.push_back(random_rate(rng));
+  for (int k = 0; k < 20; ++k) rates.push_back(random_rate(rng));
   for (const Mat3& r : rates) {
     const Mat3 s = qs::affine_yield3_stress(in, r);
     // normality: Sigma = dW/dEdot (central differences on the six components)
