@@ -17,6 +17,8 @@
 #  * a periodic cell, frictionless, pseudo-transient, the slice --probe 1/4 of 8 directions (psi =
 #    45 and 225 deg): every probe with a point lies below 1.1 x the affine bound (relaxation only
 #    lowers it; measured 0.85), the unloading reaches --unload-tol;
+#  * apps/scripts/plot_yield.py's own (p, q) closed form equals netsolve's analytic columns (1e-7:
+#    the CSV's 9 digits) and it draws surface.png of a 3D run;
 #  * the files: yield_points.csv, probes/probe_K.csv, unload.csv, summary.json, snapshots.pvd with
 #    the cell; no NaN;
 #  * bad input: one line, exit 2, no folder.
@@ -82,8 +84,8 @@ run periodic --packing "$tmp/pp/packing.csv" --friction 0 --directions 8 --probe
 run periodic_affine --packing "$tmp/pp/packing.csv" --compact-bc affine --friction 0 --directions 4
 check_pvd pvd_periodic "$tmp/periodic" particles,contacts,cell
 
-/usr/bin/python3 - "$tmp" <<'PY'
-import csv, json, math, sys
+/usr/bin/python3 - "$tmp" "${BASH_SOURCE[0]}" <<'PY'
+import csv, json, math, os, sys
 import xml.etree.ElementTree as ET
 import numpy as np
 tmp = sys.argv[1]
@@ -192,16 +194,30 @@ if not (s["setup"]["compact_bc"] == "affine (periodic cell)" and s["status"] == 
     bad.append(f"periodic affine: {s['setup']['compact_bc']}, {s['status']}, fabric ({r0['p_fabric']}, {r0['q_fabric']}) "
                f"against the loading point ({pl}, {ql})")
 
+# ---- apps/scripts/plot_yield.py's own (p, q) closed form against netsolve's analytic columns
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(sys.argv[2])), "..", "..", "apps", "scripts"))
+import plot_yield
+s = json.load(open(f"{tmp}/affine/summary.json"))
+worst_an = 0.0
+for row in rows("affine"):
+    p, q = plot_yield.analytic_pq(s["analytic"], s["setup"]["mu_eff"], math.radians(f(row["psi"])))
+    worst_an = max(worst_an, abs(p - f(row["p_analytic"])) / p_load, abs(q - f(row["q_analytic"])) / p_load)
+if not worst_an < 1e-7:
+    bad.append(f"plot_yield.analytic_pq differs from netsolve's analytic columns by {worst_an:.2e} of p_load")
+
 # ---- no NaN in any file
 import glob
 for d in ("affine", "along", "periodic"):
     for path in glob.glob(f"{tmp}/{d}/*.csv") + glob.glob(f"{tmp}/{d}/probes/*.csv") + [f"{tmp}/{d}/summary.json"]:
         if "nan" in open(path).read().lower().replace("nanosec", ""):
             bad.append(f"{path}: NaN")
-print(f"fabric bound from the files: {worst_fabric:.2e}; rotation: {dev:.2e}; periodic probes ok: {ok}")
+print(f"fabric bound from the files: {worst_fabric:.2e}; rotation: {dev:.2e}; periodic probes ok: {ok}; "
+      f"plot_yield's closed form: {worst_an:.2e}")
 for b in bad:
     print("FAIL", b)
 sys.exit(1 if bad else 0)
 PY
 result physics $?
+/usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_yield.py" "$tmp/affine" >/dev/null 2>"$tmp/stderr" && [ -s "$tmp/affine/surface.png" ]
+result plot_3d $?
 finish
