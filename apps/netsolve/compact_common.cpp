@@ -49,6 +49,24 @@ qs::CompactionOptionsT<D> compact_compaction_options(const CompactArgs& a, const
 template qs::CompactionOptionsT<2> compact_compaction_options<2>(const CompactArgs&, const qs::SolverOptions&);
 template qs::CompactionOptionsT<3> compact_compaction_options<3>(const CompactArgs&, const qs::SolverOptions&);
 
+qs::SolverOptions yield_probe_options(const qs::SolverOptions& pre, qs::BoundaryMode probe_mode) {
+  qs::SolverOptions probe = qs::SolverOptions::yield_probe();
+  probe.mode = probe_mode;
+  if (pre.mode == qs::BoundaryMode::Periodic && probe.mode == qs::BoundaryMode::Affine) {
+    probe.mode = qs::BoundaryMode::Periodic;  // affine probing of the periodic state: every centre
+    probe.affine_centres = true;              // prescribed, the histories kept
+  }
+  probe.law = pre.law;  // unloading switches it to the elastic branch (set_reversible_normal)
+  probe.iteration = pre.iteration;  // the iteration and its regularisation knob cover the probes too
+  probe.regularisation_scale = pre.regularisation_scale;
+  probe.max_cuts = pre.max_cuts;
+  probe.energy_merit = pre.energy_merit;
+  probe.friction_energy_merit = pre.friction_energy_merit;
+  if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
+  probe.validate();
+  return probe;
+}
+
 IncrementTally::IncrementTally(const qs::SolverOptions& so) {
   conv.tol = so.residual_tol;
   if (so.iteration == qs::Iteration::PseudoTransient) conv.max_unconverged_fraction = 0.0;

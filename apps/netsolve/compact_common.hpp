@@ -39,6 +39,11 @@ struct IncrementTally {
 int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const std::string& command,
                    const std::filesystem::path& out);
 
+/// The probes' solver options of `yield` (2D and 3D): the probe preset (section 3.4's elastic
+/// un/reloading) with the precompaction's law, iteration, regularisation and merit; an affine probe
+/// of a periodic cell keeps the cell with every centre prescribed (affine_centres). Validated.
+qs::SolverOptions yield_probe_options(const qs::SolverOptions& pre, qs::BoundaryMode probe_mode);
+
 /// netsolve yield --dim 3 (yield3.cpp): argv as `netsolve yield ...`; its exit status.
 int run_yield3_command(int argc, char** argv);
 

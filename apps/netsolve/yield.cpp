@@ -162,20 +162,7 @@ void yield_options(const YieldArgs& a, qs::SolverOptions& pre, qs::SolverOptions
                                             "loading tangent), got {}", a.unload_ratio));
   pre.law.unload_ratio = a.unload_ratio;
   pre.validate();
-  probe = qs::SolverOptions::yield_probe();
-  probe.mode = probe_mode;
-  if (pre.mode == qs::BoundaryMode::Periodic && probe.mode == qs::BoundaryMode::Affine) {
-    probe.mode = qs::BoundaryMode::Periodic;  // affine probing of the periodic state: every centre
-    probe.affine_centres = true;              // prescribed, the histories kept
-  }
-  probe.law = pre.law;  // unloading switches it to the elastic branch (set_reversible_normal)
-  probe.iteration = pre.iteration;  // the iteration and its regularisation knob cover the probes too
-  probe.regularisation_scale = pre.regularisation_scale;
-  probe.max_cuts = pre.max_cuts;
-  probe.energy_merit = pre.energy_merit;
-  probe.friction_energy_merit = pre.friction_energy_merit;
-  if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
-  probe.validate();
+  probe = netdem::app::netsolve::yield_probe_options(pre, probe_mode);
   if ((pre.mode == qs::BoundaryMode::Periodic) != (probe.mode == qs::BoundaryMode::Periodic))
     throw std::invalid_argument("--compact-bc and --probe-bc: a periodic cell is probed periodic or affine (--probe-bc "
                                 "periodic or affine with --compact-bc periodic, neither without)");

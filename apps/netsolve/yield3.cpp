@@ -206,16 +206,8 @@ void Yield3Run::setup() {
   apply_law_args(a.law, so_, probe_mode);
   so_.law.unload_ratio = a.unload_ratio;
   so_.validate();
-  po_ = qs::SolverOptions::yield_probe();
-  po_.mode = affine_cell ? qs::BoundaryMode::Periodic : probe_mode;
-  po_.affine_centres = affine_cell;
-  po_.law = so_.law;
+  po_ = yield_probe_options(so_, probe_mode);
   po_.law.reversible = false;  // the probes start on the elastic branch of the unloaded state
-  po_.iteration = so_.iteration;
-  po_.regularisation_scale = so_.regularisation_scale;
-  po_.max_cuts = so_.max_cuts;
-  po_.energy_merit = so_.energy_merit;
-  if (po_.iteration == qs::Iteration::PseudoTransient) po_.max_newton = so_.max_newton;
   po_.validate();
   sy_ = so_.law.sigma_y;
   mu_eff_ = so_.law.mu_eff();

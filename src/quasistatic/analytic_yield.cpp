@@ -48,12 +48,7 @@ void check_rate(double E11dot, double E22dot) {
 }  // namespace
 
 void AffineYieldInput::validate() const {
-  if (!(density > 0.0 && density <= 1.0))
-    throw std::invalid_argument(fmt::format("relative density must be in (0, 1], got {}", density));
-  if (!(z0 > 0.0 && std::isfinite(z0)))
-    throw std::invalid_argument(fmt::format("coordination number z0 must be positive and finite, got {}", z0));
-  if (!(sigma_y > 0.0 && std::isfinite(sigma_y)))
-    throw std::invalid_argument(fmt::format("yield strength sigma_y must be positive and finite, got {}", sigma_y));
+  detail::validate_aggregate(density, z0, sigma_y);
   if (!(E11 <= 0.0 && E22 <= 0.0 && std::isfinite(E11) && std::isfinite(E22)))
     throw std::invalid_argument(fmt::format(
         "accumulated precompaction strain (E11, E22) = ({}, {}) must be finite and <= 0 (compressive)", E11, E22));
@@ -113,6 +108,15 @@ double affine_stress_scale(const AffineYieldInput& in) {
 }
 
 namespace detail {
+
+void validate_aggregate(double density, double z0, double sigma_y) {
+  if (!(density > 0.0 && density <= 1.0))
+    throw std::invalid_argument(fmt::format("relative density must be in (0, 1], got {}", density));
+  if (!(z0 > 0.0 && std::isfinite(z0)))
+    throw std::invalid_argument(fmt::format("coordination number z0 must be positive and finite, got {}", z0));
+  if (!(sigma_y > 0.0 && std::isfinite(sigma_y)))
+    throw std::invalid_argument(fmt::format("yield strength sigma_y must be positive and finite, got {}", sigma_y));
+}
 
 // Carlson's symmetric integrals from Boost.Math (duplication algorithm, relative error ~1e-15); the
 // argument checks are ours, so that a bad argument is one std::invalid_argument naming the values.

@@ -1,4 +1,5 @@
 #include "netdem/quasistatic/analytic_yield3.hpp"
+#include "netdem/quasistatic/analytic_yield.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -95,12 +96,7 @@ Mat3 frame_stress(const AffineYield3Input& in, const Mat3& Ef, const Vec3& lam, 
 }  // namespace
 
 void AffineYield3Input::validate() const {
-  if (!(density > 0.0 && density <= 1.0))
-    throw std::invalid_argument(fmt::format("relative density must be in (0, 1], got {}", density));
-  if (!(z0 > 0.0 && std::isfinite(z0)))
-    throw std::invalid_argument(fmt::format("coordination number z0 must be positive and finite, got {}", z0));
-  if (!(sigma_y > 0.0 && std::isfinite(sigma_y)))
-    throw std::invalid_argument(fmt::format("yield strength sigma_y must be positive and finite, got {}", sigma_y));
+  detail::validate_aggregate(density, z0, sigma_y);
   if (!(mu_eff >= 0.0 && std::isfinite(mu_eff)))
     throw std::invalid_argument(fmt::format("tangential limit mu_eff must be finite and >= 0, got {}", mu_eff));
   if (!E.allFinite() || !is_symmetric(E))

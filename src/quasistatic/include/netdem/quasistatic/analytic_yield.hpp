@@ -69,6 +69,10 @@ double affine_switch_angle(double E11dot, double E22dot);
 
 namespace detail {
 
+/// The checks of the aggregate every analytic surface shares (2D and 3D): density in (0, 1], z0 and
+/// sigma_y positive and finite; std::invalid_argument with one line otherwise.
+void validate_aggregate(double density, double z0, double sigma_y);
+
 /// Carlson's symmetric elliptic integrals R_F(x, y, z) and R_D(x, y, z) (Boost.Math's
 /// ellint_rf/ellint_rd; relative error ~1e-15). x, y, z >= 0, at most one of them zero (z > 0 for
 /// R_D); a bad argument throws std::invalid_argument.
