@@ -144,7 +144,7 @@ def compaction_lines(R, mode, runs):
         pm, D, E = float(np.interp(FLECK_AT, a.h["D"] - d0, p)), d0 + FLECK_AT, interp(a, "E11", FLECK_AT, d0)
         ref = fleck(Z0, D, E)
         ok = abs(pm / ref - 1.0) <= FLECK_BAND
-        rows.append(dict(seed=s, what=f"Fleck (1995) p = 1.5 Z0 D σ_y |E|, Z0 = {Z0:.3f} (touching pairs at D0)",
+        rows.append(dict(seed=s, what=f"Fleck (1995) p = 1.5 Z0 D σ_y \\|E\\|, Z0 = {Z0:.3f} (touching pairs at D0)",
                          x=FLECK_AT, ref=ref, got=pm, verdict="PASS" if ok else "FAIL",
                          note=f"ratio {pm / ref:.3f}, band ±{100 * FLECK_BAND:g} %"))
         # Fleck with the run's own Z(D): information (an upper bound without the initial overlaps)
