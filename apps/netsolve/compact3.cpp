@@ -284,8 +284,15 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
       nlohmann::json l = {{"leg", k}, {"name", k == 0 ? "precompaction" : "path"},
                           {"path", k == 0 ? "hydrostatic" : co.path.name},
                           {"increments", k == 0 ? co.precompact_increments : co.increments}};
+      if (k == 0 || co.target_strain == 0.0) {
+        l["to_density"] = k == 0 ? co.precompact_density : co.target_density;
+      } else {
+        l["to_strain"] = co.target_strain;
+      }
       l["end"] = rows.reached[u] ? state_json(rows.leg_end[u].state, sy) : nlohmann::json(nullptr);
       if (rows.reached[u]) l["end"]["increment"] = rows.leg_end[u].increment;
+      if (k == 1 && rows.reached[0] && rows.reached[1])  // the path's |E| from the end of the precompaction
+        l["end"]["strain"] = (rows.leg_end[1].state.strain - rows.leg_end[0].state.strain).norm();
       j["legs"].push_back(l);
     }
   }

@@ -122,6 +122,18 @@ result lattice_vtp_3d $?
 # 3D deposition is W = 20 R (about 1000 spheres), not the 2D default width
 run shear12 --snapshots '' --affine --packing "$tmp/lattice.csv" --path 0,0,0,0,0,1 --to-strain 0.01 --increments 4 --allow-unconverged
 run default_width --snapshots '' --affine --to-density 0.6 --increments 4
+# two legs: a hydrostatic precompaction to D = 0.55, then the closed die to |E| = 0.01 (summary.json legs)
+run legs --snapshots '' --affine --packing "$tmp/lattice.csv" --precompact-density 0.55 --precompact-increments 3 \
+  --path closed-die --to-strain 0.01 --increments 4
+/usr/bin/python3 - "$tmp" <<'PY'
+import json, sys
+legs = json.load(open(f"{sys.argv[1]}/legs/summary.json"))["legs"]
+ok = legs[0]["to_density"] == 0.55 and abs(legs[0]["end"]["D"] - 0.55) < 1e-12 and legs[1]["to_strain"] == 0.01
+ok &= abs(legs[1]["end"]["strain"] - 0.01) < 1e-12 and legs[1]["end"]["increment"] == 7
+print(f"legs: {legs[0]['end']['D']}, {legs[1]['end']['strain']}, increment {legs[1]['end']['increment']}")
+sys.exit(0 if ok else 1)
+PY
+result legs_summary $?
 /usr/bin/python3 - "$tmp" <<'PY'
 import csv, json, math, sys
 tmp = sys.argv[1]
