@@ -201,17 +201,7 @@ double density_at_zero_strain(const qs::StateMeasures& m, double initial_density
 
 /// The probe settings of the command line, with the fine step and the loading stress of the run.
 qs::ProbeSettings probe_settings(const YieldArgs& a, double first_step, double loading_norm, double sigma_y) {
-  qs::ProbeSettings ps;
-  ps.directions = a.directions;
-  ps.offset = a.offset;
-  ps.max_strain = a.max_strain;
-  ps.window = a.window;
-  ps.growth = a.growth;
-  ps.fine = a.fine;
-  ps.first_step = first_step;
-  ps.loading_norm = loading_norm;
-  ps.sigma_y = sigma_y;
-  return ps;
+  return netdem::app::netsolve::yield_probe_settings(a, a.directions, first_step, loading_norm, sigma_y);
 }
 
 

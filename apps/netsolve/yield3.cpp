@@ -351,16 +351,8 @@ std::string Yield3Run::probe_row(int k, const sys::ProbeResult& r, const std::ve
 void Yield3Run::probe_phase() {
   const auto t0 = Clock::now();
   const qs::NetworkSolver3::State start = solver_->state();
-  sys::ProbeSettings ps;
-  ps.directions = a_.rate.empty() ? a_.directions : 1;
-  ps.offset = a_.offset;
-  ps.max_strain = a_.max_strain;
-  ps.window = a_.window;
-  ps.growth = a_.growth;
-  ps.fine = a_.fine;
-  ps.first_step = first_step_;
-  ps.loading_norm = loaded_.m.eq13.norm() / sy_;
-  ps.sigma_y = sy_;
+  const sys::ProbeSettings ps = yield_probe_settings(a_, a_.rate.empty() ? a_.directions : 1, first_step_,
+                                                     loaded_.m.eq13.norm() / sy_, sy_);
   points_ = points_header();
   std::size_t done = 0;
   for (int k : sel_) {
