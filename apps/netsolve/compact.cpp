@@ -340,16 +340,17 @@ int run_compact(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, con
 
 }  // namespace
 
-std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, const std::string& packing_file,
+template <int D>
+std::optional<sys::JammedStateT<D>> jammed_input(const std::string& state_file, const std::string& packing_file,
                                                  const qs::SolverOptions& so, const char* command,
                                                  const char* walls_option) {
   if (state_file.empty()) return std::nullopt;
   if (!packing_file.empty()) throw netdem::app::UsageError("--state and --packing exclude each other");
   const std::string text = sys::read_text_file(state_file, "jammed state file");
-  if (const int dim = sys::jammed_state_dim(text, state_file); dim != 2)
-    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; {} is 2D",
-                                              netdem::packing::quote_input(state_file), dim, command));
-  sys::JammedStateT<2> j = sys::parse_jammed_state<2>(text, state_file);
+  if (const int dim = sys::jammed_state_dim(text, state_file); dim != D)
+    throw netdem::app::UsageError(fmt::format("--state {} is a {}D state; {} is {}D",
+                                              netdem::packing::quote_input(state_file), dim, command, D));
+  sys::JammedStateT<D> j = sys::parse_jammed_state<D>(text, state_file);
   const bool walls = so.mode == netdem::qs::BoundaryMode::Walls;
   if (j.walls != walls)
     throw netdem::app::UsageError(fmt::format("--state {} holds a box {} contact walls: run it {} {}",
@@ -361,6 +362,11 @@ std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, 
                                               netdem::packing::quote_input(state_file), d));
   return j;
 }
+
+template std::optional<sys::JammedStateT<2>> jammed_input<2>(const std::string&, const std::string&,
+                                                              const qs::SolverOptions&, const char*, const char*);
+template std::optional<sys::JammedStateT<3>> jammed_input<3>(const std::string&, const std::string&,
+                                                              const qs::SolverOptions&, const char*, const char*);
 
 CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std::string& out) {
   CompactCli cli;

@@ -17,9 +17,11 @@
 namespace netdem::app::netsolve {
 
 /// The jammed state of --state (none if `state_file` is empty), checked against the options: it
-/// excludes a packing file, is 2D, has walls exactly when `so.mode` is walls, and has the options'
-/// contact law. UsageError (one line, naming `command` and its option `walls_option`) otherwise.
-std::optional<sys::JammedStateT<2>> jammed_input(const std::string& state_file, const std::string& packing_file,
+/// excludes a packing file, is of dimension D, has walls exactly when `so.mode` is walls, and has
+/// the options' contact law. UsageError (one line, naming `command` and its option
+/// `walls_option`) otherwise.
+template <int D = 2>
+std::optional<sys::JammedStateT<D>> jammed_input(const std::string& state_file, const std::string& packing_file,
                                                  const qs::SolverOptions& so, const char* command,
                                                  const char* walls_option);
 

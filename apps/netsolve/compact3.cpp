@@ -1,10 +1,12 @@
 // netsolve compact --dim 3 (issue 30): sphere packings on the network core NetworkSolverT<3> with
 // the 3D plastic-indentation law, affine (--affine), in the die of the peripheral layer (--boundary
-// layer) or in a periodic cell (--boundary periodic), along hydrostatic, closed-die (along z, the
-// deposition's gravity axis) or any six-component strain-rate direction. The same files as in 2D:
-// history.csv (Voigt components, the fabric <n x n>), summary.json, the .vtp snapshots in
-// snapshots.pvd, the run status. 2D-only for now: the walls, the state files (--state,
-// --save-state) and the Figs 7-8 deviation columns. README.md "netsolve", docs/quasistatic.md.
+// layer), between six rigid frictionless walls (--boundary walls) or in a periodic cell (--boundary
+// periodic), along hydrostatic, closed-die (along z, the deposition's gravity axis) or any
+// six-component strain-rate direction. The same files as in 2D: history.csv (Voigt components,
+// the fabric <n x n>), summary.json, the .vtp snapshots in snapshots.pvd, the run status; the
+// jammed state both solvers share (--state, --save-state: jammed.json). 2D-only for now: the exact
+// continuation file state.txt and the Figs 7-8 deviation columns. README.md "netsolve",
+// docs/quasistatic.md.
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -22,6 +24,7 @@
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/compaction.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/jammed_state.hpp"
 #include "netdem/system/strain_path.hpp"
 #include "output.hpp"
 #include "run_status.hpp"
@@ -184,11 +187,9 @@ namespace {
 
 /// The checks of the options that 3D does not take yet (UsageError, one line).
 void check_3d_options(const CompactArgs& a) {
-  if (a.boundary == "walls")
-    throw UsageError("--boundary walls is 2D only in netsolve for now: with --dim 3 use --affine, --boundary layer "
-                     "(the peripheral layer) or --boundary periodic");
-  if (!a.state_file.empty()) throw UsageError("--state: netsolve compact --dim 3 has no jammed-state input yet");
-  if (a.save_state) throw UsageError("--save-state: the 3D network has no state file yet");
+  if (a.save_state && a.boundary == "periodic")
+    throw UsageError("--save-state: a jammed state has no periodic cell yet, and the 3D network has no state.txt "
+                     "(--boundary periodic)");
 }
 
 }  // namespace
@@ -204,11 +205,16 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   if (periodic && a.packing_file.empty())
     throw UsageError("--boundary periodic needs --packing FILE with a periodic packing (a '# periodic' line; netsolve "
                      "pack --dim 3 --periodic)");
-  check_run_dir(out, run_dir_options(ra, a.packing_file));
-  if (a.packing_file.empty()) check_deposition_size(pa, true);
+  const std::string input = a.state_file.empty() ? a.packing_file : a.state_file;
+  check_run_dir(out, run_dir_options(ra, input));
+  const auto jammed = jammed_input<3>(a.state_file, a.packing_file, so, "netsolve compact --dim 3", "--boundary walls");
+  if (input.empty()) check_deposition_size(pa, true);
   std::string source;
-  activity() = a.packing_file.empty() ? "building the 3D ballistic deposition" : "reading " + a.packing_file;
-  const packing::Packing pk = input_packing_3d(a.packing_file, pa, source, "the network solver");
+  activity() = input.empty() ? "building the 3D ballistic deposition" : "reading " + input;
+  packing::Packing pk = jammed ? jammed->packing() : input_packing_3d(a.packing_file, pa, source, "the network solver");
+  if (jammed) source = "jammed state " + a.state_file;
+  // the walls enclose every sphere at the start (as demsolve compact --boundary walls); a state has its box
+  if (so.mode == qs::BoundaryMode::Walls && !jammed) pk.box = walls_box(pk);
   if (pk.periodic && !periodic)
     throw UsageError(fmt::format("--packing {} is a periodic packing (a '# periodic' line): run it with --boundary periodic",
                                  packing::quote_input(a.packing_file)));
@@ -217,14 +223,14 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
                                  packing::quote_input(a.packing_file)));
   co.validate(pk.density());
   activity() = "setting up the network solver";
-  open_run_dir(out, command, run_dir_options(ra, a.packing_file));
+  open_run_dir(out, command, run_dir_options(ra, input));
   packing::write_packing_csv(pk, out / "packing.csv");
   if (!a.quiet)
     std::fprintf(stderr, "netsolve: %zu spheres, D0 = %.4f, seed %llu (%s)\n", pk.size(), pk.density(),
                  static_cast<unsigned long long>(pk.seed), source.c_str());
 
   const auto t0 = std::chrono::steady_clock::now();
-  qs::NetworkSolver3 solver(pk, so);
+  qs::NetworkSolver3 solver = jammed ? qs::NetworkSolver3(*jammed, so) : qs::NetworkSolver3(pk, so);
   std::vector<std::string> kinds = {"particles", "contacts"};
   if (periodic) kinds.emplace_back("cell");
   SnapshotSeries series(out / "snapshots.pvd", kinds);
@@ -243,7 +249,10 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   if (!stopped.empty()) rows.csv += "# stopped: " + stopped + "\n";
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_file_atomic(out / "history.csv", rows.csv);
-  if (stopped.empty()) write_snapshot_3d(solver, series, "final", rows.last.density);
+  if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
+    write_snapshot_3d(solver, series, "final", rows.last.density);
+    if (a.save_state) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
+  }
   const int outside = periodic ? 0 : centres_outside_3d(solver, pk.box);
   if (outside > 0)
     std::fprintf(stderr, "netsolve: warning: %d sphere centres left the box between the peripheral spheres (die mode)\n",
@@ -253,6 +262,9 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   rows.tally.conv.judge(status, "");
   if (stopped.empty()) rows.tally.equilibrium.judge(status);
   if (outside > 0) status.add("unstable", fmt::format("{} sphere centres left the box between the peripheral spheres", outside));
+  if (so.mode == qs::BoundaryMode::Walls && a.state_file.empty() && rows.tally.unconverged > 0 && !status.ok())
+    status.add("unconverged", "a loose packing between walls is a mechanism until the walls jam it: start from a "
+                              "jammed state (--state, e.g. demsolve compact --dim 3 --boundary walls --save-state)");
   const auto& last = rows.last;
   if (last.Z < 3.0) status.add("unstable", fmt::format("final Z = {:.3g} < 3: the network is a mechanism", last.Z));
 
@@ -271,7 +283,10 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["initial_density"] = solver.initial_density();
   j["sigma_y"] = sy;
   j["friction"] = a.law.friction;
-  j["mode"] = a.affine ? (periodic ? "affine (periodic cell)" : "affine") : periodic ? "periodic" : "die";
+  j["mode"] = a.affine ? (periodic ? "affine (periodic cell)" : "affine")
+              : periodic ? "periodic"
+              : so.mode == qs::BoundaryMode::Walls ? "walls"
+                                                   : "die";
   if (periodic) j["stress_measure"] = "contact stress (periodic cell: S = S_contacts, eq13_vs_contacts 0 by construction)";
   j["rotations"] = !a.no_rotation;
   j["path"] = {{"name", co.path.name}, {"E", co.path.E}};
@@ -301,7 +316,9 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = state_json(last, sy);
   j["solver"] = solver_summary(so, tm, solver.free_dofs(), rows.tally);
-  j["state"] = nullptr;
+  j["state"] = nullptr;  // the exact continuation file (state.txt) is 2D only
+  if (a.save_state || !a.state_file.empty())
+    j["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state && stopped.empty() ? "jammed.json" : ""}};
   add_run_records(j, tm, wall);
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);

@@ -43,6 +43,10 @@ qs::CompactionOptionsT<D> compact_compaction_options(const CompactArgs& a, const
     if (so.mode == qs::BoundaryMode::Walls && co.path.E12 != 0.0)
       throw std::invalid_argument(fmt::format("--boundary walls: the walls stay axis-parallel, so the path needs E12 = 0, got {}",
                                               co.path.E12));
+  } else {
+    if (so.mode == qs::BoundaryMode::Walls && (co.path.E[3] != 0.0 || co.path.E[4] != 0.0 || co.path.E[5] != 0.0))
+      throw std::invalid_argument(fmt::format("--boundary walls: the walls stay axis-parallel, so the path needs E23 = E13 "
+                                              "= E12 = 0, got {}, {}, {}", co.path.E[3], co.path.E[4], co.path.E[5]));
   }
   return co;
 }

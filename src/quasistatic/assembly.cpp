@@ -73,10 +73,8 @@ void NetworkSolverT<D, L>::Impl::assemble(bool& any_nonsymmetric) {
   }
   // stick tangents differ slightly from M too
   if (opt.law.frictional()) any_nonsymmetric = true;
-  if constexpr (D == 2) {
-    wall_forces();
-    wall_stiffness();
-  }
+  wall_forces();
+  wall_stiffness();
 }
 
 // Modifications of a closed pair's consistent tangent e.stiffness for the iteration matrix, from
@@ -194,7 +192,7 @@ void NetworkSolverT<D, L>::Impl::evaluate_forces() {
     }
   }
   omp_set_max_active_levels(levels);
-  if constexpr (D == 2) wall_forces();  // serial, after the pairs: the same sums in the same order
+  wall_forces();  // serial, after the pairs: the same sums in the same order
 }
 
 // Open/closed cycling: a pair that closed and opened again within this increment keeps the
@@ -237,13 +235,11 @@ void NetworkSolverT<D, L>::Impl::refresh_particles(const std::vector<int>& group
     }
   for (const int p : group)
     for (int q = adj_start[p]; q < adj_start[p + 1]; ++q) refreshed[static_cast<std::size_t>(adj_pair[q])] = 0;
-  if constexpr (D == 2) {
-    if (walls())
-      for (const int p : group) {
-        wall_particle(p, -1.0);
-        wall_particle(p, 1.0);
-      }
-  }
+  if (walls())
+    for (const int p : group) {
+      wall_particle(p, -1.0);
+      wall_particle(p, 1.0);
+    }
 }
 
 /// Mean translational diagonal of the iteration matrix (rotational if no translation is free).

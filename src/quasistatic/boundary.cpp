@@ -73,7 +73,7 @@ void NetworkSolverT<D, L>::Impl::loaded_particle(std::vector<std::uint8_t>& load
   for (std::size_t k = 0; k < pi.size(); ++k)
     if (fn_c[k] > 0.0) loaded[pi[k]] = loaded[pj[k]] = 1;
   for (std::size_t s = 0; s < wfn_c.size(); ++s)
-    if (wfn_c[s] > 0.0) loaded[s / 4] = 1;
+    if (wfn_c[s] > 0.0) loaded[s / kW] = 1;
 }
 
 template <int D, class L>

@@ -37,9 +37,8 @@ template <int D, class L>
 double NetworkSolverT<D, L>::Impl::energy() const {
   double w = 0.0;
   for (double x : pw) w += x;
-  if constexpr (D == 2)
-    if (walls())
-      for (double x : wwork) w += x;
+  if (walls())
+    for (double x : wwork) w += x;
   return w;
 }
 

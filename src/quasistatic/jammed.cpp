@@ -26,14 +26,12 @@ NetworkSolverT<D, L>::NetworkSolverT(const sys::JammedStateT<D>& j, const Option
   s.ft_c.assign(s.pi.size(), ct::tan_zero<typename Impl::Tan>());
   s.slide_c.assign(s.pi.size(), 0);
   s.build_neighbours();
-  if constexpr (D == 2) {
-    if (s.walls()) {
-      s.whist.assign(4 * static_cast<std::size_t>(s.n), typename Impl::Law::History{});
-      s.wfn_c.assign(s.whist.size(), 0.0);
-      for (std::size_t k = 0; k < j.wall_particle.size(); ++k)
-        s.whist[4 * static_cast<std::size_t>(j.wall_particle[k]) + static_cast<std::size_t>(j.wall_side[k])] =
-            j.wall_history[k];
-    }
+  if (s.walls()) {
+    s.whist.assign(Impl::kW * static_cast<std::size_t>(s.n), typename Impl::Law::History{});
+    s.wfn_c.assign(s.whist.size(), 0.0);
+    for (std::size_t k = 0; k < j.wall_particle.size(); ++k)
+      s.whist[Impl::kW * static_cast<std::size_t>(j.wall_particle[k]) + static_cast<std::size_t>(j.wall_side[k])] =
+          j.wall_history[k];
   }
   // the committed forces: the law on these histories at these positions (a zero increment)
   s.begin_increment(Mat::Zero());
@@ -77,8 +75,8 @@ sys::JammedStateT<D> raw_jammed(const typename NetworkSolverT<D, L>::Impl& s) {
     }
   for (std::size_t w = 0; w < s.whist.size(); ++w)
     if (s.wall_law.has_history(s.whist[w])) {
-      j.wall_particle.push_back(static_cast<int>(w / 4));
-      j.wall_side.push_back(static_cast<int>(w % 4));
+      j.wall_particle.push_back(static_cast<int>(w / (2 * D)));
+      j.wall_side.push_back(static_cast<int>(w % (2 * D)));
       j.wall_history.push_back(s.whist[w]);
     }
   return j;

@@ -17,6 +17,40 @@
 
 namespace netdem::qs {
 
+namespace {
+
+/// BoundaryMode::Walls: the reactions are the walls' forces, applied at the contact points on the
+/// faces (Eq 13 with the walls as the boundary): added to S (unscaled Eq 13 sum, lever arms from
+/// xc), to SW (the wall contacts' share of the contact stress), to the net-force sums, and counted
+/// per particle in wall_contacts (the rattlers' load-bearing contacts). Nothing without walls.
+template <int D, class Impl>
+void add_wall_reactions(const Impl& s, const Eigen::Matrix<double, D, 1>& xc, Eigen::Matrix<double, D, D>& S,
+                        Eigen::Matrix<double, D, D>& SW, Eigen::Matrix<double, D, 1>& Fnet, double& Fabs,
+                        std::vector<int>& wall_contacts) {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  constexpr int kW = Impl::kW;
+  if (!s.walls() || s.wfn_c.size() != kW * static_cast<std::size_t>(s.n)) return;
+  wall_contacts.assign(static_cast<std::size_t>(s.n), 0);
+  const double lo[3] = {s.box0.x_min, s.box0.y_min, s.box0.z_min}, hi[3] = {s.box0.x_max, s.box0.y_max, s.box0.z_max};
+  for (int p = 0; p < s.n; ++p)
+    for (int w = 0; w < kW; ++w) {
+      const double fn = s.wfn_c[kW * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
+      if (!(fn > 0.0)) continue;
+      ++wall_contacts[static_cast<std::size_t>(p)];
+      const int a = w / 2;
+      const Vec xp = s.at(p);
+      Vec cp = xp;  // the contact point on the face
+      cp(a) = s.Fbox(a, a) * (w % 2 == 0 ? lo[a] : hi[a]);
+      const Vec Fapp = fn * (w % 2 == 0 ? 1.0 : -1.0) * Vec::Unit(a);  // inward
+      S += Fapp * (cp - xc).transpose();
+      SW -= Fapp * (xp - cp).transpose();
+      Fnet += Fapp;
+      Fabs += Fapp.norm();
+    }
+}
+
+}  // namespace
+
 template <int D, class L>
 StateMeasures NetworkSolverT<D, L>::measures() const
   requires(D == 2)
@@ -45,30 +79,11 @@ StateMeasures NetworkSolverT<D, L>::measures() const
     Fnet += Fapp;
     Fabs += Fapp.norm();
   }
-  // BoundaryMode::Walls: the reactions are the walls' forces, applied at the contact points on the
-  // faces (the same Eq 13 with the walls as the boundary); they also enter the contact stress below
+  // the walls' reactions (they also enter the contact stress below); the load-bearing contacts per
+  // particle with the walls, and the load-bearing pairs (rattlers)
   Eigen::Matrix2d SW = Eigen::Matrix2d::Zero();  // wall contacts' share of the contact stress
-  // the load-bearing contacts per particle with the walls, and the load-bearing pairs (rattlers)
   std::vector<int> wall_contacts, bi, bj;
-  if (s.walls() && s.wfn_c.size() == 4 * static_cast<std::size_t>(s.n)) {
-    wall_contacts.assign(static_cast<std::size_t>(s.n), 0);
-    const double faces[4] = {s.Fbox(0, 0) * s.box0.x_min, s.Fbox(0, 0) * s.box0.x_max, s.Fbox(1, 1) * s.box0.y_min,
-                             s.Fbox(1, 1) * s.box0.y_max};
-    const Eigen::Vector2d normal[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};  // inward
-    for (int p = 0; p < s.n; ++p)
-      for (int w = 0; w < 4; ++w) {
-        const double fn = s.wfn_c[4 * static_cast<std::size_t>(p) + static_cast<std::size_t>(w)];
-        if (!(fn > 0.0)) continue;
-        ++wall_contacts[static_cast<std::size_t>(p)];
-        const Eigen::Vector2d xp = s.at(p);
-        const Eigen::Vector2d cp = w < 2 ? Eigen::Vector2d(faces[w], xp.y()) : Eigen::Vector2d(xp.x(), faces[w]);
-        const Eigen::Vector2d Fapp = fn * normal[w];
-        S += Fapp * (cp - xc).transpose();
-        SW -= Fapp * (xp - cp).transpose();
-        Fnet += Fapp;
-        Fabs += Fapp.norm();
-      }
-  }
+  add_wall_reactions<2>(s, xc, S, SW, Fnet, Fabs, wall_contacts);
   S /= V;
   m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
   if (s.periodic()) m.net_force_ratio = 0.0;  // one held particle: no boundary to sum over
@@ -174,14 +189,13 @@ std::optional<packing::PeriodicCellT<D>> NetworkSolverT<D, L>::periodic_cell() c
   return impl_->cell0.deformed(impl_->Fbox);
 }
 
-// The Eq 13 stress of the prescribed particles' reactions (lever arms from the centre of the
-// current box, as measures()) and the Love-Weber contact stress, in any dimension.
+// The Eq 13 stress of the prescribed particles' reactions or of the walls' (lever arms from the
+// centre of the current box, as measures()) and the Love-Weber contact stress, in any dimension.
 template <int D, class L>
 StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   const auto& s = *impl_;
   using Mat = Eigen::Matrix<double, D, D>;
   using Vec = typename Impl::Vec;
-  if (s.walls()) throw std::invalid_argument("stress: in the walls mode the reactions are the walls' (measures())");
   constexpr int kN = Impl::kN;
   StressMeasuresT<D> m;
   m.strain = s.E;
@@ -202,12 +216,14 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
     Fnet += Fapp;
     Fabs += Fapp.norm();
   }
+  Mat SW = Mat::Zero();
+  std::vector<int> wall_contacts, bi, bj;  // per particle with the walls; the load-bearing pairs (rattlers)
+  add_wall_reactions<D>(s, xc, S, SW, Fnet, Fabs, wall_contacts);
   S /= V;
   m.net_force_ratio = Fabs > 0.0 ? Fnet.norm() / Fabs : 0.0;
   m.eq13 = 0.5 * (S + S.transpose());
   Mat SC = Mat::Zero();
   double sum_fn = 0.0;
-  std::vector<int> bi, bj;  // the load-bearing pairs (rattlers)
   for (std::size_t k = 0; k < s.pi.size(); ++k) {
     if (s.fn_c[k] <= 0.0) continue;
     const int i = s.pi[k], j = s.pj[k];
@@ -226,6 +242,7 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
     sum_fn += s.fn_c[k];
     m.sliding += s.slide_c[k];
   }
+  SC += SW;
   SC /= V;
   m.contacts = 0.5 * (SC + SC.transpose());
   if (s.periodic()) {  // no prescribed boundary, so no Eq 13: the stress is the contact stress
@@ -236,7 +253,7 @@ StressMeasuresT<D> NetworkSolverT<D, L>::stress() const {
   m.eq13_vs_contacts = c > 0.0 ? d / c : (d > 0.0 ? 1.0 : 0.0);
   if (m.contact_count > 0) m.fabric /= m.contact_count;
   {
-    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, {}, D + 1);
+    const sys::Backbone bb = sys::prune_rattlers(static_cast<std::size_t>(s.n), bi, bj, wall_contacts, D + 1);
     m.rattlers = static_cast<int>(bb.rattlers);
     m.Z_backbone = bb.Z;
   }

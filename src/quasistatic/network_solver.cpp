@@ -36,10 +36,6 @@ void NetworkSolverT<D, L>::Impl::init_linear_solver() {
 
 template <int D, class L>
 void NetworkSolverT<D, L>::Impl::set_options(const Options& o) {
-  if constexpr (D == 3) {
-    if (o.mode == BoundaryMode::Walls)
-      throw std::invalid_argument("network solver: the walls boundary mode is 2D only (3D: affine or die)");
-  }
   if (o.uses_energy_merit() && !ct::kHasPotential<Law>)
     throw std::invalid_argument("network solver: the energy merit needs a contact law with a potential; this law has "
                                 "none (use the residual merit)");
@@ -289,11 +285,8 @@ void NetworkStateT<D, H>::validate() const {
   if (pair_j.size() != np || history.size() != np || aux.size() != np || f_n.size() != np || f_t.size() != np ||
       sliding.size() != np)
     bad(fmt::format("per-pair arrays do not all have {} entries", np));
-  if constexpr (D == 3) {
-    if (!wall_history.empty() || !wall_f_n.empty()) bad("the walls mode is 2D only");
-  } else if ((!wall_history.empty() && wall_history.size() != 4 * n) || wall_f_n.size() != wall_history.size()) {
-    bad(fmt::format("the wall-contact arrays must be empty or have 4 x {} entries", n));
-  }
+  if ((!wall_history.empty() && wall_history.size() != 2 * D * n) || wall_f_n.size() != wall_history.size())
+    bad(fmt::format("the wall-contact arrays must be empty or have {} x {} entries", 2 * D, n));
   check_periodic(*this, n, np, bad);
   for (std::size_t k = 0; k < np; ++k) {
     const int i = pair_i[k], j = pair_j[k];

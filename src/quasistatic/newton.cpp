@@ -204,7 +204,7 @@ double NetworkSolverT<D, L>::Impl::contact_work() const {
       w -= 0.5 * (ft_c[k] + t.f_t).dot(trial_slip[k]);
     }
   }
-  if constexpr (D == 2) w += wall_work();
+  w += wall_work();
   return w;
 }
 
@@ -386,7 +386,7 @@ void NetworkSolverT<D, L>::Impl::commit(const Mat& dE, IncrementReport& rep) {
     slide_c[k] = t.sliding ? 1 : 0;
     rep.sliding += t.sliding;
   }
-  if constexpr (D == 2) commit_walls();
+  commit_walls();
   for (int p = 0; p < n; ++p) {
     for (int a = 0; a < D; ++a) ps.pos[D * p + a] += du[kN * p + a];
     for (int a = 0; a < kR; ++a) ps.rot[kR * p + a] += du[kN * p + D + a];

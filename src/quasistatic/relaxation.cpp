@@ -50,16 +50,14 @@ void NetworkSolverT<D, L>::Impl::local_eval(const int* group, int m, Eigen::Vect
           if (sl[A] >= 0 && sl[B] >= 0)
             Kl.template block<kN, kN>(kN * sl[A], kN * sl[B]) += e.stiffness.template block<kN, kN>(kN * A, kN * B);
     }
-  if constexpr (D == 2) {
-    if (walls())
-      for (int t = 0; t < m; ++t)
-        for (int w = 0; w < 4; ++w) {
-          const WallEval we = wall_eval(group[t], w);
-          const int a = w < 2 ? 0 : 1;
-          res(3 * t + a) += we.force;
-          Kl(3 * t + a, 3 * t + a) += we.k;
-        }
-  }
+  if (walls())
+    for (int t = 0; t < m; ++t)
+      for (int w = 0; w < kW; ++w) {
+        const WallEval we = wall_eval(group[t], w);
+        const int a = w / 2;
+        res(kN * t + a) += we.force;
+        Kl(kN * t + a, kN * t + a) += we.k;
+      }
   const double eta_t = std::max(eta, 0.0);
   for (int t = 0; t < m; ++t)
     for (int a = 0; a < kN; ++a) {

@@ -13,7 +13,7 @@
 //   measures.cpp       stresses (Eq 13, Love-Weber), Z, affine deviations, diagnostics
 //   network_solver.cpp construction, the public accessors, the copyable state
 //   state_io.cpp       the state file (save/restore; 2D)
-//   walls.cpp          the rigid frictionless die walls of BoundaryMode::Walls (2D)
+//   walls.cpp          the rigid frictionless walls of BoundaryMode::Walls
 //
 // The dimension D is a template parameter of everything here: a node has kN = Dim<D>::kNodeDofs
 // DOFs (D translations, then Dim<D>::kRotDofs rotations; DOF c of particle p at kN p + c), a pair
@@ -74,8 +74,9 @@ struct DofMap {
              int pinned = -1, bool affine_centres = false);
 };
 
-/// BoundaryMode::Walls (2D): the contacts of every particle with the four walls (slot 4 p + w;
-/// w = 0 left, 1 right, 2 bottom, 3 top), the plastic-indentation law with R* = r_p and mu = 0.
+/// BoundaryMode::Walls: the contacts of every particle with the 2D walls (slot 2D p + w; wall w at
+/// the minimum (w even) or maximum (w odd) of axis w / 2: in 2D 0 left, 1 right, 2 bottom, 3 top),
+/// the plastic-indentation law with R* = r_p and mu = 0.
 template <int D, class Law>
 struct WallTableT {
   std::vector<typename Law::History> whist;  ///< committed history
@@ -105,6 +106,7 @@ struct NetworkSolverT<D, L>::Impl : ContactTableT<D, L>, DofMap, WallTableT<D, L
   static constexpr int kN = ct::Dim<D>::kNodeDofs;  ///< DOFs per node
   static constexpr int kP = 2 * kN;                 ///< DOFs per pair element
   static constexpr int kR = ct::Dim<D>::kRotDofs;
+  static constexpr int kW = 2 * D;  ///< walls per particle (BoundaryMode::Walls): 2a min, 2a + 1 max of axis a
   using Table::adj_pair;
   using Table::adj_start;
   using Table::aux;
@@ -304,7 +306,7 @@ struct NetworkSolverT<D, L>::Impl : ContactTableT<D, L>, DofMap, WallTableT<D, L
   double mean_normal_force() const;
   double residual(double fbar, bool fill_rhs, double* max_norm = nullptr);
   void clip_step();
-  // walls.cpp (2D)
+  // walls.cpp
   bool walls() const { return opt.mode == BoundaryMode::Walls; }
   struct WallEval {
     Response r;

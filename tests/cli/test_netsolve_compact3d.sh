@@ -62,8 +62,6 @@ open(f"{tmp}/rotated.csv", "w").write("\n".join(out) + "\n")
 PY
 result lattices $?
 
-check_bad dim3_walls "walls is 2D only" compact --dim 3 --boundary walls --packing "$p3"
-check_bad dim3_save_state "no state file yet" compact --dim 3 --affine --packing "$p3" --save-state
 check_bad dim3_2d_file "is a 2D packing" compact --dim 3 --affine --packing "$tmp/p2/packing.csv"
 check_bad dim2_3d_file "is a 3D packing" compact --packing "$p3"
 check_bad dim3_no_compaction "does not compact" compact --dim 3 --affine --packing "$p3" --path 1,1,-1

@@ -7,7 +7,12 @@
 //    to itself (the peripheral layer with it) and under a renumbering of the particles;
 //  * a die-mode run on a jittered sphere packing converges and its Eq 13 stress agrees with the
 //    Love-Weber contact stress;
-//  * the walls mode and a packing of the other dimension are refused.
+//  * six rigid walls (BoundaryMode::Walls): a simple cubic lattice between them stays affine (the
+//    law is linear in R* u: a wall contact, R* = r, carries the chain force at half a pair's
+//    overlap) and its stress is the periodic closed form, Eq 13 of the walls' reactions equal to
+//    the contact stress with the wall contacts; a prestressed jittered lattice between walls
+//    converges, is invariant under a rotation that maps the box to itself and a renumbering;
+//  * a packing of the other dimension is refused.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -97,12 +102,17 @@ double rel(const M3& a, const M3& b) { return (a - b).norm() / b.norm(); }
 struct RunResult {
   qs::StressMeasuresT<3> s;
   int unconverged = 0;
+  double max_rms = 0.0;  ///< the largest accepted undragged RMS residual / mean contact force
 };
 
 RunResult run(const Packing& pk, const qs::SolverOptions& o, const M3& dE, int increments) {
   qs::NetworkSolver3 solver(pk, o);
   RunResult r;
-  for (int k = 0; k < increments; ++k) r.unconverged += !solver.increment(dE).converged;
+  for (int k = 0; k < increments; ++k) {
+    const qs::IncrementReport rep = solver.increment(dE);
+    r.unconverged += !rep.converged;
+    r.max_rms = std::max(r.max_rms, rep.residual_rms);
+  }
   r.s = solver.stress();
   return r;
 }
@@ -214,10 +224,81 @@ TEST(Network3D, DieModeConvergesAndEq13AgreesWithTheContactStress) {
   EXPECT_EQ(solver.stress().eq13, copy.stress().eq13);
 }
 
-TEST(Network3D, RefusesWallsAndAPackingOfTheOtherDimension) {
+TEST(Network3D, WallsKeepACubicLatticeAffineWithThePeriodicClosedForm) {
+  const int m = 4;
+  const double r = 1.0, e = 1e-3;
   qs::SolverOptions o;
   o.mode = qs::BoundaryMode::Walls;
-  EXPECT_THROW(qs::NetworkSolver3(cubic_lattice(3, 1.0), o), std::invalid_argument);
+  qs::NetworkSolver3 solver(cubic_lattice(m, r), o);
+  EXPECT_EQ(solver.free_dofs(), 6 * m * m * m);  // nothing prescribed
+  const M3 dE = -e * M3::Identity();
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(solver.increment(dE).converged);
+  // every bond at the affine length 2 r exp(-3e): the wall overlap is half a pair's, R* twice
+  const double L = 2 * r * std::exp(-3 * e);
+  ct::Kinematics<3> kin;
+  kin.overlap = 2 * r - L;
+  kin.r_eff = 0.5 * r;
+  const ct::PlasticIndentationLaw3 law(o.law);
+  const double fn = law.evaluate(ct::PlasticIndentationHistoryT<3>{}, kin, nullptr).f_n;
+  ASSERT_GT(fn, 0.0);
+  const auto contacts = solver.contacts();
+  ASSERT_EQ(contacts.size(), static_cast<std::size_t>(3 * m * m * (m - 1)));
+  for (const auto& c : contacts) EXPECT_NEAR(c.f_n, fn, 1e-9 * fn);
+  for (std::size_t p = 0; p < solver.size(); ++p) {
+    EXPECT_NEAR(solver.particles().coord(p, 0), (2 * (p % m) + 1) * r * std::exp(-3 * e), 1e-9 * r);
+  }
+  // m^2 chains per axis of force fn over the face (2 r m)^2 exp(-6e): the periodic cell's stress,
+  // no (m - 1) / m (the walls carry the outer half-bonds)
+  const double S = -fn / (4 * r * r * std::exp(-6 * e));
+  const auto st = solver.stress();
+  std::printf("3D walls lattice: S = %.9g (closed form %.9g), contacts %.9g\n", st.eq13(0, 0), S, st.contacts(0, 0));
+  EXPECT_LT(rel(st.eq13, S * M3::Identity()), 1e-9);
+  EXPECT_LT(rel(st.contacts, S * M3::Identity()), 1e-9);
+  EXPECT_LT(st.net_force_ratio, 1e-9);
+  EXPECT_EQ(st.rattlers, 0);  // the corner spheres rest on three walls
+  EXPECT_NEAR(st.Z, 2.0 * 3 * m * m * (m - 1) / (m * m * m), 1e-12);  // pairs only, as in 2D
+}
+
+TEST(Network3D, WallsConvergeAndAreInvariantUnderRotationAndRenumbering) {
+  qs::SolverOptions o = qs::SolverOptions::compact();  // netsolve compact's, which runs walls pseudo-transient:
+  o.mode = qs::BoundaryMode::Walls;
+  o.iteration = qs::Iteration::PseudoTransient;  // accepted on the undragged residual
+  o.law.mu = 0.3;
+  // overlapping radii (gap < 0): a prestressed network between the walls of the spheres' box
+  Packing pk = jittered(4, 0.05, -0.06, 13);
+  pk.box = {-4.0, -4.0, 4.0, 4.0, -4.0, 4.0};
+  for (std::size_t p = 0; p < pk.size(); ++p) {  // the walls touch the outer spheres
+    const double lim = 4.0 - pk.r[p];
+    pk.x[p] = std::clamp(pk.x[p], -lim, lim);
+    pk.y[p] = std::clamp(pk.y[p], -lim, lim);
+    pk.z[p] = std::clamp(pk.z[p], -lim, lim);
+  }
+  const M3 dE = M3(V3(-0.002, -0.001, -0.0015).asDiagonal());
+  const RunResult a = run(pk, o, dE, 8);
+  ASSERT_GT(a.s.contact_count, 100);
+  EXPECT_EQ(a.unconverged, 0);
+  EXPECT_LE(a.max_rms, o.residual_tol);
+  EXPECT_LT(a.s.eq13_vs_contacts, 0.01);  // the walls' Eq 13 and the Love-Weber sum with the wall contacts
+  EXPECT_LT(a.s.net_force_ratio, 0.01);
+  EXPECT_LT(a.s.eq13(0, 0), 0.0);
+  M3 P;  // the cyclic permutation of the axes maps the cube and its walls to themselves
+  P << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+  const RunResult b = run(rotated(pk, P), o, P * dE * P.transpose(), 8);
+  std::vector<int> perm(pk.size());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), std::mt19937(8));
+  const RunResult c = run(renumbered(pk, perm), o, dE, 8);
+  std::printf("3D walls with friction: %d contacts, RMS residual %.3g, Eq 13 vs contacts %.3g; rotated %.3g, "
+              "renumbered %.3g\n", a.s.contact_count, a.max_rms, a.s.eq13_vs_contacts, rel(b.s.eq13, P * a.s.eq13 * P.transpose()),
+              rel(c.s.eq13, a.s.eq13));
+  EXPECT_EQ(a.s.contact_count, b.s.contact_count);
+  EXPECT_EQ(a.s.contact_count, c.s.contact_count);
+  EXPECT_LT(rel(b.s.eq13, P * a.s.eq13 * P.transpose()), 1e-6);
+  EXPECT_LT(rel(c.s.eq13, a.s.eq13), 1e-6);
+}
+
+TEST(Network3D, RefusesAPackingOfTheOtherDimension) {
+  qs::SolverOptions o;
   o.mode = qs::BoundaryMode::Die;
   Packing flat;
   flat.x = {1.0};

@@ -6,8 +6,8 @@
 // (6x6 or 12x12, contact/element.hpp). The dimension and the law are the template parameters of
 // NetworkSolverT<D, Law> (NetworkSolver = NetworkSolverT<2>, the plastic-indentation law, used by
 // the tools; NetworkSolver3 = NetworkSolverT<3>; NetworkSolverLinear(3): the linear spring).
-// The walls mode (BoundaryMode::Walls), the state file and the measures of StateMeasures (strain,
-// Figs 7-8 deviations) are 2D only for now; stress() gives the Eq 13 and contact stresses in both. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
+// The state file and the measures of StateMeasures (strain, Figs 7-8 deviations) are 2D only for
+// now; stress() gives the Eq 13 and contact stresses in both. Every load increment prescribes Delta u = (exp(Delta E) - I) x (Eqs 14-15, current
 // coordinates) on the prescribed particles (the peripheral layer in die mode, every centre in
 // affine mode; peripheral rotations are always held), then finds the free DOFs by Newton
 // iterations on the equilibrium equations (Eq 10-12). The trial state is always recomputed from
@@ -207,7 +207,7 @@ struct NetworkStateT {
   std::vector<double> du_prev;
   Mat dE_prev = Mat::Zero();
   SolverTimings timings;
-  std::vector<History> wall_history;  ///< empty (walls are 2D)
+  std::vector<History> wall_history;  ///< BoundaryMode::Walls: 2D per particle (walls.cpp's slots); else empty
   std::vector<double> wall_f_n;
   /// BoundaryMode::Periodic (issue 29): the packing's cell vectors (packing::Packing::cell; empty:
   /// the box's edges), each row's image of j (empty in other modes), the particle whose
@@ -295,8 +295,7 @@ class NetworkSolverT {
   /// law and dimension, the generic layout of NetworkStateT.
   static constexpr bool kFileLayout = std::is_same_v<State, NetworkStateT<2>>;
 
-  /// Throws std::invalid_argument on invalid options or packing (a packing of another dimension;
-  /// in 3D the walls mode).
+  /// Throws std::invalid_argument on invalid options or packing (a packing of another dimension).
   NetworkSolverT(const packing::Packing& packing, const Options& options);
   /// Continues from a state (bit-identical to the solver it was taken from when `options` are
   /// that solver's). The boundary mode may differ; throws std::invalid_argument on a bad state.
@@ -329,8 +328,8 @@ class NetworkSolverT {
   const Options& options() const;
   StateMeasures measures() const
     requires(D == 2);
-  /// The Eq 13 and contact stresses (both dimensions; not in the walls mode, whose reactions are
-  /// the walls': measures()).
+  /// The Eq 13 and contact stresses (both dimensions; in the walls mode Eq 13 sums the walls'
+  /// reactions and the contact stress includes the wall contacts, as measures()).
   StressMeasuresT<D> stress() const;
   const SolverTimings& timings() const;
 
