@@ -197,7 +197,8 @@ void check_3d_options(const CompactArgs& a) {
 int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const std::string& command,
                    const fs::path& out) {
   check_3d_options(a);
-  const qs::SolverOptions so = compact_solver_options(a);
+  qs::SolverOptions so = compact_solver_options(a);
+  if (a.factor_reuse < 0) so.factor_reuse = kFactorReuse3d;
   const qs::CompactionOptions3 co = compact_compaction_options<3>(a, so);
   std::vector<double> snaps = a.snapshots;
   std::sort(snaps.begin(), snaps.end());

@@ -10,6 +10,7 @@ namespace netdem::app::netsolve {
 
 qs::SolverOptions compact_solver_options(const CompactArgs& a) {
   qs::SolverOptions so = a.solver;  // the Newton knobs bound directly by the command line
+  if (a.factor_reuse >= 0) so.factor_reuse = a.factor_reuse;  // else the preset's (2D; run_compact_3d: kFactorReuse3d)
   so.mode = a.affine                 ? qs::BoundaryMode::Affine
             : a.boundary == "walls"    ? qs::BoundaryMode::Walls
             : a.boundary == "periodic" ? qs::BoundaryMode::Periodic

@@ -21,6 +21,10 @@ template <int D, class L>
 void NetworkSolverT<D, L>::Impl::init_linear_solver() {
   LinearSolverOptions lo;
   lo.gmres_tolerance = opt.linear_tolerance;
+  // 3D: nested dissection (METIS on the particles' graph) at every size. CHOLMOD's default keeps
+  // AMD when its fill looks acceptable, and on sphere networks AMD's factor takes 2.4x (2000
+  // spheres) to 3.4x (10^4) the flops of nested dissection's (docs/performance.md "Issue 30, part 3").
+  if constexpr (D == 3) lo.ordering = LinearSolverOptions::Ordering::Nesdis;
   lin = LinearSolver(lo);
   r_mean = std::accumulate(ps.r.begin(), ps.r.end(), 0.0) / n;
   r_max = *std::max_element(ps.r.begin(), ps.r.end());
