@@ -99,6 +99,14 @@ Packing renumbered(const Packing& pk, const std::vector<int>& perm) {  // old p 
 
 double rel(const M3& a, const M3& b) { return (a - b).norm() / b.norm(); }
 
+/// The law's normal force on a fresh bond of two spheres of radius r at centre distance L.
+double bond_force(const qs::SolverOptions& o, double r, double L) {
+  ct::Kinematics<3> kin;
+  kin.overlap = 2 * r - L;
+  kin.r_eff = 0.5 * r;
+  return ct::PlasticIndentationLaw3(o.law).evaluate(ct::PlasticIndentationHistoryT<3>{}, kin, nullptr).f_n;
+}
+
 struct RunResult {
   qs::StressMeasuresT<3> s;
   int unconverged = 0;
@@ -131,12 +139,7 @@ TEST(Network3D, AffineHydrostaticLatticeGivesTheClosedForm) {
   EXPECT_TRUE(rep.converged);
   // the affine motion: every lattice bond shortened to L = 2 r exp(-e)
   const double L = 2 * r * std::exp(-e);
-  ct::Kinematics<3> kin;
-  kin.overlap = 2 * r - L;
-  kin.overlap_start = 0.0;
-  kin.r_eff = 0.5 * r;
-  const ct::PlasticIndentationLaw3 law(o.law);
-  const double fn = law.evaluate(ct::PlasticIndentationHistoryT<3>{}, kin, nullptr).f_n;
+  const double fn = bond_force(o, r, L);
   ASSERT_GT(fn, 0.0);
   const auto contacts = solver.contacts();
   ASSERT_EQ(contacts.size(), static_cast<std::size_t>(3 * m * m * (m - 1)));
@@ -235,11 +238,7 @@ TEST(Network3D, WallsKeepACubicLatticeAffineWithThePeriodicClosedForm) {
   for (int k = 0; k < 3; ++k) EXPECT_TRUE(solver.increment(dE).converged);
   // every bond at the affine length 2 r exp(-3e): the wall overlap is half a pair's, R* twice
   const double L = 2 * r * std::exp(-3 * e);
-  ct::Kinematics<3> kin;
-  kin.overlap = 2 * r - L;
-  kin.r_eff = 0.5 * r;
-  const ct::PlasticIndentationLaw3 law(o.law);
-  const double fn = law.evaluate(ct::PlasticIndentationHistoryT<3>{}, kin, nullptr).f_n;
+  const double fn = bond_force(o, r, L);
   ASSERT_GT(fn, 0.0);
   const auto contacts = solver.contacts();
   ASSERT_EQ(contacts.size(), static_cast<std::size_t>(3 * m * m * (m - 1)));
