@@ -11,8 +11,10 @@ Packings (made once in --work, reused): the green body of `netsolve pack --dim 3
   green_die      the green body in the die of the peripheral layer, the default iteration (legacy drag);
   green_die_pt   the same with --iteration pseudo-transient (true equilibrium; the 3D die leaks);
   green_affine   the green body, every centre affine;
-  periodic       the periodic packing in its cell (pseudo-transient, the default there);
-  periodic_reuse the same with the kept factor (--factor-reuse 20).
+  periodic       the periodic packing in its cell (pseudo-transient, the default there; since issue 30
+                 part 3 the kept factor, --factor-reuse 20, is the 3D default);
+  periodic_reuse the same with --factor-reuse 20 given explicitly;
+  periodic_fresh the same with a factorisation per fresh tangent (--factor-reuse 0).
 Writes a Markdown table: wall time, the solver's split (assembly, neighbours, analysis, factorisation,
 solve), Newton iterations, factorisations, peak resident memory (GNU time), the run status.
 Measure on an idle machine; this is a benchmark, not a test.
@@ -33,6 +35,7 @@ CASES = {
     "green_affine": ("green", ["--affine"]),
     "periodic": ("periodic", ["--boundary", "periodic"]),
     "periodic_reuse": ("periodic", ["--boundary", "periodic", "--factor-reuse", "20"]),
+    "periodic_fresh": ("periodic", ["--boundary", "periodic", "--factor-reuse", "0"]),
 }
 
 
