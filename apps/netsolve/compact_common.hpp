@@ -65,6 +65,11 @@ sys::ProbeSettings yield_probe_settings(const Args& a, int directions, double fi
 
 /// netsolve yield --dim 3 (yield3.cpp): argv as `netsolve yield ...`; its exit status.
 int run_yield3_command(int argc, char** argv);
+/// netsolve yield-merge --dim 3 (yield3_merge.cpp): one yield_points.csv and summary.json in
+/// `out_dir` from the folders of `netsolve yield --dim 3 --probe i/N` runs; throws
+/// std::invalid_argument (one line) for a folder that is not such a run or has another setup.
+int run_yield3_merge(const std::vector<std::string>& dirs, const std::string& out_dir, const std::string& command,
+                     bool overwrite);
 
 /// summary.json's "solver": the iteration, its knobs, the counts of the tally and the timings' counts.
 nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,

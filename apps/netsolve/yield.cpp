@@ -664,16 +664,17 @@ int run_yield(const YieldArgs& a, const std::string& command) {
 
 /// Entry point of `netsolve yield` and `netsolve yield-merge` (argv[1] is the subcommand).
 int run_yield_command(int argc, char** argv) {
-  // --dim 3: the sphere packings' command (yield3.cpp); --dim 2 is this one
+  // --dim 3: the sphere packings' command (yield3.cpp) and merge (yield3_merge.cpp); --dim 2 is this one
   std::vector<char*> args(argv, argv + argc);
+  bool merge3 = false;
   for (std::size_t k = 2; k < args.size(); ++k) {
     const std::string w = args[k];
     if (w != "--dim" && w.rfind("--dim=", 0) != 0) continue;
     const std::string v = w == "--dim" ? (k + 1 < args.size() ? args[k + 1] : "") : w.substr(6);
     if (v == "3" && std::string(argv[1]) == "yield") return netdem::app::netsolve::run_yield3_command(argc, argv);
-    if (v != "2") {
-      netdem::app::print_error_line(fmt::format("netsolve {}: error: --dim must be 2 or 3{}, got '{}'", argv[1],
-                                                std::string(argv[1]) == "yield" ? "" : " (yield-merge: 2)", v));
+    merge3 = v == "3";
+    if (v != "2" && v != "3") {
+      netdem::app::print_error_line(fmt::format("netsolve {}: error: --dim must be 2 or 3, got '{}'", argv[1], v));
       return 2;
     }
     args.erase(args.begin() + static_cast<long>(k), args.begin() + static_cast<long>(k) + (w == "--dim" ? 2 : 1));
@@ -747,7 +748,8 @@ int run_yield_command(int argc, char** argv) {
     app.add_option("--probe-worker", a.probe_worker, "internal: run one probe from the run folder's unloaded state")
         ->group("");
   } else {
-    app.description("netsolve yield-merge: assemble yield_points.csv from the probe files of several yield runs");
+    app.description("netsolve yield-merge [--dim 3]: assemble yield_points.csv from the probe files of several yield runs "
+                    "(--dim 3: of netsolve yield --dim 3 --probe i/N runs)");
     app.add_option("dirs", dirs, "run folders (each with probes/)")->required();
     app.add_option("--out", merge_out, "output folder")->capture_default_str();
     app.add_flag("--overwrite", a.overwrite, "replace the files of an earlier merge in --out (README.md 'Run folders')");
@@ -763,6 +765,7 @@ int run_yield_command(int argc, char** argv) {
   }
   return netdem::app::netsolve::guarded("netsolve " + sub, [&]() {
     if (sub == "yield") return run_yield(a, command);
+    if (merge3) return netdem::app::netsolve::run_yield3_merge(dirs, merge_out, command, a.overwrite);
     return netdem::app::netsolve::yield::run_merge(dirs, merge_out, command, a.overwrite);
   });
 }

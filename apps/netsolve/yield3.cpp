@@ -7,12 +7,17 @@
 // each curve (sys::evaluate_probe, as in 2D), and set them beside the isotropic analytic surface
 // (analytic_yield3.hpp, with the run's D, Z and E) and the fabric-resolved bound on the packing's
 // own contacts (qs::fabric_affine_stress3). docs/yield.md "3D".
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -54,6 +59,7 @@ struct Yield3Args {
   double offset = 1e-3, max_strain = 4e-3, window = 0.1, unload_tol = 1e-3, growth = 1.2;
   double unload_ratio = contact::PlasticIndentationParams{}.unload_ratio;
   int fine = 20;
+  int jobs = 0;  ///< probes at the same time, on threads (0: the number of cores)
   bool quiet = false;
   RunArgs run;
   std::string out = "results/yield3";
@@ -147,6 +153,7 @@ class Yield3Run {
   qs::SolverOptions so_, po_;
   qs::CompactionOptions3 co_;
   std::vector<int> sel_;
+  int jobs_ = 1;
   packing::Packing pk_;
   std::string source_;
   fs::path out_;
@@ -165,6 +172,7 @@ class Yield3Run {
 /// Everything checked before the output folder exists (exit 2, nothing written), then the folder.
 void Yield3Run::setup() {
   const Yield3Args& a = a_;
+  jobs_ = a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (a.precompact != "hydrostatic" && a.precompact != "closed-die")
     throw UsageError(fmt::format("--precompact '{}' is not 'hydrostatic' or 'closed-die'", a.precompact));
   if (!a.rate.empty() && a.rate.size() != 6)
@@ -347,37 +355,64 @@ std::string Yield3Run::probe_row(int k, const sys::ProbeResult& r, const std::ve
   return row;
 }
 
-/// The probes, each on a solver restored from the unloaded state (the order does not matter).
+/// The probes, each on its own solver restored from the unloaded state, on --jobs threads (each
+/// probe is independent of the others and of the order, so the files do not depend on --jobs).
 void Yield3Run::probe_phase() {
   const auto t0 = Clock::now();
   const qs::NetworkSolver3::State start = solver_->state();
   const sys::ProbeSettings ps = yield_probe_settings(a_, a_.rate.empty() ? a_.directions : 1, first_step_,
                                                      loaded_.m.eq13.norm() / sy_, sy_);
-  points_ = points_header();
-  std::size_t done = 0;
-  for (int k : sel_) {
-    activity() = fmt::format("probe {}", k);
+  struct Result {
     sys::ProbeResult r;
     std::vector<Mat3> full;
-    try {
-      qs::NetworkSolver3 s(start, po_);
-      r = sys::evaluate_probe(qs::probe_along<3>(s, probe_direction(a_, k), sy_, sys::probe_options(ps), &full), k, ps);
-    } catch (const std::invalid_argument&) {
-      throw;
-    } catch (const std::exception& e) {
-      r = sys::ProbeResult{};
-      r.index = k;
-      r.status = std::string("error: ") + e.what();
-      full.clear();
+  };
+  std::vector<Result> res(sel_.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex mutex;  // the progress lines and the first usage error
+  std::exception_ptr usage;
+  std::size_t done = 0;
+  const auto work = [&]() {
+    for (std::size_t i = next++; i < sel_.size(); i = next++) {
+      const int k = sel_[i];
+      Result& out = res[i];
+      try {
+        qs::NetworkSolver3 s(start, po_);
+        out.r = sys::evaluate_probe(qs::probe_along<3>(s, probe_direction(a_, k), sy_, sys::probe_options(ps), &out.full),
+                                    k, ps);
+      } catch (const std::invalid_argument&) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (!usage) usage = std::current_exception();
+        return;
+      } catch (const std::exception& e) {
+        out.r = sys::ProbeResult{};
+        out.r.index = k;
+        out.r.status = std::string("error: ") + e.what();
+        out.full.clear();
+      }
+      const std::lock_guard<std::mutex> lock(mutex);
+      ++done;
+      if (!a_.quiet)
+        std::fprintf(stderr, "probe %3d%s: %s [%zu/%zu]\n", k,
+                     a_.rate.empty() ? fmt::format(" (psi {:6.1f} deg)", 360.0 * k / a_.directions).c_str() : "",
+                     out.r.status.c_str(), done, sel_.size());
     }
-    if (r.curve.samples.size() != full.size()) full.resize(r.curve.samples.size(), Mat3::Zero());
-    points_ += probe_row(k, r, full);
-    ok_ += r.status == "ok";
-    ++done;
-    if (!a_.quiet)
-      std::fprintf(stderr, "probe %3d%s: %s [%zu/%zu]\n", k,
-                   a_.rate.empty() ? fmt::format(" (psi {:6.1f} deg)", 360.0 * k / a_.directions).c_str() : "",
-                   r.status.c_str(), done, sel_.size());
+  };
+  activity() = "probing";
+  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(jobs_), sel_.size());
+  if (threads <= 1) {
+    work();
+  } else {
+    std::vector<std::thread> pool;
+    for (std::size_t t = 0; t < threads; ++t) pool.emplace_back(work);
+    for (auto& t : pool) t.join();
+  }
+  if (usage) std::rethrow_exception(usage);
+  points_ = points_header();
+  for (std::size_t i = 0; i < sel_.size(); ++i) {
+    Result& r = res[i];
+    if (r.r.curve.samples.size() != r.full.size()) r.full.resize(r.r.curve.samples.size(), Mat3::Zero());
+    points_ += probe_row(sel_[i], r.r, r.full);
+    ok_ += r.r.status == "ok";
   }
   write_file_atomic(out_ / "yield_points.csv", points_);
   t_probes_ = seconds_since(t0);
@@ -437,7 +472,7 @@ int Yield3Run::finish() {
     j["probes"] = {{"run", sel_.size()}, {"ok", ok_}, {"directions", a_.rate.empty() ? a_.directions : 1},
                    {"plane", a_.rate.empty() ? "axisymmetric (p, q) about z: (ev, eq) = (cos psi, sin psi)" : "--rate"},
                    {"first_step", first_step_}, {"offset", a_.offset}, {"max_strain", a_.max_strain},
-                   {"window", a_.window}, {"indices", sel_}};
+                   {"window", a_.window}, {"indices", sel_}, {"jobs", jobs_}};
     if (!a_.rate.empty()) j["probes"]["rate"] = a_.rate;
   }
   j["centres_outside_box"] = outside;
@@ -498,7 +533,10 @@ int run_yield3_command(int argc, char** argv) {
   app.add_option("--directions", a.directions, "probes psi_k = 360 k / N degrees, (ev, eq) = (cos psi, sin psi)")
       ->capture_default_str();
   app.add_option("--rate", a.rate, "one probe along E11,E22,E33,E23,E13,E12 instead of the (p, q) plane")->delimiter(',');
-  app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays)");
+  app.add_option("--probe", a.probe_slice, "run only the slice i/N: probes k with k mod N == i (job arrays; "
+                 "netsolve yield-merge --dim 3 assembles the slices)");
+  app.add_option("--jobs", a.jobs, "probes run at the same time, on threads (0: number of cores); the files do not "
+                 "depend on it")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--offset", a.offset, "offset strain of the offset yield point")->capture_default_str();
   app.add_option("--max-strain", a.max_strain, "longest probe |dE|")->capture_default_str();
   app.add_option("--window", a.window, "curvature smoothing width (normalised arc length)")->capture_default_str();

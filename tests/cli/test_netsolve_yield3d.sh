@@ -21,7 +21,11 @@
 #    the CSV's 9 digits) and it draws surface.png of a 3D run;
 #  * the files: yield_points.csv, probes/probe_K.csv, unload.csv, summary.json, snapshots.pvd with
 #    the cell; no NaN;
-#  * bad input: one line, exit 2, no folder.
+#  * --jobs (threads) and yield-merge --dim 3: the 12 affine probes in one job, in two, and as three
+#    slices --probe i/3 merged give the same yield_points.csv and probe curves, byte for byte; a merge
+#    with a slice missing is "incomplete" and names the missing probes;
+#  * bad input: one line, exit 2, no folder (a merge of runs with different setups, or of a folder
+#    that is not a 3D yield run).
 # usage: test_netsolve_yield3d.sh PATH/TO/netsolve
 set -u
 ns="$1"
@@ -63,6 +67,7 @@ check_bad bad_periodic "needs a periodic packing" yield --dim 3 --packing "$p3" 
 check_bad bad_probe_bc "--probe-bc" yield --dim 3 --packing "$tmp/pp/packing.csv" --probe-bc die
 check_bad bad_slice "is not a slice" yield --dim 3 --packing "$p3" --probe 5/2
 check_bad bad_dim "--dim must be 2 or 3" yield --dim 4
+check_bad bad_jobs "--jobs" yield --dim 3 --packing "$p3" --jobs -1
 check_bad bad_ratio "--unload-ratio" yield --dim 3 --packing "$p3" --unload-ratio 0.5
 check_bad bad_density "not above the current density" yield --dim 3 --packing "$p3" --to-density 0.2
 check_bad bad_missing "missing.csv" yield --dim 3 --packing "$tmp/missing.csv"
@@ -83,6 +88,26 @@ run along_rotated --packing "$tmp/rotated.csv" --rate="-1,0.2,0.3,-0.1,0.4,0.2" 
 run periodic --packing "$tmp/pp/packing.csv" --friction 0 --directions 8 --probe 1/4 --max-strain 2e-3
 run periodic_affine --packing "$tmp/pp/packing.csv" --compact-bc affine --friction 0 --directions 4
 check_pvd pvd_periodic "$tmp/periodic" particles,contacts,cell
+# --jobs and yield-merge --dim 3: the affine run (its default --jobs, the number of cores) in one job and
+# as three slices merged gives the same yield_points.csv and probe curves, byte for byte
+run affine_j1 --packing "$p3" --friction 0 --directions 12 --to-density 0.47 --jobs 1
+for i in 0 1 2; do run "affine_s$i" --packing "$p3" --friction 0 --directions 12 --to-density 0.47 --probe "$i/3"; done
+"$ns" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/affine_s1" "$tmp/affine_s2" --out "$tmp/merged" >/dev/null 2>"$tmp/stderr" &&
+  cmp -s "$tmp/affine/yield_points.csv" "$tmp/affine_j1/yield_points.csv" &&
+  cmp -s "$tmp/affine/yield_points.csv" "$tmp/merged/yield_points.csv" &&
+  for k in 000 001 005 011; do cmp -s "$tmp/affine/probes/probe_$k.csv" "$tmp/merged/probes/probe_$k.csv" || exit 1; done &&
+  /usr/bin/python3 -c 'import csv, json, sys; s = json.load(open(sys.argv[1]))
+not_ok = [int(r["probe"]) for r in csv.DictReader(open(sys.argv[2])) if r["status"] != "ok"]  # the single run'"'"'s
+ok = s["probes"]["found"] == 12 and s["dim"] == 3 and "analytic" in s and s["probes"]["not_ok"] == not_ok
+sys.exit(0 if ok and s["status"] == ("incomplete" if not_ok else "ok") else 1)' \
+    "$tmp/merged/summary.json" "$tmp/affine/yield_points.csv"
+result jobs_and_merge_identical $?
+"$ns" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/affine_s1" --out "$tmp/merged2" >/dev/null 2>"$tmp/stderr" &&
+  /usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+sys.exit(0 if s["status"] == "incomplete" and s["probes"]["missing"] == [2, 5, 8, 11] else 1)' "$tmp/merged2/summary.json"
+result merge_missing_incomplete $?
+check_bad merge_setup "different setup" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/periodic"
+check_bad merge_not_3d "not a finished netsolve yield --dim 3 run" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/pp"
 
 /usr/bin/python3 - "$tmp" "${BASH_SOURCE[0]}" <<'PY'
 import csv, json, math, os, sys
