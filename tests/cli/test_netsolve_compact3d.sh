@@ -10,9 +10,10 @@
 #    (the same contacts, the DEM's own force loop, no dashpots);
 #  * the affine formula S = -(1/V) sum 6 pi sigma_y R* u L n n over the deposition's touching pairs at
 #    e^E x0, computed in the test from the packing file alone, equals netsolve's affine stress (1e-9);
-#  * invariance: the deposition rotated by 90 degrees about x and shifted gives the rotated stresses
-#    (signs included), affine and in the die of the peripheral layer, closed die along z (along y
-#    after the rotation) with sticking friction and rotations (both 1e-9; measured 1e-13, 1e-15);
+#  * invariance: the deposition rotated by 90 degrees about x, y or z and shifted gives the rotated stresses
+#    (signs included, S' = Q S Q^T), affine (about x) and in the die of the peripheral layer, closed
+#    die along z (along y, x, z after the rotation about x, y, z) with sticking friction and rotations
+#    (all 1e-9; measured 9e-14 affine, 3e-16 to 1e-15 in the die);
 #  * the kept factor (--factor-reuse 20) ends a periodic compaction at --tol 1e-6 in the state of a
 #    factorisation per fresh tangent (1e-4 of max |S|), with fewer factorisations;
 #  * the files: history.csv with the six components, the fabric (trace 1), no NaN; summary.json;
@@ -45,20 +46,27 @@ for name, periodic in (("lattice", False), ("lattice_periodic", True)):
     with open(f"{tmp}/{name}.csv", "w") as f:
         f.write(f"# box 0 0 0 {2*n} {2*n} {2*n}\n# dim 3\n" + ("# periodic\n" if periodic else "") + "id,x,y,z,r\n")
         f.write("\n".join(rows) + "\n")
-# rotation by 90 degrees about x, (x, y, z) -> (x, -z, y), then a shift
+# rotations by 90 degrees about x, y and z, then a shift: x (x, y, z) -> (x, -z, y) in rotated.csv,
+# y -> (z, y, -x) in rotated_y.csv, z -> (-y, x, z) in rotated_z.csv
+rot = {"": lambda x, y, z: (x, -z, y), "_y": lambda x, y, z: (z, y, -x), "_z": lambda x, y, z: (-y, x, z)}
+shift = (3.5, -7.25, 1.5)
 lines = open(p3).read().splitlines()
-out, box = [], None
-for l in lines:
-    if l.startswith("# box"):
-        x0, y0, z0, x1, y1, z1 = map(float, l.split()[2:])
-        box = (x0, y0, z0, x1, y1, z1)
-        out.append(f"# box {x0 + 3.5!r} {-z1 - 7.25!r} {y0 + 1.5!r} {x1 + 3.5!r} {-z0 - 7.25!r} {y1 + 1.5!r}")
-    elif l.startswith("#") or l.startswith("id"):
-        out.append(l)
-    else:
-        i, x, y, z, r = l.split(",")
-        out.append(f"{i},{float(x) + 3.5!r},{-float(z) - 7.25!r},{float(y) + 1.5!r},{r}")
-open(f"{tmp}/rotated.csv", "w").write("\n".join(out) + "\n")
+for tag, q in rot.items():
+    out = []
+    for l in lines:
+        if l.startswith("# box"):
+            x0, y0, z0, x1, y1, z1 = map(float, l.split()[2:])
+            a, b = q(x0, y0, z0), q(x1, y1, z1)
+            lo = [min(u, v) + s for u, v, s in zip(a, b, shift)]
+            hi = [max(u, v) + s for u, v, s in zip(a, b, shift)]
+            out.append("# box " + " ".join(repr(v) for v in lo + hi))
+        elif l.startswith("#") or l.startswith("id"):
+            out.append(l)
+        else:
+            i, x, y, z, r = l.split(",")
+            c = [v + s for v, s in zip(q(float(x), float(y), float(z)), shift)]
+            out.append(f"{i},{c[0]!r},{c[1]!r},{c[2]!r},{r}")
+    open(f"{tmp}/rotated{tag}.csv", "w").write("\n".join(out) + "\n")
 PY
 result lattices $?
 
@@ -177,23 +185,31 @@ sys.exit(0 if len(d) == 21 and len(n) == 321 and worst < 1e-3 and worst_z < 0.01
 PY
 result netsolve_equals_dem_affine $?
 
-# invariance under a rotation by 90 degrees about x (S22 <-> S33, S12 <-> S13) and a shift
+# invariance under rotations by 90 degrees about x, y and z and a shift: S' = Q S Q^T
 run affine_a --snapshots '' --affine --packing "$p3" --to-density 0.62 --increments 20
 run affine_b --snapshots '' --affine --packing "$tmp/rotated.csv" --to-density 0.62 --increments 20
 run die_a --snapshots '' --packing "$p3" --path closed-die --to-density 0.62 --increments 20 --allow-unconverged
 run die_b --snapshots '' --packing "$tmp/rotated.csv" --path 0,-1,0 --to-density 0.62 --increments 20 --allow-unconverged
+run die_y --snapshots '' --packing "$tmp/rotated_y.csv" --path=-1,0,0 --to-density 0.62 --increments 20 --allow-unconverged
+run die_z --snapshots '' --packing "$tmp/rotated_z.csv" --path closed-die --to-density 0.62 --increments 20 --allow-unconverged
 /usr/bin/python3 - "$tmp" <<'PY'
 import json, sys
+import numpy as np
 tmp = sys.argv[1]
 ok = True
-# Q: (x, y, z) -> (x, -z, y); S' = Q S Q^T: S'22 = S33, S'33 = S22, S'23 = -S23, S'12 = -S13, S'13 = S12
-for a, b, tol in (("affine_a", "affine_b", 1e-9), ("die_a", "die_b", 1e-9)):
+Q = {"x": [[1, 0, 0], [0, 0, -1], [0, 1, 0]], "y": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], "z": [[0, -1, 0], [1, 0, 0], [0, 0, 1]]}
+
+def tensor(f):
+    return np.array([[f["S11"], f["S12"], f["S13"]], [f["S12"], f["S22"], f["S23"]], [f["S13"], f["S23"], f["S33"]]])
+
+for a, b, axis, tol in (("affine_a", "affine_b", "x", 1e-9), ("die_a", "die_b", "x", 1e-9), ("die_a", "die_y", "y", 1e-9),
+                        ("die_a", "die_z", "z", 1e-9)):
     fa, fb = json.load(open(f"{tmp}/{a}/summary.json"))["final"], json.load(open(f"{tmp}/{b}/summary.json"))["final"]
-    pairs = (("11", "11", 1), ("33", "22", 1), ("22", "33", 1), ("23", "23", -1), ("13", "12", -1), ("12", "13", 1))
-    scale = max(abs(fa["S" + p]) for p, _, _ in pairs)
-    diff = max(abs(sign * fa["S" + p] - fb["S" + q]) for p, q, sign in pairs) / scale
-    print(f"{a} vs {b}: S = {fa['S11']:.6f} {fa['S22']:.6f} {fa['S33']:.6f} / {fb['S11']:.6f} {fb['S33']:.6f} "
-          f"{fb['S22']:.6f}, max diff / max |S| = {diff:.2e} (band {tol:g}), Z {fa['Z']} / {fb['Z']}")
+    q = np.array(Q[axis], dtype=float)
+    sa, sb = tensor(fa), tensor(fb)
+    diff = np.abs(q @ sa @ q.T - sb).max() / np.abs(sa).max()
+    print(f"{a} vs {b} (90 degrees about {axis}): diag {np.diag(sa).round(6)} -> {np.diag(sb).round(6)}, "
+          f"max |Q S Q^T - S'| / max |S| = {diff:.2e} (band {tol:g}), Z {fa['Z']} / {fb['Z']}")
     ok &= diff < tol and fa["S33"] < 0 and fa["contacts"] == fb["contacts"]
 sys.exit(0 if ok else 1)
 PY
