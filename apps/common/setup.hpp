@@ -21,6 +21,7 @@
 #include "netdem/packing/io.hpp"
 #include "netdem/packing/packing.hpp"
 #include "netdem/quasistatic/network_solver.hpp"
+#include "netdem/system/yield_curve.hpp"
 #include "output.hpp"
 #include "parse.hpp"
 
@@ -311,6 +312,24 @@ inline packing::Box walls_box(const packing::Packing& pk) {
     }
   }
   return b;
+}
+
+/// The probe settings of netsolve yield (2D and 3D) and demsolve yield from a command line `a` (offset, max_strain, window,
+/// growth, fine), with the run's number of directions, fine step and loading stress.
+template <class Args>
+sys::ProbeSettings yield_probe_settings(const Args& a, int directions, double first_step, double loading_norm,
+                                        double sigma_y) {
+  sys::ProbeSettings ps;
+  ps.directions = directions;
+  ps.offset = a.offset;
+  ps.max_strain = a.max_strain;
+  ps.window = a.window;
+  ps.growth = a.growth;
+  ps.fine = a.fine;
+  ps.first_step = first_step;
+  ps.loading_norm = loading_norm;
+  ps.sigma_y = sigma_y;
+  return ps;
 }
 
 /// Copies the LawArgs into the solver options; throws std::invalid_argument for a bad --friction.

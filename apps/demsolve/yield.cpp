@@ -388,16 +388,8 @@ void YieldRun::probe_phase() {
   const auto t0 = Clock::now();
   first_step_ = un_.strain > 0 ? un_.strain / 10 : 1e-6;
   loading_norm_ = stress_norm(loaded_) / sigma_y_;
-  sys::ProbeSettings ps;
-  ps.directions = a_.directions;
-  ps.offset = a_.offset;
-  ps.max_strain = a_.max_strain;
-  ps.window = a_.window;
-  ps.growth = a_.growth;
-  ps.fine = a_.fine;
-  ps.first_step = first_step_;
-  ps.loading_norm = loading_norm_;
-  ps.sigma_y = sigma_y_;
+  const sys::ProbeSettings ps =
+      netdem::app::netsolve::yield_probe_settings(a_, a_.directions, first_step_, loading_norm_, sigma_y_);
   const auto& selection = d_.selection;
   // progress: the probes done plus each running probe's strain over its expected length
   Progress pprog("probes", static_cast<double>(selection.size()), a_.quiet);

@@ -45,24 +45,6 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
 /// of a periodic cell keeps the cell with every centre prescribed (affine_centres). Validated.
 qs::SolverOptions yield_probe_options(const qs::SolverOptions& pre, qs::BoundaryMode probe_mode);
 
-/// The probe settings of `yield` (2D and 3D) from its command line `a` (offset, max_strain, window,
-/// growth, fine), with the run's number of directions, fine step and loading stress.
-template <class Args>
-sys::ProbeSettings yield_probe_settings(const Args& a, int directions, double first_step, double loading_norm,
-                                        double sigma_y) {
-  sys::ProbeSettings ps;
-  ps.directions = directions;
-  ps.offset = a.offset;
-  ps.max_strain = a.max_strain;
-  ps.window = a.window;
-  ps.growth = a.growth;
-  ps.fine = a.fine;
-  ps.first_step = first_step;
-  ps.loading_norm = loading_norm;
-  ps.sigma_y = sigma_y;
-  return ps;
-}
-
 /// netsolve yield --dim 3 (yield3.cpp): argv as `netsolve yield ...`; its exit status.
 int run_yield3_command(int argc, char** argv);
 /// netsolve yield-merge --dim 3 (yield3_merge.cpp): one yield_points.csv and summary.json in
