@@ -7,7 +7,6 @@
 // point and analytic surface, and the status "incomplete" when probes are missing, not ok, or a
 // folder holds an unfinished run. docs/yield.md "3D".
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -19,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "compact_common.hpp"
+#include "netdem/system/archive.hpp"
 #include "output.hpp"
 #include "run_status.hpp"
 #include "status.hpp"
@@ -30,13 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  if (!in) throw std::invalid_argument(fmt::format("yield-merge: cannot read '{}'", p.string()));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string read_text(const fs::path& p) { return sys::read_text_file(p.string(), "yield-merge input"); }
 
 /// The fields of a CSV line (double-quoted fields may hold commas; yield3.cpp writes no quote inside).
 std::vector<std::string> fields(const std::string& line) {
