@@ -20,6 +20,11 @@ check_bad() {
     echo "FAIL $name: rc=$rc lines=$lines out-exists=$([ -e "$out" ] && echo yes || echo no) stderr: $(cat "$tmp/stderr")"
   fi
 }
+# result NAME RC: counts a check that passed (RC 0) or failed (its stderr's first 2000 bytes
+# printed); a test file may define its own.
+result() {  # name ok?
+  if [ "$2" -eq 0 ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $1: $(head -c 2000 "$tmp/stderr")"; fi
+}
 finish() {
   echo "cli: $pass passed, $fail failed"
   [ "$fail" -eq 0 ]

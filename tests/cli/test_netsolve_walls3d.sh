@@ -17,9 +17,6 @@ ds="$2"
 tool="$ns"
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-result() {  # name ok?
-  if [ "$2" -eq 0 ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $1: $(head -c 2000 "$tmp/stderr")"; fi
-}
 "$ns" pack --dim 3 --width 10 --out "$tmp/p3" >/dev/null 2>"$tmp/stderr"
 result pack3d $?
 "$ns" pack --width 10 --out "$tmp/p2" >/dev/null 2>"$tmp/stderr"
