@@ -14,7 +14,10 @@ Packings (made once in --work, reused): the green body of `netsolve pack --dim 3
   periodic       the periodic packing in its cell (pseudo-transient, the default there; since issue 30
                  part 3 the kept factor, --factor-reuse 20, is the 3D default);
   periodic_reuse the same with --factor-reuse 20 given explicitly;
-  periodic_fresh the same with a factorisation per fresh tangent (--factor-reuse 0).
+  periodic_fresh the same with a factorisation per fresh tangent (--factor-reuse 0);
+  periodic_full  the periodic case with the factor of the whole matrix as the preconditioner
+                 (--preconditioner full; the 3D default since issue 30 part 5 is the translations').
+A case may be listed more than once (interleaved repetitions); each run is a row.
 Writes a Markdown table: wall time, the solver's split (assembly, neighbours, analysis, factorisation,
 solve), Newton iterations, factorisations, peak resident memory (GNU time), the run status.
 Measure on an idle machine; this is a benchmark, not a test.
@@ -36,6 +39,7 @@ CASES = {
     "periodic": ("periodic", ["--boundary", "periodic"]),
     "periodic_reuse": ("periodic", ["--boundary", "periodic", "--factor-reuse", "20"]),
     "periodic_fresh": ("periodic", ["--boundary", "periodic", "--factor-reuse", "0"]),
+    "periodic_full": ("periodic", ["--boundary", "periodic", "--preconditioner", "full"]),
 }
 
 
@@ -81,6 +85,7 @@ def main():
             print(f"packing {key}: {wall:.1f} s", flush=True)
         prep[key] = os.path.join(d, "packing.csv")
     rows = []
+    load0 = os.getloadavg()
     for c in a.cases.split(","):
         key, extra = CASES[c]
         d = os.path.join(a.work, c)
@@ -91,17 +96,26 @@ def main():
             sys.exit(f"error: {c} wrote no summary.json (exit {rc}): {err.strip()[-300:]}")
         s = json.load(open(os.path.join(d, "summary.json")))
         t, so = s["timing_s"], s["solver"]
-        rows.append((c, s["particles"], s["initial_density"], s["final"]["D"], wall, t, so, rss, s["status"], rc))
+        with open(os.path.join(d, "history.csv")) as f:
+            hdr = f.readline().strip().split(",")
+            col = hdr.index("linear_iterations")
+            gmres = sum(int(line.split(",")[col]) for line in f if line.strip())
+        so = dict(so, gmres=gmres)
+        rows.append((c, s["particles"], s["initial_density"], s["final"]["D"], wall, t, so, rss, s["status"], rc,
+                     s["final"]["S33"]))
         print(f"{c}: {wall:.1f} s, {rss / 1e6 if rss else 0:.2f} GB, {s['status']}", flush=True)
     L = [f"# netsolve compact --dim 3: speed (bench/netsolve3d_speed.py --n {a.n})", "",
          f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs; one thread (OMP_NUM_THREADS=1, --threads 1). "
-         "Hydrostatic to |E| = 0.1 in 100 increments. Times in seconds (the solver's own split from summary.json).", "",
-         "| case | spheres | D0 → D | wall | assembly | neighbours | analysis | factorisation | solve | Newton it. | "
-         "factorisations | peak RSS | status |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for c, n, d0, d1, wall, t, so, rss, st, rc in rows:
-        L.append(f"| {c} | {n} | {d0:.4f} → {d1:.4f} | {wall:.1f} | {t['assemble']:.1f} | {t['neighbours']:.1f} | "
-                 f"{t['analyse']:.1f} | {t['factorise']:.1f} | {t['solve']:.1f} | {so['newton_iterations']} | "
-                 f"{so['factorisations']} | {rss / 1e6 if rss else float('nan'):.2f} GB | {st} (exit {rc}) |")
+         "Hydrostatic to |E| = 0.1 in 100 increments. Times in seconds (the solver's own split from summary.json). "
+         f"Load average before the first run: {load0[0]:.2f}, {load0[1]:.2f}, {load0[2]:.2f}.", "",
+         "| case | preconditioner | spheres | D0 → D | wall | assembly | neighbours | analysis | factorisation | solve | "
+         "Newton it. | GMRES it. | factorisations | peak RSS | S33/σ_y at the end | status |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for c, n, d0, d1, wall, t, so, rss, st, rc, s3 in rows:
+        L.append(f"| {c} | {so.get('preconditioner', '—')} | {n} | {d0:.4f} → {d1:.4f} | {wall:.1f} | {t['assemble']:.1f} | "
+                 f"{t['neighbours']:.1f} | {t['analyse']:.1f} | {t['factorise']:.1f} | {t['solve']:.1f} | "
+                 f"{so['newton_iterations']} | {so['gmres']} | {so['factorisations']} | "
+                 f"{rss / 1e6 if rss else float('nan'):.2f} GB | {s3:.6f} | {st} (exit {rc}) |")
     with open(a.out, "w") as f:
         f.write("\n".join(L) + "\n")
     print(f"wrote {os.path.relpath(a.out, REPO)}")

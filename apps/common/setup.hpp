@@ -233,6 +233,16 @@ inline const char* iteration_name(qs::Iteration it) {
   return it == qs::Iteration::PseudoTransient ? "pseudo-transient" : "legacy-drag";
 }
 
+/// The preconditioner's names, as --preconditioner spells them and summary.json records them.
+inline const char* preconditioner_name(qs::IterationOptions::Preconditioner p) {
+  using P = qs::IterationOptions::Preconditioner;
+  return p == P::Translations ? "translations" : p == P::Full ? "full" : "auto";
+}
+inline qs::IterationOptions::Preconditioner preconditioner_of(const std::string& name) {
+  using P = qs::IterationOptions::Preconditioner;
+  return name == "translations" ? P::Translations : name == "full" ? P::Full : P::Auto;
+}
+
 /// The LawArgs of a library preset (the command's defaults).
 inline LawArgs law_args(const qs::SolverOptions& o) {
   LawArgs a;

@@ -194,7 +194,7 @@ nlohmann::json compact_summary(const std::string& command, const CompactArgs& a,
                 {"E22", last.E22},          {"E12", last.E12},
                 {"rattlers", last.rattlers}, {"Z_backbone", last.Z_backbone},
                 {"fabric11", last.fabric11}, {"fabric22", last.fabric22}, {"fabric12", last.fabric12}};
-  j["solver"] = solver_summary(so, tm, solver.free_dofs(), tally);
+  j["solver"] = solver_summary(so, tm, solver.free_dofs(), tally, 2);
   const bool saved = a.save_state && stopped.empty();
   j["state"] = saved ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
   if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
@@ -405,6 +405,7 @@ CompactCli add_compact_options(CLI::App* comp, CompactArgs& ca, RunArgs& ra, std
   comp->add_option("--max-rotation-step", ca.solver.max_rotation_step, "cap on a Newton step's rotation of one particle [rad]")->capture_default_str();
   comp->add_option("--freeze-after", ca.solver.freeze_after, "contacts that flipped stick/slip this often in an increment keep their stick stiffness in the iteration matrix")->capture_default_str();
   comp->add_option("--factor-reuse", ca.factor_reuse, "kept factor: fresh tangents in a row solved by GMRES preconditioned with the last factorisation instead of a new one (0: off; the answer is judged on the same residual); default 20 with --dim 3, 0 in 2D")->check(CLI::Range(0, 1000000));
+  comp->add_option("--preconditioner", ca.preconditioner, "the linear solver's preconditioner: full (the factor of the whole iteration matrix), translations (the factor of the translations' block and each particle's rotation block inverted; every solve is then GMRES on the whole matrix), auto (translations with --dim 3 where rotations are unknowns, else full)")->check(CLI::IsMember({"auto", "full", "translations"}))->capture_default_str();
   comp->add_option("--chord-steps", ca.solver.chord_steps, "modified Newton: iterations that reuse the last tangent and its factorisation after each fresh one (0: off)")->capture_default_str();
   comp->add_option("--backtracks", ca.solver.backtracks, "residual line search: step lengths tried (1, 1/2, 1/4, ...)")->capture_default_str();
   comp->add_option("--threads", ca.solver.threads, "threads for the force evaluations (line search, chord steps); the linear algebra stays serial; results are identical for any number")->capture_default_str();

@@ -57,6 +57,8 @@ struct CompactArgs {
   qs::SolverOptions solver = qs::SolverOptions::compact();  // bound directly by the command line
   /// --factor-reuse; -1 (not given): kFactorReuse3d with --dim 3, the preset's 0 in 2D
   int factor_reuse = -1;
+  /// --preconditioner: auto, full or translations (qs::IterationOptions::Preconditioner)
+  std::string preconditioner = "auto";
   LawArgs law = law_args(solver);
 };
 

@@ -316,7 +316,7 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["first_touch"] = so.law.first_touch;
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = state_json(last, sy);
-  j["solver"] = solver_summary(so, tm, solver.free_dofs(), rows.tally);
+  j["solver"] = solver_summary(so, tm, solver.free_dofs(), rows.tally, 3);
   j["state"] = nullptr;  // the exact continuation file (state.txt) is 2D only
   if (a.save_state || !a.state_file.empty())
     j["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state && stopped.empty() ? "jammed.json" : ""}};

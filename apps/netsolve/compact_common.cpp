@@ -25,6 +25,7 @@ qs::SolverOptions compact_solver_options(const CompactArgs& a) {
   if (so.mode == qs::BoundaryMode::Periodic && !a.state_file.empty())
     throw netdem::app::UsageError("--state: a jammed state has walls or a layer, not a periodic cell (--boundary periodic)");
   so.rotations = !a.no_rotation;
+  so.preconditioner = preconditioner_of(a.preconditioner);
   apply_law_args(a.law, so);
   so.verbose = a.verbose;
   so.validate();
@@ -91,7 +92,7 @@ void IncrementTally::add(int increment, const qs::IncrementReport& r, double eq1
 }
 
 nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,
-                              const IncrementTally& t) {
+                              const IncrementTally& t, int dim) {
   nlohmann::json j = {{"unconverged_increments", t.unconverged}, {"max_residual", t.max_residual},
                       {"free_dofs", free_dofs},                  {"newton_iterations", tm.newton_iterations},
                       {"analyses", tm.analyses},                 {"factorisations", tm.factorisations},
@@ -102,6 +103,7 @@ nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimin
   j["regularisation_scale"] = so.regularisation_scale;
   j["max_cuts"] = so.max_cuts;
   j["factor_reuse"] = so.factor_reuse;
+  j["preconditioner"] = preconditioner_name(so.resolved_preconditioner(dim));  // as resolved for this run
   // the merit the iteration used (energy, energy-friction or residual)
   if (so.iteration == qs::Iteration::PseudoTransient) j["merit"] = so.merit_name();
   if (so.uses_energy_merit()) j["unjammed_increments"] = t.unjammed;

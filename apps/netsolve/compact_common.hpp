@@ -54,8 +54,9 @@ int run_yield3_merge(const std::vector<std::string>& dirs, const std::string& ou
                      bool overwrite);
 
 /// summary.json's "solver": the iteration, its knobs, the counts of the tally and the timings' counts.
+/// dim: the network's dimension (the preconditioner recorded is the one resolved for it).
 nlohmann::json solver_summary(const qs::SolverOptions& so, const qs::SolverTimings& tm, int free_dofs,
-                              const IncrementTally& t);
+                              const IncrementTally& t, int dim);
 
 /// summary.json's "cholmod_inline_openmp" and "timing_s" (the solver's split and the wall time).
 void add_run_records(nlohmann::json& j, const qs::SolverTimings& tm, double wall);

@@ -453,7 +453,7 @@ int Yield3Run::finish() {
     j["precompaction"]["increments_done"] = rows_->done;
     j["precompaction"]["unconverged_increments"] = rows_->tally.unconverged;
   }
-  j["solver"] = solver_summary(so_, solver_->timings(), solver_->free_dofs(), rows_->tally);
+  j["solver"] = solver_summary(so_, solver_->timings(), solver_->free_dofs(), rows_->tally, 3);
   if (stopped_.empty()) {
     const auto& an = loaded_.analytic;
     j["analytic"] = {{"ok", loaded_.analytic_message.empty()}, {"message", loaded_.analytic_message},

@@ -75,14 +75,15 @@ void LinearSolver::Impl::set_ordering() {
 
 std::vector<int> LinearSolver::Impl::block_ordering() {
   const int nn = n();
-  if (static_cast<int>(blocks.size()) != nn || nn == 0) return {};
-  const int nb = *std::max_element(blocks.begin(), blocks.end()) + 1;
+  const std::vector<int>& rb = split() ? sp.sub_blocks : blocks;  // row -> block
+  if (static_cast<int>(rb.size()) != nn || nn == 0) return {};
+  const int nb = *std::max_element(rb.begin(), rb.end()) + 1;
   std::vector<int> bstart(nb + 1, 0), brows(nn);
-  for (const int b : blocks) ++bstart[b + 1];
+  for (const int b : rb) ++bstart[b + 1];
   for (int b = 0; b < nb; ++b) bstart[b + 1] += bstart[b];
   {
     std::vector<int> at(bstart.begin(), bstart.end() - 1);
-    for (int r = 0; r < nn; ++r) brows[at[blocks[r]]++] = r;
+    for (int r = 0; r < nn; ++r) brows[at[rb[r]]++] = r;
   }
   // lower triangle of the block graph (row block >= column block), pattern only
   std::vector<int> Qp(nb + 1, 0), Qi, mark(nb, -1);
@@ -93,7 +94,7 @@ std::vector<int> LinearSolver::Impl::block_ordering() {
     for (int t = bstart[bc]; t < bstart[bc + 1]; ++t) {
       const int c = brows[t];
       for (int q = Mp[c]; q < Mp[c + 1]; ++q) {
-        const int br = blocks[Mi[q]];
+        const int br = rb[Mi[q]];
         if (br >= bc && mark[br] != bc) {
           mark[br] = bc;
           Qi.push_back(br);
@@ -319,6 +320,7 @@ LinearStatus LinearSolver::Impl::pivot_status(int k) const {
   st.ok = false;
   st.minor = k;
   st.column = static_cast<const int*>(L->Perm)[k];
+  if (split()) st.column = sp.frow[st.column];  // the full matrix's row
   return st;
 }
 

@@ -41,7 +41,7 @@ struct LinearSolver::Impl::Gmres {
       : s(impl),
         A(A_),
         b(b_),
-        nn(impl.n()),
+        nn(impl.size()),
         maxit(impl.opt.gmres_max_iterations),
         m(std::min(impl.opt.gmres_restart, maxit)),
         bnorm(b_.norm()),
@@ -124,7 +124,7 @@ int LinearSolver::Impl::Gmres::cycle(const VecX& r, double beta) {
 /// Arnoldi step j: w = A M^-1 v_j orthogonalised against v_0..v_j into column j of H, with the
 /// previous rotations applied; wnorm0 = |A M^-1 v_j|, hn = |w|. false if the factor solve failed.
 bool LinearSolver::Impl::Gmres::arnoldi(int j, double& wnorm0, double& hn) {
-  if (!s.apply_factor(V.col(j).data(), Z.col(j).data())) return false;
+  if (!s.precondition(V.col(j).data(), Z.col(j).data())) return false;
   w.noalias() = A * Z.col(j);
   ++it;
   wnorm0 = w.norm();

@@ -84,17 +84,25 @@ void LinearSolver::set_row_blocks(std::vector<int> block_of_row) {
   impl_->analysed = false;  // the next factorisation re-analyses with the new blocks
 }
 
+void LinearSolver::set_split(std::vector<int> group_of_row) {
+  if (!impl_) moved_from();
+  impl_->set_split(std::move(group_of_row));
+}
+
+bool LinearSolver::split() const { return impl_ && impl_->split(); }
+
 LinearStatus LinearSolver::factorise(const SpMat& M, bool pattern_changed) {
   if (!impl_) moved_from();
-  return impl_->factorise(M, pattern_changed);
+  return impl_->split() ? impl_->factorise_split(M, pattern_changed) : impl_->factorise(M, pattern_changed);
 }
 
 LinearStatus LinearSolver::solve(const VecX& b, VecX& x) {
   if (!impl_) moved_from();
   Impl& s = *impl_;
-  if (b.size() != s.n())
+  if (b.size() != s.size())
     throw std::invalid_argument(
-        fmt::format("LinearSolver::solve: right-hand side has {} rows, matrix has {}", b.size(), s.n()));
+        fmt::format("LinearSolver::solve: right-hand side has {} rows, matrix has {}", b.size(), s.size()));
+  if (s.split()) return solve(s.sp.full, b, x);  // the preconditioner is not M's inverse: GMRES
   const auto t0 = Clock::now();
   ++s.stats.solves;
   LinearStatus st;
@@ -117,10 +125,10 @@ LinearStatus LinearSolver::solve(const VecX& b, VecX& x) {
 LinearStatus LinearSolver::solve(const SpMat& A, const VecX& b, VecX& x) {
   if (!impl_) moved_from();
   Impl& s = *impl_;
-  if (A.rows() != s.n() || A.cols() != s.n() || b.size() != s.n())
-    throw std::invalid_argument(
-        fmt::format("LinearSolver::solve: A is {}x{} and b has {} rows, factorised matrix is {}x{}", A.rows(),
-                    A.cols(), b.size(), s.n(), s.n()));
+  const int nn = s.size();
+  if (A.rows() != nn || A.cols() != nn || b.size() != nn)
+    throw std::invalid_argument(fmt::format(
+        "LinearSolver::solve: A is {}x{} and b has {} rows, factorised matrix is {}x{}", A.rows(), A.cols(), b.size(), nn, nn));
   const auto t0 = Clock::now();
   ++s.stats.solves;
   LinearStatus st;
@@ -129,18 +137,18 @@ LinearStatus LinearSolver::solve(const SpMat& A, const VecX& b, VecX& x) {
   const VecX bcopy = x.data() == b.data() ? b : VecX();  // x may alias b
   const VecX& rhs = x.data() == b.data() ? bcopy : b;
   if (!s.factor_valid) {
-    x.setZero(s.n());
+    x.setZero(nn);
     st = failure("no valid factorisation (preconditioner): the last factorise() failed or was never called");
   } else if (const int row = first_non_finite_row(rhs); row >= 0) {
-    x.setZero(s.n());
+    x.setZero(nn);
     st = failure(fmt::format("right-hand side has a non-finite entry at row {}", row));
-  } else if (same_pattern(*a, s.M) && same_values(*a, s.M)) {
+  } else if (!s.split() && same_pattern(*a, s.M) && same_values(*a, s.M)) {
     st = s.direct_solve(rhs, x);  // A is the factorised matrix itself
   } else if (const auto [r, c] = first_non_finite(*a); r >= 0) {
-    x.setZero(s.n());
+    x.setZero(nn);
     st = failure(fmt::format("matrix has a non-finite entry at ({}, {})", r, c));
-  } else if (s.n() == 0 || rhs.norm() == 0.0) {
-    x.setZero(s.n());
+  } else if (nn == 0 || rhs.norm() == 0.0) {
+    x.setZero(nn);
   } else {
     st = s.gmres(*a, rhs, x);
   }

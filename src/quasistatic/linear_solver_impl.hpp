@@ -7,6 +7,8 @@
 //                       block nested-dissection ordering), analysis, numeric factorisation, the
 //                       pivot checks, the factor solve and the direct solve
 //   gmres.cpp           the right-preconditioned restarted GMRES (Impl::Gmres)
+//   split.cpp           the split preconditioner (Impl::Split): the factor of a submatrix and
+//                       the inverses of the other rows' diagonal blocks
 //
 // The CHOLMOD C API is used directly (not Eigen's CholmodSupernodalLLT) because it gives
 // L->minor and L->Perm for the diagnostic message, lets us force the supernodal LL' method and
@@ -112,6 +114,29 @@ struct LinearSolver::Impl {
   std::vector<int> Sp, Si, smap;
   std::vector<double> Sx;
   std::vector<int> blocks;  // row -> block (node) for the nested-dissection ordering; empty: rows
+  // (of the full matrix: with the split preconditioner the ordering uses sp.sub_blocks)
+
+  /// The split preconditioner (LinearSolver::set_split). M, L and everything above are then the
+  /// factored submatrix's; `full` is the whole matrix that GMRES solves.
+  struct Split {
+    std::vector<int> group;     // full row -> group (< 0: factored); empty: off
+    std::vector<int> frow;      // factored rows (full indices, increasing)
+    std::vector<int> sub_of;    // full row -> factored row, or -1
+    std::vector<int> gstart, grow;  // the groups' rows: grow[gstart[g] .. gstart[g + 1])
+    std::vector<int> gather;    // value q of the submatrix <- value gather[q] of full
+    std::vector<int> sub_blocks;  // `blocks` restricted to the factored rows
+    std::vector<double> ginv;   // each group's inverse diagonal block, column-major, concatenated
+    std::vector<int> ginv_at;   // start of group g's inverse in ginv
+    SpMat full;                 // compressed copy of the whole matrix
+    SpMat sub;                  // the factored submatrix (pattern built per analysis)
+    VecX tin, tout;             // the factored rows' part of a vector
+    bool fresh_pattern = true;  // the next factorisation builds the submatrix's pattern
+  } sp;
+  [[nodiscard]] bool split() const { return !sp.group.empty(); }
+  /// The size of the systems solved: the full matrix's with the split preconditioner, else n().
+  [[nodiscard]] int size() const { return split() ? static_cast<int>(sp.full.rows()) : n(); }
+  /// out = P^{-1} in, the preconditioner (the factor's solve, or the split preconditioner).
+  bool precondition(const double* in, double* out);
 
   // cholmod_factor.cpp
   explicit Impl(const LinearSolverOptions& o);
@@ -149,6 +174,12 @@ struct LinearSolver::Impl {
   /// Pivot-tolerance check on the diagonal of L; returns the permuted column or -1.
   int small_pivot(double& ratio) const;
   LinearStatus direct_solve(const VecX& b, VecX& x);
+
+  // split.cpp
+  void set_split(std::vector<int> group_of_row);
+  LinearStatus factorise_split(const SpMat& Min, bool pattern_changed);
+  void build_sub_pattern();
+  LinearStatus invert_groups();
 
   // gmres.cpp
   struct Gmres;  // the state of one GMRES solve

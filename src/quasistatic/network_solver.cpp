@@ -33,6 +33,12 @@ void NetworkSolverT<D, L>::Impl::init_linear_solver() {
   std::vector<int> particle_of_dof(static_cast<std::size_t>(nfree));
   for (int q = 0; q < kN * n; ++q)
     if (dof[q] >= 0) particle_of_dof[dof[q]] = q / kN;
+  if (opt.resolved_preconditioner(D) == IterationOptions::Preconditioner::Translations) {
+    std::vector<int> group(static_cast<std::size_t>(nfree), -1);  // translations factored
+    for (int q = 0; q < kN * n; ++q)
+      if (dof[q] >= 0 && is_rotation(q % kN)) group[dof[q]] = q / kN;  // a particle's rotations
+    lin.set_split(std::move(group));
+  }
   lin.set_row_blocks(std::move(particle_of_dof));
   du.assign(kN * n, 0.0);
   f.assign(kN * n, 0.0);

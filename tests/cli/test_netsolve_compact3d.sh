@@ -16,6 +16,9 @@
 #    (all 1e-9; measured 9e-14 affine, 3e-16 to 1e-15 in the die);
 #  * the kept factor (--factor-reuse 20) ends a periodic compaction at --tol 1e-6 in the state of a
 #    factorisation per fresh tangent (1e-4 of max |S|), with fewer factorisations;
+#  * the preconditioner (the translations' factor by default, the whole matrix's with --preconditioner
+#    full) changes the linear solves only: with solves to 1e-8 every increment's stresses agree to
+#    1e-8 of max |S| with the same contacts and sliding contacts;
 #  * the files: history.csv with the six components, the fabric (trace 1), no NaN; summary.json;
 #    snapshots.pvd with z;
 #  * bad input: one line, exit 2, no folder.
@@ -259,6 +262,12 @@ for fr in 0 20; do
   run reuse$fr --snapshots '' --boundary periodic --packing "$tmp/pp/packing.csv" --tol 1e-6 --factor-reuse $fr \
     --to-density "$(/usr/bin/python3 -c "print(f'{$d0 + 0.02:.6f}')")" --increments 10
 done
+# the preconditioner: the translations' factor (the 3D default) and the whole matrix's, with linear
+# solves to 1e-8 (so that both follow the same Newton path)
+for pc in translations full; do
+  run pc_$pc --snapshots '' --boundary periodic --packing "$tmp/pp/packing.csv" --tol 1e-6 --linear-tol 1e-8 \
+    --preconditioner $pc --to-density "$(/usr/bin/python3 -c "print(f'{$d0 + 0.01:.6f}')")" --increments 5
+done
 /usr/bin/python3 - "$tmp" <<'PY'
 import json, sys
 tmp = sys.argv[1]
@@ -273,4 +282,24 @@ ok = diff < 1e-4 and fb < fa and a["status"] == b["status"] == "ok" and b["solve
 sys.exit(0 if ok else 1)
 PY
 result factor_reuse_same_state $?
+# the preconditioner changes the linear solves only: with solves to 1e-8 both preconditioners give
+# every increment's stresses within 1e-8 of max |S| and the same contacts and sliding contacts; each
+# run records the preconditioner it used, and a frictionless run (no rotations to split) the full one
+/usr/bin/python3 - "$tmp" <<'PY'
+import csv, json, sys
+tmp = sys.argv[1]
+a, b = (list(csv.DictReader(open(f"{tmp}/pc_{k}/history.csv"))) for k in ("translations", "full"))
+comp = ("11", "22", "33", "23", "13", "12")
+scale = max(abs(float(r["S" + c])) for r in a for c in comp)
+diff = max(abs(float(x["S" + c]) - float(y["S" + c])) for x, y in zip(a, b) for c in comp) / scale
+same = len(a) == len(b) == 6 and all(x["contacts"] == y["contacts"] and x["sliding"] == y["sliding"] for x, y in zip(a, b))
+sa, sb = (json.load(open(f"{tmp}/pc_{k}/summary.json")) for k in ("translations", "full"))
+pa, pb = sa["solver"]["preconditioner"], sb["solver"]["preconditioner"]
+pmu0 = json.load(open(f"{tmp}/affine_mu0/summary.json"))["solver"]["preconditioner"]
+print(f"preconditioner {pa} / {pb} (frictionless: {pmu0}): max diff / max |S| over the increments = {diff:.2e} "
+      f"(band 1e-8), same contacts and sliding contacts: {same}, status {sa['status']} / {sb['status']}")
+ok = diff < 1e-8 and same and sa["status"] == sb["status"] == "ok" and (pa, pb, pmu0) == ("translations", "full", "full")
+sys.exit(0 if ok else 1)
+PY
+result preconditioner_same_state $?
 finish

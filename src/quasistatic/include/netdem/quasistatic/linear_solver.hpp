@@ -98,8 +98,22 @@ class LinearSolver {
   /// block index.
   void set_row_blocks(std::vector<int> block_of_row);
 
-  /// Solves M x = b with the factor (direct). ok = false (x = 0) if there is no valid factor.
-  /// residual is computed with the stored copy of M (one extra mat-vec).
+  /// The split preconditioner (docs/performance.md "Issue 30, part 5"): the rows with
+  /// group_of_row[r] < 0 are factorised (CHOLMOD, the submatrix of M on those rows); the rows of
+  /// each group g >= 0 (at most kMaxSplitGroup rows, e.g. the rotations of one particle) are
+  /// preconditioned by the inverse of their diagonal block of M, their coupling to every other
+  /// row left out (block Jacobi). The preconditioner is then no longer M's inverse, so every
+  /// solve, solve(b, x) included, is GMRES on the full matrix. Empty: off (the default). Takes
+  /// effect at the next factorise(); group_of_row.size() must equal its matrix size. Throws
+  /// std::invalid_argument for a group with more than kMaxSplitGroup rows.
+  void set_split(std::vector<int> group_of_row);
+  static constexpr int kMaxSplitGroup = 6;
+  /// Whether the split preconditioner is on (set_split with a non-empty vector).
+  [[nodiscard]] bool split() const;
+
+  /// Solves M x = b with the factor (direct; with the split preconditioner, GMRES on M). ok =
+  /// false (x = 0) if there is no valid factor. residual is computed with the stored copy of M
+  /// (one extra mat-vec).
   LinearStatus solve(const VecX& b, VecX& x);
 
   /// Solves A x = b for a general (possibly non-symmetric) A, same size as M, full storage, by

@@ -117,6 +117,12 @@ struct IterationOptions {
   /// cost change.
   int factor_reuse = 0;
   static constexpr int kKeptFactorMaxIterations = 30;
+  /// The linear solver's preconditioner (docs/performance.md "Issue 30, part 5"). Full: the CHOLMOD
+  /// factor of the whole iteration matrix. Translations: the factor of the translations' block
+  /// only, and the inverse of each particle's rotation block (LinearSolver::set_split); every
+  /// solve is then GMRES on the whole matrix, so the answer is judged on the same residual. Auto:
+  /// Translations in 3D, Full in 2D (resolved_preconditioner).
+  enum class Preconditioner { Auto, Full, Translations } preconditioner = Preconditioner::Auto;
   /// Nonlinear Gauss-Seidel smoothing after each Newton step: local_sweeps sweeps over the
   /// particles whose residual exceeds local_threshold x the RMS residual, each a damped Newton
   /// iteration (local_iterations at most) on the particle's own DOFs with its neighbours held
@@ -149,6 +155,15 @@ struct SolverOptionsT : IterationOptions {
   /// energy_merit and a frictionless law.
   bool uses_energy_merit() const {
     return iteration == Iteration::PseudoTransient && energy_merit && (!law.frictional() || friction_energy_merit);
+  }
+  /// The preconditioner a network of dimension dim uses: Translations (Auto: in 3D) only where
+  /// the rotations are unknowns (a frictional law with rotations) and the iteration is not the
+  /// energy trust region (which reads the inertia of the full factor); otherwise Full.
+  Preconditioner resolved_preconditioner(int dim) const {
+    const bool split_ok = rotations && law.frictional() && !uses_energy_merit();
+    const bool want = preconditioner == Preconditioner::Translations ||
+                      (preconditioner == Preconditioner::Auto && dim == 3);
+    return split_ok && want ? Preconditioner::Translations : Preconditioner::Full;
   }
   /// The merit the pseudo-transient iteration uses: "energy", "energy-friction" or "residual".
   const char* merit_name() const {
