@@ -183,20 +183,8 @@ void Compact3Rows::add(const Row3& row) {
   end_compact_row(row.increment, r.newton_residual, total, csv, series, progress, growth);
 }
 
-namespace {
-
-/// The checks of the options that 3D does not take yet (UsageError, one line).
-void check_3d_options(const CompactArgs& a) {
-  if (a.save_state && a.boundary == "periodic")
-    throw UsageError("--save-state: a jammed state has no periodic cell yet, and the 3D network has no state.txt "
-                     "(--boundary periodic)");
-}
-
-}  // namespace
-
 int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, const std::string& command,
                    const fs::path& out) {
-  check_3d_options(a);
   qs::SolverOptions so = compact_solver_options(a);
   if (a.factor_reuse < 0) so.factor_reuse = kFactorReuse3d;
   const qs::CompactionOptions3 co = compact_compaction_options<3>(a, so);
@@ -252,7 +240,8 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   write_file_atomic(out / "history.csv", rows.csv);
   if (stopped.empty()) {  // a stopped run keeps what it wrote up to its last good increment
     write_snapshot_3d(solver, series, "final", rows.last.density);
-    if (a.save_state) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
+    if (a.save_state) qs::save_state(solver.state(), (out / "state.txt").string());  // exact (kind network3d)
+    if (a.save_state && !periodic) sys::write_jammed_state(solver.jammed_state(), (out / "jammed.json").string());
   }
   const int outside = periodic ? 0 : centres_outside_3d(solver, pk.box);
   if (outside > 0)
@@ -317,9 +306,10 @@ int run_compact_3d(const PackArgs& pa, const CompactArgs& a, const RunArgs& ra, 
   j["normal_unloading"] = a.law.normal_unloading;
   j["final"] = state_json(last, sy);
   j["solver"] = solver_summary(so, tm, solver.free_dofs(), rows.tally, 3);
-  j["state"] = nullptr;  // the exact continuation file (state.txt) is 2D only
-  if (a.save_state || !a.state_file.empty())
-    j["jammed_state"] = {{"from", a.state_file}, {"saved", a.save_state && stopped.empty() ? "jammed.json" : ""}};
+  const bool saved = a.save_state && stopped.empty();
+  j["state"] = saved ? nlohmann::json("state.txt") : nlohmann::json(nullptr);
+  if (a.save_state || !a.state_file.empty())  // a periodic cell is not a jammed state's box (yet)
+    j["jammed_state"] = {{"from", a.state_file}, {"saved", saved && !periodic ? "jammed.json" : ""}};
   add_run_records(j, tm, wall);
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   close_run_dir(out);

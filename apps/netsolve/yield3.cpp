@@ -50,6 +50,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 struct Yield3Args {
   PackArgs pack;
   std::string packing_file, precompact = "hydrostatic", compact_bc = "auto", probe_bc;
+  std::string from_state;  ///< a 3D state.txt (netsolve compact --dim 3 --save-state): no precompaction
   double to_density = 0.0;  ///< 0: D0 + 0.03
   int increments = 50;
   LawArgs law = law_args(qs::SolverOptions::yield_precompaction());
@@ -106,6 +107,22 @@ Mat3 probe_direction(const Yield3Args& a, int k) {
   return d / d.norm();
 }
 
+/// The packing of a compacted state (--from-state): its spheres where they are now, in the
+/// initial box, so that density() is the state's initial density.
+packing::Packing packing_of_state(const qs::NetworkState3& s) {
+  packing::Packing pk;
+  pk.dim = 3;
+  pk.x = s.particles.axis(0);
+  pk.y = s.particles.axis(1);
+  pk.z = s.particles.axis(2);
+  pk.r = s.particles.r;
+  pk.box = s.box0;
+  pk.periodic = s.periodic;
+  pk.cell = s.cell;
+  pk.seed = s.seed;
+  return pk;
+}
+
 /// What a run keeps of the state at the end of the precompaction (the loading point).
 struct Loaded {
   qs::StressMeasuresT<3> m;
@@ -158,6 +175,7 @@ class Yield3Run {
   std::string source_;
   fs::path out_;
   std::unique_ptr<qs::NetworkSolver3> solver_;
+  std::unique_ptr<qs::NetworkState3> state_;  ///< --from-state: the loading point, read in setup()
   std::unique_ptr<SnapshotSeries> series_;
   std::unique_ptr<Compact3Rows> rows_;
   std::string stopped_;
@@ -189,9 +207,22 @@ void Yield3Run::setup() {
     throw UsageError(fmt::format("--unload-ratio must lie in [1, 1e8], got {}", a.unload_ratio));
   if (!(a.increments >= 1 && a.increments <= 1000000))
     throw UsageError(fmt::format("--increments must be in [1, 1e6], got {}", a.increments));
-  activity() = a.packing_file.empty() ? "building the 3D ballistic deposition" : "reading " + a.packing_file;
-  if (a.packing_file.empty()) check_deposition_size(a.pack, true);
-  pk_ = input_packing_3d(a.packing_file, a.pack, source_, "the network solver");
+  if (!a.from_state.empty()) {
+    if (!a.packing_file.empty()) throw UsageError("--from-state and --packing exclude each other");
+    if (fs::is_directory(a.from_state))
+      throw UsageError(fmt::format("--from-state '{}' is a folder, not a state file (netsolve compact --dim 3 --save-state "
+                                   "writes DIR/state.txt)", a.from_state.substr(0, 80)));
+    activity() = "reading " + a.from_state;
+    state_ = std::make_unique<qs::NetworkState3>(qs::load_state3(a.from_state));
+    if (!state_->wall_history.empty())
+      throw UsageError(fmt::format("--from-state {}: the state has wall contacts, and yield --dim 3 has no walls yet", a.from_state));
+    pk_ = packing_of_state(*state_);
+    source_ = "state " + a.from_state;
+  } else {
+    activity() = a.packing_file.empty() ? "building the 3D ballistic deposition" : "reading " + a.packing_file;
+    if (a.packing_file.empty()) check_deposition_size(a.pack, true);
+    pk_ = input_packing_3d(a.packing_file, a.pack, source_, "the network solver");
+  }
   // auto: periodic for a periodic packing; otherwise affine (the 3D die leaks, docs/quasistatic.md).
   // affine with a periodic packing: every centre follows the cell.
   const std::string cbc = a.compact_bc == "auto" ? (pk_.periodic ? "periodic" : "affine") : a.compact_bc;
@@ -222,12 +253,20 @@ void Yield3Run::setup() {
   co_.path = qs::StrainPath3::parse(a.precompact);
   co_.target_density = a.to_density > 0.0 ? a.to_density : pk_.density() + 0.03;
   co_.increments = a.increments;
+  if (state_) {  // the loading point is the state's: its strain must lie along --precompact's path
+    const Mat3 E = state_->strain, R = co_.path.rate();
+    const double cosine = (E.array() * R.array()).sum() / (E.norm() * R.norm());
+    if (!(E.norm() > 0.0) || !(cosine > 1.0 - 1e-9))
+      throw UsageError(fmt::format("--from-state {}: its strain (E11, E22, E33) = ({:.4g}, {:.4g}, {:.4g}) does not lie "
+                                   "along --precompact {}", a.from_state, E(0, 0), E(1, 1), E(2, 2), a.precompact));
+    co_.target_density = pk_.density() * std::exp(-E.trace());  // the state's density (volume det exp(E))
+  }
   co_.validate(pk_.density());
   out_ = a.out;
   check_run_dir(out_, run_dir_options(a.run, a.packing_file));
   open_run_dir(out_, command_, run_dir_options(a.run, a.packing_file));
   fs::create_directories(out_ / "probes");
-  packing::write_packing_csv(pk_, out_ / "packing.csv");
+  if (!state_) packing::write_packing_csv(pk_, out_ / "packing.csv");
   if (!a.quiet)
     std::fprintf(stderr, "netsolve yield: %zu spheres, D0 = %.4f, seed %llu (%s)\n", pk_.size(), pk_.density(),
                  static_cast<unsigned long long>(pk_.seed), source_.c_str());
@@ -237,12 +276,22 @@ void Yield3Run::setup() {
 bool Yield3Run::precompact() {
   const auto t0 = Clock::now();
   activity() = "setting up the network solver";
-  solver_ = std::make_unique<qs::NetworkSolver3>(pk_, so_);
+  solver_ = state_ ? std::make_unique<qs::NetworkSolver3>(*state_, so_) : std::make_unique<qs::NetworkSolver3>(pk_, so_);
   std::vector<std::string> kinds = {"particles", "contacts"};
   if (so_.mode == qs::BoundaryMode::Periodic) kinds.emplace_back("cell");
   series_ = std::make_unique<SnapshotSeries>(out_ / "snapshots.pvd", kinds);
   write_snapshot_3d(*solver_, *series_, "initial", 0.0);  // timesteps: the phases 0, 1, 2
   rows_ = std::make_unique<Compact3Rows>(*solver_, *series_, std::vector<double>{}, so_, co_, a_.quiet);
+  if (state_) {  // the loading point itself: history.csv's one row
+    qs::CompactionRowT<3> row;
+    row.state = solver_->stress();
+    row.report.converged = true;
+    rows_->add(row);
+    rows_->progress.finish();
+    write_file_atomic(out_ / "history.csv", rows_->csv);
+    t_compact_ = seconds_since(t0);
+    return true;
+  }
   activity() = "precompacting";
   try {
     qs::run_compaction(*solver_, co_, [&](const qs::CompactionRowT<3>& row) { rows_->add(row); });
@@ -445,13 +494,14 @@ int Yield3Run::finish() {
                 {"compact_bc", so_.affine_centres ? "affine (periodic cell)" : mode_name(so_.mode)}, {"probe_bc", po_.affine_centres ? "affine (periodic cell)" : mode_name(po_.mode)},
                 {"friction", a_.law.friction}, {"mu_eff", mu_eff_}, {"unload_ratio", so_.law.unload_ratio},
                 {"k_t", so_.law.k_t}, {"first_touch", so_.law.first_touch}, {"rotations", so_.rotations}};
-  j["precompaction"] = rows_->done > 0 ? state_json(rows_->last, sy_) : json(nullptr);
-  if (rows_->done > 0) {
+  j["precompaction"] = rows_->done > 0 || state_ ? state_json(rows_->last, sy_) : json(nullptr);
+  if (state_) j["precompaction"]["from_state"] = a_.from_state;
+  if (rows_->done > 0 || state_) {
     const auto pq = qs::pq_of(rows_->last.eq13 / sy_);
     j["precompaction"]["p"] = pq.p;
     j["precompaction"]["q"] = pq.q;
-    j["precompaction"]["increments_done"] = rows_->done;
-    j["precompaction"]["unconverged_increments"] = rows_->tally.unconverged;
+    j["precompaction"]["increments_done"] = state_ ? json(nullptr) : json(rows_->done);  // not known from a state
+    j["precompaction"]["unconverged_increments"] = state_ ? json(nullptr) : json(rows_->tally.unconverged);
   }
   j["solver"] = solver_summary(so_, solver_->timings(), solver_->free_dofs(), rows_->tally, 3);
   if (stopped_.empty()) {
@@ -522,6 +572,9 @@ int run_yield3_command(int argc, char** argv) {
   app.add_option("--seed", a.pack.seed, "random seed of the deposition")->check(seed_validator())->capture_default_str();
   app.add_option("--lateral", a.pack.lateral, "walls | periodic sides of a new deposition")->capture_default_str();
   app.add_option("--packing", a.packing_file, "3D packing CSV (netsolve pack --dim 3 [--periodic]) instead of a new deposition");
+  app.add_option("--from-state", a.from_state, "a compacted state (state.txt of netsolve compact --dim 3 --save-state) as the "
+                 "loading point instead of a precompaction; its strain must lie along --precompact, and --compact-bc "
+                 "must be the mode it was compacted in")->check(CLI::ExistingFile);
   app.add_option("--precompact", a.precompact, "hydrostatic | closed-die (along z)")->capture_default_str();
   app.add_option("--to-density", a.to_density, "precompaction density D (0: D0 + 0.03)")->capture_default_str();
   app.add_option("--increments", a.increments, "precompaction increments")->capture_default_str();

@@ -49,6 +49,15 @@ std::vector<double> reals(const Field& f, std::size_t n, double lo = -kMax, doub
   return v;
 }
 
+Json timings_json(const SolverTimings& t) {
+  return Json{{"assemble", real_json(t.assemble, "timing")},     {"analyse", real_json(t.analyse, "timing")},
+              {"factorise", real_json(t.factorise, "timing")},   {"solve", real_json(t.solve, "timing")},
+              {"neighbours", real_json(t.neighbours, "timing")}, {"total", real_json(t.total, "timing")},
+              {"analyses", t.analyses},                          {"factorisations", t.factorisations},
+              {"solves", t.solves},                              {"increments", t.increments},
+              {"newton_iterations", t.newton_iterations}};
+}
+
 Json state_json(const NetworkState& s) {
   Json j = sys::make_archive("network", kNetworkStateVersion);
   std::vector<bool> per(s.peripheral.begin(), s.peripheral.end());
@@ -92,13 +101,7 @@ Json state_json(const NetworkState& s) {
     for (const auto& h : s.wall_history) hist.push_back(h);
     j["walls"] = Json{{"history", hist}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
   }
-  const auto& t = s.timings;
-  j["timings"] = Json{{"assemble", real_json(t.assemble, "timing")},     {"analyse", real_json(t.analyse, "timing")},
-                      {"factorise", real_json(t.factorise, "timing")},   {"solve", real_json(t.solve, "timing")},
-                      {"neighbours", real_json(t.neighbours, "timing")}, {"total", real_json(t.total, "timing")},
-                      {"analyses", t.analyses},                          {"factorisations", t.factorisations},
-                      {"solves", t.solves},                              {"increments", t.increments},
-                      {"newton_iterations", t.newton_iterations}};
+  j["timings"] = timings_json(s.timings);
   return j;
 }
 
@@ -251,6 +254,199 @@ NetworkState load_state_text(std::string_view text, const std::string& path) {
   read_pairs(root, s);
   read_periodic(root, s);
   read_walls(root, s);
+  read_timings(root, s.timings);
+  try {
+    s.validate();
+  } catch (const std::invalid_argument& e) {
+    root.fail(e.what());
+  }
+  return s;
+}
+
+// ------------------------------------------------------------------------------------------------
+// The 3D state file (kind "network3d", version 1; docs/quasistatic.md "State file"): the generic
+// layout of NetworkStateT<3>, matrices row-major, vectors flat (D or kNodeDofs per particle).
+
+namespace {
+
+constexpr int kNetwork3StateVersion = 1;
+
+Json matrix3(const Eigen::Matrix3d& m, const char* what) {
+  Json a = Json::array();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) a.push_back(real_json(m(r, c), what));
+  return a;
+}
+Eigen::Matrix3d matrix3(const Field& f) {
+  const std::vector<double> v = reals(f, 9);
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = v[static_cast<std::size_t>(3 * r + c)];
+  return m;
+}
+
+Json state3_json(const NetworkState3& s) {
+  Json j = sys::make_archive("network3d", kNetwork3StateVersion);
+  const auto& P = s.particles;
+  std::vector<bool> per(s.peripheral.begin(), s.peripheral.end());
+  j["particles"] = Json{{"pos", reals(P.pos, "pos")},           {"rot", reals(P.rot, "rot")},
+                        {"r", reals(P.r, "r")},                 {"peripheral", per},
+                        {"pos_build", reals(s.pos_build, "pos_build")}, {"f_contact", reals(s.f_contact, "f_contact")},
+                        {"du_prev", reals(s.du_prev, "du_prev")}};
+  j["solid_volume"] = real_json(s.solid_area, "solid_volume");
+  j["initial_density"] = real_json(s.initial_density, "initial_density");
+  j["box_volume0"] = real_json(s.box_area0, "box_volume0");
+  const auto& b = s.box0;
+  j["box0"] = Json{{"min", reals({b.x_min, b.y_min, b.z_min}, "box0")}, {"max", reals({b.x_max, b.y_max, b.z_max}, "box0")}};
+  j["seed"] = s.seed;
+  j["box_deformation"] = matrix3(s.box_deformation, "box_deformation");
+  j["strain"] = matrix3(s.strain, "strain");
+  j["box_deformation_build"] = matrix3(s.box_deformation_build, "box_deformation_build");
+  j["dE_prev"] = matrix3(s.dE_prev, "dE_prev");
+  Json e = Json::array(), slip = Json::array(), centre = Json::array(), hist = Json::array(), ft = Json::array();
+  for (std::size_t k = 0; k < s.pair_i.size(); ++k) {
+    e.push_back(matrix3(s.aux[k].E_form, "E_form"));
+    slip.push_back(real_json(s.aux[k].slip, "slip"));
+    centre.push_back(real_json(s.aux[k].centre, "centre"));
+    hist.push_back(s.history[k]);
+    ft.push_back(reals({s.f_t[k][0], s.f_t[k][1], s.f_t[k][2]}, "f_t"));
+  }
+  std::vector<bool> sl(s.sliding.begin(), s.sliding.end());
+  j["pairs"] = Json{{"i", s.pair_i},   {"j", s.pair_j},        {"history", hist},           {"E_form", e},
+                    {"slip", slip},    {"centre", centre},     {"f_n", reals(s.f_n, "f_n")}, {"f_t", ft},
+                    {"sliding", sl}};
+  if (s.periodic) {
+    Json shift = Json::array();
+    for (const auto& n : s.shift) shift.push_back(Json::array({n[0], n[1], n[2]}));
+    j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
+  }
+  if (!s.wall_history.empty()) {  // six slots per particle (wall 2a at the minimum of axis a, 2a + 1 at its maximum)
+    Json wh = Json::array();
+    for (const auto& h : s.wall_history) wh.push_back(h);
+    j["walls"] = Json{{"history", wh}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
+  }
+  j["timings"] = timings_json(s.timings);
+  return j;
+}
+
+void read_particles3(const Field& root, NetworkState3& s) {
+  constexpr std::size_t kMaxParticles = 100000000;
+  const Field p = root["particles"];
+  p.object({"pos", "rot", "r", "peripheral", "pos_build", "f_contact", "du_prev"});
+  const std::size_t n = p["r"].array(1, kMaxParticles);
+  s.particles.pos = reals(p["pos"], 3 * n);
+  s.particles.rot = reals(p["rot"], 3 * n);
+  s.particles.r = reals(p["r"], n, 0.0, kMax);
+  for (std::size_t k = 0; k < n; ++k)
+    if (!(s.particles.r[k] > 0.0)) p["r"][k].fail("a radius must be positive");
+  p["peripheral"].array(n);
+  s.peripheral.resize(n);
+  for (std::size_t k = 0; k < n; ++k) s.peripheral[k] = p["peripheral"][k].boolean() ? 1 : 0;
+  s.pos_build = reals(p["pos_build"], 3 * n);
+  s.f_contact = reals(p["f_contact"], 6 * n);
+  if (p["du_prev"].json().is_array() && p["du_prev"].json().empty()) s.du_prev.clear();
+  else s.du_prev = reals(p["du_prev"], 6 * n);
+}
+
+void read_globals3(const Field& root, NetworkState3& s) {
+  s.solid_area = root["solid_volume"].real(0.0, kMax);
+  s.initial_density = root["initial_density"].real(0.0, kMax);
+  s.box_area0 = root["box_volume0"].real(0.0, kMax);
+  const Field b = root["box0"];
+  b.object({"min", "max"});
+  const auto lo = reals(b["min"], 3), hi = reals(b["max"], 3);
+  s.box0.x_min = lo[0], s.box0.y_min = lo[1], s.box0.z_min = lo[2];
+  s.box0.x_max = hi[0], s.box0.y_max = hi[1], s.box0.z_max = hi[2];
+  if (!(hi[0] > lo[0] && hi[1] > lo[1] && hi[2] > lo[2])) b.fail("the initial box must have positive size");
+  const Field seed = root["seed"];
+  if (!seed.json().is_number_unsigned() && !(seed.json().is_number_integer() && seed.json().get<std::int64_t>() >= 0))
+    seed.fail("expected a non-negative integer");
+  s.seed = seed.json().get<std::uint64_t>();
+  s.box_deformation = matrix3(root["box_deformation"]);
+  s.strain = matrix3(root["strain"]);
+  s.box_deformation_build = matrix3(root["box_deformation_build"]);
+  s.dE_prev = matrix3(root["dE_prev"]);
+  if (!(s.box_deformation_build.determinant() > 0.0)) root["box_deformation_build"].fail("the determinant must be positive");
+}
+
+void read_pairs3(const Field& root, NetworkState3& s) {
+  const Field p = root["pairs"];
+  p.object({"i", "j", "history", "E_form", "slip", "centre", "f_n", "f_t", "sliding"});
+  const std::size_t n = s.particles.size();
+  const std::size_t np = p["i"].array(0, 64 * n);
+  for (const char* key : {"j", "history", "E_form", "slip", "centre", "f_n", "f_t", "sliding"}) p[key].array(np);
+  const auto last = static_cast<std::int64_t>(n) - 1;
+  s.pair_i.resize(np);
+  s.pair_j.resize(np);
+  s.history.resize(np);
+  s.aux.resize(np);
+  s.sliding.resize(np);
+  s.f_t.resize(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    s.pair_i[k] = static_cast<int>(p["i"][k].integer(0, last));
+    s.pair_j[k] = static_cast<int>(p["j"][k].integer(0, last));
+    s.history[k] = p["history"][k].get<contact::PlasticIndentationHistoryT<3>>();
+    s.aux[k].E_form = matrix3(p["E_form"][k]);
+    s.aux[k].slip = p["slip"][k].real();
+    s.aux[k].centre = p["centre"][k].real();
+    const auto t = reals(p["f_t"][k], 3);
+    s.f_t[k] = Eigen::Vector3d(t[0], t[1], t[2]);
+    s.sliding[k] = p["sliding"][k].boolean() ? 1 : 0;
+  }
+  s.f_n = reals(p["f_n"], np, 0.0, kMax);
+}
+
+void read_optional3(const Field& root, NetworkState3& s) {
+  if (root.has("periodic")) {
+    const Field p = root["periodic"];
+    p.object({"cell", "shift", "pinned"});
+    s.periodic = true;
+    const std::size_t nc = p["cell"].array(0, 9);
+    if (nc != 0 && nc != 9) p["cell"].fail("expected 0 or 9 numbers (the cell vectors a1, a2, a3)");
+    s.cell = reals(p["cell"], nc);
+    const std::size_t np = s.pair_i.size();
+    p["shift"].array(np);
+    s.shift.resize(np);
+    for (std::size_t k = 0; k < np; ++k) {
+      p["shift"][k].array(3);
+      for (std::size_t a = 0; a < 3; ++a) s.shift[k][a] = static_cast<int>(p["shift"][k][a].integer(-1000000, 1000000));
+    }
+    s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(s.particles.size()) - 1));
+  }
+  if (root.has("walls")) {
+    const Field w = root["walls"];
+    w.object({"history", "f_n"});
+    const std::size_t n = 6 * s.particles.size();
+    w["history"].array(n);
+    s.wall_history.resize(n);
+    for (std::size_t k = 0; k < n; ++k) s.wall_history[k] = w["history"][k].get<contact::PlasticIndentationHistoryT<3>>();
+    s.wall_f_n = reals(w["f_n"], n, 0.0, kMax);
+  }
+}
+
+}  // namespace
+
+void save_state(const NetworkState3& s, const std::string& path) {
+  s.validate();
+  sys::write_text_file(path, sys::dump_archive(state3_json(s)), "state file");
+}
+
+NetworkState3 load_state3(const std::string& path) {
+  return load_state3_text(sys::read_text_file(path, "state file"), path);
+}
+
+NetworkState3 load_state3_text(std::string_view text, const std::string& path) {
+  const Json j = sys::parse_archive(text, path);
+  const Field root(j, path);
+  sys::check_header(root, "network3d", kNetwork3StateVersion);
+  root.object({"format", "kind", "version", "particles", "solid_volume", "initial_density", "box_volume0", "box0",
+               "seed", "box_deformation", "strain", "box_deformation_build", "dE_prev", "pairs", "periodic", "walls",
+               "timings"});
+  NetworkState3 s;
+  read_particles3(root, s);
+  read_globals3(root, s);
+  read_pairs3(root, s);
+  read_optional3(root, s);
   read_timings(root, s.timings);
   try {
     s.validate();

@@ -33,7 +33,6 @@ check_bad walls_shear "E23 = E13 = E12 = 0" compact --dim 3 --boundary walls --s
 check_bad state_2d "is a 2D state" compact --dim 3 --boundary walls --state "$tmp/jam2/jammed.json"
 check_bad state_without_walls "contact walls" compact --dim 3 --boundary layer --state "$jam"
 check_bad state_and_packing "exclude each other" compact --dim 3 --boundary walls --state "$jam" --packing "$tmp/p3/packing.csv"
-check_bad save_periodic "no periodic cell" compact --dim 3 --boundary periodic --packing "$tmp/p3/packing.csv" --save-state
 check_bad state_law "friction" compact --dim 3 --boundary walls --state "$jam" --friction 0.1
 
 "$ns" compact --dim 3 --boundary walls --state "$jam" --to-strain 0.01 --increments 10 --tol 1e-5 --save-state --quiet \

@@ -24,8 +24,10 @@
 #  * --jobs (threads) and yield-merge --dim 3: the 12 affine probes in one job, in two, and as three
 #    slices --probe i/3 merged give the same yield_points.csv and probe curves, byte for byte; a merge
 #    with a slice missing is "incomplete" and names the missing probes;
+#  * --from-state: compact --dim 3 --save-state's state.txt as the loading point gives the yield points
+#    and probe curves of the run that precompacts itself, byte for byte;
 #  * bad input: one line, exit 2, no folder (a merge of runs with different setups, or of a folder
-#    that is not a 3D yield run).
+#    that is not a 3D yield run; --from-state with --packing, off the path, or not a 3D state).
 # usage: test_netsolve_yield3d.sh PATH/TO/netsolve
 set -u
 ns="$1"
@@ -103,6 +105,31 @@ result jobs_and_merge_identical $?
   /usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
 sys.exit(0 if s["status"] == "incomplete" and s["probes"]["missing"] == [2, 5, 8, 11] else 1)' "$tmp/merged2/summary.json"
 result merge_missing_incomplete $?
+# --from-state: netsolve compact --dim 3 --save-state writes the loading point (state.txt, kind network3d),
+# and yield --from-state probes from it: the same yield points and probe curves, byte for byte, as the
+# run that precompacts itself with the same options (periodic cell, sticking, pseudo-transient; yield's
+# precompaction keeps no factor, hence --factor-reuse 0)
+dpp=$(/usr/bin/python3 -c 'import json, sys; print("%.6f" % (json.load(open(sys.argv[1]))["density"] + 0.02))' "$tmp/pp/summary.json")
+"$ns" compact --dim 3 --boundary periodic --packing "$tmp/pp/packing.csv" --to-density "$dpp" --increments 8 \
+  --factor-reuse 0 --snapshots '' --save-state --quiet --out "$tmp/cstate" >/dev/null 2>"$tmp/stderr" &&
+  /usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+sys.exit(0 if s["state"] == "state.txt" and s["jammed_state"]["saved"] == "" and s["status"] == "ok" else 1)' "$tmp/cstate/summary.json"
+result compact3d_save_state $?
+run own_pre --packing "$tmp/pp/packing.csv" --to-density "$dpp" --increments 8 --directions 4 --probe-bc affine
+run from_state --from-state "$tmp/cstate/state.txt" --directions 4 --probe-bc affine
+cmp -s "$tmp/own_pre/yield_points.csv" "$tmp/from_state/yield_points.csv" &&
+  for k in 000 001 002 003; do cmp -s "$tmp/own_pre/probes/probe_$k.csv" "$tmp/from_state/probes/probe_$k.csv" || exit 1; done &&
+  /usr/bin/python3 -c 'import json, sys; a, b = (json.load(open(f)) for f in sys.argv[1:3])
+pa, pb = a["precompaction"], b["precompaction"]
+ok = pb["from_state"].endswith("state.txt") and pb["increments_done"] is None and pa["increments_done"] == 8
+ok &= all(pa[k] == pb[k] for k in ("S11", "S22", "S33", "Z", "D"))
+print("from a state: loading point S33 %.9f / %.9f, probes identical" % (pa["S33"], pb["S33"]))
+sys.exit(0 if ok and a["status"] == b["status"] else 1)' "$tmp/own_pre/summary.json" "$tmp/from_state/summary.json"
+result from_state_identical $?
+check_bad from_state_packing "exclude each other" yield --dim 3 --from-state "$tmp/cstate/state.txt" --packing "$p3"
+check_bad from_state_path "does not lie along" yield --dim 3 --from-state "$tmp/cstate/state.txt" --precompact closed-die
+sed 's/"network3d"/"network"/' "$tmp/cstate/state.txt" > "$tmp/state2d_kind.txt"
+check_bad from_state_kind "expected a network3d state" yield --dim 3 --from-state "$tmp/state2d_kind.txt"
 check_bad merge_setup "different setup" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/periodic"
 check_bad merge_not_3d "not a finished netsolve yield --dim 3 run" yield-merge --dim 3 "$tmp/affine_s0" "$tmp/pp"
 

@@ -276,6 +276,13 @@ NetworkState load_state(const std::string& path);
 NetworkState load_state(std::istream& in, const std::string& source);
 NetworkState load_state_text(std::string_view text, const std::string& source);
 
+/// The 3D state of the plastic-indentation law (the generic layout) and its state file (kind
+/// "network3d"; docs/quasistatic.md "State file"): the same contract as the 2D functions above.
+using NetworkState3 = NetworkStateT<3>;
+void save_state(const NetworkState3& state, const std::string& path);
+NetworkState3 load_state3(const std::string& path);
+NetworkState3 load_state3_text(std::string_view text, const std::string& source);
+
 /// The network solver in dimension D with the contact law Law (law.hpp's interface, chosen at
 /// compile time). The tools use the plastic-indentation law of Redanz & Fleck, the default.
 template <int D, class Law = contact::PlasticIndentationLawT<D>>
