@@ -39,15 +39,10 @@ def read_packing3d(path):
     return np.array(rows), box
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("packing")
-    ap.add_argument("out")
-    ap.add_argument("--azimuth", type=float, default=35.0, help="view direction about z [deg]")
-    ap.add_argument("--elevation", type=float, default=25.0, help="view elevation above the x-y plane [deg]")
-    a = ap.parse_args()
-    P, box = read_packing3d(a.packing)
-    az, el = math.radians(a.azimuth), math.radians(a.elevation)
+def draw(P, box, out, azimuth=35.0, elevation=25.0, title=None):
+    """The picture of the spheres P (rows x, y, z, r) in box [x0, y0, z0, x1, y1, z1] into out (PNG);
+    title: the plot's title (default: the count, the box and the density)."""
+    az, el = math.radians(azimuth), math.radians(elevation)
     # view basis: d points from the scene to the viewer; u (right) and v (up) span the screen
     d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
     u = np.cross([0.0, 0.0, 1.0], d)
@@ -80,10 +75,24 @@ def main():
     ax.axis("off")
     n = len(P)
     dens = np.sum(4.0 / 3.0 * np.pi * P[:, 3] ** 3) / ((box[3] - box[0]) * (box[4] - box[1]) * (box[5] - box[2]))
-    ax.set_title(f"{n} spheres, box {box[3] - box[0]:g} x {box[4] - box[1]:g} x {box[5] - box[2]:g}, "
-                 f"density {dens:.3f} (colour: height)", fontsize=9)
+    if title is None:
+        title = (f"{n} spheres, box {box[3] - box[0]:g} x {box[4] - box[1]:g} x {box[5] - box[2]:g}, "
+                 f"density {dens:.3f} (colour: height)")
+    ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(a.out)
+    fig.savefig(out)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("packing")
+    ap.add_argument("out")
+    ap.add_argument("--azimuth", type=float, default=35.0, help="view direction about z [deg]")
+    ap.add_argument("--elevation", type=float, default=25.0, help="view elevation above the x-y plane [deg]")
+    a = ap.parse_args()
+    P, box = read_packing3d(a.packing)
+    draw(P, box, a.out, a.azimuth, a.elevation)
     print(f"wrote {a.out}")
 
 

@@ -4,8 +4,9 @@
 usage: plot_run.py RUN_DIR
 
 Reads RUN_DIR/history.csv, summary.json and packing.csv; writes compaction.png (normalised stresses
-and coordination against density), packing.png (initial packing with its contact network)
-and report.md.
+and coordination against density), packing.png (2D: the initial packing with its contact network;
+3D, `netsolve compact --dim 3`: the initial spheres seen from an oblique direction, as
+plot_packing3d.py draws them) and report.md.
 """
 import csv
 import json
@@ -28,6 +29,12 @@ def read_csv(path):
     return {h: [float(r[k]) for r in data] for k, h in enumerate(head)}
 
 
+def dim_of(run):
+    """2 or 3: summary.json's dim (a 2D run's summary has none)."""
+    with open(os.path.join(run, "summary.json")) as f:
+        return json.load(f).get("dim", 2)
+
+
 def read_packing(path):
     box = None
     xs, ys, rs = [], [], []
@@ -44,6 +51,12 @@ def read_packing(path):
 
 
 def plot_packing(run, png):
+    if dim_of(run) == 3:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import plot_packing3d  # noqa: E402 (this folder's)
+        P, box = plot_packing3d.read_packing3d(os.path.join(run, "packing.csv"))
+        plot_packing3d.draw(P, box, png, title=f"initial packing: {len(P)} spheres (colour: height)")
+        return
     box, xs, ys, rs = read_packing(os.path.join(run, "packing.csv"))
     fig, ax = plt.subplots(figsize=(6, 6))
     circles = [Circle((x, y), r) for x, y, r in zip(xs, ys, rs)]
@@ -77,6 +90,8 @@ def plot_compaction(h, summary, png):
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     a1.plot(x, [-v for v in h["S22"]], label=r"$-\Sigma_{22}/\sigma_y$")
     a1.plot(x, [-v for v in h["S11"]], "--", label=r"$-\Sigma_{11}/\sigma_y$")
+    if "S33" in h:
+        a1.plot(x, [-v for v in h["S33"]], "-.", label=r"$-\Sigma_{33}/\sigma_y$")
     if legs:
         a1.plot(x, [-v for v in h["S12"]], ":", label=r"$-\Sigma_{12}/\sigma_y$")
     a1.set_xlabel(xlabel); a1.set_ylabel("normalised stress"); a1.legend(); a1.grid(alpha=0.3)
@@ -115,18 +130,21 @@ def main():
     plot_compaction(h, s, os.path.join(run, "compaction.png"))
     plot_packing(run, os.path.join(run, "packing.png"))
     fin = s["final"]
-    ratio = fin["S22"] / fin["S11"] if fin["S11"] else float("nan")
+    three = s.get("dim", 2) == 3
+    last = "S33" if three else "S22"  # the compaction axis of the closed die (z in 3D, y in 2D)
+    ratio = fin[last] / fin["S11"] if fin["S11"] else float("nan")
     t = s["timing_s"]
+    stress_rows = ([f"| Σ{a}/σy | {fin['S' + a]:.4f} |" for a in ("11", "22", "33", "23", "13", "12")] if three else
+                   [f"| Σ11/σy | {fin['S11']:.4f} |", f"| Σ22/σy | {fin['S22']:.4f} |"])
     lines = [
-        "# netsolve compaction run", "",
+        "# netsolve compaction run" + (" (3D: spheres)" if three else ""), "",
         f"Command: `{s['command']}`", "",
         f"Packing: {s['packing']} ({s['particles']} particles, D0 = {s['initial_density']:.4f}, seed {s['seed']})", "",
         "| quantity | value |", "|---|---|",
         f"| final density D | {fin['D']:.4f} |",
-        f"| Σ11/σy | {fin['S11']:.4f} |",
-        f"| Σ22/σy | {fin['S22']:.4f} |",
-        f"| Σ22/Σ11 | {ratio:.3f} |",
-        f"| asymmetry (Σ12-Σ21)/2σy | {fin['S_asym']:.2e} |",
+        *stress_rows,
+        f"| Σ{last[1:]}/Σ11 | {ratio:.3f} |",
+        *([f"| asymmetry (Σ12-Σ21)/2σy | {fin['S_asym']:.2e} |"] if "S_asym" in fin else []),
         f"| coordination Z | {fin['Z']:.3f} |",
         f"| sliding contacts | {fin['sliding']} of {fin['contacts']} |",
         f"| increments (unconverged) | {s['increments']} ({s['solver']['unconverged_increments']}) |",

@@ -21,6 +21,8 @@
 #    1e-8 of max |S| with the same contacts and sliding contacts;
 #  * the files: history.csv with the six components, the fabric (trace 1), no NaN; summary.json;
 #    snapshots.pvd with z;
+#  * apps/scripts/plot_run.py writes a 3D run's report (the six stress components of summary.json)
+#    and its pictures;
 #  * bad input: one line, exit 2, no folder.
 # usage: test_netsolve_compact3d.sh PATH/TO/netsolve PATH/TO/demsolve
 set -u
@@ -302,4 +304,20 @@ ok = diff < 1e-8 and same and sa["status"] == sb["status"] == "ok" and (pa, pb, 
 sys.exit(0 if ok else 1)
 PY
 result preconditioner_same_state $?
+# apps/scripts/plot_run.py (README command 1's report) on a 3D run: report.md lists the six stress
+# components as summary.json has them, compaction.png and packing.png (the spheres) are drawn
+/usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/../../apps/scripts/plot_run.py" "$tmp/pc_full" >/dev/null 2>"$tmp/stderr" &&
+  [ -s "$tmp/pc_full/compaction.png" ] && [ -s "$tmp/pc_full/packing.png" ] &&
+  /usr/bin/python3 - "$tmp/pc_full" <<'PY'
+import json, sys
+run = sys.argv[1]
+s = json.load(open(f"{run}/summary.json"))["final"]
+rep = open(f"{run}/report.md").read()
+ok = "(3D: spheres)" in rep
+for c in ("11", "22", "33", "23", "13", "12"):
+    ok &= f"| Σ{c}/σy | {s['S' + c]:.4f} |" in rep
+ok &= f"| Σ33/Σ11 | {s['S33'] / s['S11']:.3f} |" in rep
+sys.exit(0 if ok else 1)
+PY
+result plot_run_3d $?
 finish
