@@ -33,20 +33,106 @@ Json reals(const std::vector<double>& v, const char* what) {
   for (double d : v) a.push_back(real_json(d, what));
   return a;
 }
-Json matrix(const Eigen::Matrix2d& m, const char* what) {
-  return Json::array({real_json(m(0, 0), what), real_json(m(0, 1), what), real_json(m(1, 0), what), real_json(m(1, 1), what)});
-}
-Eigen::Matrix2d matrix(const Field& f) {
-  f.array(4);
-  Eigen::Matrix2d m;
-  m << f[std::size_t{0}].real(), f[std::size_t{1}].real(), f[std::size_t{2}].real(), f[std::size_t{3}].real();
-  return m;
-}
 std::vector<double> reals(const Field& f, std::size_t n, double lo = -kMax, double hi = kMax) {
   f.array(n);
   std::vector<double> v(n);
   for (std::size_t k = 0; k < n; ++k) v[k] = f[k].real(lo, hi);
   return v;
+}
+/// A D x D matrix, row-major [D * D] (both layouts).
+template <int D>
+Json matrix(const Eigen::Matrix<double, D, D>& m, const char* what) {
+  Json a = Json::array();
+  for (int r = 0; r < D; ++r)
+    for (int c = 0; c < D; ++c) a.push_back(real_json(m(r, c), what));
+  return a;
+}
+template <int D>
+Eigen::Matrix<double, D, D> matrix(const Field& f) {
+  const std::vector<double> v = reals(f, D * D);
+  Eigen::Matrix<double, D, D> m;
+  for (int r = 0; r < D; ++r)
+    for (int c = 0; c < D; ++c) m(r, c) = v[static_cast<std::size_t>(D * r + c)];
+  return m;
+}
+
+// ---- the parts both layouts (2D "network", 3D "network3d") share; S: the state of either ----
+
+std::uint64_t read_seed(const Field& seed) {
+  if (!seed.json().is_number_unsigned() && !(seed.json().is_number_integer() && seed.json().get<std::int64_t>() >= 0))
+    seed.fail("expected a non-negative integer");
+  return seed.json().get<std::uint64_t>();
+}
+
+/// Pair k of the member "pairs" p: its indices (i < j < N, sorted by (i, j)), history, E_form,
+/// slip, centre and sliding flag.
+template <int D, class S>
+void read_pair(const Field& p, std::size_t k, std::int64_t last, S& s) {
+  using History = typename decltype(s.history)::value_type;
+  s.pair_i[k] = static_cast<int>(p["i"][k].integer(0, last));
+  s.pair_j[k] = static_cast<int>(p["j"][k].integer(0, last));
+  if (!(s.pair_i[k] < s.pair_j[k])) p["j"][k].fail("pair indices must satisfy i < j < N");
+  if (k > 0 && !(std::make_pair(s.pair_i[k - 1], s.pair_j[k - 1]) < std::make_pair(s.pair_i[k], s.pair_j[k])))
+    p["i"][k].fail("pairs must be sorted by (i, j)");
+  s.history[k] = p["history"][k].get<History>();
+  s.aux[k].E_form = matrix<D>(p["E_form"][k]);
+  s.aux[k].slip = p["slip"][k].real();
+  s.aux[k].centre = p["centre"][k].real();
+  s.sliding[k] = p["sliding"][k].boolean() ? 1 : 0;
+}
+
+/// The optional members: the periodic cell (issue 29: the cell's vectors, empty: the box's edges;
+/// each row's image; the held particle) and the wall contacts (2 D slots per particle).
+template <int D, class S>
+void write_optional(Json& j, const S& s) {
+  if (s.periodic) {
+    Json shift = Json::array();
+    for (const auto& n : s.shift) {
+      Json a = Json::array();
+      for (int c = 0; c < D; ++c) a.push_back(n[static_cast<std::size_t>(c)]);
+      shift.push_back(a);
+    }
+    j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
+  }
+  if (!s.wall_history.empty()) {
+    Json hist = Json::array();
+    for (const auto& h : s.wall_history) hist.push_back(h);
+    j["walls"] = Json{{"history", hist}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
+  }
+}
+
+/// The optional periodic cell (absent: walls, die or affine) and wall contacts (absent: no walls,
+/// or walls that no particle has touched yet) of a state of n particles.
+template <int D, class S>
+void read_optional(const Field& root, S& s, std::size_t n) {
+  if (root.has("periodic")) {
+    const Field p = root["periodic"];
+    p.object({"cell", "shift", "pinned"});
+    s.periodic = true;
+    const std::size_t nc = p["cell"].array(0, D * D);
+    if (nc != 0 && nc != D * D)
+      p["cell"].fail(D == 2 ? "expected 0 or 4 numbers (the cell vectors a1, a2)"
+                            : "expected 0 or 9 numbers (the cell vectors a1, a2, a3)");
+    s.cell = reals(p["cell"], nc);
+    const std::size_t np = s.pair_i.size();
+    p["shift"].array(np);
+    s.shift.resize(np);
+    for (std::size_t k = 0; k < np; ++k) {
+      p["shift"][k].array(D);
+      for (std::size_t a = 0; a < D; ++a) s.shift[k][a] = static_cast<int>(p["shift"][k][a].integer(-1000000, 1000000));
+    }
+    s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(n) - 1));
+  }
+  if (root.has("walls")) {
+    using History = typename decltype(s.wall_history)::value_type;
+    const Field w = root["walls"];
+    w.object({"history", "f_n"});
+    const std::size_t slots = 2 * D * n;
+    w["history"].array(slots);
+    s.wall_history.resize(slots);
+    for (std::size_t k = 0; k < slots; ++k) s.wall_history[k] = w["history"][k].get<History>();
+    s.wall_f_n = reals(w["f_n"], slots, 0.0, kMax);
+  }
 }
 
 Json timings_json(const SolverTimings& t) {
@@ -76,13 +162,13 @@ Json state_json(const NetworkState& s) {
   j["box0"] = Json{{"min", Json::array({real_json(s.box0.x_min, "box0"), real_json(s.box0.y_min, "box0")})},
                    {"max", Json::array({real_json(s.box0.x_max, "box0"), real_json(s.box0.y_max, "box0")})}};
   j["seed"] = s.seed;
-  j["box_deformation"] = matrix(s.box_deformation, "box_deformation");
-  j["strain"] = matrix(s.strain, "strain");
-  j["box_deformation_build"] = matrix(s.box_deformation_build, "box_deformation_build");
-  j["dE_prev"] = matrix(s.dE_prev, "dE_prev");
+  j["box_deformation"] = matrix<2>(s.box_deformation, "box_deformation");
+  j["strain"] = matrix<2>(s.strain, "strain");
+  j["box_deformation_build"] = matrix<2>(s.box_deformation_build, "box_deformation_build");
+  j["dE_prev"] = matrix<2>(s.dE_prev, "dE_prev");
   Json e = Json::array(), slip = Json::array(), centre = Json::array(), hist = Json::array();
   for (std::size_t k = 0; k < s.pair_i.size(); ++k) {
-    e.push_back(matrix(s.aux[k].E_form, "E_form"));
+    e.push_back(matrix<2>(s.aux[k].E_form, "E_form"));
     slip.push_back(real_json(s.aux[k].slip, "slip"));
     centre.push_back(real_json(s.aux[k].centre, "centre"));
     hist.push_back(s.history[k]);
@@ -91,16 +177,7 @@ Json state_json(const NetworkState& s) {
   j["pairs"] = Json{{"i", s.pair_i},        {"j", s.pair_j},   {"history", hist}, {"E_form", e},
                     {"slip", slip},         {"centre", centre}, {"f_n", reals(s.f_n, "f_n")},
                     {"f_t", reals(s.f_t, "f_t")}, {"sliding", sl}};
-  if (s.periodic) {  // issue 29: the cell's vectors (empty: the box's edges), each row's image, the held particle
-    Json shift = Json::array();
-    for (const auto& n : s.shift) shift.push_back(Json::array({n[0], n[1]}));
-    j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
-  }
-  if (!s.wall_history.empty()) {  // BoundaryMode::Walls: 4 slots per particle (left, right, bottom, top)
-    Json hist = Json::array();
-    for (const auto& h : s.wall_history) hist.push_back(h);
-    j["walls"] = Json{{"history", hist}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
-  }
+  write_optional<2>(j, s);  // walls: 4 slots per particle (left, right, bottom, top)
   j["timings"] = timings_json(s.timings);
   return j;
 }
@@ -135,14 +212,11 @@ void read_globals(const Field& root, NetworkState& s) {
   const auto lo = reals(b["min"], 2), hi = reals(b["max"], 2);
   s.box0 = {lo[0], lo[1], hi[0], hi[1]};
   if (!(s.box0.x_max > s.box0.x_min && s.box0.y_max > s.box0.y_min)) b.fail("the initial box must have positive size");
-  const Field seed = root["seed"];
-  if (!seed.json().is_number_unsigned() && !(seed.json().is_number_integer() && seed.json().get<std::int64_t>() >= 0))
-    seed.fail("expected a non-negative integer");
-  s.seed = seed.json().get<std::uint64_t>();
-  s.box_deformation = matrix(root["box_deformation"]);
-  s.strain = matrix(root["strain"]);
-  s.box_deformation_build = matrix(root["box_deformation_build"]);
-  s.dE_prev = matrix(root["dE_prev"]);
+  s.seed = read_seed(root["seed"]);
+  s.box_deformation = matrix<2>(root["box_deformation"]);
+  s.strain = matrix<2>(root["strain"]);
+  s.box_deformation_build = matrix<2>(root["box_deformation_build"]);
+  s.dE_prev = matrix<2>(root["dE_prev"]);
   if (!(s.box_deformation.determinant() > 0.0)) root["box_deformation"].fail("the determinant must be positive");
   if (!(s.box_deformation_build.determinant() > 0.0))
     root["box_deformation_build"].fail("the determinant must be positive");
@@ -160,51 +234,9 @@ void read_pairs(const Field& root, NetworkState& s) {
   s.history.resize(np);
   s.aux.resize(np);
   s.sliding.resize(np);
-  for (std::size_t k = 0; k < np; ++k) {
-    s.pair_i[k] = static_cast<int>(p["i"][k].integer(0, last));
-    s.pair_j[k] = static_cast<int>(p["j"][k].integer(0, last));
-    if (!(s.pair_i[k] < s.pair_j[k])) p["j"][k].fail("pair indices must satisfy i < j < N");
-    if (k > 0 && !(std::make_pair(s.pair_i[k - 1], s.pair_j[k - 1]) < std::make_pair(s.pair_i[k], s.pair_j[k])))
-      p["i"][k].fail("pairs must be sorted by (i, j)");
-    s.history[k] = p["history"][k].get<contact::PlasticIndentationHistory>();
-    s.aux[k].E_form = matrix(p["E_form"][k]);
-    s.aux[k].slip = p["slip"][k].real();
-    s.aux[k].centre = p["centre"][k].real();
-    s.sliding[k] = p["sliding"][k].boolean() ? 1 : 0;
-  }
+  for (std::size_t k = 0; k < np; ++k) read_pair<2>(p, k, last, s);
   s.f_n = reals(p["f_n"], np, 0.0, kMax);
   s.f_t = reals(p["f_t"], np);
-}
-
-/// The optional periodic cell (absent: walls, die or affine).
-void read_periodic(const Field& root, NetworkState& s) {
-  if (!root.has("periodic")) return;
-  const Field p = root["periodic"];
-  p.object({"cell", "shift", "pinned"});
-  s.periodic = true;
-  const std::size_t nc = p["cell"].array(0, 4);
-  if (nc != 0 && nc != 4) p["cell"].fail("expected 0 or 4 numbers (the cell vectors a1, a2)");
-  s.cell = reals(p["cell"], nc);
-  const std::size_t np = s.pair_i.size();
-  p["shift"].array(np);
-  s.shift.resize(np);
-  for (std::size_t k = 0; k < np; ++k) {
-    p["shift"][k].array(2);
-    for (std::size_t a = 0; a < 2; ++a) s.shift[k][a] = static_cast<int>(p["shift"][k][a].integer(-1000000, 1000000));
-  }
-  s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(s.x.size()) - 1));
-}
-
-/// The optional wall contacts (absent: no walls, or walls that no disk has touched yet).
-void read_walls(const Field& root, NetworkState& s) {
-  if (!root.has("walls")) return;
-  const Field w = root["walls"];
-  w.object({"history", "f_n"});
-  const std::size_t n = 4 * s.x.size();
-  w["history"].array(n);
-  s.wall_history.resize(n);
-  for (std::size_t k = 0; k < n; ++k) s.wall_history[k] = w["history"][k].get<contact::PlasticIndentationHistory>();
-  s.wall_f_n = reals(w["f_n"], n, 0.0, kMax);
 }
 
 void read_timings(const Field& root, SolverTimings& T) {
@@ -252,8 +284,7 @@ NetworkState load_state_text(std::string_view text, const std::string& path) {
   read_particles(root, s);
   read_globals(root, s);
   read_pairs(root, s);
-  read_periodic(root, s);
-  read_walls(root, s);
+  read_optional<2>(root, s, s.x.size());
   read_timings(root, s.timings);
   try {
     s.validate();
@@ -271,20 +302,6 @@ namespace {
 
 constexpr int kNetwork3StateVersion = 1;
 
-Json matrix3(const Eigen::Matrix3d& m, const char* what) {
-  Json a = Json::array();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) a.push_back(real_json(m(r, c), what));
-  return a;
-}
-Eigen::Matrix3d matrix3(const Field& f) {
-  const std::vector<double> v = reals(f, 9);
-  Eigen::Matrix3d m;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) m(r, c) = v[static_cast<std::size_t>(3 * r + c)];
-  return m;
-}
-
 Json state3_json(const NetworkState3& s) {
   Json j = sys::make_archive("network3d", kNetwork3StateVersion);
   const auto& P = s.particles;
@@ -299,13 +316,13 @@ Json state3_json(const NetworkState3& s) {
   const auto& b = s.box0;
   j["box0"] = Json{{"min", reals({b.x_min, b.y_min, b.z_min}, "box0")}, {"max", reals({b.x_max, b.y_max, b.z_max}, "box0")}};
   j["seed"] = s.seed;
-  j["box_deformation"] = matrix3(s.box_deformation, "box_deformation");
-  j["strain"] = matrix3(s.strain, "strain");
-  j["box_deformation_build"] = matrix3(s.box_deformation_build, "box_deformation_build");
-  j["dE_prev"] = matrix3(s.dE_prev, "dE_prev");
+  j["box_deformation"] = matrix<3>(s.box_deformation, "box_deformation");
+  j["strain"] = matrix<3>(s.strain, "strain");
+  j["box_deformation_build"] = matrix<3>(s.box_deformation_build, "box_deformation_build");
+  j["dE_prev"] = matrix<3>(s.dE_prev, "dE_prev");
   Json e = Json::array(), slip = Json::array(), centre = Json::array(), hist = Json::array(), ft = Json::array();
   for (std::size_t k = 0; k < s.pair_i.size(); ++k) {
-    e.push_back(matrix3(s.aux[k].E_form, "E_form"));
+    e.push_back(matrix<3>(s.aux[k].E_form, "E_form"));
     slip.push_back(real_json(s.aux[k].slip, "slip"));
     centre.push_back(real_json(s.aux[k].centre, "centre"));
     hist.push_back(s.history[k]);
@@ -315,16 +332,7 @@ Json state3_json(const NetworkState3& s) {
   j["pairs"] = Json{{"i", s.pair_i},   {"j", s.pair_j},        {"history", hist},           {"E_form", e},
                     {"slip", slip},    {"centre", centre},     {"f_n", reals(s.f_n, "f_n")}, {"f_t", ft},
                     {"sliding", sl}};
-  if (s.periodic) {
-    Json shift = Json::array();
-    for (const auto& n : s.shift) shift.push_back(Json::array({n[0], n[1], n[2]}));
-    j["periodic"] = Json{{"cell", reals(s.cell, "cell")}, {"shift", shift}, {"pinned", s.pinned}};
-  }
-  if (!s.wall_history.empty()) {  // six slots per particle (wall 2a at the minimum of axis a, 2a + 1 at its maximum)
-    Json wh = Json::array();
-    for (const auto& h : s.wall_history) wh.push_back(h);
-    j["walls"] = Json{{"history", wh}, {"f_n", reals(s.wall_f_n, "wall f_n")}};
-  }
+  write_optional<3>(j, s);  // walls: six slots per particle (wall 2a at the minimum of axis a, 2a + 1 at its maximum)
   j["timings"] = timings_json(s.timings);
   return j;
 }
@@ -358,14 +366,11 @@ void read_globals3(const Field& root, NetworkState3& s) {
   s.box0.x_min = lo[0], s.box0.y_min = lo[1], s.box0.z_min = lo[2];
   s.box0.x_max = hi[0], s.box0.y_max = hi[1], s.box0.z_max = hi[2];
   if (!(hi[0] > lo[0] && hi[1] > lo[1] && hi[2] > lo[2])) b.fail("the initial box must have positive size");
-  const Field seed = root["seed"];
-  if (!seed.json().is_number_unsigned() && !(seed.json().is_number_integer() && seed.json().get<std::int64_t>() >= 0))
-    seed.fail("expected a non-negative integer");
-  s.seed = seed.json().get<std::uint64_t>();
-  s.box_deformation = matrix3(root["box_deformation"]);
-  s.strain = matrix3(root["strain"]);
-  s.box_deformation_build = matrix3(root["box_deformation_build"]);
-  s.dE_prev = matrix3(root["dE_prev"]);
+  s.seed = read_seed(root["seed"]);
+  s.box_deformation = matrix<3>(root["box_deformation"]);
+  s.strain = matrix<3>(root["strain"]);
+  s.box_deformation_build = matrix<3>(root["box_deformation_build"]);
+  s.dE_prev = matrix<3>(root["dE_prev"]);
   if (!(s.box_deformation_build.determinant() > 0.0)) root["box_deformation_build"].fail("the determinant must be positive");
 }
 
@@ -383,45 +388,11 @@ void read_pairs3(const Field& root, NetworkState3& s) {
   s.sliding.resize(np);
   s.f_t.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
-    s.pair_i[k] = static_cast<int>(p["i"][k].integer(0, last));
-    s.pair_j[k] = static_cast<int>(p["j"][k].integer(0, last));
-    s.history[k] = p["history"][k].get<contact::PlasticIndentationHistoryT<3>>();
-    s.aux[k].E_form = matrix3(p["E_form"][k]);
-    s.aux[k].slip = p["slip"][k].real();
-    s.aux[k].centre = p["centre"][k].real();
+    read_pair<3>(p, k, last, s);
     const auto t = reals(p["f_t"][k], 3);
     s.f_t[k] = Eigen::Vector3d(t[0], t[1], t[2]);
-    s.sliding[k] = p["sliding"][k].boolean() ? 1 : 0;
   }
   s.f_n = reals(p["f_n"], np, 0.0, kMax);
-}
-
-void read_optional3(const Field& root, NetworkState3& s) {
-  if (root.has("periodic")) {
-    const Field p = root["periodic"];
-    p.object({"cell", "shift", "pinned"});
-    s.periodic = true;
-    const std::size_t nc = p["cell"].array(0, 9);
-    if (nc != 0 && nc != 9) p["cell"].fail("expected 0 or 9 numbers (the cell vectors a1, a2, a3)");
-    s.cell = reals(p["cell"], nc);
-    const std::size_t np = s.pair_i.size();
-    p["shift"].array(np);
-    s.shift.resize(np);
-    for (std::size_t k = 0; k < np; ++k) {
-      p["shift"][k].array(3);
-      for (std::size_t a = 0; a < 3; ++a) s.shift[k][a] = static_cast<int>(p["shift"][k][a].integer(-1000000, 1000000));
-    }
-    s.pinned = static_cast<int>(p["pinned"].integer(0, static_cast<std::int64_t>(s.particles.size()) - 1));
-  }
-  if (root.has("walls")) {
-    const Field w = root["walls"];
-    w.object({"history", "f_n"});
-    const std::size_t n = 6 * s.particles.size();
-    w["history"].array(n);
-    s.wall_history.resize(n);
-    for (std::size_t k = 0; k < n; ++k) s.wall_history[k] = w["history"][k].get<contact::PlasticIndentationHistoryT<3>>();
-    s.wall_f_n = reals(w["f_n"], n, 0.0, kMax);
-  }
 }
 
 }  // namespace
@@ -446,7 +417,7 @@ NetworkState3 load_state3_text(std::string_view text, const std::string& path) {
   read_particles3(root, s);
   read_globals3(root, s);
   read_pairs3(root, s);
-  read_optional3(root, s);
+  read_optional<3>(root, s, s.particles.size());
   read_timings(root, s.timings);
   try {
     s.validate();
