@@ -86,7 +86,7 @@ double rel_err(const VecX& x, const VecX& ref) { return (x - ref).norm() / ref.n
 
 TEST(SplitPreconditioner, SolvesTheWholeSystem) {
   std::mt19937_64 rng(11);
-  const int nodes = 300;
+  const int nodes = 150;
   const Net net = network(nodes, true, 0.3, rng);
   const VecX b = random_vector(kDof * nodes, rng);
   const Eigen::MatrixXd Md(net.M), Ad(net.A);
@@ -146,7 +146,7 @@ TEST(SplitPreconditioner, SolvesTheWholeSystem) {
 // entry.
 TEST(SplitPreconditioner, IsExactWithoutCoupling) {
   std::mt19937_64 rng(12);
-  const int nodes = 200;
+  const int nodes = 120;
   const Net net = network(nodes, false, 0.0, rng);
   const VecX b = random_vector(kDof * nodes, rng);
   LinearSolver split(LinearSolverOptions{.gmres_tolerance = 1e-11});
