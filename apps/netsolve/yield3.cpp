@@ -175,7 +175,8 @@ class Yield3Run {
   std::string source_;
   fs::path out_;
   std::unique_ptr<qs::NetworkSolver3> solver_;
-  std::unique_ptr<qs::NetworkState3> state_;  ///< --from-state: the loading point, read in setup()
+  std::unique_ptr<qs::NetworkState3> state_;  ///< --from-state: the loading point, read in setup(), until the solver has it
+  bool from_state_ = false;                    ///< the run starts from --from-state (no precompaction)
   std::unique_ptr<SnapshotSeries> series_;
   std::unique_ptr<Compact3Rows> rows_;
   std::string stopped_;
@@ -218,6 +219,7 @@ void Yield3Run::setup() {
       throw UsageError(fmt::format("--from-state {}: the state has wall contacts, and yield --dim 3 has no walls yet", a.from_state));
     pk_ = packing_of_state(*state_);
     source_ = "state " + a.from_state;
+    from_state_ = true;
   } else {
     activity() = a.packing_file.empty() ? "building the 3D ballistic deposition" : "reading " + a.packing_file;
     if (a.packing_file.empty()) check_deposition_size(a.pack, true);
@@ -277,12 +279,13 @@ bool Yield3Run::precompact() {
   const auto t0 = Clock::now();
   activity() = "setting up the network solver";
   solver_ = state_ ? std::make_unique<qs::NetworkSolver3>(*state_, so_) : std::make_unique<qs::NetworkSolver3>(pk_, so_);
+  state_.reset();  // the solver holds it now
   std::vector<std::string> kinds = {"particles", "contacts"};
   if (so_.mode == qs::BoundaryMode::Periodic) kinds.emplace_back("cell");
   series_ = std::make_unique<SnapshotSeries>(out_ / "snapshots.pvd", kinds);
   write_snapshot_3d(*solver_, *series_, "initial", 0.0);  // timesteps: the phases 0, 1, 2
   rows_ = std::make_unique<Compact3Rows>(*solver_, *series_, std::vector<double>{}, so_, co_, a_.quiet);
-  if (state_) {  // the loading point itself: history.csv's one row
+  if (from_state_) {  // the loading point itself: history.csv's one row
     qs::CompactionRowT<3> row;
     row.state = solver_->stress();
     row.report.converged = true;
@@ -494,14 +497,14 @@ int Yield3Run::finish() {
                 {"compact_bc", so_.affine_centres ? "affine (periodic cell)" : mode_name(so_.mode)}, {"probe_bc", po_.affine_centres ? "affine (periodic cell)" : mode_name(po_.mode)},
                 {"friction", a_.law.friction}, {"mu_eff", mu_eff_}, {"unload_ratio", so_.law.unload_ratio},
                 {"k_t", so_.law.k_t}, {"first_touch", so_.law.first_touch}, {"rotations", so_.rotations}};
-  j["precompaction"] = rows_->done > 0 || state_ ? state_json(rows_->last, sy_) : json(nullptr);
-  if (state_) j["precompaction"]["from_state"] = a_.from_state;
-  if (rows_->done > 0 || state_) {
+  j["precompaction"] = rows_->done > 0 || from_state_ ? state_json(rows_->last, sy_) : json(nullptr);
+  if (from_state_) j["precompaction"]["from_state"] = a_.from_state;
+  if (rows_->done > 0 || from_state_) {
     const auto pq = qs::pq_of(rows_->last.eq13 / sy_);
     j["precompaction"]["p"] = pq.p;
     j["precompaction"]["q"] = pq.q;
-    j["precompaction"]["increments_done"] = state_ ? json(nullptr) : json(rows_->done);  // not known from a state
-    j["precompaction"]["unconverged_increments"] = state_ ? json(nullptr) : json(rows_->tally.unconverged);
+    j["precompaction"]["increments_done"] = from_state_ ? json(nullptr) : json(rows_->done);  // not known from a state
+    j["precompaction"]["unconverged_increments"] = from_state_ ? json(nullptr) : json(rows_->tally.unconverged);
   }
   j["solver"] = solver_summary(so_, solver_->timings(), solver_->free_dofs(), rows_->tally, 3);
   if (stopped_.empty()) {
