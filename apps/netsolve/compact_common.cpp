@@ -68,6 +68,7 @@ qs::SolverOptions yield_probe_options(const qs::SolverOptions& pre, qs::Boundary
   probe.max_cuts = pre.max_cuts;
   probe.energy_merit = pre.energy_merit;
   probe.friction_energy_merit = pre.friction_energy_merit;
+  probe.preconditioner = pre.preconditioner;  // the linear solver's too
   if (probe.iteration == qs::Iteration::PseudoTransient) probe.max_newton = pre.max_newton;
   probe.validate();
   return probe;

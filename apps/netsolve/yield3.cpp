@@ -51,6 +51,7 @@ struct Yield3Args {
   PackArgs pack;
   std::string packing_file, precompact = "hydrostatic", compact_bc = "auto", probe_bc;
   std::string from_state;  ///< a 3D state.txt (netsolve compact --dim 3 --save-state): no precompaction
+  std::string preconditioner = "auto";  ///< --preconditioner (qs::IterationOptions::Preconditioner)
   double to_density = 0.0;  ///< 0: D0 + 0.03
   int increments = 50;
   LawArgs law = law_args(qs::SolverOptions::yield_precompaction());
@@ -246,6 +247,7 @@ void Yield3Run::setup() {
     throw UsageError("--probe-bc: in 3D the probes run in the precompaction's mode, or affine in its periodic cell");
   apply_law_args(a.law, so_, probe_mode);
   so_.law.unload_ratio = a.unload_ratio;
+  so_.preconditioner = preconditioner_of(a.preconditioner);
   so_.validate();
   po_ = yield_probe_options(so_, probe_mode);
   po_.law.reversible = false;  // the probes start on the elastic branch of the unloaded state
@@ -598,6 +600,10 @@ int run_yield3_command(int argc, char** argv) {
   app.add_option("--window", a.window, "curvature smoothing width (normalised arc length)")->capture_default_str();
   app.add_option("--fine", a.fine, "equal fine probe steps (unloading strain / 10 each) before the steps grow")->capture_default_str();
   app.add_option("--growth", a.growth, "growth factor of the probe steps after the fine ones")->capture_default_str();
+  app.add_option("--preconditioner", a.preconditioner, "the linear solver's preconditioner, precompaction and probes: "
+                 "translations (the factor of the translations' block, each sphere's rotation block inverted; GMRES on the "
+                 "whole matrix), full (the whole matrix's factor), auto (translations where rotations are unknowns)")
+      ->check(CLI::IsMember({"auto", "full", "translations"}))->capture_default_str();
   app.add_option("--unload-tol", a.unload_tol, "unload until |Sigma| < tol sigma_y")->capture_default_str();
   app.add_option("--unload-ratio", a.unload_ratio, "elastic un/reloading stiffness / loading tangent (section 3.4)")
       ->capture_default_str();

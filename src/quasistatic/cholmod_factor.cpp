@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -26,6 +27,19 @@ using detail::seconds_since;
 
 // ------------------------------------------------------------------------------------------------
 // Lifecycle, views, ordering, factor solve
+
+namespace {
+/// One CHOLMOD analysis, factorisation or solve at a time in the process. Two LinearSolvers used at
+/// once on two threads (netsolve yield --dim 3 --jobs 2, a probe per thread, each with its own
+/// cholmod_common) gave other results than --jobs 1 in every run, and factors "not positive
+/// definite" from the same matrices; with this lock the files are identical (cli_netsolve_yield3d
+/// jobs_with_solves_identical). Where inside CHOLMOD, METIS or the serial OpenBLAS under its
+/// supernodal kernels the shared state lies was not isolated; the lock covers all three.
+std::mutex& cholmod_mutex() {
+  static std::mutex m;
+  return m;
+}
+}  // namespace
 
 LinearSolver::Impl::Impl(const LinearSolverOptions& o) : opt(o) {
   cholmod_start(&cm);
@@ -127,6 +141,7 @@ bool LinearSolver::Impl::apply_factor(const double* in, double* out) {
   B.xtype = CHOLMOD_REAL;
   B.dtype = CHOLMOD_DOUBLE;
   const SerialCholmod serial;
+  const std::lock_guard<std::mutex> one_at_a_time(cholmod_mutex());
   if (!cholmod_solve2(CHOLMOD_A, L, &B, nullptr, &X, nullptr, &Y, &E, &cm)) return false;
   const auto* xs = static_cast<const double*>(X->x);
   std::copy(xs, xs + n(), out);
@@ -151,6 +166,7 @@ long LinearSolver::Impl::factor_nnz() const {
 
 // ------------------------------------------------------------------------------------------------
 // Analysis and numeric factorisation
+
 
 LinearStatus LinearSolver::Impl::factorise(const SpMat& Min, bool pattern_changed) {
   if (adopt(Min, pattern_changed)) {
@@ -196,6 +212,7 @@ LinearStatus LinearSolver::Impl::analyse() {
     set_ordering();
     cholmod_sparse A = view();
     const SerialCholmod serial;
+    const std::lock_guard<std::mutex> one_at_a_time(cholmod_mutex());  // see cholmod_mutex()
     std::vector<int> perm;
     if (cm.nmethods == 1 && cm.method[0].ordering == CHOLMOD_NESDIS) perm = block_ordering();
     if (!perm.empty()) {  // symbolic factorisation with the block ordering
@@ -268,6 +285,7 @@ int LinearSolver::Impl::numeric_factorise() {
   cm.status = CHOLMOD_OK;
   {
     const SerialCholmod serial;
+    const std::lock_guard<std::mutex> one_at_a_time(cholmod_mutex());
     if (L->is_super && !Sp.empty()) {
       // what cholmod_factorize does for a supernodal factor and stype < 0 (final_asis: no
       // conversion), without its two transposes (allocation + 2 passes over M per call):

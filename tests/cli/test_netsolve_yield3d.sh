@@ -24,6 +24,8 @@
 #  * --jobs (threads) and yield-merge --dim 3: the 12 affine probes in one job, in two, and as three
 #    slices --probe i/3 merged give the same yield_points.csv and probe curves, byte for byte; a merge
 #    with a slice missing is "incomplete" and names the missing probes;
+#  * --jobs 2 with linear solves (periodic probes, sticking) gives --jobs 1's files byte for byte (full
+#    scale only);
 #  * --from-state: compact --dim 3 --save-state's state.txt as the loading point gives the yield points
 #    and probe curves of the run that precompacts itself, byte for byte;
 #  * bad input: one line, exit 2, no folder (a merge of runs with different setups, or of a folder
@@ -126,6 +128,19 @@ ok &= all(pa[k] == pb[k] for k in ("S11", "S22", "S33", "Z", "D"))
 print("from a state: loading point S33 %.9f / %.9f, probes identical" % (pa["S33"], pb["S33"]))
 sys.exit(0 if ok and a["status"] == b["status"] else 1)' "$tmp/own_pre/summary.json" "$tmp/from_state/summary.json"
 result from_state_identical $?
+# --jobs with linear solves (a periodic cell, sticking, periodic probes): two probes factorise and
+# solve at once on two threads, and the files equal --jobs 1's byte for byte. Before the process-wide
+# lock on CHOLMOD's calls (src/quasistatic/cholmod_factor.cpp) they differed in every run, with
+# factors "not positive definite". Full scale only: about 20 s in Release, and the sanitizers do not
+# see this kind of race.
+if [ "${NETDEM_TEST_SCALE:-}" != small ]; then
+  run solves_j1 --packing "$tmp/pp/packing.csv" --directions 2 --max-strain 3e-4 --offset 1e-4 --jobs 1
+  run solves_j2 --packing "$tmp/pp/packing.csv" --directions 2 --max-strain 3e-4 --offset 1e-4 --jobs 2
+  cmp -s "$tmp/solves_j1/yield_points.csv" "$tmp/solves_j2/yield_points.csv" &&
+    cmp -s "$tmp/solves_j1/probes/probe_000.csv" "$tmp/solves_j2/probes/probe_000.csv" &&
+    cmp -s "$tmp/solves_j1/probes/probe_001.csv" "$tmp/solves_j2/probes/probe_001.csv"
+  result jobs_with_solves_identical $?
+fi
 check_bad from_state_packing "exclude each other" yield --dim 3 --from-state "$tmp/cstate/state.txt" --packing "$p3"
 check_bad from_state_path "does not lie along" yield --dim 3 --from-state "$tmp/cstate/state.txt" --precompact closed-die
 sed 's/"network3d"/"network"/' "$tmp/cstate/state.txt" > "$tmp/state2d_kind.txt"
